@@ -1,0 +1,145 @@
+"""The small protocols everything else is built on.
+
+A *sample source* yields DAQ samples, a *hand* takes finger positions and
+reports them, and a *reflex* maps input samples to finger commands. The
+simulated rig, the serial drivers and the replay of a recording all implement
+these; the runtime loop and the experiment runner depend only on them. This
+module imports nothing from the rest of the package except constants.
+
+Examples
+--------
+>>> from slipreflex.interfaces import DaqSample
+>>> s = DaqSample(seq=0, t=0.0, slip_volts=0.42, accel_g=(0.0, 0.0, 1.0), flow_pulses=0)
+>>> s.slip_volts
+0.42
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Literal, Protocol, runtime_checkable
+
+import numpy as np
+
+from .hardware import Finger
+
+__all__ = ["DaqSample", "SampleSource", "Hand", "Reflex", "InputKind"]
+
+#: What a reflex reads: the slip sensor (one float per sample) or the 4 x 4
+#: tactile array (one ``(4, 4)`` float array of newtons per sample).
+InputKind = Literal["slip", "tactile"]
+
+
+@dataclass(frozen=True, slots=True)
+class DaqSample:
+    """One sample period of the DAQ board, decoded.
+
+    Parameters
+    ----------
+    seq : int
+        Sequence number as sent by the board (wraps as the wire format says).
+    t : float
+        Sample time in seconds on the board's clock (``seq`` times the period,
+        unwrapped by the reader).
+    slip_volts : float
+        Slip-sensor voltage (V).
+    accel_g : tuple of float or None
+        Accelerometer x, y, z in g, or None when no fresh IMU reading came
+        with this sample.
+    flow_pulses : int
+        Cumulative YF-S201 pulse count.
+
+    Examples
+    --------
+    >>> DaqSample(seq=1, t=0.003, slip_volts=3.33, accel_g=None, flow_pulses=7).flow_pulses
+    7
+    """
+
+    seq: int
+    t: float
+    slip_volts: float
+    accel_g: tuple[float, float, float] | None
+    flow_pulses: int
+
+
+@runtime_checkable
+class SampleSource(Protocol):
+    """Anything that yields DAQ samples: a serial DAQ, the simulated rig, a recording.
+
+    ``read(timeout)`` returns the samples that arrived since the last call
+    (possibly none after ``timeout`` seconds); it never blocks longer than
+    ``timeout``.
+
+    Examples
+    --------
+    >>> class Two:
+    ...     def read(self, timeout): return []
+    ...     def close(self): pass
+    >>> isinstance(Two(), SampleSource)
+    True
+    """
+
+    def read(self, timeout: float) -> list[DaqSample]: ...
+
+    def close(self) -> None: ...
+
+
+@runtime_checkable
+class Hand(Protocol):
+    """A hand that takes finger position targets and reports finger positions.
+
+    Positions are in i-Limb units (0 open .. 500 closed). ``set_positions``
+    sends targets for the named fingers only; ``positions`` returns the last
+    known measured position of every finger it knows.
+
+    Examples
+    --------
+    >>> class Still:
+    ...     def set_positions(self, targets): pass
+    ...     def positions(self): return {}
+    >>> isinstance(Still(), Hand)
+    True
+    """
+
+    def set_positions(self, targets: Mapping[Finger, float]) -> None: ...
+
+    def positions(self) -> dict[Finger, float]: ...
+
+
+@runtime_checkable
+class Reflex(Protocol):
+    """Maps input samples to finger commands, one sample at a time.
+
+    Attributes
+    ----------
+    name : str
+        Method name used by the trial runner ("fixed", "dath", "nmsd", "swt").
+    input_kind : {"slip", "tactile"}
+        Which stream ``step`` expects.
+    fs : float
+        The rate (Hz) at which ``step`` must be called.
+
+    ``step(sample, position=None)`` takes one sample (a float for "slip", a
+    ``(4, 4)`` array for "tactile") and the hand's measured slip-finger
+    position if known; it returns a new target position for the grasping
+    fingers, or None when the command does not change. ``reset()`` restores
+    the initial state.
+
+    Examples
+    --------
+    >>> class Never:
+    ...     name, input_kind, fs = "never", "slip", 333.0
+    ...     def step(self, sample, position=None): return None
+    ...     def reset(self): pass
+    >>> isinstance(Never(), Reflex)
+    True
+    """
+
+    name: str
+    input_kind: InputKind
+    fs: float
+
+    def step(self, sample: float | np.ndarray, position: float | None = None) -> float | None: ...
+
+    def reset(self) -> None: ...
