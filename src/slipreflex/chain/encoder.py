@@ -1,0 +1,170 @@
+"""Event encoder: FA-I-like spikes by send-on-delta, fixed threshold or DATH (SPEC 1.2).
+
+For every filtered sample x_k the encoder accumulates the difference to the
+previous sample (paper Eq. 1), fires when ``|acc| > theta`` (Eq. 2, strictly
+greater) and resets the accumulator. With DATH on, the first spike fired under
+theta0 sets ``theta = max(|x_k - x_(k-1)|, floor)`` (Eq. 4) for the next D
+samples; spikes during that time do not re-arm it; sample k+D+1 is compared
+against theta0 again.
+
+Examples
+--------
+>>> import numpy as np
+>>> encode(np.array([0.0, 0.005, 0.010, 0.010]), threshold=0.008).tolist()
+[False, False, True, False]
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from ._checks import as_samples
+from .params import DEFAULT_THRESHOLD, EncoderParams
+
+__all__ = ["encode", "encode_trace", "EncoderTrace", "EventEncoder"]
+
+
+class EncoderTrace(NamedTuple):
+    """Per-sample internals of the encoder, for plots like the paper's Fig. 6-9.
+
+    Attributes
+    ----------
+    events : numpy.ndarray of bool
+        y_k.
+    accumulator : numpy.ndarray of float
+        The accumulator compared with the threshold at sample k (before its reset).
+    threshold : numpy.ndarray of float
+        The threshold in force at sample k.
+    """
+
+    events: np.ndarray
+    accumulator: np.ndarray
+    threshold: np.ndarray
+
+
+def encode_trace(x, threshold: float = DEFAULT_THRESHOLD, dath: bool = False, dath_samples: int = 16,
+                 x0: float | None = None, dath_floor: float = 0.0) -> EncoderTrace:
+    """Encode filtered samples and return events with accumulator and threshold.
+
+    Parameters are those of :func:`encode`.
+
+    Returns
+    -------
+    EncoderTrace
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> tr = encode_trace(np.array([0.0, 0.01, 0.011, 0.0111]), dath=True)
+    >>> tr.events.tolist(), tr.threshold.round(4).tolist()
+    ([False, True, False, False], [0.008, 0.008, 0.01, 0.01])
+    """
+    p = EncoderParams(threshold=threshold, dath=dath, dath_samples=dath_samples, x0=x0,
+                      dath_floor=dath_floor)
+    xs = as_samples("x", x)
+    k = xs.size
+    events = np.zeros(k, dtype=np.bool_)
+    acc = np.empty(k)
+    theta = np.empty(k)
+    if k:
+        from ._kernels import encode_kernel
+
+        prev = xs[0] if p.x0 is None else p.x0
+        encode_kernel(xs, prev, p.threshold, p.dath, p.dath_samples, p.dath_floor, events, acc, theta)
+    return EncoderTrace(events, acc, theta)
+
+
+def encode(x, threshold: float = DEFAULT_THRESHOLD, dath: bool = False, dath_samples: int = 16,
+           x0: float | None = None, dath_floor: float = 0.0) -> np.ndarray:
+    """Turn filtered slip-sensor samples into spikes (one bool per sample).
+
+    Parameters
+    ----------
+    x : array_like of float
+        Filtered samples (volts); NaN or inf raises ValueError naming the index.
+    threshold : float
+        Base threshold theta0 (V), >= 0. The paper uses 0.008 V (2 LSB).
+    dath : bool
+        Use the Dynamic Adaptive Threshold.
+    dath_samples : int
+        DATH duration D (samples).
+    x0 : float or None
+        Initial reference; None uses the first sample; 0.0 is the paper's literal start.
+    dath_floor : float
+        Lower bound of the DATH threshold (V).
+
+    Returns
+    -------
+    numpy.ndarray of bool
+        y_k for every sample, identical to :class:`EventEncoder` step by step.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> encode(np.full(4, 0.4), x0=0.0).tolist()   # the paper's start-up spike
+    [True, False, False, False]
+    """
+    return encode_trace(x, threshold, dath, dath_samples, x0, dath_floor).events
+
+
+class EventEncoder:
+    """Streaming event encoder: one filtered sample in, one bool out.
+
+    Parameters are those of :func:`encode`. After each :meth:`step`,
+    ``last_threshold`` holds the threshold that sample was compared against and
+    ``last_accumulator`` the accumulator before its reset.
+
+    Examples
+    --------
+    >>> enc = EventEncoder(threshold=0.008, dath=True)
+    >>> [enc.step(v) for v in (0.0, 0.01, 0.011)]
+    [False, True, False]
+    >>> round(enc.threshold, 4)   # DATH active: |0.01 - 0.0|
+    0.01
+    """
+
+    __slots__ = ("params", "_prev", "acc", "threshold", "remaining", "last_threshold",
+                 "last_accumulator")
+
+    def __init__(self, threshold: float = DEFAULT_THRESHOLD, dath: bool = False, dath_samples: int = 16,
+                 x0: float | None = None, dath_floor: float = 0.0) -> None:
+        self.params = EncoderParams(threshold=threshold, dath=dath, dath_samples=dath_samples, x0=x0,
+                                    dath_floor=dath_floor)
+        self.reset()
+
+    def reset(self) -> None:
+        """Restore the initial state (reference x0 or the next sample)."""
+        self._prev: float | None = self.params.x0
+        self.acc = 0.0
+        self.threshold = self.params.threshold
+        self.remaining = 0
+        self.last_threshold = self.params.threshold
+        self.last_accumulator = 0.0
+
+    def step(self, x: float) -> bool:
+        """Encode one filtered sample; returns True on a spike."""
+        x = float(x)
+        prev = x if self._prev is None else self._prev
+        d = x - prev
+        acc = self.acc + d
+        theta = self.threshold
+        self.last_threshold = theta
+        self.last_accumulator = acc
+        event = abs(acc) > theta
+        if event:
+            acc = 0.0
+        self.acc = acc
+        p = self.params
+        if p.dath:
+            if self.remaining > 0:
+                self.remaining -= 1
+                if self.remaining == 0:
+                    self.threshold = p.threshold
+            elif event:
+                ad = abs(d)
+                self.threshold = ad if ad > p.dath_floor else p.dath_floor
+                self.remaining = p.dath_samples
+        self._prev = x
+        return event
