@@ -1,0 +1,261 @@
+"""The NMSD closing rule, turned into finger position targets (shared SPEC section 2).
+
+Osborn et al.'s reflex closes the fingers for a fixed time on every slip
+detection (45 ms in the paper); each further detection while the fingers are
+still closing adds another 45 ms. A position-controlled hand cannot be told
+"close for 45 ms", so :class:`Closer` turns closing time into a ramp of
+position targets: on every sample spent closing, the target advances by
+``speed / fs`` finger units, where ``speed`` is the hand's closing speed
+(finger units per second, from the simulated hand's documented constant). The
+hand then follows the ramp at its own speed, i.e. it closes for as long as the
+rule says. The total closing time generated is ``closing_samples / fs``.
+
+Two trigger modes share the rule:
+
+* ``"events"`` (NMSD): every detection adds ``close_s`` of closing;
+* ``"hold"`` (SWT-SD, whose detector gives an ON/OFF signal): while ON, a new
+  ``close_s`` quantum starts whenever the previous one has run out, so the
+  fingers close while ON and for at most ``close_s`` after it ends.
+
+Examples
+--------
+>>> c = Closer(ClosingParams(fs=100.0, speed=1000.0, close_s=0.03))
+>>> c.trigger()
+>>> [c.step() for _ in range(4)]
+[10.0, 20.0, 30.0, None]
+>>> c.closing_samples
+3
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from ..errors import ParameterError
+from ..hardware import FINGER_MAX, FINGER_MIN
+from ._validate import integer, number, setattr_frozen
+
+__all__ = ["CLOSE_S", "ClosingParams", "Closer", "closing_commands"]
+
+#: Closing time per detection in the paper's NMSD implementation (s).
+CLOSE_S: float = 0.045
+
+TriggerMode = Literal["events", "hold"]
+
+
+@dataclass(frozen=True, slots=True)
+class ClosingParams:
+    """Parameters of the closing rule.
+
+    Parameters
+    ----------
+    fs : float
+        Rate (Hz) at which :meth:`Closer.step` is called (> 0).
+    speed : float
+        Closing speed of the hand in finger units per second (> 0).
+    close_s : float
+        Closing time added by one detection (s, > 0); 45 ms in the paper.
+    p0 : float
+        Initial target used when no measured position is supplied.
+    lo, hi : float
+        Saturation of the targets (finger range).
+
+    Examples
+    --------
+    >>> ClosingParams(fs=260.0, speed=500.0).samples_per_close
+    12
+    >>> ClosingParams(fs=260.0, speed=0.0)
+    Traceback (most recent call last):
+    ...
+    slipreflex.errors.ParameterError: speed must be a finite number > 0, got 0.0
+    """
+
+    fs: float
+    speed: float
+    close_s: float = CLOSE_S
+    p0: float = 0.0
+    lo: float = float(FINGER_MIN)
+    hi: float = float(FINGER_MAX)
+
+    def __post_init__(self) -> None:
+        setattr_frozen(self, "fs", number("fs", self.fs, lo=0.0, lo_open=True))
+        setattr_frozen(self, "speed", number("speed", self.speed, lo=0.0, lo_open=True))
+        setattr_frozen(self, "close_s", number("close_s", self.close_s, lo=0.0, lo_open=True))
+        setattr_frozen(self, "p0", number("p0", self.p0))
+        setattr_frozen(self, "lo", number("lo", self.lo))
+        setattr_frozen(self, "hi", number("hi", self.hi))
+        if self.hi < self.lo:
+            raise ParameterError(f"hi must be >= lo, got lo={self.lo!r}, hi={self.hi!r}")
+
+    @property
+    def samples_per_close(self) -> int:
+        """Closing samples added by one detection: ``round(close_s * fs)``, at least 1."""
+        return max(1, int(round(self.close_s * self.fs)))
+
+    @property
+    def step_size(self) -> float:
+        """Target increment per closing sample (finger units): ``speed / fs``."""
+        return self.speed / self.fs
+
+
+class Closer:
+    """Streaming closing rule: detections in, a ramp of position targets out.
+
+    Parameters
+    ----------
+    params : ClosingParams
+        The rule's parameters.
+
+    Attributes
+    ----------
+    target : float
+        The current position target.
+    remaining : int
+        Closing samples still to run.
+    closing_samples : int
+        Closing samples generated since the last reset (total closing time
+        is ``closing_samples / fs``).
+    triggers : int
+        Number of closing quanta started since the last reset.
+
+    Examples
+    --------
+    >>> c = Closer(ClosingParams(fs=10.0, speed=100.0, close_s=0.2))
+    >>> c.trigger(); c.trigger()
+    >>> [c.step(position=50.0) for _ in range(5)]
+    [60.0, 70.0, 80.0, 90.0, None]
+    """
+
+    def __init__(self, params: ClosingParams) -> None:
+        if not isinstance(params, ClosingParams):
+            raise ParameterError(f"params must be a ClosingParams, got {type(params).__name__}")
+        self.params = params
+        self.reset()
+
+    def reset(self) -> None:
+        """Restore the initial state (target ``p0``, nothing to close).
+
+        Examples
+        --------
+        >>> c = Closer(ClosingParams(fs=10.0, speed=100.0)); c.trigger(); c.reset(); c.remaining
+        0
+        """
+        self.target = float(np.clip(self.params.p0, self.params.lo, self.params.hi))
+        self.remaining = 0
+        self.closing_samples = 0
+        self.triggers = 0
+        self._episode = 0
+
+    @property
+    def closing(self) -> bool:
+        """True while closing samples remain.
+
+        Examples
+        --------
+        >>> Closer(ClosingParams(fs=10.0, speed=100.0)).closing
+        False
+        """
+        return self.remaining > 0
+
+    def trigger(self) -> None:
+        """Add one closing quantum (``close_s``) to the time still to close.
+
+        Examples
+        --------
+        >>> c = Closer(ClosingParams(fs=100.0, speed=100.0, close_s=0.05)); c.trigger(); c.remaining
+        5
+        """
+        self.remaining += self.params.samples_per_close
+        self.triggers += 1
+
+    def feed(self, trig: bool, mode: TriggerMode = "events") -> None:
+        """Apply one sample's detector output according to the trigger ``mode``.
+
+        ``"events"``: a True adds a quantum; ``"hold"``: a True starts a quantum
+        only when the previous one has run out.
+
+        Examples
+        --------
+        >>> c = Closer(ClosingParams(fs=100.0, speed=100.0, close_s=0.05))
+        >>> c.feed(True, "hold"); c.feed(True, "hold"); c.remaining
+        5
+        """
+        if trig and (mode == "events" or self.remaining <= 0):
+            self.trigger()
+
+    def step(self, position: float | None = None) -> float | None:
+        """Advance one sample; return the new target, or None when it does not change.
+
+        Parameters
+        ----------
+        position : float, optional
+            The hand's measured position; when a closing episode starts, the
+            ramp starts from ``max(target, position)`` so it never commands a
+            position behind the fingers.
+
+        Examples
+        --------
+        >>> c = Closer(ClosingParams(fs=100.0, speed=100.0, close_s=0.01))
+        >>> c.step(), c.trigger(), c.step(position=200.0)
+        (None, None, 201.0)
+        """
+        if self.remaining <= 0:
+            return None
+        p = self.params
+        if position is not None and self._episode == 0:
+            self.target = float(np.clip(max(self.target, float(position)), p.lo, p.hi))
+        old = self.target
+        self.target = min(p.hi, self.target + p.step_size)
+        self.remaining -= 1
+        self.closing_samples += 1
+        self._episode = 0 if self.remaining == 0 else self._episode + 1
+        return self.target if self.target != old else None
+
+
+def closing_commands(triggers, params: ClosingParams, *, mode: TriggerMode = "events",
+                     positions=None) -> np.ndarray:
+    """Batch closing rule: per-sample triggers in, per-sample targets out.
+
+    Parameters
+    ----------
+    triggers : array_like of bool, shape (K,)
+        Detections (``mode="events"``) or the ON/OFF signal (``mode="hold"``).
+    params : ClosingParams
+        The rule's parameters.
+    mode : {"events", "hold"}
+        How triggers start closing quanta (see the module docstring).
+    positions : array_like of float, shape (K,), optional
+        Measured hand positions (NaN where unknown).
+
+    Returns
+    -------
+    numpy.ndarray of float, shape (K,)
+        The new target at each sample, NaN where the target does not change.
+
+    Examples
+    --------
+    >>> p = ClosingParams(fs=100.0, speed=100.0, close_s=0.02)
+    >>> closing_commands([True, False, False, True, True], p).tolist()
+    [1.0, 2.0, nan, 3.0, 4.0]
+    """
+    trig = np.asarray(triggers, dtype=bool)
+    if trig.ndim != 1:
+        raise ParameterError(f"triggers must be one-dimensional, got shape {trig.shape}")
+    if mode not in ("events", "hold"):
+        raise ParameterError(f"mode must be 'events' or 'hold', got {mode!r}")
+    pos = None if positions is None else np.asarray(positions, dtype=np.float64)
+    if pos is not None and pos.shape != trig.shape:
+        raise ParameterError(f"positions must have shape {trig.shape}, got {pos.shape}")
+    closer = Closer(params)
+    out = np.full(trig.shape, np.nan)
+    for k, t in enumerate(trig):
+        closer.feed(bool(t), mode)
+        p = None if pos is None or np.isnan(pos[k]) else float(pos[k])
+        v = closer.step(p)
+        if v is not None:
+            out[k] = v
+    return out
+

@@ -1,0 +1,303 @@
+"""NMSD: neuromimetic slip detection after Osborn et al. (shared SPEC section 2).
+
+The comparison method of the paper's section II-E, on the 4 x 4 tactile array
+sampled at 260 Hz. For every taxel the force derivative is taken,
+``d_k = (f_k - f_(k-1)) * fs`` (N/s), and slip is a *fast change of the
+derivative*: the statistic is ``s_k = d_k - d_(k-1)`` (N/s per sample), defined
+from the third frame on (0 before). A taxel is over threshold when
+``|s_k| > threshold``; a *detection* is a sample at which any taxel is over
+threshold while none was at the previous sample (a rising edge of the ORed
+signal), so one burst of fast change counts once and a slip that keeps
+shaking the taxels keeps producing detections. Every detection adds 45 ms of
+finger closing (:mod:`slipreflex.baselines.closing`).
+
+The threshold is not a per-bottle tuning knob: :func:`slipreflex.baselines.rest_threshold`
+derives it from a recording of the rig at rest (k standard deviations of
+``s``).
+
+Examples
+--------
+>>> import numpy as np
+>>> frames = np.zeros((6, 4, 4)); frames[4:, 0, 0] = -0.5      # a sudden force drop
+>>> nmsd_detections(frames, fs=260.0, threshold=50.0).tolist()
+[False, False, False, False, True, False]
+>>> r = NMSD(threshold=50.0, speed=500.0)
+>>> [r.step(f) is not None for f in frames]
+[False, False, False, False, True, True]
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..hardware import FINGER_MAX, FINGER_MIN, NMSD_FS
+from ._validate import as_frame, as_frames, build, number, setattr_frozen
+from .closing import CLOSE_S, Closer, ClosingParams, closing_commands
+
+__all__ = ["NMSDParams", "NMSD", "nmsd_statistic", "nmsd_detections", "nmsd_commands"]
+
+
+@dataclass(frozen=True, slots=True)
+class NMSDParams:
+    """Parameters of the NMSD reflex.
+
+    Parameters
+    ----------
+    threshold : float
+        Threshold on ``|d_k - d_(k-1)|`` in N/s (> 0); derive it with
+        :func:`slipreflex.baselines.rest_threshold`.
+    speed : float
+        Hand closing speed in finger units per second (> 0).
+    fs : float
+        Tactile sampling rate (Hz); 260 Hz in the paper.
+    close_s : float
+        Closing time per detection (s); 45 ms in the paper.
+    p0, lo, hi : float
+        Initial target and target saturation (finger units).
+
+    Examples
+    --------
+    >>> NMSDParams(threshold=40.0, speed=500.0).fs
+    260.0
+    """
+
+    threshold: float
+    speed: float
+    fs: float = NMSD_FS
+    close_s: float = CLOSE_S
+    p0: float = 0.0
+    lo: float = float(FINGER_MIN)
+    hi: float = float(FINGER_MAX)
+
+    def __post_init__(self) -> None:
+        setattr_frozen(self, "threshold", number("threshold", self.threshold, lo=0.0, lo_open=True))
+        setattr_frozen(self, "fs", number("fs", self.fs, lo=0.0, lo_open=True))
+        self.closing  # validates speed, close_s, p0, lo, hi
+
+    @property
+    def closing(self) -> ClosingParams:
+        """The closing-rule parameters at this method's rate.
+
+        Examples
+        --------
+        >>> NMSDParams(threshold=1.0, speed=520.0).closing.samples_per_close
+        12
+        """
+        return ClosingParams(fs=self.fs, speed=self.speed, close_s=self.close_s,
+                             p0=self.p0, lo=self.lo, hi=self.hi)
+
+
+def nmsd_statistic(frames, fs: float = NMSD_FS) -> np.ndarray:
+    """Change of the force derivative per taxel, ``s_k = d_k - d_(k-1)`` (N/s).
+
+    Parameters
+    ----------
+    frames : array_like, shape (K, 4, 4)
+        Tactile forces (N) at ``fs``.
+    fs : float
+        Sampling rate (Hz).
+
+    Returns
+    -------
+    numpy.ndarray, shape (K, 4, 4)
+        The statistic; zero for the first two frames (no second difference yet).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> f = np.zeros((4, 4, 4)); f[:, 1, 1] = [0.0, 0.0, 0.5, 1.5]
+    >>> nmsd_statistic(f, fs=2.0)[:, 1, 1].tolist()
+    [0.0, 0.0, 1.0, 1.0]
+    """
+    f = as_frames("frames", frames)
+    fs = number("fs", fs, lo=0.0, lo_open=True)
+    s = np.zeros_like(f)
+    if len(f) >= 3:
+        d = np.diff(f, axis=0) * fs
+        s[2:] = np.diff(d, axis=0)
+    return s
+
+
+def nmsd_detections(frames, fs: float = NMSD_FS, *, threshold: float) -> np.ndarray:
+    """Detections: rising edges of "any taxel has ``|s_k| > threshold``".
+
+    Parameters
+    ----------
+    frames : array_like, shape (K, 4, 4)
+        Tactile forces (N).
+    fs : float
+        Sampling rate (Hz).
+    threshold : float
+        Threshold on ``|s_k|`` (N/s).
+
+    Returns
+    -------
+    numpy.ndarray of bool, shape (K,)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> f = np.zeros((5, 4, 4)); f[3:, 2, 3] = 1.0
+    >>> nmsd_detections(f, fs=1.0, threshold=0.5).tolist()
+    [False, False, False, True, False]
+    """
+    threshold = number("threshold", threshold, lo=0.0, lo_open=True)
+    over = (np.abs(nmsd_statistic(frames, fs)) > threshold).reshape(-1, 16).any(axis=1)
+    prev = np.concatenate(([False], over[:-1]))
+    return over & ~prev
+
+
+def nmsd_commands(frames, params: NMSDParams, positions=None) -> np.ndarray:
+    """Batch NMSD reflex: frames in, finger targets out (NaN where unchanged).
+
+    Gives exactly what :class:`NMSD` returns sample by sample.
+
+    Parameters
+    ----------
+    frames : array_like, shape (K, 4, 4)
+        Tactile forces (N) at ``params.fs``.
+    params : NMSDParams
+        The reflex parameters.
+    positions : array_like, shape (K,), optional
+        Measured hand positions fed with each frame (NaN where unknown).
+
+    Returns
+    -------
+    numpy.ndarray of float, shape (K,)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> f = np.zeros((6, 4, 4)); f[4:, 0, 0] = -1.0
+    >>> p = NMSDParams(threshold=50.0, speed=260.0)
+    >>> nmsd_commands(f, p).tolist()
+    [nan, nan, nan, nan, 1.0, 2.0]
+    """
+    det = nmsd_detections(frames, params.fs, threshold=params.threshold)
+    return closing_commands(det, params.closing, mode="events", positions=positions)
+
+
+class NMSD:
+    """Streaming NMSD reflex (implements :class:`slipreflex.interfaces.Reflex`).
+
+    Parameters
+    ----------
+    params : NMSDParams, optional
+        Parameters; or give them as keywords (unknown keywords are an error).
+
+    Attributes
+    ----------
+    name : str
+        ``"nmsd"``.
+    input_kind : str
+        ``"tactile"``.
+    fs : float
+        Rate at which :meth:`step` must be called (260 Hz by default).
+    last_statistic : float
+        Largest ``|s_k|`` over the taxels at the last step.
+    last_event : bool
+        Whether the last step was a detection.
+    detections : int
+        Detections since the last reset.
+    closing_s : float
+        Total closing time generated since the last reset (s).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from slipreflex.interfaces import Reflex
+    >>> r = NMSD(threshold=50.0, speed=520.0)
+    >>> isinstance(r, Reflex), r.name, r.input_kind, r.fs
+    (True, 'nmsd', 'tactile', 260.0)
+    >>> r.step(np.zeros((4, 4)), position=100.0) is None
+    True
+    """
+
+    name = "nmsd"
+    input_kind = "tactile"
+
+    def __init__(self, params: NMSDParams | None = None, **kwargs: Any) -> None:
+        if params is None:
+            params = build(NMSDParams, kwargs)
+        elif kwargs:
+            params = build(NMSDParams, {**_asdict(params), **kwargs})
+        self.params = params
+        self.fs = params.fs
+        self._closer = Closer(params.closing)
+        self.reset()
+
+    def reset(self) -> None:
+        """Restore the initial state.
+
+        Examples
+        --------
+        >>> r = NMSD(threshold=1.0, speed=100.0); r.reset(); r.detections
+        0
+        """
+        self._prev: np.ndarray | None = None
+        self._prev_d: np.ndarray | None = None
+        self._over = False
+        self._closer.reset()
+        self.last_statistic = 0.0
+        self.last_event = False
+        self.detections = 0
+
+    @property
+    def closing_s(self) -> float:
+        """Total closing time generated since the last reset (s).
+
+        Examples
+        --------
+        >>> NMSD(threshold=1.0, speed=100.0).closing_s
+        0.0
+        """
+        return self._closer.closing_samples / self.fs
+
+    @property
+    def closing(self) -> bool:
+        """True while the fingers are being told to close.
+
+        Examples
+        --------
+        >>> NMSD(threshold=1.0, speed=100.0).closing
+        False
+        """
+        return self._closer.closing
+
+    def step(self, frame, position: float | None = None) -> float | None:
+        """Take one (4, 4) tactile frame; return a new finger target or None.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> r = NMSD(threshold=50.0, speed=520.0)
+        >>> out = [r.step(np.full((4, 4), v)) for v in (0.0, 0.0, 0.0, -1.0)]
+        >>> out[-1], r.last_event
+        (2.0, True)
+        """
+        f = as_frame("frame", frame)
+        s = 0.0
+        if self._prev is not None:
+            d = (f - self._prev) * self.fs
+            if self._prev_d is not None:
+                s = float(np.max(np.abs(d - self._prev_d)))
+            self._prev_d = d
+        self._prev = f
+        over = s > self.params.threshold
+        event = over and not self._over
+        self._over = over
+        self.last_statistic = s
+        self.last_event = event
+        if event:
+            self.detections += 1
+        self._closer.feed(event, "events")
+        return self._closer.step(position)
+
+
+def _asdict(params: Any) -> dict[str, Any]:
+    import dataclasses
+
+    return {f.name: getattr(params, f.name) for f in dataclasses.fields(params)}

@@ -1,0 +1,319 @@
+"""SWT-SD: slip detection with the stationary wavelet transform after Romeo et al.
+
+The second comparison method of the paper's section II-E (shared SPEC
+section 2), on the 4 x 4 tactile array sampled at 380 Hz. For every taxel, the
+last ``window = 8`` samples (21 ms) are decomposed by :func:`pywt.swt` into
+three levels with the Haar wavelet, and the statistic is the level-3 detail
+coefficient at the first position of the window. With Haar and a window of
+exactly ``2**3`` samples that coefficient is the only one whose filter does
+not wrap around the window: ``(sum(older half) - sum(newer half)) / (2 * sqrt(2))``,
+a matched step/ramp detector over the whole 21 ms (a force drop gives a
+positive value). It is 0 until the window is full.
+
+A taxel is over threshold when ``|c_k| > threshold``; slip is declared on a
+taxel when it has been over threshold on the crossing sample and on the
+``persist = 8`` following samples (the change "persists for at least another
+21 ms"); the ON/OFF signal is the OR over the taxels. While ON, the hand is
+driven with the NMSD closing rule (:mod:`slipreflex.baselines.closing`, mode
+``"hold"``).
+
+The wavelet, the use of the first coefficient and the persistence count are
+our reading of Romeo et al.; the threshold comes from
+:func:`slipreflex.baselines.rest_threshold`, the same rule as for NMSD.
+
+Examples
+--------
+>>> import numpy as np
+>>> f = np.zeros((30, 4, 4)); f[10:, 1, 2] = -np.arange(20) * 0.05   # force falling
+>>> on = swt_on(f, threshold=0.05)
+>>> int(np.argmax(on)), bool(on[-1])
+(20, True)
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..errors import ParameterError
+from ..hardware import FINGER_MAX, FINGER_MIN, SWT_FS
+from ._validate import as_frame, as_frames, build, integer, number, setattr_frozen
+from .closing import CLOSE_S, Closer, ClosingParams, closing_commands
+
+__all__ = ["SWTParams", "SWTSD", "swt_statistic", "swt_on", "swt_commands",
+           "SWT_WINDOW", "SWT_LEVEL", "SWT_WAVELET"]
+
+#: Moving-window length (samples): 21 ms at 380 Hz, as in the paper.
+SWT_WINDOW: int = 8
+#: Decomposition depth.
+SWT_LEVEL: int = 3
+#: Mother wavelet (our choice; see the module docstring).
+SWT_WAVELET: str = "haar"
+
+
+@dataclass(frozen=True, slots=True)
+class SWTParams:
+    """Parameters of the SWT-SD reflex.
+
+    Parameters
+    ----------
+    threshold : float
+        Threshold on ``|cD3|`` (N, > 0); derive it with
+        :func:`slipreflex.baselines.rest_threshold`.
+    speed : float
+        Hand closing speed in finger units per second (> 0).
+    fs : float
+        Tactile sampling rate (Hz); 380 Hz in the paper.
+    persist : int
+        Samples the crossing must persist after the crossing sample (>= 0);
+        8 samples = 21 ms at 380 Hz.
+    close_s : float
+        Closing quantum of the NMSD rule used while ON (s).
+    p0, lo, hi : float
+        Initial target and target saturation (finger units).
+
+    Examples
+    --------
+    >>> SWTParams(threshold=0.1, speed=500.0).fs
+    380.0
+    """
+
+    threshold: float
+    speed: float
+    fs: float = SWT_FS
+    persist: int = SWT_WINDOW
+    close_s: float = CLOSE_S
+    p0: float = 0.0
+    lo: float = float(FINGER_MIN)
+    hi: float = float(FINGER_MAX)
+
+    def __post_init__(self) -> None:
+        setattr_frozen(self, "threshold", number("threshold", self.threshold, lo=0.0, lo_open=True))
+        setattr_frozen(self, "fs", number("fs", self.fs, lo=0.0, lo_open=True))
+        setattr_frozen(self, "persist", integer("persist", self.persist, lo=0))
+        self.closing  # validates speed, close_s, p0, lo, hi
+
+    @property
+    def closing(self) -> ClosingParams:
+        """The closing-rule parameters at this method's rate.
+
+        Examples
+        --------
+        >>> SWTParams(threshold=1.0, speed=500.0).closing.samples_per_close
+        17
+        """
+        return ClosingParams(fs=self.fs, speed=self.speed, close_s=self.close_s,
+                             p0=self.p0, lo=self.lo, hi=self.hi)
+
+
+def _cd3_first(windows: np.ndarray) -> np.ndarray:
+    """Level-3 Haar SWT detail at the first position of each window (last axis, length 8)."""
+    import pywt
+
+    coeffs = pywt.swt(windows, SWT_WAVELET, level=SWT_LEVEL, axis=-1)
+    return coeffs[0][1][..., 0]
+
+
+def swt_statistic(frames) -> np.ndarray:
+    """Level-3 SWT detail of the last 8 samples of every taxel.
+
+    Parameters
+    ----------
+    frames : array_like, shape (K, 4, 4)
+        Tactile forces (N).
+
+    Returns
+    -------
+    numpy.ndarray, shape (K, 4, 4)
+        ``c_k``; zero for the first 7 frames (window not yet full).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> f = np.zeros((9, 4, 4)); f[:, 0, 0] = np.arange(9.0)
+    >>> np.round(swt_statistic(f)[6:, 0, 0], 4).tolist()
+    [0.0, -5.6569, -5.6569]
+    """
+    f = as_frames("frames", frames)
+    k = len(f)
+    out = np.zeros_like(f)
+    if k >= SWT_WINDOW:
+        flat = f.reshape(k, -1)
+        win = np.lib.stride_tricks.sliding_window_view(flat, SWT_WINDOW, axis=0)  # (k-7, 16, 8)
+        out[SWT_WINDOW - 1:] = _cd3_first(np.ascontiguousarray(win)).reshape(-1, *f.shape[1:])
+    return out
+
+
+def swt_on(frames, *, threshold: float, persist: int = SWT_WINDOW) -> np.ndarray:
+    """The ON/OFF slip signal: any taxel over threshold for ``persist + 1`` samples running.
+
+    Parameters
+    ----------
+    frames : array_like, shape (K, 4, 4)
+        Tactile forces (N).
+    threshold : float
+        Threshold on ``|c_k|`` (N).
+    persist : int
+        Samples the crossing must persist after the crossing sample.
+
+    Returns
+    -------
+    numpy.ndarray of bool, shape (K,)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> f = np.zeros((20, 4, 4)); f[8:, 3, 3] = 1.0     # a step on one taxel
+    >>> np.flatnonzero(swt_on(f, threshold=0.1, persist=2)).tolist()
+    [10, 11, 12, 13, 14]
+    """
+    threshold = number("threshold", threshold, lo=0.0, lo_open=True)
+    persist = integer("persist", persist, lo=0)
+    over = (np.abs(swt_statistic(frames)) > threshold).reshape(len(np.asarray(frames)), -1)
+    k = np.arange(over.shape[0])[:, None]
+    last_below = np.maximum.accumulate(np.where(over, -1, k), axis=0)
+    run = k - last_below  # consecutive over-threshold samples ending at k
+    return (run > persist).any(axis=1)
+
+
+def swt_commands(frames, params: SWTParams, positions=None) -> np.ndarray:
+    """Batch SWT-SD reflex: frames in, finger targets out (NaN where unchanged).
+
+    Gives exactly what :class:`SWTSD` returns sample by sample.
+
+    Parameters
+    ----------
+    frames : array_like, shape (K, 4, 4)
+        Tactile forces (N) at ``params.fs``.
+    params : SWTParams
+        The reflex parameters.
+    positions : array_like, shape (K,), optional
+        Measured hand positions (NaN where unknown).
+
+    Returns
+    -------
+    numpy.ndarray of float, shape (K,)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> f = np.zeros((12, 4, 4)); f[8:, 0, 0] = 1.0
+    >>> p = SWTParams(threshold=0.1, speed=380.0, persist=1)
+    >>> swt_commands(f, p)[8:].tolist()
+    [nan, 1.0, 2.0, 3.0]
+    """
+    on = swt_on(frames, threshold=params.threshold, persist=params.persist)
+    return closing_commands(on, params.closing, mode="hold", positions=positions)
+
+
+class SWTSD:
+    """Streaming SWT-SD reflex (implements :class:`slipreflex.interfaces.Reflex`).
+
+    Parameters
+    ----------
+    params : SWTParams, optional
+        Parameters; or give them as keywords (unknown keywords are an error).
+
+    Attributes
+    ----------
+    name : str
+        ``"swt"``.
+    input_kind : str
+        ``"tactile"``.
+    fs : float
+        Rate at which :meth:`step` must be called (380 Hz by default).
+    last_statistic : float
+        Largest ``|c_k|`` over the taxels at the last step.
+    last_on : bool
+        The ON/OFF slip signal at the last step.
+    last_event : bool
+        True on the first ON sample of an ON period.
+    detections : int
+        ON periods started since the last reset.
+    closing_s : float
+        Total closing time generated since the last reset (s).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from slipreflex.interfaces import Reflex
+    >>> r = SWTSD(threshold=0.1, speed=380.0)
+    >>> isinstance(r, Reflex), r.name, r.input_kind, r.fs
+    (True, 'swt', 'tactile', 380.0)
+    """
+
+    name = "swt"
+    input_kind = "tactile"
+
+    def __init__(self, params: SWTParams | None = None, **kwargs: Any) -> None:
+        if params is None:
+            params = build(SWTParams, kwargs)
+        elif kwargs:
+            import dataclasses
+
+            params = build(SWTParams, {**{f.name: getattr(params, f.name)
+                                          for f in dataclasses.fields(params)}, **kwargs})
+        if not isinstance(params, SWTParams):
+            raise ParameterError(f"params must be an SWTParams, got {type(params).__name__}")
+        self.params = params
+        self.fs = params.fs
+        self._closer = Closer(params.closing)
+        self.reset()
+
+    def reset(self) -> None:
+        """Restore the initial state.
+
+        Examples
+        --------
+        >>> r = SWTSD(threshold=1.0, speed=100.0); r.reset(); r.last_on
+        False
+        """
+        self._buf: deque[np.ndarray] = deque(maxlen=SWT_WINDOW)
+        self._run = np.zeros(16, dtype=np.int64)
+        self._closer.reset()
+        self.last_statistic = 0.0
+        self.last_on = False
+        self.last_event = False
+        self.detections = 0
+
+    @property
+    def closing_s(self) -> float:
+        """Total closing time generated since the last reset (s).
+
+        Examples
+        --------
+        >>> SWTSD(threshold=1.0, speed=100.0).closing_s
+        0.0
+        """
+        return self._closer.closing_samples / self.fs
+
+    def step(self, frame, position: float | None = None) -> float | None:
+        """Take one (4, 4) tactile frame; return a new finger target or None.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> r = SWTSD(threshold=0.1, speed=380.0, persist=1)
+        >>> out = [r.step(np.full((4, 4), 1.0 if k >= 8 else 0.0)) for k in range(11)]
+        >>> out[8:], r.last_on
+        ([None, 1.0, 2.0], True)
+        """
+        self._buf.append(as_frame("frame", frame))
+        if len(self._buf) == SWT_WINDOW:
+            c = _cd3_first(np.stack(self._buf, axis=-1))  # (16, 8) -> (16,)
+            over = np.abs(c) > self.params.threshold
+            self.last_statistic = float(np.max(np.abs(c)))
+        else:
+            over = np.zeros(16, dtype=bool)
+            self.last_statistic = 0.0
+        self._run = np.where(over, self._run + 1, 0)
+        on = bool((self._run > self.params.persist).any())
+        self.last_event = on and not self.last_on
+        self.last_on = on
+        if self.last_event:
+            self.detections += 1
+        self._closer.feed(on, "hold")
+        return self._closer.step(position)
