@@ -1,0 +1,453 @@
+"""The real-time loop: DAQ samples in, reflex commands out, everything recorded.
+
+:func:`run_loop` reads samples from any :class:`~slipreflex.interfaces.SampleSource`
+(the serial DAQ, the virtual DAQ on a pty, anything with ``read``), feeds each
+to the same reflex object used in simulation and replay, sends its commands to
+any :class:`~slipreflex.interfaces.Hand`, and records every stream with a
+:class:`~slipreflex.recording.Recorder`.
+
+What it guarantees:
+
+- **Latency** from a sample's arrival (the moment its bytes were read from the
+  port, ``source.last_arrival`` when the source provides it) to its command
+  being written is measured for every command; :class:`RunResult` reports
+  p50, p99 and max.
+- **Watchdog**: when no valid sample arrives for ``watchdog`` seconds (100 ms
+  by default) the grasping fingers are told to hold where they are
+  (``hand.hold()`` if the hand has it, else its last target is re-sent); the
+  hand is never opened by a fault. The fault is reported and recorded, and
+  the reflex resumes, unchanged, when samples return.
+- **Faults never stop the loop**: a DAQ or hand port that fails, a command
+  the hand driver rejects, a recording that cannot be written any more - each
+  becomes a :class:`Fault` (recorded, reported) and the loop goes on.
+- **Stopping**: after ``duration`` seconds, when ``stop`` is set, or on
+  Ctrl-C; the recording is always closed by the caller's ``with`` block.
+
+Examples
+--------
+>>> from slipreflex.chain import SlipReflex
+>>> from slipreflex.interfaces import DaqSample
+>>> class Source:                          # 64 samples of a still surface, then nothing
+...     def __init__(self): self.left = [DaqSample(k, k * 0.003, 0.4, None, 0) for k in range(64)]
+...     def read(self, timeout):
+...         out, self.left = self.left[:8], self.left[8:]
+...         return out
+...     def close(self): pass
+>>> class Hand:
+...     def __init__(self): self.targets = {}
+...     def set_positions(self, t): self.targets.update(t)
+...     def positions(self): return dict(self.targets)
+>>> res = run_loop(Source(), Hand(), SlipReflex(p0=200.0), duration=0.5)
+>>> res.samples, res.commands, [f.kind for f in res.faults]
+(64, 4, ['watchdog'])
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import threading
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .errors import DeviceError, ParameterError
+from .hardware import SLIP_FINGER, TRIPOD, Finger
+from .interfaces import DaqSample
+
+__all__ = ["Fault", "RunResult", "run_loop", "print_fault", "WATCHDOG_S"]
+
+#: Seconds without a valid sample after which the watchdog holds the fingers.
+WATCHDOG_S: float = 0.1
+
+
+@dataclass(frozen=True, slots=True)
+class Fault:
+    """One fault seen by the loop.
+
+    Attributes
+    ----------
+    time : float
+        Seconds since the run started.
+    kind : str
+        ``"watchdog"``, ``"watchdog-clear"``, ``"daq-port"``, ``"hand-port"``,
+        ``"hand-port-restored"``, ``"command-rejected"``, ``"hold-failed"``
+        or ``"recording"``.
+    message : str
+        What happened, naming the port or file.
+    action : str
+        What the loop did about it.
+
+    Examples
+    --------
+    >>> Fault(0.5, "watchdog", "no valid sample for 100 ms", "fingers held").kind
+    'watchdog'
+    """
+
+    time: float
+    kind: str
+    message: str
+    action: str
+
+    def to_dict(self) -> dict[str, Any]:
+        """Fields as a dict (the /faults message).
+
+        Examples
+        --------
+        >>> Fault(1.0, "k", "m", "a").to_dict()["action"]
+        'a'
+        """
+        return {"time": self.time, "kind": self.kind, "message": self.message, "action": self.action}
+
+
+@dataclass
+class RunResult:
+    """What a run did.
+
+    Attributes
+    ----------
+    samples, events, windows, commands : int
+        Samples processed, spikes, windows and reflex commands.
+    commands_sent : int
+        Commands the hand driver accepted and wrote.
+    latencies : numpy.ndarray
+        Seconds from sample arrival to command written, per sent command.
+    faults : list of Fault
+    daq_stats : dict
+        The source's counters at the end (``seq_gaps``, ``crc_errors``, ...), if it has any.
+    duration : float
+        Seconds the loop ran.
+    interrupted : bool
+        True if stopped by Ctrl-C.
+    recording_error : str or None
+        Why the recording stopped early, if it did.
+
+    Examples
+    --------
+    >>> r = RunResult(latencies=np.array([1e-4, 2e-4, 3e-4]))
+    >>> {k: round(v, 3) for k, v in r.latency_ms().items()}
+    {'p50': 0.2, 'p99': 0.298, 'max': 0.3}
+    """
+
+    samples: int = 0
+    events: int = 0
+    windows: int = 0
+    commands: int = 0
+    commands_sent: int = 0
+    latencies: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    faults: list[Fault] = field(default_factory=list)
+    daq_stats: dict[str, int] = field(default_factory=dict)
+    duration: float = 0.0
+    interrupted: bool = False
+    recording_error: str | None = None
+
+    def latency_ms(self) -> dict[str, float]:
+        """p50, p99 and max of the command latency in milliseconds (NaN if none).
+
+        Examples
+        --------
+        >>> RunResult().latency_ms()["p99"]
+        nan
+        """
+        if self.latencies.size == 0:
+            return {"p50": math.nan, "p99": math.nan, "max": math.nan}
+        ms = self.latencies * 1e3
+        return {"p50": float(np.percentile(ms, 50)), "p99": float(np.percentile(ms, 99)),
+                "max": float(ms.max())}
+
+    def summary(self) -> str:
+        """A few human-readable lines for the end of a run.
+
+        Examples
+        --------
+        >>> print(RunResult(samples=3).summary().splitlines()[0])
+        samples 3, events 0, windows 0, commands 0 (0 sent) in 0.0 s
+        """
+        lat = self.latency_ms()
+        lines = [f"samples {self.samples}, events {self.events}, windows {self.windows}, "
+                 f"commands {self.commands} ({self.commands_sent} sent) in {self.duration:.1f} s",
+                 f"latency sample->command: p50 {lat['p50']:.3f} ms, p99 {lat['p99']:.3f} ms, "
+                 f"max {lat['max']:.3f} ms (n={self.latencies.size})"]
+        if self.daq_stats:
+            d = self.daq_stats
+            lines.append("daq: " + ", ".join(f"{k} {d[k]}" for k in
+                                              ("frames", "seq_gaps", "frames_lost", "crc_errors",
+                                               "truncated", "resyncs", "garbage_bytes",
+                                               "disconnects", "reconnects") if k in d))
+        kinds: dict[str, int] = {}
+        for f in self.faults:
+            kinds[f.kind] = kinds.get(f.kind, 0) + 1
+        lines.append("faults: " + (", ".join(f"{k} x{n}" for k, n in kinds.items()) or "none"))
+        if self.recording_error:
+            lines.append(f"recording stopped early: {self.recording_error}")
+        return "\n".join(lines)
+
+
+def _num(x: Any) -> float | None:
+    """JSON-safe float: NaN/inf/None -> None."""
+    if x is None:
+        return None
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
+def run_loop(source: Any, hand: Any, reflex: Any, *, recorder: Any = None,
+             duration: float | None = None, watchdog: float = WATCHDOG_S, poll: float = 0.01,
+             fingers: Sequence[Finger] = TRIPOD, stop: threading.Event | None = None,
+             on_fault: Callable[[Fault], None] | None = None, stats_interval: float = 1.0,
+             clock: Callable[[], float] = time.perf_counter) -> RunResult:
+    """Run the reflex in real time until ``duration``, ``stop`` or Ctrl-C.
+
+    Parameters
+    ----------
+    source : SampleSource
+        ``read(timeout) -> list[DaqSample]``; may raise
+        :class:`~slipreflex.errors.DeviceError` (recorded, the loop goes on).
+        If it has ``last_arrival`` (a ``time.perf_counter()`` value) that is
+        the arrival time of the samples just read; if it has ``stats`` (with
+        ``to_dict()``), the counters are recorded and returned.
+    hand : Hand
+        ``set_positions(targets)``; optional ``hold(fingers)``.
+    reflex : Reflex
+        A slip reflex (``input_kind == "slip"``), e.g. :class:`slipreflex.chain.SlipReflex`.
+    recorder : Recorder, optional
+        Where every stream goes.
+    duration : float, optional
+        Seconds to run (default: until stopped).
+    watchdog : float
+        Seconds without a valid sample before the fingers are held.
+    poll : float
+        Longest wait for input in one read (s); bounds the watchdog's reaction.
+    fingers : sequence of Finger
+        Fingers that get the reflex's command (default: the tripod).
+    stop : threading.Event, optional
+        Set it (e.g. from a signal handler) to stop the loop.
+    on_fault : callable, optional
+        Called with each :class:`Fault` as it happens (e.g. to print it).
+    stats_interval : float
+        Seconds between /stats messages.
+    clock : callable
+        Monotonic clock in seconds; must be ``time.perf_counter`` if the
+        source's ``last_arrival`` is to be used.
+
+    Returns
+    -------
+    RunResult
+
+    Raises
+    ------
+    ParameterError
+        For a reflex that does not read the slip sensor, or a bad watchdog/poll.
+
+    Examples
+    --------
+    >>> from slipreflex.chain import SlipReflex
+    >>> class Silent:
+    ...     def read(self, timeout): return []
+    ...     def close(self): pass
+    >>> class Hand:
+    ...     held = 0
+    ...     def set_positions(self, t): pass
+    ...     def positions(self): return {}
+    ...     def hold(self, fingers): self.held += 1
+    >>> h = Hand()
+    >>> r = run_loop(Silent(), h, SlipReflex(), duration=0.3, poll=0.01)
+    >>> [f.kind for f in r.faults], h.held
+    (['watchdog'], 1)
+    """
+    if getattr(reflex, "input_kind", "slip") != "slip":
+        raise ParameterError(f"run_loop: reflex {getattr(reflex, 'name', reflex)!r} reads "
+                             f"{reflex.input_kind!r}, but the DAQ provides the slip sensor")
+    if not (watchdog > 0 and poll > 0):
+        raise ParameterError(f"run_loop: watchdog and poll must be > 0, got {watchdog!r}, {poll!r}")
+    fingers = tuple(Finger(f) for f in fingers)
+    finger_names = [f.name.lower() for f in fingers]
+    res = RunResult()
+    latencies: list[float] = []
+    t0 = clock()
+    wall0 = time.time_ns()
+    rec_ok = recorder is not None
+
+    def ns(t: float) -> int:
+        return wall0 + int((t - t0) * 1e9)
+
+    def record(topic: str, msg: dict[str, Any], t: float) -> None:
+        if rec_ok and not recorder.write(topic, msg, ns(t)):
+            check_recorder()
+
+    def check_recorder() -> None:
+        nonlocal rec_ok
+        if rec_ok and recorder.error is not None:
+            rec_ok = False
+            res.recording_error = f"{getattr(recorder, 'path', 'recording')}: {recorder.error}"
+            fault("recording", f"recording failed, later data is not recorded: {res.recording_error}",
+                  "reflex kept running")
+
+    def fault(kind: str, message: str, action: str) -> None:
+        f = Fault(round(clock() - t0, 6), kind, message, action)
+        res.faults.append(f)
+        if on_fault is not None:
+            on_fault(f)
+        record("/faults", f.to_dict(), clock())
+
+    last_target: float | None = None
+
+    def hold() -> None:
+        try:
+            if hasattr(hand, "hold"):
+                hand.hold(fingers)
+            elif last_target is not None:
+                hand.set_positions({f: last_target for f in fingers})
+        except (DeviceError, ParameterError) as err:
+            fault("hold-failed", str(err), "hand keeps its last target")
+
+    def source_stats() -> dict[str, int]:
+        st = getattr(source, "stats", None)
+        if st is None:
+            return {}
+        return dict(st.to_dict()) if hasattr(st, "to_dict") else dict(vars(st))
+
+    last_valid = t0
+    stalled = False
+    hand_ok = True
+    last_flow: int | None = None
+    next_stats = t0 + stats_interval
+    pending: list[tuple[DaqSample, float, float | None, float | None, Any, bool, int | None,
+                        float | None, bool, float | None]] = []
+    try:
+        while True:
+            now = clock()
+            if duration is not None and now - t0 >= duration:
+                break
+            if stop is not None and stop.is_set():
+                break
+            try:
+                samples = source.read(poll)
+            except DeviceError as err:
+                fault("daq-port", str(err), "fingers hold via the watchdog; reconnecting")
+                samples = []
+            if samples:
+                arrival = getattr(source, "last_arrival", math.nan)
+                if not (isinstance(arrival, float) and math.isfinite(arrival)):
+                    arrival = clock()
+                # 1. the time-critical part: every sample through the reflex, commands out.
+                for s in samples:
+                    pos = None
+                    try:
+                        pos = hand.positions().get(SLIP_FINGER)
+                    except DeviceError:
+                        pass
+                    cmd = reflex.step(s.slip_volts, pos)
+                    sent = False
+                    lat = None
+                    if cmd is not None:
+                        try:
+                            hand.set_positions({f: cmd for f in fingers})
+                        except ParameterError as err:
+                            fault("command-rejected", str(err), "not sent; fingers hold their last target")
+                        except DeviceError as err:
+                            if hand_ok:
+                                fault("hand-port", str(err), "hand keeps its last target; reconnecting")
+                            hand_ok = False
+                        else:
+                            lat = clock() - arrival
+                            latencies.append(lat)
+                            sent = True
+                            last_target = cmd
+                            if not hand_ok:
+                                hand_ok = True
+                                fault("hand-port-restored", "hand port is back", "commands resumed")
+                    pending.append((s, arrival, pos, cmd, getattr(reflex, "last_filtered", None),
+                                    bool(getattr(reflex, "last_event", False)),
+                                    getattr(reflex, "last_count", None),
+                                    getattr(reflex, "last_threshold", None), sent, lat))
+                t_now = clock()
+                if stalled:
+                    stalled = False
+                    fault("watchdog-clear", f"samples resumed after {t_now - last_valid:.3f} s",
+                          "reflex resumed")
+                last_valid = t_now
+                # 2. bookkeeping and recording, after the commands are out.
+                for (s, arr, pos, cmd, filt, ev, count, thr, sent, lat) in pending:
+                    res.samples += 1
+                    res.events += ev
+                    if count is not None:
+                        res.windows += 1
+                    if cmd is not None:
+                        res.commands += 1
+                        res.commands_sent += sent
+                    if not rec_ok:
+                        continue
+                    ta = arr - t0
+                    record("/daq/samples", {"seq": s.seq, "t": s.t, "slip_volts": s.slip_volts,
+                                            "flow_pulses": s.flow_pulses, "arrival": ta,
+                                            "position": _num(pos)}, arr)
+                    if s.accel_g is not None:
+                        ax, ay, az = s.accel_g
+                        record("/daq/imu", {"seq": s.seq, "t": s.t, "ax": ax, "ay": ay, "az": az}, arr)
+                    if s.flow_pulses != last_flow:
+                        record("/daq/flow", {"seq": s.seq, "t": s.t, "pulses": s.flow_pulses}, arr)
+                    record("/chain/state", {"seq": s.seq, "t": s.t, "filtered": _num(filt),
+                                            "threshold": _num(thr) or 0.0, "event": ev}, arr)
+                    if ev:
+                        record("/chain/events", {"seq": s.seq, "t": s.t}, arr)
+                    if count is not None:
+                        record("/chain/windows", {"seq": s.seq, "t": s.t, "count": int(count)}, arr)
+                    if cmd is not None:
+                        record("/hand/commands", {"seq": s.seq, "t": s.t, "target": float(cmd),
+                                                  "fingers": finger_names, "sent": sent,
+                                                  "latency": lat}, arr)
+                for item in pending:
+                    last_flow = item[0].flow_pulses
+                pending.clear()
+            else:
+                t_now = clock()
+                if not stalled and t_now - last_valid > watchdog:
+                    stalled = True
+                    hold()
+                    fault("watchdog", f"no valid DAQ sample for {(t_now - last_valid) * 1e3:.0f} ms",
+                          "fingers held where they are")
+            if rec_ok:
+                recorder.maybe_flush()
+                check_recorder()
+                t_now = clock()
+                if t_now >= next_stats:
+                    next_stats = t_now + stats_interval
+                    record("/stats", {"time": t_now - t0, "counters": {
+                        **source_stats(), "samples": res.samples, "commands": res.commands,
+                        "faults": len(res.faults)}}, t_now)
+    except KeyboardInterrupt:
+        res.interrupted = True
+    res.duration = clock() - t0
+    res.latencies = np.asarray(latencies, dtype=float)
+    res.daq_stats = source_stats()
+    if rec_ok:
+        record("/stats", {"time": res.duration, "counters": {
+            **res.daq_stats, "samples": res.samples, "commands": res.commands,
+            "faults": len(res.faults)}}, clock())
+        lat = res.latency_ms()
+        recorder.add_metadata("run_summary", {
+            "samples": res.samples, "commands": res.commands, "events": res.events,
+            "duration_s": f"{res.duration:.3f}", "latency_p50_ms": f"{lat['p50']:.4f}",
+            "latency_p99_ms": f"{lat['p99']:.4f}", "latency_max_ms": f"{lat['max']:.4f}",
+            "faults": len(res.faults)})
+    if recorder is not None and recorder.error is not None and res.recording_error is None:
+        res.recording_error = f"{getattr(recorder, 'path', 'recording')}: {recorder.error}"
+    return res
+
+
+def print_fault(fault: Fault, file: Any = None) -> None:
+    """Print a fault as one line on stderr (the CLI's ``on_fault``).
+
+    Examples
+    --------
+    >>> import io; buf = io.StringIO()
+    >>> print_fault(Fault(1.25, "watchdog", "no sample", "held"), file=buf); buf.getvalue()
+    '[   1.250 s] watchdog: no sample -> held\\n'
+    """
+    print(f"[{fault.time:8.3f} s] {fault.kind}: {fault.message} -> {fault.action}",
+          file=file if file is not None else sys.stderr, flush=True)
+
