@@ -50,7 +50,13 @@ PWM_MAX: int = 297
 
 
 class Finger(enum.IntEnum):
-    """i-Limb finger ids on the control unit's serial protocol."""
+    """i-Limb finger ids on the control unit's serial protocol.
+
+    Examples
+    --------
+    >>> Finger(2).name
+    'MIDDLE'
+    """
 
     THUMB = 0
     INDEX = 1
@@ -62,7 +68,13 @@ class Finger(enum.IntEnum):
 
 
 class HandCommand(enum.IntEnum):
-    """i-Limb per-finger command codes."""
+    """i-Limb per-finger command codes.
+
+    Examples
+    --------
+    >>> int(HandCommand.POSITION)
+    3
+    """
 
     STOP = 0
     CLOSE = 1

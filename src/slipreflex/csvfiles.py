@@ -1,0 +1,165 @@
+"""The CSV formats of slipreflex, defined once; every reader and writer uses them.
+
+Input (what ``slipreflex detect`` reads and ``slipreflex export`` writes): a
+header row with ``t`` (seconds) and ``x`` (slip-sensor volts), extra columns
+ignored; or a single column of volts (with or without a header) and a sampling
+rate given by the caller.
+
+Outputs of ``slipreflex detect``: per sample ``t, x, threshold, event`` (x is the
+filtered signal, threshold the one in force) and per window ``t_end, v, command``.
+
+Examples
+--------
+>>> import tempfile, pathlib
+>>> p = pathlib.Path(tempfile.mkdtemp()) / "rec.csv"
+>>> write_columns(p, {"t": [0.0, 0.003], "x": [0.41, 0.42]})
+>>> t, x = read_slip_csv(p)
+>>> x.tolist()
+[0.41, 0.42]
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import os
+import tempfile
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+
+from .errors import DataError
+
+__all__ = ["INPUT_COLUMNS", "SAMPLE_COLUMNS", "WINDOW_COLUMNS", "read_slip_csv", "write_columns"]
+
+INPUT_COLUMNS: tuple[str, str] = ("t", "x")
+SAMPLE_COLUMNS: tuple[str, ...] = ("t", "x", "threshold", "event")
+WINDOW_COLUMNS: tuple[str, ...] = ("t_end", "v", "command")
+
+
+def _number(path: Path, line: int, column: str, cell: str) -> float:
+    try:
+        value = float(cell)
+    except ValueError:
+        raise DataError(f"{path}, line {line}: column '{column}' is not a number: {cell!r}") from None
+    if not math.isfinite(value):
+        raise DataError(f"{path}, line {line}: column '{column}' is not finite: {cell!r}")
+    return value
+
+
+def read_slip_csv(path: str | os.PathLike, fs: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Read a slip-sensor recording.
+
+    Parameters
+    ----------
+    path : path-like
+        CSV file with a header naming ``t`` and ``x``, or a single column of volts.
+    fs : float, optional
+        Sampling rate (Hz) for a single-column file (times are k / fs). With a
+        ``t`` column it is not needed.
+
+    Returns
+    -------
+    t, x : numpy.ndarray
+        Times (s, strictly increasing) and volts.
+
+    Raises
+    ------
+    DataError
+        Unreadable, empty, missing column, non-numeric or non-finite cell, or
+        time not increasing; the message names the file and the line.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "one.csv"
+    >>> _ = p.write_text("x\\n0.4\\n0.5\\n")
+    >>> read_slip_csv(p, fs=100.0)[0].tolist()
+    [0.0, 0.01]
+    """
+    path = Path(path)
+    try:
+        with path.open(newline="") as fh:
+            rows = list(csv.reader(fh))
+    except (OSError, UnicodeDecodeError) as err:
+        raise DataError(f"{path}: cannot read: {getattr(err, 'strerror', None) or err}") from None
+    rows = [(i + 1, [c.strip() for c in row]) for i, row in enumerate(rows) if any(c.strip() for c in row)]
+    if not rows:
+        raise DataError(f"{path}: file is empty")
+    first_line, header = rows[0]
+    has_header = any(_is_text(c) for c in header)
+    body = rows[1:] if has_header else rows
+    if has_header and "x" in header and "t" in header:
+        it, ix = header.index("t"), header.index("x")
+    elif len(header) == 1:
+        it, ix = None, 0
+    else:
+        missing = [c for c in INPUT_COLUMNS if c not in header] if has_header else list(INPUT_COLUMNS)
+        raise DataError(f"{path}, line {first_line}: missing column(s) {', '.join(missing)} "
+                        f"(need a header with t and x, or a single column of volts)")
+    if it is None and fs is None:
+        raise DataError(f"{path}: single-column file needs a sampling rate (--fs)")
+    if not body:
+        raise DataError(f"{path}: no samples after the header")
+    t = np.empty(len(body))
+    x = np.empty(len(body))
+    width = len(header)
+    for k, (line, row) in enumerate(body):
+        if len(row) < width:
+            raise DataError(f"{path}, line {line}: expected {width} cells, got {len(row)}")
+        x[k] = _number(path, line, header[ix] if has_header else "x", row[ix])
+        if it is not None:
+            t[k] = _number(path, line, "t", row[it])
+            if k and t[k] <= t[k - 1]:
+                raise DataError(f"{path}, line {line}: time not increasing ({t[k]!r} after {t[k - 1]!r})")
+    if it is None:
+        t = np.arange(len(body)) / float(fs)
+    return t, x
+
+
+def _is_text(cell: str) -> bool:
+    try:
+        float(cell)
+    except ValueError:
+        return True
+    return False
+
+
+def write_columns(path: str | os.PathLike, columns: Mapping[str, Sequence]) -> None:
+    """Write equal-length columns to a CSV atomically.
+
+    The file appears under its name only once it is complete (written to a
+    temporary file in the same folder, then renamed), so an interrupted write
+    never leaves a file that looks complete.
+
+    Parameters
+    ----------
+    path : path-like
+        Destination.
+    columns : mapping of str to sequence
+        Column name to values; all the same length.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "w.csv"
+    >>> write_columns(p, {"v": [1, 2], "command": [10.0, 20.0]})
+    >>> p.read_text().splitlines()
+    ['v,command', '1,10.0', '2,20.0']
+    """
+    path = Path(path)
+    names = list(columns)
+    cols = [np.asarray(columns[n]) for n in names]
+    if len({c.shape[0] for c in cols}) > 1:
+        raise ValueError(f"columns of {path} differ in length: {[c.shape[0] for c in cols]}")
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
+    try:
+        with os.fdopen(fd, "w", newline="") as fh:
+            w = csv.writer(fh, lineterminator="\n")
+            w.writerow(names)
+            w.writerows(zip(*(c.tolist() for c in cols)))
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
