@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Sets everything up on a fresh machine (Python 3.11 + pip, root for apt) and runs a job.
 #   bash scripts/bootstrap.sh test        -> all tests
-#   bash scripts/bootstrap.sh reproduce   -> the main job
+#   bash scripts/bootstrap.sh reproduce   -> the main job (the paper's experiments, simulated)
+#   bash scripts/bootstrap.sh detect      -> slipreflex detect on the shipped example recording
 set -euo pipefail
 cd "$(dirname "$0")/.."
 job="${1:-test}"; shift || true
@@ -21,5 +22,6 @@ python3 -m pip install -q --disable-pip-version-check -e ".[test]"
 case "$job" in
   test) exec python3 -m pytest -q "$@" ;;
   reproduce) exec slipreflex reproduce "$@" ;;
-  *) echo "bootstrap.sh: unknown job '$job' (use test or reproduce)" >&2; exit 2 ;;
+  detect) exec slipreflex detect examples/slip_example.csv --out out/detect/slip_example "$@" ;;
+  *) echo "bootstrap.sh: unknown job '$job' (use test, reproduce or detect)" >&2; exit 2 ;;
 esac
