@@ -446,3 +446,239 @@ def read_recording(path: str | os.PathLike) -> Recording:
             elif isinstance(record, Footer):
                 rec.complete = True
     return rec
+
+
+def chain_params_of(rec: Recording):
+    """The :class:`~slipreflex.chain.ReflexParams` stored in a recording's metadata.
+
+    Parameters
+    ----------
+    rec : Recording
+
+    Returns
+    -------
+    ReflexParams
+
+    Raises
+    ------
+    DataError
+        The metadata is missing or malformed.
+
+    Examples
+    --------
+    >>> import json
+    >>> from slipreflex.chain import ReflexParams
+    >>> meta = {METADATA_NAME: {"reflex_params": json.dumps(ReflexParams(dath=True).to_dict())}}
+    >>> chain_params_of(Recording("r.mcap", metadata=meta)).dath
+    True
+    """
+    from .chain import ReflexParams
+
+    raw = rec.metadata.get(METADATA_NAME, {}).get("reflex_params")
+    if raw is None:
+        raise DataError(f"{rec.path}: no chain parameters in the metadata record {METADATA_NAME!r} "
+                        f"(not a slipreflex run recording?)")
+    try:
+        return ReflexParams.from_dict(json.loads(raw))
+    except (ValueError, TypeError) as err:
+        raise DataError(f"{rec.path}: bad chain parameters in the metadata: {err}") from None
+
+
+@dataclass
+class ReplayResult:
+    """Outcome of :func:`replay`: the recorded and the re-computed events and commands.
+
+    Events are ``(seq, t)`` of the spiking samples; commands ``(seq, t, target)``.
+
+    Attributes
+    ----------
+    samples : int
+    recorded_events, replayed_events : list of tuple
+    recorded_commands, replayed_commands : list of tuple
+    complete : bool
+        Whether the recording was complete (see :attr:`Recording.complete`).
+
+    Examples
+    --------
+    >>> r = ReplayResult(3, [(1, 0.003)], [(1, 0.003)], [], [], True)
+    >>> r.identical
+    True
+    """
+
+    samples: int
+    recorded_events: list[tuple]
+    replayed_events: list[tuple]
+    recorded_commands: list[tuple]
+    replayed_commands: list[tuple]
+    complete: bool
+
+    @property
+    def identical(self) -> bool:
+        """True if replay reproduced the recorded events and commands exactly.
+
+        For a recording cut short, the recorded lists must be a prefix of the
+        replayed ones (the crash may have cut derived messages of the last
+        samples).
+
+        Examples
+        --------
+        >>> ReplayResult(1, [], [(0, 0.0)], [], [], complete=False).identical
+        True
+        """
+        if self.complete:
+            return (self.recorded_events == self.replayed_events
+                    and self.recorded_commands == self.replayed_commands)
+        return (self.replayed_events[:len(self.recorded_events)] == self.recorded_events
+                and self.replayed_commands[:len(self.recorded_commands)] == self.recorded_commands)
+
+    def summary(self) -> str:
+        """One line per stream: counts and whether they match.
+
+        Examples
+        --------
+        >>> print(ReplayResult(1, [], [], [], [], True).summary())
+        samples 1
+        events: recorded 0, replayed 0 - identical
+        commands: recorded 0, replayed 0 - identical
+        """
+        def line(name: str, a: list, b: list) -> str:
+            same = a == b if self.complete else b[:len(a)] == a
+            if same:
+                verdict = "identical"
+            else:
+                k = next((i for i, (x, y) in enumerate(zip(a, b)) if x != y), min(len(a), len(b)))
+                verdict = (f"DIFFERENT from #{k}: recorded {a[k] if k < len(a) else None}, "
+                           f"replayed {b[k] if k < len(b) else None}")
+            return f"{name}: recorded {len(a)}, replayed {len(b)} - {verdict}"
+        return "\n".join([f"samples {self.samples}" + ("" if self.complete else " (recording cut short)"),
+                          line("events", self.recorded_events, self.replayed_events),
+                          line("commands", self.recorded_commands, self.replayed_commands)])
+
+
+def replay(path: str | os.PathLike | Recording) -> ReplayResult:
+    """Re-run the recorded chain offline over the recorded samples.
+
+    A fresh :class:`~slipreflex.chain.SlipReflex` built from the parameters in
+    the metadata gets every recorded sample, in order, with the slip-finger
+    position the loop gave it; its events and commands are compared with
+    the recorded ones.
+
+    Parameters
+    ----------
+    path : path-like or Recording
+
+    Returns
+    -------
+    ReplayResult
+
+    Raises
+    ------
+    DataError
+        Not a slipreflex run recording.
+
+    Examples
+    --------
+    >>> import io, json, tempfile, os
+    >>> from slipreflex.chain import ReflexParams
+    >>> path = os.path.join(tempfile.mkdtemp(), "r.mcap")
+    >>> meta = {METADATA_NAME: {"reflex_params": json.dumps(ReflexParams(p0=100.0).to_dict())}}
+    >>> with Recorder(path, metadata=meta) as rec:
+    ...     for k in range(16):
+    ...         _ = rec.write("/daq/samples", {"seq": k, "t": k * 0.003, "slip_volts": 0.4,
+    ...                       "flow_pulses": 0, "arrival": 0.0, "position": None}, k)
+    ...     _ = rec.write("/hand/commands", {"seq": 15, "t": 15 * 0.003, "target": 100.0,
+    ...                   "fingers": ["middle"], "sent": True, "latency": 1e-4}, 16)
+    >>> replay(path).identical
+    True
+    """
+    from .chain import SlipReflex
+
+    rec = path if isinstance(path, Recording) else read_recording(path)
+    reflex = SlipReflex.from_params(chain_params_of(rec))
+    events: list[tuple] = []
+    commands: list[tuple] = []
+    samples = rec.topic("/daq/samples")
+    for s in samples:
+        cmd = reflex.step(s["slip_volts"], s.get("position"))
+        if reflex.last_event:
+            events.append((s["seq"], s["t"]))
+        if cmd is not None:
+            commands.append((s["seq"], s["t"], float(cmd)))
+    return ReplayResult(
+        samples=len(samples),
+        recorded_events=[(m["seq"], m["t"]) for m in rec.topic("/chain/events")],
+        replayed_events=events,
+        recorded_commands=[(m["seq"], m["t"], float(m["target"])) for m in rec.topic("/hand/commands")],
+        replayed_commands=commands, complete=rec.complete)
+
+
+def export_csv(path: str | os.PathLike, out: str | os.PathLike | None = None, *,
+               all_streams: bool = False) -> list[str]:
+    """Write a recording's slip-sensor samples as a CSV that ``slipreflex detect`` reads.
+
+    The main file has columns ``t`` (board time, s) and ``x`` (volts). With
+    ``all_streams`` companions are written next to it: ``-imu`` (t, ax, ay,
+    az), ``-flow`` (t, pulses), ``-events`` (t), ``-windows`` (t, count),
+    ``-commands`` (t, target, sent, latency) and ``-faults`` (time, kind).
+
+    Parameters
+    ----------
+    path : path-like
+        The MCAP recording.
+    out : path-like, optional
+        Main CSV path (default: the recording's path with ``.csv``).
+    all_streams : bool
+        Also write the companion CSVs.
+
+    Returns
+    -------
+    list of str
+        The files written, main first.
+
+    Raises
+    ------
+    DataError
+        The recording has no samples.
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> from slipreflex.csvfiles import read_slip_csv
+    >>> path = os.path.join(tempfile.mkdtemp(), "r.mcap")
+    >>> with Recorder(path) as rec:
+    ...     for k in range(3):
+    ...         _ = rec.write("/daq/samples", {"seq": k, "t": k * 0.003, "slip_volts": 0.4 + k,
+    ...                       "flow_pulses": 0, "arrival": 0.0, "position": None}, k)
+    >>> files = export_csv(path)
+    >>> read_slip_csv(files[0])[1].tolist()
+    [0.4, 1.4, 2.4]
+    """
+    from pathlib import Path
+
+    from .csvfiles import write_columns
+
+    rec = read_recording(path)
+    samples = rec.topic("/daq/samples")
+    if not samples:
+        raise DataError(f"{rec.path}: no slip-sensor samples to export")
+    main = Path(out) if out is not None else Path(rec.path).with_suffix(".csv")
+    write_columns(main, {"t": [s["t"] for s in samples], "x": [s["slip_volts"] for s in samples]})
+    written = [str(main)]
+    if all_streams:
+        companions = {
+            "imu": ("/daq/imu", ("t", "ax", "ay", "az")),
+            "flow": ("/daq/flow", ("t", "pulses")),
+            "events": ("/chain/events", ("t",)),
+            "windows": ("/chain/windows", ("t", "count")),
+            "commands": ("/hand/commands", ("t", "target", "sent", "latency")),
+            "faults": ("/faults", ("time", "kind", "message", "action")),
+        }
+        for suffix, (topic, cols) in companions.items():
+            msgs = rec.topic(topic)
+            target = main.with_name(f"{main.stem}-{suffix}.csv")
+            write_columns(target, {c: ["" if m.get(c) is None else m.get(c) for m in msgs] for c in cols})
+            written.append(str(target))
+    return written
+
+
+__all__ += ["chain_params_of", "ReplayResult", "replay", "export_csv"]
