@@ -1,0 +1,225 @@
+"""results.csv, summary.csv, the terminal table and report.md (one definition of each).
+
+Rows are plain dicts with the keys of :data:`~slipreflex.analysis.trial.RESULT_COLUMNS`;
+no data-frame library is needed.
+
+Examples
+--------
+>>> rows = [{"experiment": "drop", "bottle": "TR", "method": "dath", "trial": i,
+...          "response_ms": 50.0 + i, "total_ms": 300.0, "success": i < 2,
+...          "onset_error_ms": 3.0, "n_events": 1} for i in range(3)]
+>>> s = summarize(rows)[0]
+>>> s["response_mean_ms"], s["response_n"], round(s["success_rate"], 3)
+(51.0, 3, 0.667)
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from collections.abc import Iterable, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .paper import (BOTTLE_ORDER, EXPERIMENTS, METHOD_LABELS, METHOD_ORDER, PAPER_SUCCESS,
+                    paper_value)
+from .trial import RESULT_COLUMNS
+
+__all__ = ["SUMMARY_COLUMNS", "summarize", "write_csv", "read_csv", "terminal_table",
+           "comparison_markdown", "fmt_mean_sd", "group_key_order"]
+
+#: Columns of summary.csv, in order.
+SUMMARY_COLUMNS: tuple[str, ...] = (
+    "experiment", "bottle", "method", "n_trials", "n_rows", "n_events",
+    "response_mean_ms", "response_sd_ms", "response_n",
+    "total_mean_ms", "total_sd_ms", "total_n",
+    "success_rate", "success_n",
+    "onset_error_mean_ms", "onset_error_sd_ms", "onset_error_n",
+    "paper_response_ms", "paper_total_ms",
+)
+
+
+def _stats(values: Iterable[Any]) -> tuple[float, float, int]:
+    v = np.array([float(x) for x in values], dtype=float)
+    v = v[np.isfinite(v)]
+    if v.size == 0:
+        return float("nan"), float("nan"), 0
+    sd = float(np.std(v, ddof=1)) if v.size > 1 else float("nan")
+    return float(np.mean(v)), sd, int(v.size)
+
+
+def group_key_order(key: tuple[str, str, str]) -> tuple:
+    """Sort key: experiments, bottles and methods in the paper's order.
+
+    Examples
+    --------
+    >>> sorted([("pour", "TR", "nmsd"), ("drop", "TX", "dath")], key=group_key_order)[0]
+    ('drop', 'TX', 'dath')
+    """
+    def idx(seq, x):
+        return seq.index(x) if x in seq else len(seq)
+    e, b, m = key
+    return (idx(EXPERIMENTS, e), e, idx(BOTTLE_ORDER, b), b, idx(METHOD_ORDER, m), m)
+
+
+def _truthy(x: Any) -> float:
+    if isinstance(x, str):
+        return 1.0 if x.strip().lower() in ("true", "1") else 0.0
+    return float(bool(x))
+
+
+def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Mean, sd (ddof 1) and n per experiment, bottle and method, plus success rate.
+
+    Success rate is over all rows (slip events; a trial without a detected slip
+    counts once). NaN timings (no onset, no response) are left out of the means
+    and counted in ``n``.
+
+    Examples
+    --------
+    >>> summarize([])
+    []
+    """
+    groups: dict[tuple[str, str, str], list[dict[str, Any]]] = {}
+    for r in rows:
+        groups.setdefault((r["experiment"], r["bottle"], r["method"]), []).append(r)
+    out = []
+    for key in sorted(groups, key=group_key_order):
+        g = groups[key]
+        e, b, m = key
+        rm, rs, rn = _stats(r.get("response_ms", math.nan) for r in g)
+        tm, ts, tn = _stats(r.get("total_ms", math.nan) for r in g)
+        em, es, en = _stats(r.get("onset_error_ms", math.nan) for r in g)
+        succ = [_truthy(r.get("success", False)) for r in g]
+        pr, pt = paper_value(e, "response_ms", b, m), paper_value(e, "total_ms", b, m)
+        out.append({
+            "experiment": e, "bottle": b, "method": m,
+            "n_trials": len({(r.get("trial"), r.get("seed")) for r in g}),
+            "n_rows": len(g),
+            "n_events": int(sum(1 for r in g if int(float(r.get("n_events", 1))) > 0)),
+            "response_mean_ms": rm, "response_sd_ms": rs, "response_n": rn,
+            "total_mean_ms": tm, "total_sd_ms": ts, "total_n": tn,
+            "success_rate": float(np.mean(succ)) if succ else float("nan"), "success_n": len(succ),
+            "onset_error_mean_ms": em, "onset_error_sd_ms": es, "onset_error_n": en,
+            "paper_response_ms": pr.text() if pr else "", "paper_total_ms": pt.text() if pt else "",
+        })
+    return out
+
+
+def _cell(v: Any) -> str:
+    if isinstance(v, (bool, np.bool_)):
+        return "True" if v else "False"
+    if isinstance(v, float):
+        return "" if math.isnan(v) else repr(round(v, 6))
+    return str(v)
+
+
+def write_csv(path: str | Path, rows: Sequence[dict[str, Any]],
+              columns: Sequence[str] = RESULT_COLUMNS) -> Path:
+    """Write ``rows`` with exactly ``columns`` (NaN as an empty cell).
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> p = write_csv(os.path.join(tempfile.mkdtemp(), "r.csv"), [{"a": 1.5, "b": float("nan")}], ["a", "b"])
+    >>> p.read_text().splitlines()
+    ['a,b', '1.5,']
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with path.open("w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(columns)
+        for r in rows:
+            w.writerow([_cell(r.get(c, "")) for c in columns])
+    return path
+
+
+def read_csv(path: str | Path) -> list[dict[str, str]]:
+    """Read a CSV written by :func:`write_csv` into dicts of strings.
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> p = write_csv(os.path.join(tempfile.mkdtemp(), "r.csv"), [{"a": 1}], ["a"])
+    >>> read_csv(p)
+    [{'a': '1'}]
+    """
+    with Path(path).open(newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def fmt_mean_sd(mean: float, sd: float, n: int | None = None, digits: int = 0) -> str:
+    """``"mean ± sd"`` (and ``" (n)"``), or ``"-"`` when there is no value.
+
+    Examples
+    --------
+    >>> fmt_mean_sd(50.26, 6.4, 10), fmt_mean_sd(float("nan"), float("nan"), 0)
+    ('50 ± 6 (10)', '-')
+    """
+    if n == 0 or mean is None or (isinstance(mean, float) and math.isnan(mean)):
+        return "-"
+    s = f"{mean:.{digits}f}"
+    s += f" ± {sd:.{digits}f}" if sd == sd else ""
+    return s + (f" ({n})" if n is not None else "")
+
+
+def terminal_table(summary: Sequence[dict[str, Any]]) -> str:
+    """A compact text table of the summary for the terminal.
+
+    Examples
+    --------
+    >>> print(terminal_table([]))
+    exp   bottle method  response ms (n)   total ms (n)      success
+    """
+    head = f"{'exp':5} {'bottle':6} {'method':7} {'response ms (n)':17} {'total ms (n)':17} success"
+    lines = [head]
+    for s in summary:
+        lines.append(
+            f"{s['experiment']:5} {s['bottle']:6} {METHOD_LABELS.get(s['method'], s['method']):7} "
+            f"{fmt_mean_sd(s['response_mean_ms'], s['response_sd_ms'], s['response_n']):17} "
+            f"{fmt_mean_sd(s['total_mean_ms'], s['total_sd_ms'], s['total_n']):17} "
+            f"{100 * s['success_rate']:.0f}% of {s['success_n']}")
+    return "\n".join(lines)
+
+
+def comparison_markdown(summary: Sequence[dict[str, Any]]) -> str:
+    """The paper's table beside ours, as markdown (one line per experiment, metric, bottle).
+
+    Examples
+    --------
+    >>> print(comparison_markdown([]).splitlines()[0])
+    | experiment, metric | bottle | DATH paper | DATH ours | fixed paper | fixed ours | NMSD paper | NMSD ours | SWT-SD paper | SWT-SD ours |
+    """
+    by = {(s["experiment"], s["bottle"], s["method"]): s for s in summary}
+    cols = " | ".join(f"{METHOD_LABELS[m]} paper | {METHOD_LABELS[m]} ours" for m in METHOD_ORDER)
+    lines = [f"| experiment, metric | bottle | {cols} |",
+             "|---|---|" + "---|" * (2 * len(METHOD_ORDER))]
+    exps = [e for e in EXPERIMENTS if any(k[0] == e for k in by)] or list(EXPERIMENTS)
+    bottles = [b for b in BOTTLE_ORDER if any(k[1] == b for k in by)] or list(BOTTLE_ORDER)
+    for e in exps:
+        for metric, label in (("response", "response ms"), ("total", "total ms")):
+            for b in bottles:
+                cells = []
+                for m in METHOD_ORDER:
+                    p = paper_value(e, f"{metric}_ms", b, m)
+                    s = by.get((e, b, m))
+                    ours = fmt_mean_sd(s[f"{metric}_mean_ms"], s[f"{metric}_sd_ms"],
+                                       s[f"{metric}_n"]) if s else "not run"
+                    cells += [p.text() if p else "-", ours]
+                lines.append(f"| {e}, {label} | {b} | " + " | ".join(cells) + " |")
+    for e in exps:
+        cells = []
+        for m in METHOD_ORDER:
+            pt = PAPER_SUCCESS.get((e, "all", m), "-")
+            ours = [by[(e, b, m)] for b in bottles if (e, b, m) in by]
+            if ours:
+                n = sum(s["success_n"] for s in ours)
+                rate = sum(s["success_rate"] * s["success_n"] for s in ours) / n if n else math.nan
+                cells += [pt, f"{100 * rate:.0f}% of {n}"]
+            else:
+                cells += [pt, "not run"]
+        lines.append(f"| {e}, success | all | " + " | ".join(cells) + " |")
+    return "\n".join(lines)

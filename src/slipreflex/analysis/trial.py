@@ -1,0 +1,234 @@
+"""From one trial's recorded streams to the paper's metrics, one row per slip event.
+
+:class:`TrialStreams` holds only what the analysis needs (accelerometer,
+commanded finger position, induction interval, the simulator's truth), so the
+analysis runs the same on a simulated trial, a recording, or hand-built arrays.
+:func:`analyse_trial` applies the paper's recipe:
+
+* **drop**: one slip; onset = first accelerometer candidate inside the
+  induction interval (:func:`~slipreflex.analysis.onset.detect_onset`); its
+  window runs from the start of the induction interval to the end of the trial.
+* **pour**: every slip is its own event
+  (:func:`~slipreflex.analysis.events.segment_events` on the same envelope and
+  threshold); each event has its own window.
+
+For each event: response time, controller activity (span and, for the
+tactile methods, the closing time), the paper's *total* (span for fixed/DATH,
+closing time for NMSD/SWT-SD), success, and the simulator's true onset with
+the error of the accelerometer estimate against it.
+
+Examples
+--------
+>>> import numpy as np
+>>> fs = 333.0
+>>> t = np.arange(int(3 * fs)) / fs
+>>> acc = np.random.default_rng(0).normal(0, 0.002, (t.size, 3)); acc[:, 2] += 1
+>>> acc[t >= 1.5, 1] += 0.1
+>>> s = TrialStreams(experiment="drop", method="dath", bottle="TR", seed=1, trial=0,
+...                  accel_t=t, accel=acc, cmd_t=[1.56, 1.60, 1.70], cmd_v=[210., 230., 240.],
+...                  base_command=200.0, induction=(1.2, 2.2), t_end=3.0,
+...                  fell_out_time=float("nan"), true_onsets=[1.49], method_fs=333.0)
+>>> row = analyse_trial(s)[0]
+>>> round(row["response_ms"]), round(row["total_ms"]), row["success"]
+(58, 140, True)
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..errors import ParameterError
+from .events import LEAD_S, MERGE_S, segment_events
+from .metrics import ACTIVITY_GAP_S, controller_activity, response_time, suppressed
+from .onset import OnsetParams, accel_envelope, detect_onset, select_axis
+
+__all__ = ["TrialStreams", "analyse_trial", "RESULT_COLUMNS", "RAMP_METHODS"]
+
+#: Methods whose command is a closing ramp: their "total" is the closing time generated.
+RAMP_METHODS: frozenset[str] = frozenset({"nmsd", "swt"})
+
+#: Columns of results.csv, in order (one definition; the writer and the tests use it).
+RESULT_COLUMNS: tuple[str, ...] = (
+    "experiment", "bottle", "method", "trial", "seed", "event", "n_events", "n_true_slips",
+    "onset_s", "true_onset_s", "onset_error_ms", "axis", "response_ms", "total_ms",
+    "span_ms", "closing_ms", "n_increases", "rise", "first_change_s", "last_change_s",
+    "success", "fell_out", "fell_out_s", "window_start_s", "window_end_s", "load_at_onset",
+    "threshold",
+)
+
+
+@dataclass(frozen=True)
+class TrialStreams:
+    """What the analysis needs from one trial.
+
+    Parameters
+    ----------
+    experiment : {"drop", "pour"}
+    method, bottle : str
+    seed, trial : int
+        The trial's seed and index (reported, not used).
+    accel_t, accel : array_like
+        Accelerometer times (s) and (K, 3) values (g); the first 200 ms are rest.
+    cmd_t, cmd_v : array_like
+        Times (s) and values of the commands the reflex issued.
+    base_command : float
+        The command in force before the reflex's first one (the grasp position).
+    induction : (float, float)
+        Interval (s) where slip was induced.
+    t_end : float
+        End of the recording (s).
+    fell_out_time : float
+        When the object fell out of the grasp (s), NaN if it never did.
+    true_onsets : array_like
+        The simulator's true slip onsets (s); empty when unknown.
+    method_fs : float
+        The reflex's rate (Hz), for the closing time of ramp methods.
+    load_t, load : array_like, optional
+        A load signal (e.g. poured volume in ml) to report at each onset.
+    threshold : float
+        The reflex's detection threshold (reported only).
+
+    Examples
+    --------
+    >>> TrialStreams(experiment="drop", method="nmsd", bottle="DK", seed=0, trial=0,
+    ...              accel_t=[0, 1], accel=[[0, 0, 1], [0, 0, 1]], cmd_t=[], cmd_v=[],
+    ...              base_command=0.0, induction=(0.5, 1.0), t_end=1.0,
+    ...              fell_out_time=float("nan"), true_onsets=[], method_fs=260.0).ramp
+    True
+    """
+
+    experiment: str
+    method: str
+    bottle: str
+    seed: int
+    trial: int
+    accel_t: Any
+    accel: Any
+    cmd_t: Any
+    cmd_v: Any
+    base_command: float
+    induction: tuple[float, float]
+    t_end: float
+    fell_out_time: float
+    true_onsets: Any
+    method_fs: float
+    load_t: Any = None
+    load: Any = None
+    threshold: float = float("nan")
+    extra: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if self.experiment not in ("drop", "pour"):
+            raise ParameterError(f"experiment must be 'drop' or 'pour', got {self.experiment!r}")
+
+    @property
+    def ramp(self) -> bool:
+        """Whether the method's total is a closing time (NMSD, SWT-SD).
+
+        Examples
+        --------
+        >>> RAMP_METHODS >= {"nmsd", "swt"}
+        True
+        """
+        return self.method in RAMP_METHODS
+
+
+def _nearest(values: np.ndarray, x: float, lo: float, hi: float) -> float:
+    if math.isnan(x):
+        cand = values[(values >= lo) & (values < hi)]
+        return float(cand[0]) if cand.size else float("nan")
+    cand = values[(values >= lo - 0.5) & (values < hi)]
+    if cand.size == 0:
+        return float("nan")
+    return float(cand[np.argmin(np.abs(cand - x))])
+
+
+def _load_at(s: TrialStreams, t: float) -> float:
+    if s.load_t is None or math.isnan(t):
+        return float("nan")
+    lt = np.asarray(s.load_t, dtype=float)
+    lv = np.asarray(s.load, dtype=float)
+    if lt.size == 0:
+        return float("nan")
+    return float(np.interp(t, lt, lv))
+
+
+def analyse_trial(s: TrialStreams, onset_params: OnsetParams | None = None, *,
+                  merge_s: float = MERGE_S, lead_s: float = LEAD_S,
+                  gap: float = ACTIVITY_GAP_S) -> list[dict[str, Any]]:
+    """The paper's metrics for every slip event of one trial.
+
+    Returns
+    -------
+    list of dict
+        One dict per slip event with the keys of :data:`RESULT_COLUMNS`; a trial
+        in which the accelerometer found no slip gives one row with
+        ``event = 0``, ``n_events = 0`` and NaN timings (success still says
+        whether the object stayed in the grasp).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.arange(0, 20, 1 / 333.0)
+    >>> acc = np.random.default_rng(2).normal(0, 0.002, (t.size, 3))
+    >>> for t0 in (6.0, 13.0):
+    ...     acc[(t >= t0) & (t < t0 + 0.3), 0] += 0.05
+    >>> s = TrialStreams(experiment="pour", method="nmsd", bottle="DK", seed=3, trial=1,
+    ...                  accel_t=t, accel=acc, cmd_t=6.05 + np.arange(12) / 260.0,
+    ...                  cmd_v=200 + np.arange(1, 13) * 2.0, base_command=200.0,
+    ...                  induction=(1.0, 19.0), t_end=20.0, fell_out_time=float("nan"),
+    ...                  true_onsets=[5.98, 12.99], method_fs=260.0)
+    >>> rows = analyse_trial(s)
+    >>> [r["event"] for r in rows], round(rows[0]["total_ms"], 1), bool(np.isnan(rows[1]["response_ms"]))
+    ([0, 1], 46.2, True)
+    """
+    p = onset_params or OnsetParams()
+    t = np.asarray(s.accel_t, dtype=float)
+    acc = np.asarray(s.accel, dtype=float)
+    cmd_t = np.asarray(s.cmd_t, dtype=float).ravel()
+    cmd_v = np.asarray(s.cmd_v, dtype=float).ravel()
+    truth = np.sort(np.asarray(s.true_onsets, dtype=float).ravel())
+    lo, hi = float(s.induction[0]), float(s.induction[1])
+    fell = float(s.fell_out_time)
+
+    if s.experiment == "drop":
+        on = detect_onset(t, acc, (lo, hi), p)
+        events = [(on.time, (lo, float(s.t_end)))]
+        axis, thr = on.axis, on.threshold
+    else:
+        axis = select_axis(t, acc, (lo, hi), baseline_s=p.baseline_s)
+        env = accel_envelope(t, acc[:, axis], p)
+        base = env[t < t[0] + p.baseline_s]
+        thr = float(base.mean() + p.k * base.std())
+        found = segment_events(t, env, thr, (lo, hi), merge_s=merge_s, lead_s=lead_s,
+                               t_end=float(s.t_end))
+        events = [(e.onset, e.window) for e in found] or [(float("nan"), (lo, float(s.t_end)))]
+    n_events = 0 if math.isnan(events[0][0]) else len(events)
+
+    rows = []
+    for i, (onset, window) in enumerate(events):
+        resp = response_time(onset, cmd_t, cmd_v, window=window, base=s.base_command)
+        act = controller_activity(cmd_t, cmd_v, window=window, base=s.base_command, gap=gap)
+        closing = act.closing_time(s.method_fs) if s.ramp else float("nan")
+        total = closing if s.ramp else (act.span if act.n_increases else float("nan"))
+        true_on = _nearest(truth, onset, window[0], window[1])
+        rows.append({
+            "experiment": s.experiment, "bottle": s.bottle, "method": s.method,
+            "trial": int(s.trial), "seed": int(s.seed), "event": i, "n_events": n_events,
+            "n_true_slips": int(((truth >= lo) & (truth <= float(s.t_end))).sum()),
+            "onset_s": onset, "true_onset_s": true_on,
+            "onset_error_ms": (onset - true_on) * 1e3,
+            "axis": int(axis), "response_ms": resp * 1e3, "total_ms": total * 1e3,
+            "span_ms": act.span * 1e3, "closing_ms": closing * 1e3,
+            "n_increases": act.n_increases, "rise": act.rise,
+            "first_change_s": act.first, "last_change_s": act.last,
+            "success": suppressed(fell, window[1]),
+            "fell_out": not math.isnan(fell), "fell_out_s": fell,
+            "window_start_s": float(window[0]), "window_end_s": float(window[1]),
+            "load_at_onset": _load_at(s, onset), "threshold": float(s.threshold),
+        })
+    return rows
