@@ -1,0 +1,502 @@
+"""Virtual devices: a rig behind two pseudo-terminals, in real time.
+
+:class:`PtyPort` is one pseudo-terminal whose far end (the *slave* path, or a
+stable symlink to it) a program opens like a serial device. :class:`VirtualDevices`
+runs a rig in real time behind two of them: the DAQ port emits the
+firmware's frames (:mod:`slipreflex.devices.wire`) one sample period apart,
+and the hand port accepts i-Limb packets (:mod:`slipreflex.devices.ilimb`)
+and drives the rig's hand. ``slipreflex run`` cannot tell them from the real
+devices: it runs exactly the same code.
+
+A *rig* here is anything with ``advance_to(t) -> list[DaqSample]`` (the
+samples up to time ``t`` seconds), a ``hand`` implementing
+:class:`~slipreflex.interfaces.Hand`, and ``perturb(kind)`` for the named
+perturbations ("drop", "pour"); :class:`slipreflex.devices.simrig.SimRig`
+adapts the simulated rig to it.
+
+For fault tests the devices can misbehave on request: inject bytes into the
+DAQ stream, pause it, restart it (sequence numbers from 0, like a reset
+board), and unplug / replug either port (with ``link_dir`` the replugged port
+appears at the same path, as udev does for a real device).
+
+Examples
+--------
+>>> import serial
+>>> from slipreflex.devices.wire import FrameParser
+>>> from slipreflex.interfaces import DaqSample
+>>> class Still:                       # a rig whose sensor sees a constant 0.4 V
+...     def __init__(self): self.k, self.hand = 0, None
+...     def advance_to(self, t):
+...         out = []
+...         while (self.k + 1) * 0.003 <= t:
+...             out.append(DaqSample(self.k, self.k * 0.003, 0.4, None, 0)); self.k += 1
+...         return out
+>>> with VirtualDevices(Still()) as dev:
+...     with serial.Serial(dev.daq_path, timeout=0.5) as port:
+...         data = port.read(200)
+>>> len(FrameParser().feed(data)) >= 1
+True
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+import queue
+import select
+import threading
+import time
+import tty
+from collections.abc import Iterable
+from typing import Any
+
+from ..errors import DeviceError, ParameterError
+from ..hardware import DAQ_PERIOD_S, Finger, HandCommand
+from . import wire
+from .ilimb import PacketParser, value_range
+
+__all__ = ["PtyPort", "VirtualDevices", "parse_schedule"]
+
+
+class PtyPort:
+    """One pseudo-terminal standing in for a serial device.
+
+    The master side stays here (non-blocking); :attr:`path` is what a
+    program opens. The slave is kept open and in raw mode, so data written
+    before the program opens the port is neither echoed nor translated.
+
+    Parameters
+    ----------
+    link : str, optional
+        Also make this symlink point to the slave (kept up to date across
+        :meth:`unplug` / :meth:`replug`); :attr:`path` is then the link.
+
+    Examples
+    --------
+    >>> import serial
+    >>> port = PtyPort()
+    >>> with serial.Serial(port.path, timeout=1) as s:
+    ...     port.write(b"hi"), s.read(2)
+    (True, b'hi')
+    >>> port.close()
+    """
+
+    def __init__(self, link: str | None = None) -> None:
+        self.link = link
+        self.master: int | None = None
+        self._slave: int | None = None
+        self.slave_name = ""
+        self.dropped_bytes = 0
+        self.replug()
+
+    @property
+    def path(self) -> str:
+        """The device path to open (the link if there is one).
+
+        Examples
+        --------
+        >>> p = PtyPort(); p.path.startswith("/dev/pts/"); p.close()
+        True
+        """
+        return self.link or self.slave_name
+
+    @property
+    def plugged(self) -> bool:
+        """True while the port exists.
+
+        Examples
+        --------
+        >>> p = PtyPort(); p.unplug(); p.plugged
+        False
+        >>> p.close()
+        """
+        return self.master is not None
+
+    def replug(self) -> None:
+        """(Re)create the pseudo-terminal (and repoint the link).
+
+        Examples
+        --------
+        >>> p = PtyPort(); p.unplug(); p.replug(); p.plugged; p.close()
+        True
+        """
+        if self.master is not None:
+            return
+        master, slave = os.openpty()
+        tty.setraw(slave)
+        os.set_blocking(master, False)
+        self.master, self._slave = master, slave
+        self.slave_name = os.ttyname(slave)
+        if self.link:
+            tmp = f"{self.link}.tmp{os.getpid()}"
+            if os.path.lexists(tmp):
+                os.unlink(tmp)
+            os.symlink(self.slave_name, tmp)
+            os.replace(tmp, self.link)
+
+    def unplug(self) -> None:
+        """Make the device vanish: close the pty (and remove the link).
+
+        A program holding the port open then gets I/O errors.
+
+        Examples
+        --------
+        >>> p = PtyPort(); p.unplug(); p.write(b"x")
+        False
+        >>> p.close()
+        """
+        if self.link and os.path.lexists(self.link):
+            os.unlink(self.link)
+        for fd in (self.master, self._slave):
+            if fd is not None:
+                os.close(fd)
+        self.master = self._slave = None
+
+    def write(self, data: bytes) -> bool:
+        """Write without blocking; bytes that do not fit are dropped and counted.
+
+        Returns
+        -------
+        bool
+            True if everything was written.
+
+        Examples
+        --------
+        >>> p = PtyPort(); p.write(b"abc"); p.close()
+        True
+        """
+        if self.master is None:
+            self.dropped_bytes += len(data)
+            return False
+        try:
+            n = os.write(self.master, data)
+        except (BlockingIOError, InterruptedError):
+            n = 0
+        except OSError:
+            n = 0
+        if n < len(data):
+            self.dropped_bytes += len(data) - n
+            return False
+        return True
+
+    def read(self) -> bytes:
+        """Whatever the program wrote, without blocking (b"" if nothing).
+
+        Examples
+        --------
+        >>> p = PtyPort(); p.read(); p.close()
+        b''
+        """
+        if self.master is None:
+            return b""
+        try:
+            return os.read(self.master, 4096)
+        except (BlockingIOError, InterruptedError):
+            return b""
+        except OSError:  # EIO: no process has the slave open (cannot happen: we keep it)
+            return b""
+
+    def close(self) -> None:
+        """Close for good (idempotent).
+
+        Examples
+        --------
+        >>> p = PtyPort(); p.close(); p.close()
+        """
+        self.unplug()
+
+
+def parse_schedule(text: str) -> list[tuple[str, float]]:
+    """Parse a perturbation schedule such as ``"drop@2.0,pour@5.0"``.
+
+    Parameters
+    ----------
+    text : str
+        Comma-separated ``kind@seconds`` items; kinds are ``drop`` and ``pour``.
+
+    Returns
+    -------
+    list of (str, float)
+        Sorted by time.
+
+    Raises
+    ------
+    ParameterError
+        A malformed item, an unknown kind or a negative time.
+
+    Examples
+    --------
+    >>> parse_schedule("pour@5, drop@2.0")
+    [('drop', 2.0), ('pour', 5.0)]
+    >>> parse_schedule("jump@1")
+    Traceback (most recent call last):
+    ...
+    slipreflex.errors.ParameterError: schedule item 'jump@1': kind must be drop or pour
+    """
+    out = []
+    for item in (s.strip() for s in text.split(",")):
+        if not item:
+            continue
+        kind, sep, at = item.partition("@")
+        kind = kind.strip().lower()
+        if not sep:
+            raise ParameterError(f"schedule item {item!r}: expected kind@seconds, e.g. drop@2.0")
+        if kind not in ("drop", "pour"):
+            raise ParameterError(f"schedule item {item!r}: kind must be drop or pour")
+        try:
+            t = float(at)
+        except ValueError:
+            raise ParameterError(f"schedule item {item!r}: time {at.strip()!r} is not a number") from None
+        if not (math.isfinite(t) and t >= 0):
+            raise ParameterError(f"schedule item {item!r}: time must be >= 0")
+        out.append((kind, t))
+    return sorted(out, key=lambda x: x[1])
+
+
+class VirtualDevices:
+    """A rig running in real time behind a virtual DAQ port and a virtual hand port.
+
+    A background thread advances the rig to the wall-clock time since
+    :meth:`start`, writes each new sample's frame to the DAQ port, and
+    applies every i-Limb packet that arrives on the hand port to
+    ``rig.hand`` (position: the target; stop: hold the measured position;
+    close/open: move to the end of the range - the PWM value sets no speed
+    here). Perturbations run when :meth:`trigger` is called or their
+    scheduled time comes.
+
+    Parameters
+    ----------
+    rig : rig
+        See the module docstring.
+    link_dir : str, optional
+        Directory in which ``daq`` and ``hand`` symlinks name the ports.
+    schedule : iterable of (kind, seconds), optional
+        Perturbations at fixed times after :meth:`start`.
+    period : float
+        Sample period (s) used to wake up; the rig decides the sample times.
+
+    Attributes
+    ----------
+    daq, hand : PtyPort
+    frames_written, hand_packets : int
+    hand_parser : PacketParser
+        Its counters show rejected packets and skipped bytes.
+    triggered : list of (str, float)
+        Perturbations started, with the time since :meth:`start`.
+
+    Examples
+    --------
+    >>> VirtualDevices.__name__
+    'VirtualDevices'
+    """
+
+    def __init__(self, rig: Any, *, link_dir: str | None = None,
+                 schedule: Iterable[tuple[str, float]] = (), period: float = DAQ_PERIOD_S) -> None:
+        self.rig = rig
+        self.period = period
+        self.daq = PtyPort(os.path.join(link_dir, "daq") if link_dir else None)
+        self.hand = PtyPort(os.path.join(link_dir, "hand") if link_dir else None)
+        self.hand_parser = PacketParser()
+        self.frames_written = 0
+        self.hand_packets = 0
+        self.hand_errors = 0
+        self.triggered: list[tuple[str, float]] = []
+        self._schedule = sorted(schedule, key=lambda x: x[1])
+        self._requests: queue.SimpleQueue = queue.SimpleQueue()
+        self._stop = threading.Event()
+        self._wake_r, self._wake_w = os.pipe()
+        os.set_blocking(self._wake_r, False)
+        self._thread: threading.Thread | None = None
+        self._t0 = math.nan
+        self._daq_paused = False
+        self._seq_offset = 0
+        self._last_seq: int | None = None
+        self._error: BaseException | None = None
+
+    # -- paths and lifetime --------------------------------------------------
+    @property
+    def daq_path(self) -> str:
+        """Path of the virtual DAQ port."""
+        return self.daq.path
+
+    @property
+    def hand_path(self) -> str:
+        """Path of the virtual hand port."""
+        return self.hand.path
+
+    @property
+    def elapsed(self) -> float:
+        """Seconds since :meth:`start` (NaN before)."""
+        return time.perf_counter() - self._t0
+
+    def start(self) -> "VirtualDevices":
+        """Start the real-time thread (idempotent); returns self."""
+        if self._thread is None:
+            self._t0 = time.perf_counter()
+            self._thread = threading.Thread(target=self._run, name="virtual-rig", daemon=True)
+            self._thread.start()
+        return self
+
+    def stop(self) -> None:
+        """Stop the thread and close the ports (idempotent).
+
+        Raises
+        ------
+        DeviceError
+            If the rig raised in the thread (the error is re-raised here).
+        """
+        self._stop.set()
+        self._wake()
+        if self._thread is not None:
+            self._thread.join(timeout=5.0)
+        for fd in (self._wake_r, self._wake_w):
+            try:
+                os.close(fd)
+            except OSError:
+                pass
+        self._wake_r = self._wake_w = -1
+        self.daq.close()
+        self.hand.close()
+        err, self._error = self._error, None
+        if err is not None:
+            raise DeviceError(f"virtual rig failed: {err!r}") from err
+
+    @property
+    def running(self) -> bool:
+        """True while the thread runs."""
+        return self._thread is not None and self._thread.is_alive()
+
+    def __enter__(self) -> "VirtualDevices":
+        return self.start()
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+    def _wake(self) -> None:
+        try:
+            os.write(self._wake_w, b"x")
+        except OSError:
+            pass
+
+    # -- requests from other threads ----------------------------------------
+    def _request(self, *item: Any) -> None:
+        self._requests.put(item)
+        self._wake()
+
+    def trigger(self, kind: str) -> None:
+        """Start a perturbation ("drop" or "pour") now.
+
+        Raises
+        ------
+        ParameterError
+            For another kind.
+        """
+        if kind not in ("drop", "pour"):
+            raise ParameterError(f"unknown perturbation {kind!r}: drop or pour")
+        self._request("perturb", kind)
+
+    def inject_daq(self, data: bytes) -> None:
+        """Send raw bytes on the DAQ port between frames (garbage, torn frames)."""
+        self._request("inject", bytes(data))
+
+    def pause_daq(self, paused: bool = True) -> None:
+        """Stop (or resume) sending frames; the rig keeps running."""
+        self._request("pause", paused)
+
+    def restart_daq(self) -> None:
+        """Resume sending with sequence numbers from 0, like a board that was reset."""
+        self._request("restart")
+
+    def unplug(self, which: str) -> None:
+        """Make the "daq" or "hand" port vanish."""
+        self._request("unplug", which)
+
+    def replug(self, which: str) -> None:
+        """Bring the "daq" or "hand" port back (at the same link path)."""
+        self._request("replug", which)
+
+    def call(self, fn: Any) -> None:
+        """Run ``fn(rig)`` in the rig's thread (e.g. to read its state safely)."""
+        self._request("call", fn)
+
+    # -- the real-time thread ------------------------------------------------
+    def _handle(self, item: tuple) -> None:
+        kind = item[0]
+        if kind == "perturb":
+            self.rig.perturb(item[1])
+            self.triggered.append((item[1], self.elapsed))
+        elif kind == "inject":
+            self.daq.write(item[1])
+        elif kind == "pause":
+            self._daq_paused = bool(item[1])
+        elif kind == "restart":
+            self._daq_paused = False
+            self._seq_offset = (self._last_seq + 1) if self._last_seq is not None else 0
+        elif kind in ("unplug", "replug"):
+            port = {"daq": self.daq, "hand": self.hand}[item[1]]
+            port.unplug() if kind == "unplug" else port.replug()
+        elif kind == "call":
+            item[1](self.rig)
+
+    def _apply_packet(self, cmds: tuple) -> None:
+        targets: dict[Finger, float] = {}
+        hold = [c.finger for c in cmds if c.command == HandCommand.STOP]
+        measured = self.rig.hand.positions() if hold else {}
+        for c in cmds:
+            if c.command == HandCommand.POSITION:
+                targets[c.finger] = float(c.value)
+            elif c.command == HandCommand.STOP:
+                if c.finger in measured:
+                    targets[c.finger] = float(measured[c.finger])
+            elif c.finger != Finger.WRIST:
+                lo, hi = value_range(c.finger, HandCommand.POSITION)
+                targets[c.finger] = float(hi if c.command == HandCommand.CLOSE else lo)
+        if targets:
+            try:
+                self.rig.hand.set_positions(targets)
+            except (ParameterError, ValueError, KeyError):
+                self.hand_errors += 1
+
+    def _run(self) -> None:
+        try:
+            self._loop()
+        except BaseException as err:  # noqa: BLE001 - reported by stop()
+            self._error = err
+
+    def _loop(self) -> None:
+        schedule = list(self._schedule)
+        while not self._stop.is_set():
+            t = time.perf_counter() - self._t0
+            while schedule and schedule[0][1] <= t:
+                self._handle(("perturb", schedule.pop(0)[0]))
+            while True:
+                try:
+                    self._handle(self._requests.get_nowait())
+                except queue.Empty:
+                    break
+            for s in self.rig.advance_to(t):
+                self._last_seq = s.seq
+                if self._daq_paused:
+                    continue
+                seq = s.seq - self._seq_offset
+                self.daq.write(wire.encode_sample(dataclasses.replace(s, seq=seq)))
+                self.frames_written += 1
+            # Sleep until the next sample is due, waking early for hand packets.
+            t = time.perf_counter() - self._t0
+            timeout = max(0.0, (math.floor(t / self.period) + 1) * self.period - t)
+            fds = [self._wake_r] + ([self.hand.master] if self.hand.master is not None else [])
+            try:
+                ready, _, _ = select.select(fds, [], [], timeout)
+            except (OSError, ValueError):  # a port closed under us by unplug
+                continue
+            if self._wake_r in ready:
+                try:
+                    os.read(self._wake_r, 4096)
+                except OSError:
+                    pass
+            if self.hand.master is not None and self.hand.master in ready:
+                data = self.hand.read()
+                for cmds in self.hand_parser.feed(data):
+                    self.hand_packets += 1
+                    self._apply_packet(cmds)
