@@ -92,6 +92,11 @@ def test_swt_statistic_is_level3_haar_first_coefficient():
         w = f[k - 7:k + 1]
         expect = (w[:4].sum(axis=0) - w[4:].sum(axis=0)) / (2 * np.sqrt(2))
         np.testing.assert_allclose(s[k], expect, rtol=1e-12, atol=1e-12)
+    # and it is what pywt.swt itself gives on every 8-sample window
+    import pywt
+    win = np.lib.stride_tricks.sliding_window_view(f.reshape(40, 16), 8, axis=0)
+    direct = pywt.swt(np.ascontiguousarray(win), "haar", level=3, axis=-1)[0][1][..., 0]
+    np.testing.assert_allclose(s[7:].reshape(-1, 16), direct, rtol=1e-12, atol=1e-12)
 
 
 def test_swt_on_needs_persistence():

@@ -4,7 +4,10 @@ The second comparison method of the paper's section II-E (shared SPEC
 section 2), on the 4 x 4 tactile array sampled at 380 Hz. For every taxel, the
 last ``window = 8`` samples (21 ms) are decomposed by :func:`pywt.swt` into
 three levels with the Haar wavelet, and the statistic is the level-3 detail
-coefficient at the first position of the window. With Haar and a window of
+coefficient at the first position of the window. Because the SWT is linear,
+that coefficient is a fixed weighted sum of the window; the weights are taken
+once from :func:`pywt.swt` applied to unit impulses (:func:`swt_kernel`), and
+the batch and streaming paths apply them in the same order (same bits). With Haar and a window of
 exactly ``2**3`` samples that coefficient is the only one whose filter does
 not wrap around the window: ``(sum(older half) - sum(newer half)) / (2 * sqrt(2))``,
 a matched step/ramp detector over the whole 21 ms (a force drop gives a
@@ -32,7 +35,7 @@ Examples
 
 from __future__ import annotations
 
-from collections import deque
+import functools
 from dataclasses import dataclass
 from typing import Any
 
@@ -43,7 +46,7 @@ from ..hardware import FINGER_MAX, FINGER_MIN, SWT_FS
 from ._validate import as_frame, as_frames, build, integer, number, setattr_frozen
 from .closing import CLOSE_S, Closer, ClosingParams, closing_commands
 
-__all__ = ["SWTParams", "SWTSD", "swt_statistic", "swt_on", "swt_commands",
+__all__ = ["SWTParams", "SWTSD", "swt_statistic", "swt_on", "swt_commands", "swt_kernel",
            "SWT_WINDOW", "SWT_LEVEL", "SWT_WAVELET"]
 
 #: Moving-window length (samples): 21 ms at 380 Hz, as in the paper.
@@ -109,12 +112,42 @@ class SWTParams:
                              p0=self.p0, lo=self.lo, hi=self.hi)
 
 
-def _cd3_first(windows: np.ndarray) -> np.ndarray:
-    """Level-3 Haar SWT detail at the first position of each window (last axis, length 8)."""
+@functools.lru_cache(maxsize=8)
+def _kernel(wavelet: str = SWT_WAVELET, level: int = SWT_LEVEL, window: int = SWT_WINDOW) -> np.ndarray:
+    """The SWT as a linear map: cD_level[0] of a window = ``kernel @ window``.
+
+    The SWT is linear, so applying :func:`pywt.swt` once to the ``window``
+    unit impulses gives the exact weights it applies to a window; using them
+    costs a dot product per step instead of a full decomposition.
+    """
     import pywt
 
-    coeffs = pywt.swt(windows, SWT_WAVELET, level=SWT_LEVEL, axis=-1)
-    return coeffs[0][1][..., 0]
+    eye = np.eye(window)
+    k = pywt.swt(eye, wavelet, level=level, axis=-1)[0][1][:, 0]
+    k.setflags(write=False)
+    return k
+
+
+def swt_kernel() -> np.ndarray:
+    """Weights of the level-3 Haar SWT detail at the first position of an 8-sample window.
+
+    Returns
+    -------
+    numpy.ndarray, shape (8,)
+        Read-only; ``+1/(2 sqrt 2)`` on the older half, ``-1/(2 sqrt 2)`` on the newer.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> np.round(swt_kernel() * 2 * np.sqrt(2), 12).tolist()
+    [1.0, 1.0, 1.0, 1.0, -1.0, -1.0, -1.0, -1.0]
+    """
+    return _kernel()
+
+
+def _apply(kernel: np.ndarray, windows: np.ndarray) -> np.ndarray:
+    """``sum_j kernel[j] * windows[..., j, :]``, rows added in order (same bits batch/stream)."""
+    return (kernel[:, None] * windows).sum(axis=-2)
 
 
 def swt_statistic(frames) -> np.ndarray:
@@ -143,7 +176,8 @@ def swt_statistic(frames) -> np.ndarray:
     if k >= SWT_WINDOW:
         flat = f.reshape(k, -1)
         win = np.lib.stride_tricks.sliding_window_view(flat, SWT_WINDOW, axis=0)  # (k-7, 16, 8)
-        out[SWT_WINDOW - 1:] = _cd3_first(np.ascontiguousarray(win)).reshape(-1, *f.shape[1:])
+        win = np.ascontiguousarray(np.swapaxes(win, 1, 2))                         # (k-7, 8, 16)
+        out[SWT_WINDOW - 1:] = _apply(_kernel(), win).reshape(-1, *f.shape[1:])
     return out
 
 
@@ -261,6 +295,7 @@ class SWTSD:
         self.params = params
         self.fs = params.fs
         self._closer = Closer(params.closing)
+        self._kernel = _kernel()
         self.reset()
 
     def reset(self) -> None:
@@ -271,7 +306,8 @@ class SWTSD:
         >>> r = SWTSD(threshold=1.0, speed=100.0); r.reset(); r.last_on
         False
         """
-        self._buf: deque[np.ndarray] = deque(maxlen=SWT_WINDOW)
+        self._win = np.zeros((SWT_WINDOW, 16))
+        self._n = 0
         self._run = np.zeros(16, dtype=np.int64)
         self._closer.reset()
         self.last_statistic = 0.0
@@ -301,9 +337,12 @@ class SWTSD:
         >>> out[8:], r.last_on
         ([None, 1.0, 2.0], True)
         """
-        self._buf.append(as_frame("frame", frame))
-        if len(self._buf) == SWT_WINDOW:
-            c = _cd3_first(np.stack(self._buf, axis=-1))  # (16, 8) -> (16,)
+        f = as_frame("frame", frame)
+        self._win[:-1] = self._win[1:]
+        self._win[-1] = f
+        self._n += 1
+        if self._n >= SWT_WINDOW:
+            c = _apply(self._kernel, self._win)
             over = np.abs(c) > self.params.threshold
             self.last_statistic = float(np.max(np.abs(c)))
         else:
