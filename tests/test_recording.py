@@ -1,0 +1,144 @@
+"""MCAP recordings: round trip, crash tolerance (SIGKILL), full disk, unwritable path."""
+
+from __future__ import annotations
+
+import contextlib
+import errno
+import io
+import json
+import os
+import subprocess
+import sys
+import textwrap
+import time
+
+import pytest
+
+from slipreflex.recording import (
+    METADATA_NAME, TOPICS, Recorder, RecordingError, read_recording,
+)
+
+
+def test_round_trip_and_foxglove_facing_format(tmp_path):
+    path = tmp_path / "r.mcap"
+    with Recorder(path, metadata={METADATA_NAME: {"reflex": "dath"}}) as rec:
+        for k in range(1000):
+            assert rec.write("/daq/samples", {"seq": k, "t": k * 0.003, "slip_volts": 0.1 * k,
+                                              "flow_pulses": 0, "arrival": 0.0, "position": None}, k)
+        rec.write("/faults", {"time": 1.0, "kind": "watchdog", "message": "m", "action": "held"}, 2000)
+    r = read_recording(path)
+    assert r.complete
+    assert [m["seq"] for m in r.topic("/daq/samples")] == list(range(1000))
+    assert [m["slip_volts"] for m in r.topic("/daq/samples")] == [0.1 * k for k in range(1000)]
+    assert r.topic("/faults")[0]["kind"] == "watchdog"
+    assert r.metadata[METADATA_NAME]["reflex"] == "dath"
+    # Every channel is JSON with a JSON schema (what Foxglove needs), read with mcap's own reader.
+    from mcap.reader import make_reader
+    with open(path, "rb") as fh:
+        reader = make_reader(fh)
+        summary = reader.get_summary()
+        assert {c.topic for c in summary.channels.values()} == set(TOPICS)
+        assert all(c.message_encoding == "json" for c in summary.channels.values())
+        assert all(s.encoding == "jsonschema" for s in summary.schemas.values())
+        for s in summary.schemas.values():
+            assert json.loads(s.data)["type"] == "object"
+        n = sum(1 for _ in reader.iter_messages(topics=["/daq/samples"]))
+    assert n == 1000
+
+
+_CHILD = textwrap.dedent("""
+    import sys, time
+    from slipreflex.recording import Recorder
+    rec = Recorder(sys.argv[1], flush_interval=0.25)
+    k = 0
+    t0 = time.perf_counter()
+    while True:
+        # 333 messages per second, paced by the clock like the real loop
+        while time.perf_counter() - t0 < k / 333.0:
+            time.sleep(0.0005)
+        rec.write("/chain/events", {"seq": k, "t": k / 333.0}, k)
+        rec.maybe_flush()
+        if k % 50 == 0:
+            print(k, flush=True)
+        k += 1
+""")
+
+
+def test_sigkill_leaves_a_file_readable_up_to_about_a_second_before(tmp_path):
+    path = tmp_path / "killed.mcap"
+    proc = subprocess.Popen([sys.executable, "-c", _CHILD, str(path)], stdout=subprocess.PIPE,
+                            text=True)
+    try:
+        last = -1
+        deadline = time.monotonic() + 30
+        while last < 700 and time.monotonic() < deadline:  # ~2 s of messages written
+            line = proc.stdout.readline()
+            if not line:
+                break
+            last = int(line)
+        assert last >= 700, "child did not get going"
+        proc.kill()
+        proc.wait(timeout=10)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(timeout=10)
+        proc.stdout.close()
+    r = read_recording(path)
+    assert not r.complete
+    seqs = [m["seq"] for m in r.topic("/chain/events")]
+    assert seqs == list(range(len(seqs)))  # nothing garbled, nothing missing before the cut
+    assert seqs[-1] >= last - 333  # within one second (333 messages) of the kill
+
+
+def test_unwritable_path_and_full_disk_fail_before_the_run(tmp_path):
+    with pytest.raises(RecordingError, match="no-such-dir"):
+        Recorder(tmp_path / "no-such-dir" / "r.mcap")
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o500)
+    try:
+        if not os.access(ro, os.W_OK):  # (as root, permissions do not apply)
+            with pytest.raises(RecordingError, match="cannot create"):
+                Recorder(ro / "r.mcap")
+    finally:
+        ro.chmod(0o700)
+    if os.path.exists("/dev/full"):
+        with pytest.raises(RecordingError, match="/dev/full"):
+            Recorder("/dev/full")
+
+
+class _FillingDisk(io.RawIOBase):
+    """A file that accepts ``room`` bytes, then fails with ENOSPC."""
+
+    def __init__(self, room):
+        self.data = bytearray()
+        self.room = room
+
+    def writable(self):
+        return True
+
+    def write(self, b):
+        if len(self.data) + len(b) > self.room:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        self.data += b
+        return len(b)
+
+    def tell(self):
+        return len(self.data)
+
+
+def test_disk_full_mid_run_stops_recording_without_raising():
+    disk = _FillingDisk(room=20_000)
+    buf = io.BufferedWriter(disk)
+    rec = Recorder(buf, chunk_size=2_000, flush_interval=0.0, compression="none")
+    results = []
+    for k in range(2000):
+        results.append(rec.write("/chain/events", {"seq": k, "t": k * 0.003}, k))
+        rec.maybe_flush()
+    assert results[0] and not results[-1]
+    assert isinstance(rec.error, OSError) and rec.error.errno == errno.ENOSPC
+    assert not rec.ok
+    rec.close()  # does not raise either
+    with contextlib.suppress(OSError):
+        buf.close()
