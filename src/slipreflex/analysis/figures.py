@@ -1,0 +1,242 @@
+"""Figures like the paper's (matplotlib with the Agg backend, imported lazily).
+
+* :func:`plot_trial` - one trial, like Figs. 10-12 (drop) and 15 (pour):
+  accelerometer, filtered sensor, events, commanded position (and poured
+  volume for a pour), with the onset (I), the first response (II) and the last
+  change (III) marked.
+* :func:`bar_chart` - mean and sd per bottle and method, like Figs. 13, 14,
+  16 and 17, with the paper's values drawn beside ours.
+* :func:`success_chart` - success rates per bottle and method.
+
+Examples
+--------
+>>> import os, tempfile
+>>> s = [{"experiment": "drop", "bottle": "TR", "method": "dath", "response_mean_ms": 50.0,
+...       "response_sd_ms": 5.0, "response_n": 10, "success_rate": 0.8, "success_n": 10}]
+>>> p = bar_chart(s, "drop", "response", os.path.join(tempfile.mkdtemp(), "b.png"))
+>>> p.stat().st_size > 1000
+True
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .paper import BOTTLE_ORDER, METHOD_LABELS, METHOD_ORDER, paper_value
+
+__all__ = ["TrialPlot", "plot_trial", "bar_chart", "success_chart", "METHOD_COLORS"]
+
+#: One colour per method, used by every figure.
+METHOD_COLORS: dict[str, str] = {"dath": "#1f77b4", "fixed": "#ff7f0e", "nmsd": "#2ca02c",
+                                 "swt": "#d62728"}
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg", force=True)
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+@dataclass
+class TrialPlot:
+    """The streams of one trial to plot (times in s).
+
+    Examples
+    --------
+    >>> TrialPlot(title="x", accel_t=[0, 1], accel=[0, 0]).title
+    'x'
+    """
+
+    title: str
+    accel_t: Any
+    accel: Any
+    accel_label: str = "accelerometer (g)"
+    envelope: Any = None
+    threshold: float = float("nan")
+    sensor_t: Any = None
+    sensor: Any = None
+    sensor_label: str = "filtered sensor"
+    event_t: Any = None
+    event_label: str = "events"
+    cmd_t: Any = None
+    cmd_v: Any = None
+    load_t: Any = None
+    load: Any = None
+    load_label: str = "volume (ml)"
+    onsets: Sequence[float] = ()
+    responses: Sequence[float] = ()
+    lasts: Sequence[float] = ()
+    true_onsets: Sequence[float] = ()
+    xlim: tuple[float, float] | None = None
+    notes: dict = field(default_factory=dict)
+
+
+def _mark(ax, times: Sequence[float], color: str, label: str | None, style: str = "--") -> None:
+    first = True
+    for x in times:
+        if x is not None and not math.isnan(x):
+            ax.axvline(x, color=color, ls=style, lw=0.9, label=label if first else None)
+            first = False
+
+
+def plot_trial(p: TrialPlot, path: str | Path) -> Path:
+    """Draw one trial as the paper's Figs. 10-12 / 15 and save it as PNG.
+
+    Examples
+    --------
+    >>> import os, tempfile, numpy as np
+    >>> t = np.linspace(0, 2, 600)
+    >>> tp = TrialPlot(title="demo", accel_t=t, accel=np.sin(9 * t), sensor_t=t, sensor=t,
+    ...                event_t=[1.0, 1.1], cmd_t=[1.05, 1.2], cmd_v=[200, 220], onsets=[0.98],
+    ...                responses=[1.05], lasts=[1.2])
+    >>> plot_trial(tp, os.path.join(tempfile.mkdtemp(), "t.png")).suffix
+    '.png'
+    """
+    plt = _plt()
+    has_load = p.load_t is not None and len(p.load_t) > 0
+    n = 4 + int(has_load)
+    fig, axes = plt.subplots(n, 1, figsize=(7.5, 1.7 * n + 0.6), sharex=True)
+    axes = list(axes)
+    letters = iter("ABCDE")
+    if has_load:
+        ax = axes.pop(0)
+        ax.plot(p.load_t, p.load, color="tab:cyan", lw=1)
+        ax.set_ylabel(p.load_label, fontsize=8)
+        ax.set_title(f"{next(letters)}) {p.load_label}", loc="left", fontsize=8)
+    ax_acc, ax_sen, ax_ev, ax_cmd = axes
+    ax_acc.plot(p.accel_t, p.accel, color="0.4", lw=0.6, label="raw")
+    if p.envelope is not None:
+        ax2 = ax_acc.twinx()
+        ax2.plot(p.accel_t, p.envelope, color="tab:purple", lw=0.9, label="rectified, 30 Hz")
+        if not math.isnan(p.threshold):
+            ax2.axhline(p.threshold, color="tab:purple", ls=":", lw=0.8)
+        ax2.set_ylabel("envelope (g)", fontsize=7)
+        ax2.tick_params(labelsize=7)
+    ax_acc.set_ylabel("g", fontsize=8)
+    ax_acc.set_title(f"{next(letters)}) {p.accel_label}", loc="left", fontsize=8)
+    if p.sensor is not None:
+        ax_sen.plot(p.sensor_t, p.sensor, color="tab:blue", lw=0.8)
+    ax_sen.set_title(f"{next(letters)}) {p.sensor_label}", loc="left", fontsize=8)
+    ev = np.asarray([] if p.event_t is None else p.event_t, dtype=float)
+    if ev.size:
+        ax_ev.vlines(ev, 0, 1, color="k", lw=0.7)
+    ax_ev.set_yticks([])
+    ax_ev.set_title(f"{next(letters)}) {p.event_label} ({ev.size})", loc="left", fontsize=8)
+    if p.cmd_t is not None and len(p.cmd_t):
+        ax_cmd.step(p.cmd_t, p.cmd_v, where="post", color="tab:green", lw=1.0)
+    ax_cmd.set_ylabel("position", fontsize=8)
+    ax_cmd.set_title(f"{next(letters)}) commanded finger position", loc="left", fontsize=8)
+    ax_cmd.set_xlabel("time (s)")
+    for ax in (ax_acc, ax_sen, ax_ev, ax_cmd):
+        _mark(ax, p.onsets, "tab:red", "I onset" if ax is ax_acc else None)
+        _mark(ax, p.responses, "tab:green", "II response" if ax is ax_acc else None)
+        _mark(ax, p.lasts, "tab:olive", "III last change" if ax is ax_acc else None, ":")
+        _mark(ax, p.true_onsets, "k", "true onset (sim)" if ax is ax_acc else None, "-.")
+        ax.tick_params(labelsize=7)
+    ax_acc.legend(fontsize=6, loc="upper left", ncol=4)
+    if p.xlim:
+        ax_cmd.set_xlim(*p.xlim)
+    fig.suptitle(p.title, fontsize=9)
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def _present(summary, experiment):
+    rows = [s for s in summary if s["experiment"] == experiment]
+    bottles = [b for b in BOTTLE_ORDER if any(s["bottle"] == b for s in rows)]
+    methods = [m for m in METHOD_ORDER if any(s["method"] == m for s in rows)]
+    return {(s["bottle"], s["method"]): s for s in rows}, bottles, methods
+
+
+def bar_chart(summary: Sequence[dict[str, Any]], experiment: str, metric: str,
+              path: str | Path) -> Path:
+    """Bars of ``metric`` ("response" or "total") with sd, ours beside the paper's.
+
+    Our values are the filled bars; the paper's mean and sd, where it reports
+    them, are black diamonds with error bars next to each bar.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> bar_chart([], "pour", "total", os.path.join(tempfile.mkdtemp(), "x.png")).exists()
+    True
+    """
+    plt = _plt()
+    by, bottles, methods = _present(summary, experiment)
+    fig, ax = plt.subplots(figsize=(6.5, 3.4))
+    width = 0.8 / max(1, len(methods))
+    for j, m in enumerate(methods):
+        xs = np.arange(len(bottles)) + (j - (len(methods) - 1) / 2) * width
+        mean = [by.get((b, m), {}).get(f"{metric}_mean_ms", np.nan) for b in bottles]
+        sd = [by.get((b, m), {}).get(f"{metric}_sd_ms", np.nan) for b in bottles]
+        mean = np.array([float(x) for x in mean])
+        sd = np.nan_to_num(np.array([float(x) for x in sd]))
+        ax.bar(xs, np.nan_to_num(mean), width * 0.9, yerr=sd, capsize=3,
+               color=METHOD_COLORS.get(m, "0.5"), label=f"{METHOD_LABELS.get(m, m)} (ours)")
+        for x, b in zip(xs, bottles):
+            pv = paper_value(experiment, f"{metric}_ms", b, m)
+            if pv is not None and pv.mean is not None:
+                ax.errorbar(x + width * 0.25, pv.mean, yerr=pv.sd, fmt="D", color="k", ms=3.5,
+                            capsize=2, lw=0.8)
+    ax.errorbar([], [], yerr=[], fmt="D", color="k", ms=3.5, label="paper (mean ± sd)")
+    ax.set_xticks(np.arange(len(bottles)))
+    ax.set_xticklabels(bottles)
+    label = "response time" if metric == "response" else "total controller time"
+    what = "sudden 10 g drop" if experiment == "drop" else "pouring 500 ml"
+    ax.set_ylabel(f"{label} (ms)")
+    ax.set_title(f"{label.capitalize()}, {what} (bars: sd)", fontsize=9)
+    ax.legend(fontsize=7, ncol=2)
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def success_chart(summary: Sequence[dict[str, Any]], path: str | Path) -> Path:
+    """Success rate per experiment, bottle and method.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> s = [{"experiment": "pour", "bottle": "DK", "method": "nmsd", "success_rate": 1.0}]
+    >>> success_chart(s, os.path.join(tempfile.mkdtemp(), "s.png")).exists()
+    True
+    """
+    plt = _plt()
+    exps = [e for e in ("drop", "pour") if any(s["experiment"] == e for s in summary)] or ["drop"]
+    fig, axes = plt.subplots(1, len(exps), figsize=(4.2 * len(exps), 3.2), squeeze=False)
+    for ax, e in zip(axes[0], exps):
+        by, bottles, methods = _present(summary, e)
+        width = 0.8 / max(1, len(methods))
+        for j, m in enumerate(methods):
+            xs = np.arange(len(bottles)) + (j - (len(methods) - 1) / 2) * width
+            rate = [100 * float(by.get((b, m), {}).get("success_rate", np.nan)) for b in bottles]
+            ax.bar(xs, np.nan_to_num(rate), width * 0.9, color=METHOD_COLORS.get(m, "0.5"),
+                   label=METHOD_LABELS.get(m, m))
+        ax.set_xticks(np.arange(len(bottles)))
+        ax.set_xticklabels(bottles)
+        ax.set_ylim(0, 105)
+        ax.set_ylabel("slips suppressed (%)")
+        ax.set_title(f"Success, {e}", fontsize=9)
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
