@@ -28,7 +28,8 @@ from .paper import (BOTTLE_ORDER, EXPERIMENTS, METHOD_LABELS, METHOD_ORDER, PAPE
 from .trial import RESULT_COLUMNS
 
 __all__ = ["SUMMARY_COLUMNS", "summarize", "write_csv", "read_csv", "terminal_table",
-           "comparison_markdown", "fmt_mean_sd", "group_key_order"]
+           "comparison_markdown", "success_markdown", "onset_markdown", "differences",
+           "report_markdown", "fmt_mean_sd", "group_key_order"]
 
 #: Columns of summary.csv, in order.
 SUMMARY_COLUMNS: tuple[str, ...] = (
@@ -222,4 +223,131 @@ def comparison_markdown(summary: Sequence[dict[str, Any]]) -> str:
             else:
                 cells += [pt, "not run"]
         lines.append(f"| {e}, success | all | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def success_markdown(summary: Sequence[dict[str, Any]]) -> str:
+    """Success rates per experiment, bottle and method as a markdown table.
+
+    Examples
+    --------
+    >>> print(success_markdown([{"experiment": "drop", "bottle": "TX", "method": "dath",
+    ...                          "success_rate": 0.9, "success_n": 10}]).splitlines()[2])
+    | drop | TX | 90% (10) | 90 % | not run | - | not run | - | not run | - |
+    """
+    by = {(s["experiment"], s["bottle"], s["method"]): s for s in summary}
+    cols = " | ".join(f"{METHOD_LABELS[m]} ours | paper" for m in METHOD_ORDER)
+    lines = [f"| experiment | bottle | {cols} |", "|---|---|" + "---|" * (2 * len(METHOD_ORDER))]
+    keys = sorted({(e, b) for e, b, _ in by}, key=lambda k: group_key_order((k[0], k[1], "")))
+    for e, b in keys:
+        cells = []
+        for m in METHOD_ORDER:
+            s = by.get((e, b, m))
+            cells.append(f"{100 * s['success_rate']:.0f}% ({s['success_n']})" if s else "not run")
+            cells.append(PAPER_SUCCESS.get((e, b, m), "-"))
+        lines.append(f"| {e} | {b} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def onset_markdown(rows: Sequence[dict[str, Any]]) -> str:
+    """Accelerometer onset estimate vs the simulator's true onset, per experiment and bottle.
+
+    Examples
+    --------
+    >>> r = [{"experiment": "drop", "bottle": "TR", "onset_error_ms": e} for e in (2.0, 4.0)]
+    >>> print(onset_markdown(r).splitlines()[2])
+    | drop | TR | 3.0 ± 1.4 (2) | 2.0 | 4.0 |
+    """
+    groups: dict[tuple[str, str], list[float]] = {}
+    for r in rows:
+        groups.setdefault((r["experiment"], r["bottle"]), []).append(float(r.get("onset_error_ms", math.nan) or math.nan))
+    lines = ["| experiment | bottle | error ms, mean ± sd (n) | min | max |", "|---|---|---|---|---|"]
+    for (e, b) in sorted(groups, key=lambda k: group_key_order((k[0], k[1], ""))):
+        v = np.array(groups[(e, b)], dtype=float)
+        v = v[np.isfinite(v)]
+        m, s, n = _stats(v)
+        lo = f"{v.min():.1f}" if v.size else "-"
+        hi = f"{v.max():.1f}" if v.size else "-"
+        lines.append(f"| {e} | {b} | {fmt_mean_sd(m, s, n, 1)} | {lo} | {hi} |")
+    return "\n".join(lines)
+
+
+def differences(summary: Sequence[dict[str, Any]], *, tolerance_sd: float = 2.0) -> list[str]:
+    """Cells where our mean lies outside the paper's mean ± ``tolerance_sd`` x its sd.
+
+    Examples
+    --------
+    >>> s = [{"experiment": "drop", "bottle": "TR", "method": "dath", "response_mean_ms": 120.0,
+    ...       "response_sd_ms": 5.0, "response_n": 10, "total_mean_ms": 300.0,
+    ...       "total_sd_ms": 50.0, "total_n": 10}]
+    >>> differences(s)
+    ['drop, response, TR, DATH: ours 120 ms vs paper 50 ± 6.48 ms (+70 ms, 2.4x)']
+    """
+    out = []
+    for s in summary:
+        for metric in ("response", "total"):
+            p = paper_value(s["experiment"], f"{metric}_ms", s["bottle"], s["method"])
+            if p is None or p.mean is None:
+                continue
+            m = float(s[f"{metric}_mean_ms"])
+            if math.isnan(m):
+                out.append(f"{s['experiment']}, {metric}, {s['bottle']}, "
+                           f"{METHOD_LABELS[s['method']]}: no value of ours (paper {p.text()} ms)")
+                continue
+            if abs(m - p.mean) > tolerance_sd * p.sd:
+                out.append(f"{s['experiment']}, {metric}, {s['bottle']}, {METHOD_LABELS[s['method']]}: "
+                           f"ours {m:.0f} ms vs paper {p.text()} ms ({m - p.mean:+.0f} ms, "
+                           f"{m / p.mean:.1f}x)")
+    return out
+
+
+def report_markdown(*, summary: Sequence[dict[str, Any]], rows: Sequence[dict[str, Any]],
+                    figures: Sequence[tuple[str, str]], setup: Sequence[str],
+                    discussion: Sequence[str]) -> str:
+    """The whole report.md: the paper's table beside ours, success, onsets, figures, honesty.
+
+    Parameters
+    ----------
+    summary, rows : sequence of dict
+        From :func:`summarize` and the per-event rows.
+    figures : sequence of (caption, relative path)
+    setup : sequence of str
+        Bullet lines describing the run (command, seeds, thresholds, timing).
+    discussion : sequence of str
+        Paragraphs on why our numbers differ where they do.
+
+    Examples
+    --------
+    >>> md = report_markdown(summary=[], rows=[], figures=[("A bar chart", "fig.png")],
+    ...                      setup=["seed 1"], discussion=["Because."])
+    >>> "![A bar chart](fig.png)" in md and "- seed 1" in md
+    True
+    """
+    from .paper import PAPER_NOTES
+
+    lines = ["# slipreflex reproduce: the paper's experiments on the simulated rig", ""]
+    lines += ["## Run", ""] + [f"- {s}" for s in setup] + [""]
+    lines += ["## The paper's table beside ours", "",
+              "Mean ± sd (n) in ms; *paper* columns are the paper's section III / SPEC 4 values, "
+              "*ours* come from `results.csv` (one value per slip event). Response time: onset "
+              "(accelerometer) to the first increase of the commanded finger position. Total: first "
+              "to last change of the command for that slip (fixed, DATH) or the closing time the "
+              "method generated (NMSD, SWT-SD).", "", comparison_markdown(summary), ""]
+    lines += ["## Success (slip suppressed before the bottle slipped out)", "",
+              success_markdown(summary), ""]
+    lines += ["## Onset estimate vs the simulator's true onset", "",
+              "Accelerometer onset minus the true onset of the slip (positive: the estimate is late).",
+              "", onset_markdown(rows), ""]
+    lines += ["## Figures", ""]
+    for caption, rel in figures:
+        lines += [f"![{caption}]({rel})", "", f"*{caption}*", ""]
+    lines += ["## Where we differ from the paper, and why", ""]
+    diffs = differences(summary)
+    if diffs:
+        lines += ["Cells where our mean is outside the paper's mean ± 2 sd:", ""]
+        lines += [f"- {d}" for d in diffs] + [""]
+    else:
+        lines += ["Every reported cell of ours is within the paper's mean ± 2 sd.", ""]
+    lines += list(discussion) + [""]
+    lines += ["## The paper's other claims", ""] + [f"- {n}" for n in PAPER_NOTES] + [""]
     return "\n".join(lines)
