@@ -275,6 +275,10 @@ class VirtualDevices:
         Perturbations at fixed times after :meth:`start`.
     period : float
         Sample period (s) used to wake up; the rig decides the sample times.
+    script : iterable of (seconds, callable), optional
+        Actions ``fn(devices)`` run in the rig's thread at fixed times after
+        :meth:`start` (e.g. ``(1.0, lambda d: d.unplug("hand"))``), for
+        scripted fault tests.
 
     Attributes
     ----------
@@ -292,7 +296,8 @@ class VirtualDevices:
     """
 
     def __init__(self, rig: Any, *, link_dir: str | None = None,
-                 schedule: Iterable[tuple[str, float]] = (), period: float = DAQ_PERIOD_S) -> None:
+                 schedule: Iterable[tuple[str, float]] = (), period: float = DAQ_PERIOD_S,
+                 script: Iterable[tuple[float, Any]] = ()) -> None:
         self.rig = rig
         self.period = period
         self.daq = PtyPort(os.path.join(link_dir, "daq") if link_dir else None)
@@ -302,7 +307,8 @@ class VirtualDevices:
         self.hand_packets = 0
         self.hand_errors = 0
         self.triggered: list[tuple[str, float]] = []
-        self._schedule = sorted(schedule, key=lambda x: x[1])
+        self._schedule = sorted([(t, ("perturb", kind)) for kind, t in schedule]
+                                + [(t, ("script", fn)) for t, fn in script], key=lambda x: x[0])
         self._requests: queue.SimpleQueue = queue.SimpleQueue()
         self._stop = threading.Event()
         self._wake_r, self._wake_w = os.pipe()
@@ -438,6 +444,8 @@ class VirtualDevices:
             port.unplug() if kind == "unplug" else port.replug()
         elif kind == "call":
             item[1](self.rig)
+        elif kind == "script":
+            item[1](self)
 
     def _apply_packet(self, cmds: tuple) -> None:
         targets: dict[Finger, float] = {}
@@ -468,8 +476,8 @@ class VirtualDevices:
         schedule = list(self._schedule)
         while not self._stop.is_set():
             t = time.perf_counter() - self._t0
-            while schedule and schedule[0][1] <= t:
-                self._handle(("perturb", schedule.pop(0)[0]))
+            while schedule and schedule[0][0] <= t:
+                self._handle(schedule.pop(0)[1])
             while True:
                 try:
                     self._handle(self._requests.get_nowait())

@@ -1,0 +1,292 @@
+"""The real-time loop over virtual devices: commands, latency, watchdog, faults, replay, CLI."""
+
+from __future__ import annotations
+
+import contextlib
+import errno
+import io
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+import serial
+
+from slipreflex import hardware as hw
+from slipreflex.chain import SlipReflex
+from slipreflex.cli import main
+from slipreflex.csvfiles import read_slip_csv
+from slipreflex.devices.daq import SerialDaq
+from slipreflex.devices.ilimb import ILimb, PacketParser
+from slipreflex.devices.virtual import VirtualDevices
+from slipreflex.devices import wire
+from slipreflex.interfaces import DaqSample
+from slipreflex.recording import METADATA_NAME, Recorder, read_recording, replay
+from slipreflex.runtime import run_loop
+
+P0 = 150.0
+
+
+class ToyHand:
+    """Fingers jump to their targets; keeps every target it was given."""
+
+    def __init__(self):
+        self.pos = {f: 0.0 for f in hw.TRIPOD}
+        self.history = []
+
+    def set_positions(self, targets):
+        self.history.append(dict(targets))
+        self.pos.update({f: float(v) for f, v in targets.items()})
+
+    def positions(self):
+        return dict(self.pos)
+
+
+class ToyRig:
+    """A sensor at 0.4 V that fluctuates while the object slips; a drop makes it slip
+    until the middle finger has closed 20 units past where it was."""
+
+    def __init__(self, seed=0):
+        self.rng = np.random.default_rng(seed)
+        self.k = 0
+        self.hand = ToyHand()
+        self.slip_until = None
+
+    def perturb(self, kind):
+        self.slip_until = self.hand.pos[hw.Finger.MIDDLE] + 20.0
+
+    @property
+    def slipping(self):
+        return self.slip_until is not None and self.hand.pos[hw.Finger.MIDDLE] < self.slip_until
+
+    def advance_to(self, t):
+        out = []
+        while (self.k + 1) * hw.DAQ_PERIOD_S <= t:
+            v = 0.4 + (0.1 * self.rng.standard_normal() if self.slipping else 0.0)
+            out.append(DaqSample(seq=self.k, t=self.k * hw.DAQ_PERIOD_S, slip_volts=v,
+                                 accel_g=(0.0, 0.0, 1.0) if self.k % 10 == 0 else None,
+                                 flow_pulses=self.k // 100))
+            self.k += 1
+        return out
+
+
+@contextlib.contextmanager
+def rig_and_drivers(tmp_path, **kw):
+    dev = VirtualDevices(ToyRig(), link_dir=str(tmp_path), **kw)
+    with dev:
+        daq = SerialDaq(dev.daq_path, reconnect_interval=0.02)
+        hand = ILimb(dev.hand_path, reconnect_interval=0.02)
+        try:
+            hand.set_positions({f: P0 for f in hw.TRIPOD})
+            yield dev, daq, hand
+        finally:
+            daq.close()
+            hand.close()
+
+
+def _recorder(path, reflex):
+    import json
+    return Recorder(path, metadata={METADATA_NAME: {"reflex_params": json.dumps(reflex.params.to_dict())}})
+
+
+def test_loop_over_virtual_devices_reacts_records_and_replays_exactly(tmp_path):
+    path = tmp_path / "run.mcap"
+    reflex = SlipReflex(p0=P0)
+    with rig_and_drivers(tmp_path, schedule=[("drop", 0.6)]) as (dev, daq, hand):
+        with _recorder(path, reflex) as rec:
+            res = run_loop(daq, hand, reflex, recorder=rec, duration=1.6)
+        assert dev.triggered and dev.triggered[0][0] == "drop"
+        sent = [h[hw.Finger.MIDDLE] for h in dev.rig.hand.history]
+    assert res.samples > 100 and res.commands > 5 and res.events > 0
+    assert res.latencies.size == res.commands_sent == res.commands
+    assert np.all(res.latencies > 0)
+    assert max(sent) >= P0 + 20 and min(sent) >= P0  # the reflex closed, never opened
+    assert not [f for f in res.faults if f.kind != "watchdog"]
+    lat = res.latency_ms()
+    assert 0 < lat["p50"] <= lat["p99"] <= lat["max"]
+    assert "p99" in res.summary()
+
+    rec = read_recording(path)
+    assert rec.complete
+    assert len(rec.topic("/daq/samples")) == res.samples
+    assert len(rec.topic("/chain/events")) == res.events
+    assert len(rec.topic("/hand/commands")) == res.commands
+    assert rec.topic("/daq/imu") and rec.topic("/daq/flow") and rec.topic("/chain/windows")
+    assert "run_summary" in rec.metadata
+    rep = replay(path)
+    assert rep.identical and len(rep.replayed_events) == res.events
+    assert rep.replayed_commands == rep.recorded_commands
+
+    # export -> detect
+    assert main(["export", str(path), "--all"]) == 0
+    t, x = read_slip_csv(tmp_path / "run.csv")
+    assert x.tolist() == [m["slip_volts"] for m in rec.topic("/daq/samples")]
+    assert (tmp_path / "run-commands.csv").exists()
+    assert main(["detect", str(tmp_path / "run.csv"), "--out", str(tmp_path / "det")]) == 0
+
+
+def test_watchdog_holds_when_the_daq_stops_and_resumes_when_it_restarts(tmp_path):
+    script = [(0.5, lambda d: d.pause_daq()), (0.9, lambda d: d.restart_daq())]
+    with rig_and_drivers(tmp_path, script=script) as (dev, daq, hand):
+        res = run_loop(daq, hand, SlipReflex(p0=P0), duration=1.5)
+        history = list(dev.rig.hand.history)
+        stops = dev.hand_packets
+    kinds = [f.kind for f in res.faults]
+    assert "watchdog" in kinds and "watchdog-clear" in kinds
+    assert kinds.index("watchdog") < kinds.index("watchdog-clear")
+    assert res.daq_stats["seq_gaps"] >= 1  # the restarted board counts from 0 again
+    # Holding stops the fingers where they are; no target ever went below the grasp.
+    assert all(v >= P0 for h in history for v in h.values())
+    assert stops > res.commands_sent  # the hold (STOP) packet reached the hand too
+    assert res.samples > 0.5 * (1.5 - 0.4) * hw.DAQ_FS  # the loop kept running after
+
+
+def test_hand_port_that_disappears_and_comes_back(tmp_path):
+    script = [(0.5, lambda d: d.unplug("hand")), (0.9, lambda d: d.replug("hand"))]
+    with rig_and_drivers(tmp_path, script=script, schedule=[("drop", 0.2)]) as (dev, daq, hand):
+        res = run_loop(daq, hand, SlipReflex(p0=P0), duration=1.5)
+        history = list(dev.rig.hand.history)
+    kinds = [f.kind for f in res.faults]
+    assert "hand-port" in kinds and "hand-port-restored" in kinds
+    assert res.commands_sent < res.commands  # some commands could not be written...
+    assert res.samples > 0.5 * 1.5 * hw.DAQ_FS  # ...but the loop never stopped
+    assert hand.reconnects >= 1
+    assert all(v >= P0 for h in history for v in h.values())
+    assert max(h[hw.Finger.MIDDLE] for h in history) > P0  # the drop was answered
+
+
+def test_garbage_truncated_and_flipped_frames_while_running(tmp_path):
+    bad = bytearray(wire.encode_frame(seq=1, adc=5))
+    bad[9] ^= 0x04
+    script = [(0.3, lambda d: d.inject_daq(b"\xa5\x5a\x01 garbage \x00\xff" * 3)),
+              (0.5, lambda d: d.inject_daq(wire.encode_frame(seq=7, adc=1)[:11])),
+              (0.7, lambda d: d.inject_daq(bytes(bad)))]
+    with rig_and_drivers(tmp_path, script=script) as (dev, daq, hand):
+        res = run_loop(daq, hand, SlipReflex(p0=P0), duration=1.0)
+    st = res.daq_stats
+    assert st["garbage_bytes"] >= 20 and st["truncated"] >= 1 and st["crc_errors"] >= 1
+    assert st["resyncs"] >= 3
+    assert "watchdog" not in [f.kind for f in res.faults]
+    assert res.samples > 0.5 * hw.DAQ_FS
+
+
+class _Wild:
+    """A reflex whose every command is out of range."""
+
+    name, input_kind, fs = "wild", "slip", hw.FS_NOMINAL
+    last_filtered, last_event, last_threshold, last_count = 0.0, False, 0.0, None
+
+    def step(self, sample, position=None):
+        return 600.0
+
+    def reset(self):
+        pass
+
+
+class _Samples:
+    def __init__(self, n):
+        self.left = [DaqSample(k, k * hw.DAQ_PERIOD_S, 0.4, None, 0) for k in range(n)]
+
+    def read(self, timeout):
+        out, self.left = self.left[:10], self.left[10:]
+        return out
+
+    def close(self):
+        pass
+
+
+def test_out_of_range_command_is_not_sent_and_the_loop_goes_on():
+    loop = serial.serial_for_url("loop://", timeout=0)
+    hand = ILimb(loop)
+    res = run_loop(_Samples(50), hand, _Wild(), duration=0.4)
+    assert res.samples == 50 and res.commands == 50 and res.commands_sent == 0
+    rejected = [f for f in res.faults if f.kind == "command-rejected"]
+    assert len(rejected) == 50 and "600" in rejected[0].message
+    # Only the watchdog's hold (STOP) reached the port: never the bad value.
+    packets = PacketParser().feed(loop.read(10_000))
+    assert packets and all(c.command == hw.HandCommand.STOP for p in packets for c in p)
+    hand.close()
+    loop.close()
+
+
+class _FillingDisk(io.RawIOBase):
+    def __init__(self, room):
+        self.n, self.room = 0, room
+
+    def writable(self):
+        return True
+
+    def write(self, b):
+        if self.n + len(b) > self.room:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        self.n += len(b)
+        return len(b)
+
+    def tell(self):
+        return self.n
+
+
+def test_disk_full_mid_run_is_recorded_as_a_fault_and_the_reflex_keeps_running():
+    buf = io.BufferedWriter(_FillingDisk(room=30_000))
+    rec = Recorder(buf, chunk_size=1_000, compression="none")
+    loop = serial.serial_for_url("loop://", timeout=0)
+    hand = ILimb(loop)
+    res = run_loop(_Samples(2000), hand, SlipReflex(p0=P0), recorder=rec, duration=0.5)
+    rec.close()
+    with contextlib.suppress(OSError):
+        buf.close()
+    assert res.samples == 2000 and res.commands_sent == 2000 // 16
+    assert [f.kind for f in res.faults].count("recording") == 1
+    assert "No space left" in res.recording_error
+    hand.close()
+    loop.close()
+
+
+def test_cli_run_over_virtual_devices_then_replay(tmp_path, capsys):
+    path = tmp_path / "cli.mcap"
+    with VirtualDevices(ToyRig(), link_dir=str(tmp_path), schedule=[("drop", 0.3)]) as dev:
+        code = main(["run", "--daq", dev.daq_path, "--hand", dev.hand_path, "--p0", str(P0),
+                     "--duration", "1.0", "--record", str(path)])
+    out = capsys.readouterr().out
+    assert code == 0
+    assert "latency sample->command: p50" in out and "seq_gaps" in out
+    assert main(["replay", str(path)]) == 0
+    assert "identical" in capsys.readouterr().out
+
+
+def test_cli_refuses_bad_recording_path_and_bad_p0_before_running(tmp_path, capsys):
+    code = main(["run", "--daq", "loop://", "--hand", "loop://", "--p0", "100",
+                 "--record", str(tmp_path / "missing" / "r.mcap"), "--duration", "5"])
+    err = capsys.readouterr().err
+    assert code == 2 and "missing" in err and "running" not in err
+    code = main(["run", "--daq", "loop://", "--hand", "loop://", "--p0", "600", "--no-record",
+                 "--duration", "5"])
+    assert code == 2 and "600" in capsys.readouterr().err
+    code = main(["run", "--daq", str(tmp_path / "nodaq"), "--hand", "loop://", "--p0", "100"])
+    assert code == 2 and "nodaq" in capsys.readouterr().err
+
+
+def test_ctrl_c_stops_cleanly_and_closes_the_recording(tmp_path):
+    path = tmp_path / "int.mcap"
+    proc = subprocess.Popen([sys.executable, "-m", "slipreflex", "run", "--daq", "loop://",
+                             "--hand", "loop://", "--p0", "100", "--record", str(path)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        line = proc.stdout.readline()
+        assert line.startswith("running"), line + proc.stderr.read()
+        fault = proc.stderr.readline()  # no DAQ data: the watchdog fires after 100 ms
+        assert "watchdog" in fault and "held" in fault
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert proc.returncode == 0, err
+    assert "samples 0" in out and "recorded to" in out
+    rec = read_recording(path)
+    assert rec.complete and "run_summary" in rec.metadata
+    assert [f["kind"] for f in rec.topic("/faults")] == ["watchdog"]
