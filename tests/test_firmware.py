@@ -161,6 +161,8 @@ def _copy(src: Path, dst: Path) -> Path:
     ("flip", "crc errors"),
     ("drop", "seq gaps"),
     ("value", "wrong ADC count"),
+    ("accel", "accelerometer readings do not come back"),
+    ("pulse", "impossible flow count"),
     ("stretch", "sample period"),
 ])
 def test_negative_control_corrupted_capture_is_rejected(good_capture, tmp_path, damage, words):
@@ -173,12 +175,16 @@ def test_negative_control_corrupted_capture_is_rejected(good_capture, tmp_path, 
     elif damage == "drop":       # one whole frame lost
         del data[k:k + wire.FRAME_LEN]
         cycles = np.delete(cycles, np.s_[k:k + wire.FRAME_LEN])
-    elif damage == "value":      # the harness injected something else than what came back
+    elif damage in ("value", "accel", "pulse"):  # the log disagrees with what came back
         ev = (out / "events.txt").read_text().splitlines()
-        i = [j for j, l in enumerate(ev) if l.startswith("A ")][4321]
+        kind = {"value": "A ", "accel": "I ", "pulse": "P "}[damage]
+        i = [j for j, l in enumerate(ev) if l.startswith(kind)][1234]
         parts = ev[i].split(" ")
-        parts[2] = str((int(parts[2]) + 1) % 1024)
-        ev[i] = " ".join(parts)
+        if damage == "pulse":    # one pulse the firmware counted never happened
+            del ev[i]
+        else:
+            parts[2] = str((int(parts[2]) + 1) % 1024)
+            ev[i] = " ".join(parts)
         (out / "events.txt").write_text("\n".join(ev) + "\n")
     else:                        # the UART clock 0.02 % slow from the middle on
         cycles = cycles.copy()

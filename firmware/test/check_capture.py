@@ -139,13 +139,9 @@ def check(outdir: str | Path, imu: bool = True) -> Report:
     if any(f.overrun for f in frames):
         err.append(f"{sum(f.overrun for f in frames)} frames flagged OVERRUN")
 
-    # Timing: the first byte of frame k, and conversion start k.
-    first = np.flatnonzero(np.frombuffer(data, np.uint8) == wire.SYNC[0])
-    # Frames are contiguous from byte 0 (no garbage), so frame k starts at byte 20 k.
-    starts = np.arange(len(frames)) * wire.FRAME_LEN
-    if not np.all(np.isin(starts, first)):
-        err.append("frames are not back to back from the first byte")
-    t_first = cycles[starts]
+    # Timing: the first byte of frame k (frames are back to back from byte 0, as there
+    # is no garbage and no gap) and conversion start k.
+    t_first = cycles[np.arange(len(frames)) * wire.FRAME_LEN]
     rep.period_uart_cycles = _slope(t_first)
     adc_t = np.array(adc_t, dtype=np.int64)
     if len(adc_t) < len(frames):
@@ -203,9 +199,13 @@ def check(outdir: str | Path, imu: bool = True) -> Report:
         elif len(latched) - len(fresh) > 2:
             err.append(f"{len(latched) - len(fresh)} accelerometer readings never sent")
         else:
-            late = [i for (i, _), (tl, _) in zip(fresh, latched) if t_first[i] <= tl]
-            if late:
-                err.append(f"frame {late[0]} carries a reading latched after it left")
+            # Documented timing: frame k carries the reading latched during period k - 1
+            # (started by tick k - 1, completed after the ADC snapshot of tick k - 1).
+            wrong = [i for (i, _), (tl, _) in zip(fresh, latched)
+                     if i == 0 or not adc_t[i - 1] <= tl < adc_t[i]]
+            if wrong:
+                err.append(f"frame {wrong[0]} carries an accel reading not latched during "
+                           f"the previous period")
     else:
         if fresh:
             err.append(f"{len(fresh)} fresh accel readings with no IMU on the bus")
