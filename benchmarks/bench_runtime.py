@@ -1,0 +1,113 @@
+"""Latency of the real-time loop over the virtual devices (333 Hz DAQ, i-Limb port).
+
+Starts ``slipreflex virtual-rig`` in its own process (the simulated rig behind
+two pseudo-terminals, as a real DAQ board and control unit would be), then runs
+exactly what ``slipreflex run`` runs - SerialDaq -> SlipReflex -> ILimb, with
+the MCAP recording on - for ``--duration`` seconds and prints the latency from
+a sample's arrival (its bytes read from the DAQ port) to its command written
+to the hand port: p50, p99 and max, plus the DAQ counters.
+
+Usage::
+
+    python benchmarks/bench_runtime.py              # 60 s
+    python benchmarks/bench_runtime.py --duration 10 --no-record
+
+Target: p99 <= 1 ms on an idle machine.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+import time
+
+
+def start_rig(link_dir: str, schedule: str, seed: int) -> tuple[subprocess.Popen, dict[str, str]]:
+    """Start the virtual rig and return it with the facts it prints (daq, hand, p0)."""
+    cmd = [sys.executable, "-m", "slipreflex", "virtual-rig", "--link-dir", link_dir,
+           "--seed", str(seed)]
+    if schedule:
+        cmd += ["--schedule", schedule]
+    proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    info: dict[str, str] = {}
+    deadline = time.monotonic() + 120
+    while not {"daq", "hand", "p0"} <= set(info) and time.monotonic() < deadline:
+        line = proc.stdout.readline()
+        if not line:
+            raise SystemExit(f"virtual-rig exited early (status {proc.wait()})")
+        key, sep, value = line.partition(":")
+        if sep:
+            info[key.strip()] = value.strip()
+    return proc, info
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the benchmark; print the numbers."""
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--duration", type=float, default=60.0, help="seconds of loop (default 60)")
+    ap.add_argument("--no-record", action="store_true", help="run without the MCAP recording")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--schedule", default=None,
+                    help="perturbations for the rig (default: a drop every 10 s, first at 5 s)")
+    args = ap.parse_args(argv)
+
+    from slipreflex.chain import SlipReflex
+    from slipreflex.devices.daq import SerialDaq
+    from slipreflex.devices.ilimb import ILimb
+    from slipreflex.hardware import TRIPOD
+    from slipreflex.recording import METADATA_NAME, Recorder
+    from slipreflex.runtime import run_loop
+
+    schedule = args.schedule
+    if schedule is None:
+        schedule = ",".join(f"drop@{t:g}" for t in range(5, int(args.duration) + 5, 10))
+    with tempfile.TemporaryDirectory() as tmp:
+        rig, info = start_rig(tmp, schedule, args.seed)
+        try:
+            p0 = float(info["p0"])
+            reflex = SlipReflex(dath=True, p0=p0)
+            rec = None
+            if not args.no_record:
+                rec = Recorder(os.path.join(tmp, "bench.mcap"), metadata={METADATA_NAME: {
+                    "reflex_params": json.dumps(reflex.params.to_dict())}})
+            with SerialDaq(info["daq"]) as daq, ILimb(info["hand"]) as hand:
+                hand.set_positions({f: p0 for f in TRIPOD})
+                res = run_loop(daq, hand, reflex, recorder=rec, duration=args.duration)
+            if rec is not None:
+                rec.close()
+                size = os.path.getsize(rec.path)
+        finally:
+            try:
+                rig.stdin.write("q\n")
+                rig.stdin.flush()
+            except OSError:
+                pass
+            try:
+                rig.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                rig.kill()
+                rig.wait()
+            rig.stdin.close()
+            rig.stdout.close()
+    lat = res.latency_ms()
+    print(f"machine: {platform.machine()}, {os.cpu_count()} cpus, python {platform.python_version()}, "
+          f"load average {os.getloadavg()[0]:.2f}")
+    print(f"loop over virtual devices for {res.duration:.1f} s "
+          f"({'recording to MCAP' if not args.no_record else 'no recording'}), p0 {p0:g}, "
+          f"rig schedule {schedule or 'none'}")
+    print(res.summary())
+    if not args.no_record:
+        print(f"recording: {size / 1e6:.1f} MB ({size / res.duration / 1e3:.0f} kB/s)")
+    print(f"RESULT latency_p50_ms={lat['p50']:.3f} latency_p99_ms={lat['p99']:.3f} "
+          f"latency_max_ms={lat['max']:.3f} commands={res.commands_sent} samples={res.samples} "
+          f"seq_gaps={res.daq_stats.get('seq_gaps', 0)}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,109 @@
+"""``slipreflex virtual-rig``: the simulated rig behind a virtual DAQ port and a virtual hand port.
+
+Prints the two device paths and the grasp position, then runs in real time
+until ``q``, Ctrl-C, SIGTERM or ``--duration``. A drop or a pour is triggered
+by a key (``d`` / ``p`` then Enter), a signal (SIGUSR1 / SIGUSR2) or a
+schedule (``--schedule "drop@2.0,pour@5.0"``, seconds after start).
+
+Examples
+--------
+>>> from slipreflex.cli import main
+>>> main(["virtual-rig", "--schedule", "drop@2.0", "--duration", "10"])  # doctest: +SKIP
+daq: /dev/pts/5
+hand: /dev/pts/6
+p0: 212
+"""
+
+from __future__ import annotations
+
+import argparse
+import select
+import signal
+import sys
+import threading
+import time
+
+NAME = "virtual-rig"
+HELP = "simulated rig behind two pseudo-terminals (DAQ and i-Limb) for 'slipreflex run'"
+ORDER = 31
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Options of ``slipreflex virtual-rig``."""
+    p.add_argument("--bottle", default="TR", help="bottle of the simulated rig (TX, TR, DK; default TR)")
+    p.add_argument("--seed", type=int, default=0, help="random seed of the simulation (0)")
+    p.add_argument("--schedule", default="", help='perturbations, e.g. "drop@2.0,pour@5.0" (s after start)')
+    p.add_argument("--link-dir", default=None,
+                   help="also create DIR/daq and DIR/hand symlinks to the ports (stable paths)")
+    p.add_argument("--duration", type=float, default=None, help="exit after this many seconds")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Grasp, open the ports, run in real time, print a summary at exit."""
+    from ..devices.simrig import SimRig
+    from ..devices.virtual import VirtualDevices, parse_schedule
+
+    schedule = parse_schedule(args.schedule)
+    rig = SimRig(bottle=args.bottle, seed=args.seed)
+    grasp = rig.grasp()
+    stop = threading.Event()
+    pending: list[str] = []
+
+    def on_signal(signum: int, _frame: object) -> None:
+        if signum in (signal.SIGINT, signal.SIGTERM):
+            stop.set()
+        else:
+            pending.append("drop" if signum == signal.SIGUSR1 else "pour")
+
+    old = {s: signal.signal(s, on_signal)
+           for s in (signal.SIGINT, signal.SIGTERM, signal.SIGUSR1, signal.SIGUSR2)}
+    dev = VirtualDevices(rig, link_dir=args.link_dir, schedule=schedule)
+    try:
+        print(f"daq: {dev.daq_path}", flush=True)
+        print(f"hand: {dev.hand_path}", flush=True)
+        print(f"p0: {grasp.position:g}", flush=True)
+        print(f"grasp: contact {grasp.force:.2f} N after {grasp.steps} steps; bottle {args.bottle}",
+              flush=True)
+        print(f"run: slipreflex run --daq {dev.daq_path} --hand {dev.hand_path} --p0 {grasp.position:g}",
+              flush=True)
+        print("keys: d+Enter drop, p+Enter pour, q+Enter quit; SIGUSR1 drop, SIGUSR2 pour", flush=True)
+        dev.start()
+        t0 = time.monotonic()
+        stdin_open = sys.stdin is not None and not sys.stdin.closed
+        while not stop.is_set():
+            if args.duration is not None and time.monotonic() - t0 >= args.duration:
+                break
+            while pending:
+                kind = pending.pop(0)
+                dev.trigger(kind)
+            if not dev.running:
+                break
+            if stdin_open:
+                try:
+                    ready, _, _ = select.select([sys.stdin], [], [], 0.1)
+                except (OSError, ValueError):
+                    stdin_open = False
+                    continue
+                if ready:
+                    line = sys.stdin.readline()
+                    if not line:
+                        stdin_open = False  # EOF: keep running on schedule and signals
+                        continue
+                    key = line.strip().lower()[:1]
+                    if key == "q":
+                        break
+                    if key in ("d", "p"):
+                        dev.trigger("drop" if key == "d" else "pour")
+                        print(f"{'drop' if key == 'd' else 'pour'} at {dev.elapsed:.2f} s", flush=True)
+            else:
+                stop.wait(0.1)
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
+        dev.stop()
+    print(f"stopped after {dev.elapsed:.1f} s: {dev.frames_written} frames sent, "
+          f"{dev.hand_packets} hand packets applied ({dev.hand_parser.rejected} rejected), "
+          f"perturbations {[(k, round(t, 2)) for k, t in dev.triggered]}", flush=True)
+    print(rig.status(), flush=True)
+    return 0
+
