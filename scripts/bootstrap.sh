@@ -8,7 +8,7 @@ cd "$(dirname "$0")/.."
 job="${1:-test}"; shift || true
 
 need_apt=()
-for pkg in gcc-avr avr-libc simavr libsimavr-dev libelf-dev pkg-config; do
+for pkg in gcc-avr avr-libc simavr libsimavr-dev libelf-dev pkg-config make gcc libc6-dev; do
   dpkg -s "$pkg" >/dev/null 2>&1 || need_apt+=("$pkg")
 done
 if [ ${#need_apt[@]} -gt 0 ]; then
