@@ -1,7 +1,7 @@
 /*
  * harness.c -- runs the DAQ firmware under simavr with simulated peripherals.
  *
- *   build/harness FIRMWARE.elf OUTDIR SECONDS [--no-imu] [--flow-hz HZ] [--seed N]
+ *   build/harness FIRMWARE.elf OUTDIR SECONDS [--no-imu] [--flow-hz HZ] [--seed N] [--profile]
  *
  * Simulated around an ATmega328P at 16 MHz, AVcc = 5 V:
  *   - slip sensor on ADC0: at every conversion start a new pseudo-random count 0..1023
@@ -22,6 +22,9 @@
  *   W <cycle> <reg> <value>    the firmware wrote an MPU6050 register
  *   E <cycle> <text>           something the firmware must never do (e.g. wrong ADC channel)
  *   X <cycles> <sleep_cycles>  end of run
+ * With --profile, also OUTDIR/profile.txt: "<pc> <cycles>" per flash byte address, the
+ * awake CPU cycles spent on the instruction there (benchmarks/firmware_budget.py maps
+ * them to functions).
  * The checker is firmware/test/check_capture.py.
  */
 #include <stdint.h>
@@ -197,9 +200,11 @@ int main(int argc, char **argv)
     }
     const char *elf = argv[1], *outdir = argv[2];
     double seconds = atof(argv[3]), flow_hz = 97.0;
+    int profile = 0;
     mpu.present = 1;
     for (int i = 4; i < argc; i++) {
         if (!strcmp(argv[i], "--no-imu")) mpu.present = 0;
+        else if (!strcmp(argv[i], "--profile")) profile = 1;
         else if (!strcmp(argv[i], "--flow-hz") && i + 1 < argc) flow_hz = atof(argv[++i]);
         else if (!strcmp(argv[i], "--seed") && i + 1 < argc)
             rng_state ^= strtoull(argv[++i], NULL, 0) * 0xD1B54A32D192ED03ull;
@@ -253,10 +258,28 @@ int main(int argc, char **argv)
 
     const uint64_t end = (uint64_t)(seconds * F_CPU_HZ);
     int state = cpu_Running;
+    static uint64_t pc_cycles[32768];
     while (avr->cycle < end) {
-        state = avr_run(avr);
+        if (profile) {
+            uint32_t pc = avr->pc;
+            uint64_t c0 = avr->cycle, s0 = sleep_cycles;
+            state = avr_run(avr);
+            if (pc < sizeof pc_cycles / sizeof pc_cycles[0])
+                pc_cycles[pc] += (avr->cycle - c0) - (sleep_cycles - s0);
+        } else {
+            state = avr_run(avr);
+        }
         if (state == cpu_Done || state == cpu_Crashed)
             break;
+    }
+    if (profile) {
+        snprintf(path, sizeof path, "%s/profile.txt", outdir);
+        FILE *pf = fopen(path, "w");
+        if (!pf) { perror(path); return 2; }
+        for (size_t pc = 0; pc < sizeof pc_cycles / sizeof pc_cycles[0]; pc++)
+            if (pc_cycles[pc])
+                fprintf(pf, "%zu %llu\n", pc, (unsigned long long)pc_cycles[pc]);
+        fclose(pf);
     }
     fprintf(events, "X %llu %llu\n", (unsigned long long)avr->cycle,
             (unsigned long long)sleep_cycles);
