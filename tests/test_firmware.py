@@ -203,3 +203,19 @@ def test_without_imu_frames_keep_coming_flagged(build, tmp_path):
     assert rep.fresh_frames == 0 and rep.frames >= 3330
     # The same capture fails the checks for a board with its IMU present.
     assert any("IMU_ERROR" in e for e in checker.check(tmp_path, imu=True).errors)
+
+
+def test_imu_plugged_in_later_is_configured_and_read(build, tmp_path):
+    """No IMU for the first second, then one appears (asleep, as at power-on): the
+    firmware keeps streaming, flags IMU_ERROR meanwhile, then configures and reads it."""
+    _harness(build[0], "daq.elf", tmp_path, 3, "--imu-from", "1.0")
+    parser = wire.FrameParser()
+    frames = parser.feed((tmp_path / "uart.bin").read_bytes())
+    assert len(frames) >= 998 and parser.stats.seq_gaps == 0 and parser.stats.crc_errors == 0
+    plug = round(1.0 / hardware.DAQ_PERIOD_S)
+    assert all(f.imu_error and not f.accel_fresh for f in frames[:plug])
+    assert all(f.accel_fresh and not f.imu_error for f in frames[plug + 5:])
+    writes = [l.split() for l in (tmp_path / "events.txt").read_text().splitlines()
+              if l.startswith("W ")]
+    assert [(int(r), int(v)) for _, _, r, v in writes] == list(checker.IMU_CONFIG.items())
+    assert all(int(c) > hardware.F_CPU for _, c, _, _ in writes)

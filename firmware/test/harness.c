@@ -1,7 +1,8 @@
 /*
  * harness.c -- runs the DAQ firmware under simavr with simulated peripherals.
  *
- *   build/harness FIRMWARE.elf OUTDIR SECONDS [--no-imu] [--flow-hz HZ] [--seed N] [--profile]
+ *   build/harness FIRMWARE.elf OUTDIR SECONDS [--no-imu | --imu-from S] [--flow-hz HZ]
+ *                 [--seed N] [--profile]
  *
  * Simulated around an ATmega328P at 16 MHz, AVcc = 5 V:
  *   - slip sensor on ADC0: at every conversion start a new pseudo-random count 0..1023
@@ -10,7 +11,8 @@
  *   - MPU6050 at I2C address 0x68 on the TWI bus: registers, auto-increment, sleep bit
  *     (power-on value of PWR_MGMT_1 is 0x40: asleep, readings frozen at 0 until the
  *     firmware wakes it). Every burst read starting at ACCEL_XOUT_H latches a new
- *     pseudo-random reading. --no-imu leaves the bus empty (every address NACKed).
+ *     pseudo-random reading. --no-imu leaves the bus empty (every address NACKed);
+ *     --imu-from S plugs a powered-on (asleep) MPU6050 in at S simulated seconds.
  *   - UART0 captured byte by byte with the CPU cycle at which the firmware wrote UDR0.
  *
  * Writes OUTDIR/uart.bin (the bytes), OUTDIR/uart_cycles.bin (uint64 little-endian
@@ -182,6 +184,13 @@ static void mpu_from_avr(struct avr_irq_t *irq, uint32_t value, void *param)
     }
 }
 
+static avr_cycle_count_t mpu_plug_in(avr_t *a, avr_cycle_count_t when, void *param)
+{
+    (void)a; (void)when; (void)param;
+    mpu.present = 1;
+    return 0;
+}
+
 /* ---- main ------------------------------------------------------------------------ */
 static void write_file(const char *dir, const char *name, const void *data, size_t n)
 {
@@ -194,17 +203,18 @@ static void write_file(const char *dir, const char *name, const void *data, size
 int main(int argc, char **argv)
 {
     if (argc < 4) {
-        fprintf(stderr, "usage: %s FIRMWARE.elf OUTDIR SECONDS [--no-imu] [--flow-hz HZ] "
-                        "[--seed N]\n", argv[0]);
+        fprintf(stderr, "usage: %s FIRMWARE.elf OUTDIR SECONDS [--no-imu | --imu-from S] "
+                        "[--flow-hz HZ] [--seed N] [--profile]\n", argv[0]);
         return 2;
     }
     const char *elf = argv[1], *outdir = argv[2];
-    double seconds = atof(argv[3]), flow_hz = 97.0;
+    double seconds = atof(argv[3]), flow_hz = 97.0, imu_from = 0.0;
     int profile = 0;
     mpu.present = 1;
     for (int i = 4; i < argc; i++) {
         if (!strcmp(argv[i], "--no-imu")) mpu.present = 0;
         else if (!strcmp(argv[i], "--profile")) profile = 1;
+        else if (!strcmp(argv[i], "--imu-from") && i + 1 < argc) imu_from = atof(argv[++i]);
         else if (!strcmp(argv[i], "--flow-hz") && i + 1 < argc) flow_hz = atof(argv[++i]);
         else if (!strcmp(argv[i], "--seed") && i + 1 < argc)
             rng_state ^= strtoull(argv[++i], NULL, 0) * 0xD1B54A32D192ED03ull;
@@ -251,6 +261,11 @@ int main(int argc, char **argv)
     mpu.irq = avr_alloc_irq(&avr->irq_pool, 0, 2, names);
     mpu.regs[MPU_PWR_MGMT_1] = 0x40u;        /* power-on: sleep */
     mpu.regs[0x75] = MPU_ADDR;               /* WHO_AM_I */
+    if (imu_from > 0) {
+        mpu.present = 0;
+        avr_cycle_timer_register(avr, (avr_cycle_count_t)(imu_from * F_CPU_HZ), mpu_plug_in,
+                                 NULL);
+    }
     avr_connect_irq(mpu.irq + TWI_IRQ_INPUT, avr_io_getirq(avr, AVR_IOCTL_TWI_GETIRQ(0),
                                                            TWI_IRQ_INPUT));
     avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_TWI_GETIRQ(0), TWI_IRQ_OUTPUT),
