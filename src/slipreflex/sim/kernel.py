@@ -1,0 +1,441 @@
+"""The numba kernel: grasp physics, finger servos and the DAQ-side sensors.
+
+Internal module: :class:`slipreflex.sim.Rig` is the public face. The state,
+parameters and outputs are flat float64 arrays indexed by the constants
+below, so the jitted functions compile once (``cache=True``) and a call has
+few arguments.
+
+Model (one physics step of ``dt``, semi-implicit Euler):
+
+* **Fingers** (thumb, index, middle): first-order position servo
+  ``dq/dt = clip(K (target - q), -speed, speed)``; a finger does not advance
+  while its contact force exceeds the stall force.
+* **Normal force**: the three fingertips sit 120 degrees apart around the
+  bottle, which is free to shift sideways; with linear contact springs the
+  lateral equilibrium gives every contact the same normal force
+  ``N_c = k_n * travel * max(0, mean(q) - q_contact)`` (the bottle moves so
+  that all three stay loaded). ``k_n`` is pad, finger and bottle wall in
+  series. Friction acts on ``N = 3 N_c``.
+* **Friction** (elasto-plastic Coulomb with an explicit stick state and a
+  Stribeck curve): the pads' tangential compliance ``k_t`` (with damping
+  ``c_t``) connects the bottle to an anchor ``s`` on its surface. While
+  stuck, ``s`` is fixed and the pad force is ``k_t (x - s) + c_t v``; when
+  that exceeds ``mu_s N`` the contact slips and the force becomes
+  ``mu(w) N`` with ``mu(w) = mu_k + (mu_s - mu_k) exp(-(w / v_s)^2)``, ``w``
+  the sliding speed; the massless pad relaxes exactly toward ``F / k_t``;
+  when ``w`` reaches zero the contact sticks again. No creep while stuck:
+  ``s`` does not move at all.
+* **Loads**: gravity on bottle + water (+ landed masses, through their
+  contact springs); a dropped mass is a second body with a compliant,
+  damped contact on the bottom; a pour adds water at a constant rate after
+  the jet's fall time and pushes with the jet's momentum flux.
+* **Fallen out**: once the bottle has moved ``grip_travel`` below the
+  fingertips the contacts reach the shoulder and are lost; the bottle then
+  falls freely.
+* **Sensors** sampled inside the loop on their own clocks: the OPR5005 slip
+  sensor (track interpolation at the surface position under the sensor,
+  transfer curve, electrical noise, 10-bit ADC) and flow pulses at the DAQ's
+  333.33 Hz; the MPU6050 at its own ODR through its DLPF. Tactile snapshots
+  (normal and tangential force, slip distance) at each requested tactile
+  rate; frames are built by :func:`tactile_frames`.
+
+Noise is counter-based (splitmix64 of a per-channel key and the sample
+index), so a trace does not depend on how the run is cut into calls.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+__all__: list[str] = []
+
+# ---- state vector S -------------------------------------------------------
+S_X, S_V, S_S, S_W, S_STUCK, S_DIR = 0, 1, 2, 3, 4, 5
+S_Q0, S_TGT0, S_SPD0 = 6, 9, 12
+S_NC, S_FT, S_AF, S_SUPPORTED, S_FALLEN, S_TFALL = 15, 16, 17, 18, 19, 20
+S_AX, S_AY, S_AZ, S_AFRESH, S_MASS, S_A = 21, 22, 23, 24, 25, 26
+S_SIZE = 27
+
+# ---- counters C (int64) ---------------------------------------------------
+C_N, C_DAQ, C_ACC = 0, 1, 2
+C_SIZE = 3
+
+# ---- parameters P ---------------------------------------------------------
+(P_DT, P_G, P_MB, P_MUS, P_MUK, P_VS, P_KT, P_CT, P_KN, P_LAM, P_QC, P_KSERVO, P_STALL, P_GRIP,
+ P_DAQ_T, P_ACC_T, P_ACC_ALPHA, P_ACC_NOISE, P_ACC_LSB, P_ACC_RANGE, P_TILT_X, P_TILT_Z, P_TILT_Y,
+ P_VCC, P_VSAT, P_KNEE, P_VNOISE, P_GAP, P_ADC_LSB, P_ADC_MAX, P_TRACK_DX, P_TRACK_OFF,
+ P_FLOW_K, P_FLOW_PHASE, P_DECAY) = range(35)
+P_SIZE = 35
+
+# ---- drops D (one row per drop) -------------------------------------------
+D_REL, D_M, D_H0, D_KC, D_CC, D_ACT, D_Z, D_VZ, D_LANDED = range(9)
+D_SIZE = 9
+
+# ---- pours W (one row per pour) -------------------------------------------
+W_START, W_RATE_KG_S, W_TOTAL_KG, W_DELAY, W_JET_N, W_RATE_L_S, W_DUR = range(7)
+W_SIZE = 7
+
+# ---- DAQ output rows --------------------------------------------------------
+(O_T, O_VOLTS, O_AX, O_AY, O_AZ, O_AFRESH, O_PULSES, O_X, O_V, O_S, O_STUCK, O_NC, O_MASS,
+ O_Q0, O_Q1, O_Q2, O_FALLEN, O_A) = range(18)
+O_SIZE = 18
+
+# ---- tactile snapshot rows --------------------------------------------------
+T_ID, T_IDX, T_T, T_NC, T_FT, T_S, T_FALLEN = range(7)
+T_SIZE = 7
+
+# ---- events -----------------------------------------------------------------
+E_ONSET, E_STICK, E_FALLEN, E_LANDED = 1.0, 2.0, 3.0, 4.0
+
+_GOLDEN = np.uint64(0x9E3779B97F4A7C15)
+_M1 = np.uint64(0xBF58476D1CE4E5B9)
+_M2 = np.uint64(0x94D049BB133111EB)
+_S30, _S27, _S31, _S11 = np.uint64(30), np.uint64(27), np.uint64(31), np.uint64(11)
+_TWO53 = 1.0 / 9007199254740992.0
+
+
+@njit(cache=True, inline="always")
+def _mix(z):
+    z = (z ^ (z >> _S30)) * _M1
+    z = (z ^ (z >> _S27)) * _M2
+    return z ^ (z >> _S31)
+
+
+@njit(cache=True, inline="always")
+def _uniform(key, i):
+    h = _mix(key + np.uint64(i) * _GOLDEN)
+    return (float(h >> _S11) + 0.5) * _TWO53
+
+
+@njit(cache=True)
+def normal(key, i):
+    """Standard normal number ``i`` of the stream ``key`` (counter-based, Box-Muller)."""
+    u1 = _uniform(key, 2 * i)
+    u2 = _uniform(key, 2 * i + 1)
+    return np.sqrt(-2.0 * np.log(u1)) * np.cos(2.0 * np.pi * u2)
+
+
+@njit(cache=True, inline="always")
+def _volts(P, track, keys, k, pos, fallen, q_mid):
+    if fallen:
+        rho = 0.0
+    else:
+        fi = (pos + P[P_TRACK_OFF]) / P[P_TRACK_DX]
+        i = int(np.floor(fi))
+        nt = track.shape[0]
+        if i < 0:
+            i = 0
+            fi = 0.0
+        elif i > nt - 2:
+            i = nt - 2
+            fi = float(nt - 1)
+        fr = fi - i
+        rho = track[i] + fr * (track[i + 1] - track[i])
+        extra = (P[P_QC] - q_mid) * P[P_LAM]
+        if extra > 0.0:
+            r = extra / P[P_GAP]
+            rho = rho / (1.0 + r * r)
+    vlin = P[P_VCC] * (1.0 - rho)
+    z = (vlin - P[P_VSAT]) / P[P_KNEE]
+    if z > 0.0:
+        v = P[P_VSAT] + P[P_KNEE] * (z + np.log1p(np.exp(-z)))
+    else:
+        v = P[P_VSAT] + P[P_KNEE] * np.log1p(np.exp(z))
+    v += P[P_VNOISE] * normal(keys[0], k)
+    code = np.floor(v / P[P_ADC_LSB])
+    if code < 0.0:
+        code = 0.0
+    elif code > P[P_ADC_MAX]:
+        code = P[P_ADC_MAX]
+    return code * P[P_ADC_LSB]
+
+
+@njit(cache=True, inline="always")
+def _quant_g(val, P):
+    lsb = P[P_ACC_LSB]
+    c = np.floor(val / lsb + 0.5)
+    hi = np.floor(P[P_ACC_RANGE] / lsb + 0.5) - 1.0
+    lo = -np.floor(P[P_ACC_RANGE] / lsb + 0.5)
+    if c > hi:
+        c = hi
+    elif c < lo:
+        c = lo
+    return c * lsb
+
+
+@njit(cache=True)
+def _water(W, t):
+    """Water mass in the bottle (kg), jet force (N) and litres through the flow sensor at ``t``."""
+    m = 0.0
+    jet = 0.0
+    litres = 0.0
+    for p in range(W.shape[0]):
+        st = W[p, W_START]
+        dur = W[p, W_DUR]
+        if t > st:
+            tf = min(t - st, dur)
+            litres += W[p, W_RATE_L_S] * tf
+        ta = st + W[p, W_DELAY]
+        if t > ta:
+            tw = min(t - ta, dur)
+            m += W[p, W_RATE_KG_S] * tw
+            if t - ta < dur:
+                jet += W[p, W_JET_N]
+    return m, jet, litres
+
+
+@njit(cache=True)
+def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, n_end, daq_out, tac_out, ev_out, counts):
+    """Advance the physics to step ``n_end``; write DAQ rows, tactile snapshots and events.
+
+    ``counts`` receives the number of rows written to each output. Stops
+    early (without error) if an output buffer would overflow; the caller
+    sizes them so that this does not happen.
+    """
+    dt = P[P_DT]
+    g = P[P_G]
+    nd = 0
+    ntac = 0
+    nev = 0
+    n = C[C_N]
+    cap_daq = daq_out.shape[0]
+    cap_tac = tac_out.shape[0]
+    cap_ev = ev_out.shape[0]
+    nsamp = tac_rates.shape[0]
+    while n < n_end:
+        if nev + 4 > cap_ev or nd + 2 > cap_daq:
+            break
+        t0 = n * dt
+        t1 = (n + 1) * dt
+        # ---- fingers
+        nc_prev = S[S_NC]
+        for i in range(3):
+            q = S[S_Q0 + i]
+            tg = S[S_TGT0 + i]
+            e = tg - q
+            r = P[P_KSERVO] * e
+            sp = S[S_SPD0 + i]
+            if r > sp:
+                r = sp
+            elif r < -sp:
+                r = -sp
+            if r > 0.0 and nc_prev >= P[P_STALL]:
+                r = 0.0
+            qn = q + r * dt
+            if (tg - qn) * e < 0.0:
+                qn = tg
+            S[S_Q0 + i] = qn
+        qbar = (S[S_Q0] + S[S_Q0 + 1] + S[S_Q0 + 2]) / 3.0
+        pen = (qbar - P[P_QC]) * P[P_LAM]
+        fallen = S[S_FALLEN] > 0.0
+        nc = P[P_KN] * pen if (pen > 0.0 and not fallen) else 0.0
+        S[S_NC] = nc
+        ntot = 3.0 * nc
+        # ---- loads
+        mw, fjet, _l = _water(W, t0)
+        x = S[S_X]
+        v = S[S_V]
+        x_old = x
+        fdrop = 0.0
+        mland = 0.0
+        for d in range(D.shape[0]):
+            if t1 <= D[d, D_REL]:
+                continue
+            if D[d, D_ACT] == 0.0:
+                D[d, D_ACT] = 1.0
+                D[d, D_Z] = x - D[d, D_H0]
+                D[d, D_VZ] = 0.0
+            pd = D[d, D_Z] - x
+            f = 0.0
+            if pd > 0.0:
+                f = D[d, D_KC] * pd + D[d, D_CC] * (D[d, D_VZ] - v)
+                if f < 0.0:
+                    f = 0.0
+                if D[d, D_LANDED] == 0.0:
+                    D[d, D_LANDED] = 1.0
+                    ev_out[nev, 0] = t1
+                    ev_out[nev, 1] = E_LANDED
+                    ev_out[nev, 2] = x
+                    nev += 1
+            if D[d, D_LANDED] > 0.0:
+                mland += D[d, D_M]
+            D[d, D_VZ] += (g - f / D[d, D_M]) * dt
+            D[d, D_Z] += D[d, D_VZ] * dt
+            fdrop += f
+        m = P[P_MB] + mw
+        S[S_MASS] = m + mland
+        wload = m * g + fjet + fdrop
+        # ---- bottle
+        a = 0.0
+        if S[S_SUPPORTED] > 0.0:
+            S[S_FT] = 0.0
+        elif fallen:
+            a = wload / m
+            v += a * dt
+            x += v * dt
+            S[S_FT] = 0.0
+        else:
+            s = S[S_S]
+            u = x - s
+            fp = P[P_KT] * u + P[P_CT] * v
+            if S[S_STUCK] > 0.0 and abs(fp) > P[P_MUS] * ntot:
+                S[S_STUCK] = 0.0
+                S[S_DIR] = 1.0 if fp > 0.0 else -1.0
+                S[S_W] = 0.0
+                ev_out[nev, 0] = t0
+                ev_out[nev, 1] = E_ONSET
+                ev_out[nev, 2] = x
+                nev += 1
+            if S[S_STUCK] > 0.0:
+                a = (wload - fp) / m
+                v += a * dt
+                x += v * dt
+                S[S_FT] = fp
+            else:
+                w = S[S_W] / P[P_VS]
+                mu = P[P_MUK] + (P[P_MUS] - P[P_MUK]) * np.exp(-w * w)
+                fr = S[S_DIR] * mu * ntot
+                a = (wload - fr) / m
+                v += a * dt
+                x += v * dt
+                ueq = fr / P[P_KT]
+                u = ueq + (u - ueq) * P[P_DECAY]
+                sn = x - u
+                wn = (sn - s) / dt
+                if wn * S[S_DIR] <= 0.0:
+                    S[S_STUCK] = 1.0
+                    S[S_W] = 0.0
+                    ev_out[nev, 0] = t1
+                    ev_out[nev, 1] = E_STICK
+                    ev_out[nev, 2] = x
+                    nev += 1
+                else:
+                    S[S_S] = sn
+                    S[S_W] = abs(wn)
+                S[S_FT] = fr
+            if x > P[P_GRIP]:
+                S[S_FALLEN] = 1.0
+                S[S_TFALL] = t1
+                S[S_STUCK] = 0.0
+                ev_out[nev, 0] = t1
+                ev_out[nev, 1] = E_FALLEN
+                ev_out[nev, 2] = x
+                nev += 1
+        S[S_X] = x
+        S[S_V] = v
+        S[S_A] = a
+        S[S_AF] += (a - S[S_AF]) * P[P_ACC_ALPHA]
+        # ---- accelerometer ticks (own ODR)
+        while C[C_ACC] * P[P_ACC_T] <= t1 + 1e-12:
+            j = C[C_ACC]
+            spec = 1.0 - S[S_AF] / g
+            S[S_AX] = _quant_g(P[P_TILT_X] * spec + P[P_ACC_NOISE] * normal(keys[1], 3 * j), P)
+            S[S_AY] = _quant_g(P[P_TILT_Y] * spec + P[P_ACC_NOISE] * normal(keys[1], 3 * j + 1), P)
+            S[S_AZ] = _quant_g(P[P_TILT_Z] * spec + P[P_ACC_NOISE] * normal(keys[1], 3 * j + 2), P)
+            S[S_AFRESH] = 1.0
+            C[C_ACC] = j + 1
+        # ---- DAQ ticks (slip sensor, flow, latest accel)
+        while C[C_DAQ] * P[P_DAQ_T] <= t1 + 1e-12 and nd < cap_daq:
+            k = C[C_DAQ]
+            tk = k * P[P_DAQ_T]
+            frac = (tk - t0) / dt
+            if frac < 0.0:
+                frac = 0.0
+            xk = x_old + frac * (x - x_old)
+            row = daq_out[nd]
+            row[O_T] = tk
+            row[O_VOLTS] = _volts(P, track, keys, k, xk, S[S_FALLEN] > 0.0, S[S_Q0 + 2])
+            row[O_AX] = S[S_AX]
+            row[O_AY] = S[S_AY]
+            row[O_AZ] = S[S_AZ]
+            row[O_AFRESH] = S[S_AFRESH]
+            S[S_AFRESH] = 0.0
+            _m, _j, litres = _water(W, tk)
+            row[O_PULSES] = np.floor(P[P_FLOW_K] * litres + P[P_FLOW_PHASE]) if litres > 0.0 else 0.0
+            row[O_X] = xk
+            row[O_V] = v
+            row[O_S] = S[S_S]
+            row[O_STUCK] = S[S_STUCK]
+            row[O_NC] = nc
+            row[O_MASS] = S[S_MASS]
+            row[O_Q0] = S[S_Q0]
+            row[O_Q1] = S[S_Q0 + 1]
+            row[O_Q2] = S[S_Q0 + 2]
+            row[O_FALLEN] = S[S_FALLEN]
+            row[O_A] = a
+            nd += 1
+            C[C_DAQ] = k + 1
+        # ---- tactile snapshots
+        for si in range(nsamp):
+            while tac_next[si] / tac_rates[si] <= t1 + 1e-12 and ntac < cap_tac:
+                row = tac_out[ntac]
+                row[T_ID] = si
+                row[T_IDX] = tac_next[si]
+                row[T_T] = tac_next[si] / tac_rates[si]
+                row[T_NC] = nc
+                row[T_FT] = S[S_FT] / 3.0
+                row[T_S] = S[S_S]
+                row[T_FALLEN] = S[S_FALLEN]
+                ntac += 1
+                tac_next[si] += 1
+        n += 1
+    C[C_N] = n
+    counts[0] = nd
+    counts[1] = ntac
+    counts[2] = nev
+
+
+@njit(cache=True)
+def tactile_frames(snap, vib, vib_dx, vib_off, key, patch_sigma, shear_shift, noise, resolution, out):
+    """Build ``(4, 4)`` frames (N per taxel) from tactile snapshots.
+
+    ``snap`` rows are (id, index, t, N_c, F_t, s, fallen). The pressure
+    patch is a Gaussian of ``patch_sigma`` taxels centred on the array and
+    shifted along the bottle axis by ``shear_shift * F_t / N_c``; the total
+    is ``N_c * (1 + vib(s))``, the undulation felt at the slip distance
+    ``s`` (so it changes only while sliding); then per-taxel noise (stream
+    ``key``, counter = sample index), quantization, and clipping at 0.
+    """
+    nv = vib.shape[0]
+    for r in range(snap.shape[0]):
+        nc = snap[r, T_NC]
+        idx = np.int64(snap[r, T_IDX])
+        if nc > 0.0 and snap[r, T_FALLEN] == 0.0:
+            fi = (snap[r, T_S] + vib_off) / vib_dx
+            i = int(np.floor(fi))
+            if i < 0:
+                i = 0
+                fi = 0.0
+            elif i > nv - 2:
+                i = nv - 2
+                fi = float(nv - 1)
+            fr = fi - i
+            tot = nc * (1.0 + vib[i] + fr * (vib[i + 1] - vib[i]))
+            cy = 1.5 + shear_shift * snap[r, T_FT] / nc
+        else:
+            tot = 0.0
+            cy = 1.5
+        wsum = 0.0
+        for a in range(4):
+            for b in range(4):
+                dxa = a - 1.5
+                dyb = b - cy
+                wgt = np.exp(-(dxa * dxa + dyb * dyb) / (2.0 * patch_sigma * patch_sigma))
+                out[r, b, a] = wgt
+                wsum += wgt
+        for a in range(4):
+            for b in range(4):
+                f = tot * out[r, b, a] / wsum + noise * normal(key, idx * 16 + b * 4 + a)
+                if resolution > 0.0:
+                    f = np.floor(f / resolution + 0.5) * resolution
+                if f < 0.0:
+                    f = 0.0
+                out[r, b, a] = f
+
+
+@njit(cache=True)
+def volts_along(P, track, keys, positions, out):
+    """Slip-sensor volts at surface positions (sample k uses noise number k); for the scan."""
+    for k in range(positions.shape[0]):
+        out[k] = _volts(P, track, keys, k, positions[k], False, 0.0)

@@ -1,0 +1,381 @@
+"""Closed-loop runs of a reflex on the simulated rig, and their result object.
+
+:func:`run_closed_loop` feeds a :class:`slipreflex.interfaces.Reflex` the
+input its ``input_kind`` asks for (slip-sensor volts at the DAQ's 333.33 Hz,
+or ``(4, 4)`` index-finger tactile frames at the reflex's own ``fs``), passes
+the measured middle-finger position with every sample, and sends every
+returned command as a position target to the tripod fingers (thumb, index,
+middle). The command is sent at the time of the sample that produced it and
+reaches the fingers after the hand's latency; the physics is advanced in
+stretches that never pass a time a pending command could still change, so
+the result is the same as stepping sample by sample.
+
+:class:`SimTrace` holds every stream of the run as arrays.
+
+Examples
+--------
+>>> from slipreflex.sim import Rig, run_closed_loop
+>>> class Never:
+...     name, input_kind, fs = "never", "slip", 333.0
+...     def step(self, sample, position=None): return None
+...     def reset(self): pass
+>>> rig = Rig("TR", seed=1); _ = rig.grasp()
+>>> tr = run_closed_loop(rig, Never(), 0.5)
+>>> tr.t.size, tr.fallen
+(167, False)
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .. import hardware as hw
+from ..errors import ParameterError
+from ..hardware import Finger
+from ..interfaces import Reflex
+from . import kernel as K
+from .objects import Drop, Pour
+from .rig import DaqBlock, Rig, SlipEvent
+
+__all__ = ["SimTrace", "run_closed_loop", "TRACE_COLUMNS"]
+
+#: Columns of :meth:`SimTrace.to_frame` / :meth:`SimTrace.write_csv` (DAQ-rate streams), with units.
+TRACE_COLUMNS: dict[str, str] = {
+    "t": "s", "volts": "V", "accel_x": "g", "accel_y": "g", "accel_z": "g", "accel_fresh": "bool",
+    "flow_pulses": "count", "thumb": "units", "index": "units", "middle": "units", "command": "units",
+    "displacement": "m", "velocity": "m/s", "slip": "m", "stuck": "bool", "fallen": "bool",
+    "normal_force": "N", "load_mass": "kg", "accel_true": "m/s^2",
+}
+
+
+@dataclass
+class SimTrace:
+    """Everything a closed-loop (or open-loop) run produced.
+
+    Attributes
+    ----------
+    daq : DaqBlock
+        Slip-sensor volts, accelerometer (g), flow pulses at 333.33 Hz, with
+        the truth at the same instants (displacement, velocity, slip, stuck,
+        fallen, normal force, load mass, finger positions).
+    cmd_t, cmd_value : ndarray
+        Commands the reflex returned: time of the sample that produced each,
+        and the target position.
+    tactile_t, tactile : ndarray
+        Index-finger tactile frames (times, ``(n, 4, 4)`` N) if the reflex
+        read them or ``tactile_fs`` asked for them (else empty).
+    onsets : ndarray
+        Truth: times of every stick -> slip transition in the run.
+    slip_events : list of SlipEvent
+        Truth: sliding episodes (see :meth:`Rig.slip_events`).
+    fallen : bool
+        The bottle slid out of the grasp.
+    fall_time : float or None
+    perturbations : list of (float, Drop | Pour)
+        Every perturbation scheduled on the rig, with its time.
+    method : str
+        The reflex's name.
+    t_start, t_end : float
+        The run's time span (s).
+
+    Examples
+    --------
+    >>> from slipreflex.sim import Rig, simulate_open_loop
+    >>> tr = simulate_open_loop(Rig("TR"), 0.1)
+    >>> sorted(tr.to_frame())[:3]
+    ['accel_fresh', 'accel_true', 'accel_x']
+    """
+
+    daq: DaqBlock
+    cmd_t: np.ndarray
+    cmd_value: np.ndarray
+    tactile_t: np.ndarray
+    tactile: np.ndarray
+    onsets: np.ndarray
+    slip_events: list[SlipEvent]
+    fallen: bool
+    fall_time: float | None
+    perturbations: list[tuple[float, Drop | Pour]]
+    method: str
+    t_start: float
+    t_end: float
+    extra: dict = field(default_factory=dict)
+
+    # convenient aliases of the DAQ streams
+    @property
+    def t(self) -> np.ndarray:
+        """DAQ sample times (s).
+
+        Examples
+        --------
+        >>> from slipreflex.sim import Rig, simulate_open_loop
+        >>> simulate_open_loop(Rig("TR"), 0.03).t.size
+        10
+        """
+        return self.daq.t
+
+    @property
+    def volts(self) -> np.ndarray:
+        """Slip-sensor volts.
+
+        Examples
+        --------
+        >>> from slipreflex.sim import Rig, simulate_open_loop
+        >>> float(simulate_open_loop(Rig("TR"), 0.03).volts[0]) > 4
+        True
+        """
+        return self.daq.volts
+
+    @property
+    def accel(self) -> np.ndarray:
+        """Accelerometer readings (g), shape (n, 3).
+
+        Examples
+        --------
+        >>> from slipreflex.sim import Rig, simulate_open_loop
+        >>> simulate_open_loop(Rig("TR"), 0.03).accel.shape
+        (10, 3)
+        """
+        return self.daq.accel
+
+    @property
+    def command(self) -> np.ndarray:
+        """The last command at or before each DAQ sample (NaN before the first).
+
+        Examples
+        --------
+        >>> from slipreflex.sim import Rig, simulate_open_loop
+        >>> bool(np.isnan(simulate_open_loop(Rig("TR"), 0.03).command).all())
+        True
+        """
+        out = np.full(self.daq.t.size, np.nan)
+        if self.cmd_t.size:
+            idx = np.searchsorted(self.cmd_t, self.daq.t + 1e-12, side="right") - 1
+            ok = idx >= 0
+            out[ok] = self.cmd_value[idx[ok]]
+        return out
+
+    @property
+    def water_ml(self) -> np.ndarray:
+        """Water volume estimated from the flow pulses (ml), as the paper's Fig. 15A.
+
+        Examples
+        --------
+        >>> from slipreflex.sim import Rig, simulate_open_loop
+        >>> float(simulate_open_loop(Rig("TR"), 0.03).water_ml.max())
+        0.0
+        """
+        return self.daq.flow_pulses / hw.FLOW_PULSES_PER_LITRE * 1000.0
+
+    def to_frame(self) -> dict[str, np.ndarray]:
+        """The DAQ-rate streams as a dict of equal-length 1-D arrays (see :data:`TRACE_COLUMNS`).
+
+        Examples
+        --------
+        >>> from slipreflex.sim import Rig, simulate_open_loop
+        >>> f = simulate_open_loop(Rig("TR"), 0.03).to_frame()
+        >>> len({v.size for v in f.values()})
+        1
+        """
+        d = self.daq
+        return {
+            "t": d.t, "volts": d.volts, "accel_x": d.accel[:, 0], "accel_y": d.accel[:, 1],
+            "accel_z": d.accel[:, 2], "accel_fresh": d.accel_fresh, "flow_pulses": d.flow_pulses,
+            "thumb": d.fingers[:, 0], "index": d.fingers[:, 1], "middle": d.fingers[:, 2],
+            "command": self.command, "displacement": d.displacement, "velocity": d.velocity, "slip": d.slip,
+            "stuck": d.stuck, "fallen": d.fallen, "normal_force": d.normal_force, "load_mass": d.load_mass,
+            "accel_true": d.accel_true,
+        }
+
+    def write_csv(self, path: str | Path) -> Path:
+        """Write :meth:`to_frame` as CSV (header row of column names).
+
+        Examples
+        --------
+        >>> import tempfile, pathlib
+        >>> from slipreflex.sim import Rig, simulate_open_loop
+        >>> p = simulate_open_loop(Rig("TR"), 0.03).write_csv(pathlib.Path(tempfile.mkdtemp()) / "a.csv")
+        >>> p.read_text().splitlines()[0].split(",")[:3]
+        ['t', 'volts', 'accel_x']
+        """
+        path = Path(path)
+        frame = self.to_frame()
+        cols = list(frame)
+        with path.open("w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(cols)
+            arrs = [np.asarray(frame[c]) for c in cols]
+            for i in range(self.daq.t.size):
+                w.writerow([_fmt(a[i]) for a in arrs])
+        return path
+
+
+def _fmt(v: object) -> str:
+    if isinstance(v, (bool, np.bool_)):
+        return "1" if v else "0"
+    if isinstance(v, (np.integer, int)):
+        return str(int(v))
+    f = float(v)  # type: ignore[arg-type]
+    return "" if math.isnan(f) else repr(f)
+
+
+def _trace(rig: Rig, t0: float, method: str, cmd_t: list[float], cmd_v: list[float],
+           tac_t: np.ndarray, tac: np.ndarray) -> SimTrace:
+    hist = rig.daq_history()
+    keep = hist.t >= t0 - 1e-12
+    d = DaqBlock(**{k: getattr(hist, k)[keep] for k in hist.__dataclass_fields__})
+    ons = rig.onsets
+    ev = [e for e in rig.slip_events() if e.onset >= t0 - 1e-12 or e.end is None or e.end >= t0]
+    return SimTrace(daq=d, cmd_t=np.asarray(cmd_t, dtype=float), cmd_value=np.asarray(cmd_v, dtype=float),
+                    tactile_t=tac_t, tactile=tac, onsets=ons[ons >= t0 - 1e-12], slip_events=ev,
+                    fallen=rig.fallen, fall_time=rig.fall_time, perturbations=list(rig.perturbations),
+                    method=method, t_start=t0, t_end=rig.t)
+
+
+def simulate_open_loop(rig: Rig, duration: float, *, tactile_fs: float | None = None) -> SimTrace:
+    """Advance the rig without a reflex and return the trace of that stretch.
+
+    Parameters
+    ----------
+    rig : Rig
+    duration : float
+        Seconds to simulate.
+    tactile_fs : float, optional
+        Also record index-finger tactile frames at this rate.
+
+    Returns
+    -------
+    SimTrace
+
+    Examples
+    --------
+    >>> from slipreflex.sim import Rig, Pour
+    >>> rig = Rig("TR", seed=2); _ = rig.grasp(); rig.perturb(Pour(), at=rig.t)
+    >>> simulate_open_loop(rig, 40.0).fallen
+    True
+    """
+    if not (math.isfinite(duration) and duration >= 0):
+        raise ParameterError(f"duration must be >= 0, got {duration!r}")
+    t0 = rig.t
+    s = rig.tactile_sampler(tactile_fs, keep=True) if tactile_fs else None
+    rig.advance_block(t0 + duration)
+    tac_t, tac = s.history if s else (np.zeros(0), np.zeros((0,) + hw.TACTILE_SHAPE))
+    if s:
+        s.close()
+    return _trace(rig, t0, "open-loop", [], [], tac_t, tac)
+
+
+def run_closed_loop(rig: Rig, reflex: Reflex, duration: float, *,
+                    fingers: Sequence[Finger] = hw.TRIPOD, tactile_fs: float | None = None) -> SimTrace:
+    """Run ``reflex`` on ``rig`` for ``duration`` seconds from the rig's current time.
+
+    Parameters
+    ----------
+    rig : Rig
+        Usually after :meth:`Rig.grasp` and with perturbations scheduled.
+    reflex : Reflex
+        ``input_kind == "slip"``: called once per DAQ sample with the slip
+        volts; ``"tactile"``: called at ``reflex.fs`` with index-finger
+        frames. ``position`` is the measured middle-finger position.
+    duration : float
+        Seconds to run.
+    fingers : sequence of Finger
+        Fingers that receive each command (default: the tripod).
+    tactile_fs : float, optional
+        For a slip reflex, also record tactile frames at this rate.
+
+    Returns
+    -------
+    SimTrace
+
+    Examples
+    --------
+    >>> from slipreflex.sim import Rig
+    >>> class Squeeze:
+    ...     name, input_kind, fs = "squeeze", "tactile", 260.0
+    ...     def step(self, frame, position=None): return position + 1 if frame.sum() < 2 else None
+    ...     def reset(self): pass
+    >>> rig = Rig("TR"); _ = rig.grasp()
+    >>> tr = run_closed_loop(rig, Squeeze(), 0.5)
+    >>> bool(tr.daq.normal_force[-1] > 1.9)
+    True
+    """
+    if not (math.isfinite(duration) and duration >= 0):
+        raise ParameterError(f"duration must be >= 0, got {duration!r}")
+    kind = getattr(reflex, "input_kind", None)
+    if kind not in ("slip", "tactile"):
+        raise ParameterError(f"reflex.input_kind must be 'slip' or 'tactile', got {kind!r}")
+    fingers = tuple(Finger(f) for f in fingers)
+    t0 = rig.t
+    t_end = t0 + duration
+    lat = rig.hand.latency
+    cmd_t: list[float] = []
+    cmd_v: list[float] = []
+    send = rig.hand.set_positions
+    eps = 1e-12
+    tac_s = None
+    if kind == "tactile":
+        tac_s = rig.tactile_sampler(float(reflex.fs), Finger.INDEX, keep=True)
+    elif tactile_fs:
+        tac_s = rig.tactile_sampler(float(tactile_fs), Finger.INDEX, keep=True)
+    try:
+        if kind == "slip":
+            step = reflex.step
+            while rig.next_daq_time <= t_end + eps:
+                horizon = min(t_end, max(rig.t + rig.physics.dt, rig.next_daq_time + lat))
+                b = rig.advance_block(horizon)
+                volts = b.volts.tolist()
+                mids = np.rint(b.fingers[:, 2]).tolist()
+                ts = b.t.tolist()
+                for v, pos, ts_k in zip(volts, mids, ts):
+                    c = step(v, position=pos)
+                    if c is not None:
+                        send({f: c for f in fingers}, at=ts_k)
+                        cmd_t.append(ts_k)
+                        cmd_v.append(float(c))
+                if rig.t >= t_end - eps and rig.next_daq_time > t_end + eps:
+                    break
+        else:
+            assert tac_s is not None
+            step = reflex.step
+            while tac_s.next_time <= t_end + eps:
+                horizon = min(t_end, max(rig.t + rig.physics.dt, tac_s.next_time + lat))
+                b = rig.advance_block(horizon)
+                tt, frames = tac_s.read()
+                # measured middle position at each frame time: from the DAQ-rate truth
+                for k in range(tt.size):
+                    ts_k = float(tt[k])
+                    pos = float(round(_finger_at(rig, b, ts_k)))
+                    c = step(frames[k], position=pos)
+                    if c is not None:
+                        send({f: c for f in fingers}, at=ts_k)
+                        cmd_t.append(ts_k)
+                        cmd_v.append(float(c))
+                if rig.t >= t_end - eps and tac_s.next_time > t_end + eps:
+                    break
+        if rig.t < t_end - eps:
+            rig.advance_block(t_end)
+    finally:
+        if tac_s is not None:
+            tac_s.close()
+    tac_t, tac = tac_s.history if tac_s is not None else (np.zeros(0), np.zeros((0,) + hw.TACTILE_SHAPE))
+    return _trace(rig, t0, getattr(reflex, "name", type(reflex).__name__), cmd_t, cmd_v, tac_t, tac)
+
+
+def _finger_at(rig: Rig, block: DaqBlock, t: float) -> float:
+    """Middle-finger position at time ``t``: the latest DAQ-rate value at or before ``t``."""
+    if block.t.size and block.t[0] <= t + 1e-12:
+        i = int(np.searchsorted(block.t, t + 1e-12, side="right")) - 1
+        return float(block.fingers[i, 2])
+    hist = rig._daq_chunks
+    for rows in reversed(hist):
+        if rows.shape[0] and rows[0, K.O_T] <= t + 1e-12:
+            i = int(np.searchsorted(rows[:, K.O_T], t + 1e-12, side="right")) - 1
+            return float(rows[i, K.O_Q2])
+    return float(rig._S[K.S_Q0 + 2])

@@ -1,0 +1,307 @@
+"""Model constants of the simulated rig, each with where it came from.
+
+Hardware facts shared with the rest of the package (sampling rate, ADC,
+finger range, tactile shape, 0.8 N contact force, flow-sensor pulses per
+litre, gravity) live in :mod:`slipreflex.hardware` and are imported, not
+repeated. This module holds what only the simulator needs, grouped into
+frozen dataclasses that validate themselves; a :class:`~slipreflex.sim.Rig`
+takes one of each, so any of them can be changed per rig without editing
+the package.
+
+Sources are marked in each field's description:
+
+* **datasheet**: the part's datasheet (OPR5005, MPU6050, YF-S201);
+* **paper**: the paper or the shared SPEC;
+* **estimate**: a physical estimate, with the reason given.
+
+Examples
+--------
+>>> from slipreflex.sim.params import HandParams
+>>> HandParams().speed_units_s
+500.0
+>>> HandParams(latency_s=-1)
+Traceback (most recent call last):
+...
+slipreflex.errors.ParameterError: HandParams.latency_s must be >= 0, got -1
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from ..errors import ParameterError
+
+__all__ = ["HandParams", "SlipSensorParams", "ImuParams", "TactileParams", "FlowParams", "PhysicsParams"]
+
+
+def _pos(cls: str, name: str, value: float, *, zero_ok: bool = False) -> None:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ParameterError(f"{cls}.{name} must be a finite number, got {value!r}")
+    if value < 0 or (value == 0 and not zero_ok):
+        raise ParameterError(f"{cls}.{name} must be {'>=' if zero_ok else '>'} 0, got {value!r}")
+
+
+def _validate(obj: object, zero_ok: tuple[str, ...] = ()) -> None:
+    for name in obj.__dataclass_fields__:  # type: ignore[attr-defined]
+        _pos(type(obj).__name__, name, getattr(obj, name), zero_ok=name in zero_ok)
+
+
+@dataclass(frozen=True, slots=True)
+class HandParams:
+    """The i-Limb fingers of the tripod grasp and their fingertip pads.
+
+    Parameters
+    ----------
+    speed_units_s : float
+        Servo speed limit (position units/s). Estimate: an i-Limb digit closes
+        fully (0 -> 500) in about 0.8-1.2 s (manufacturer videos, clinical
+        reports), so 500 units/s.
+    latency_s : float
+        Command latency (s): a 15-byte packet at 115200 baud takes 1.3 ms,
+        the prosthesis control unit and the digit controller add a few ms;
+        estimate 10 ms.
+    servo_gain : float
+        Proportional gain of the digit position loop (1/s) below the speed
+        limit: estimate 40/s, a 25 ms time constant, so a small step settles
+        in ~0.1 s like a geared DC motor under position control.
+    travel_per_unit_m : float
+        Fingertip travel toward the bottle axis per position unit (m).
+        Estimate: the distal pad of a 9 cm digit sweeps ~10 cm radially over
+        0..500, so 0.2 mm per unit.
+    aperture_radius_m : float
+        Radius (m) of the circle through the three fingertips at position 0.
+        Estimate: the open i-Limb takes objects up to ~12 cm wide, so 6 cm.
+    pad_normal_stiffness_n_m : float
+        Normal stiffness (N/m) of a silicone fingertip pad at about 1 N: a
+        2-3 mm pad compresses ~0.3 mm per newton (estimate from silicone of
+        Shore 20-40 A), 3000 N/m.
+    finger_stiffness_n_m : float
+        Structural stiffness (N/m) of a digit (worm-geared, non back-drivable):
+        estimate 20000 N/m. In series with the pad and the bottle wall.
+    pad_shear_stiffness_n_m : float
+        Tangential stiffness (N/m) of one pad: G A / h with G ~ 0.2 MPa,
+        contact area ~20 mm^2 and 2 mm thickness gives 2000 N/m (estimate).
+    pad_shear_damping_n_s_m : float
+        Tangential damping (N s/m) of one pad: estimate 1.0, a loss factor of
+        about 0.2 at the grasp's ~60 Hz stick resonance.
+    stall_force_n : float
+        Normal force (N) at which a digit's motor stalls and stops advancing:
+        estimate 25 N per digit (i-Limb hands reach ~100 N+ power grip with
+        five digits).
+    grasp_speed_units_s : float
+        Closing speed (units/s) of the grasp routine's approach: a slow
+        "close" (about 30 % PWM) so the 0.8 N stop does not overshoot much;
+        estimate 150 units/s.
+    grasp_poll_fs : float
+        Rate (Hz) at which the grasp routine reads the index and thumb
+        tactile sensors while closing: estimate 100 Hz.
+    settle_s : float
+        Hold time (s) after the fingers stop and again after the bottle's
+        support is removed: 0.5 s.
+
+    Examples
+    --------
+    >>> round(HandParams().travel_per_unit_m * 500, 3)
+    0.1
+    """
+
+    speed_units_s: float = 500.0
+    latency_s: float = 0.010
+    servo_gain: float = 40.0
+    travel_per_unit_m: float = 0.2e-3
+    aperture_radius_m: float = 0.060
+    pad_normal_stiffness_n_m: float = 3000.0
+    finger_stiffness_n_m: float = 20000.0
+    pad_shear_stiffness_n_m: float = 2000.0
+    pad_shear_damping_n_s_m: float = 1.0
+    stall_force_n: float = 25.0
+    grasp_speed_units_s: float = 150.0
+    grasp_poll_fs: float = 100.0
+    settle_s: float = 0.5
+
+    def __post_init__(self) -> None:
+        _validate(self, zero_ok=("latency_s", "settle_s"))
+
+
+@dataclass(frozen=True, slots=True)
+class SlipSensorParams:
+    """The OPR5005 reflective sensor and its driver, read by a 10-bit ADC.
+
+    The phototransistor (4.7 kohm collector resistor to the 5 V supply)
+    pulls the output down in proportion to the reflected light, so
+    ``V_lin = supply * (1 - reflectance)``; near the rail it saturates at
+    ``v_sat`` with a soft knee of width ``knee_v``::
+
+        V = v_sat + knee_v * log(1 + exp((V_lin - v_sat) / knee_v))
+
+    Parameters
+    ----------
+    supply_v : float
+        Driver supply (V): the DAQ's 5 V rail (paper: ADC reference 5 V).
+    v_sat : float
+        Collector-emitter saturation (V). Datasheet: V_CE(sat) <= 0.4 V;
+        0.2 V typical at these currents.
+    knee_v : float
+        Width of the soft saturation knee (V): estimate 0.15 V, so that the
+        white surface (~0.4 V) still fluctuates as in the paper's Fig. 6B.
+    noise_v : float
+        Electrical noise (V rms) at the ADC input: the paper set its
+        threshold at 2 LSB after measuring the noise, so the noise is below
+        one LSB; estimate 1.5 mV.
+    gap_m : float
+        Sensor-to-surface gap set by the cuff (m). Paper: 3 mm. When the
+        finger is further away (before contact) the reflected light falls as
+        ``1 / (1 + (extra / gap)^2)``.
+    spot_sigma_m : float
+        Standard deviation (m) of the sensor's spot on the surface: blurs
+        edges such as the white/black boundary. Estimate 0.8 mm for the
+        OPR5005's emitter/detector overlap at 3 mm.
+
+    Examples
+    --------
+    >>> SlipSensorParams().gap_m
+    0.003
+    """
+
+    supply_v: float = 5.0
+    v_sat: float = 0.2
+    knee_v: float = 0.15
+    noise_v: float = 1.5e-3
+    gap_m: float = 0.003
+    spot_sigma_m: float = 0.8e-3
+
+    def __post_init__(self) -> None:
+        _validate(self, zero_ok=("noise_v",))
+
+
+@dataclass(frozen=True, slots=True)
+class ImuParams:
+    """The MPU6050 accelerometer taped to the bottle.
+
+    Parameters
+    ----------
+    fs : float
+        Output data rate (Hz). Datasheet: 1 kHz with the DLPF on; the DAQ
+        attaches the latest reading to each 333.33 Hz sample.
+    range_g : float
+        Full scale (g). Datasheet: +-2 g setting (16384 LSB/g).
+    lsb_per_g : float
+        Sensitivity (LSB/g) at +-2 g. Datasheet: 16384.
+    noise_g : float
+        Noise (g rms): datasheet 400 ug/sqrt(Hz) over the 44 Hz DLPF
+        (noise bandwidth ~1.57 x 44 Hz) gives ~3.4 mg; 4 mg.
+    dlpf_hz : float
+        Digital low-pass bandwidth (Hz). Datasheet: DLPF_CFG = 3, 44 Hz.
+    tilt_x_deg, tilt_z_deg : float
+        Mounting tilt (deg) of the sensor on the bottle: gravity leaks into
+        x and z. Estimate: 3 and 2 degrees (taped by hand).
+
+    Examples
+    --------
+    >>> ImuParams().lsb_per_g
+    16384.0
+    """
+
+    fs: float = 1000.0
+    range_g: float = 2.0
+    lsb_per_g: float = 16384.0
+    noise_g: float = 4e-3
+    dlpf_hz: float = 44.0
+    tilt_x_deg: float = 3.0
+    tilt_z_deg: float = 2.0
+
+    def __post_init__(self) -> None:
+        _validate(self, zero_ok=("noise_g", "tilt_x_deg", "tilt_z_deg"))
+
+
+@dataclass(frozen=True, slots=True)
+class TactileParams:
+    """The 4 x 4 tactile arrays on the index finger and thumb.
+
+    Parameters
+    ----------
+    noise_n : float
+        Noise per taxel (N rms). Estimate: 5 mN for a piezoresistive array
+        with a 12-bit reading (about 2 mN per count).
+    resolution_n : float
+        Quantization step per taxel (N): estimate 2 mN.
+    patch_sigma_taxels : float
+        Width of the contact pressure patch (taxel pitches, Gaussian sigma):
+        a fingertip on a 6.5 cm cylinder covers 2-3 of 4 taxels; 0.9.
+    shear_shift_taxels : float
+        Shift of the pressure centre along the slip direction per unit of
+        tangential/normal force ratio (taxel pitches): a 2-3 mm pad sheared
+        at ratio 0.6 moves the centre ~1 mm, ~0.4 pitch; 0.7.
+    vibration_min_wavelength_m : float
+        Finest wavelength (m) of the surface undulation the sliding pad
+        feels: 0.1 mm (estimate; finer features are averaged by the pad).
+
+    Examples
+    --------
+    >>> TactileParams().noise_n
+    0.005
+    """
+
+    noise_n: float = 5e-3
+    resolution_n: float = 2e-3
+    patch_sigma_taxels: float = 0.9
+    shear_shift_taxels: float = 0.7
+    vibration_min_wavelength_m: float = 0.1e-3
+
+    def __post_init__(self) -> None:
+        _validate(self, zero_ok=("noise_n", "resolution_n", "shear_shift_taxels"))
+
+
+@dataclass(frozen=True, slots=True)
+class FlowParams:
+    """The YF-S201 hall-effect flow sensor.
+
+    Parameters
+    ----------
+    k_factor_sd : float
+        Relative standard deviation of this unit's pulses per litre around
+        the nominal 450 (``slipreflex.hardware.FLOW_PULSES_PER_LITRE``).
+        Datasheet accuracy is +-10 % over the range; a given unit at a fixed
+        flow is repeatable, so each seed draws one factor with sd 3 %.
+
+    Examples
+    --------
+    >>> FlowParams().k_factor_sd
+    0.03
+    """
+
+    k_factor_sd: float = 0.03
+
+    def __post_init__(self) -> None:
+        _validate(self, zero_ok=("k_factor_sd",))
+
+
+@dataclass(frozen=True, slots=True)
+class PhysicsParams:
+    """Integration settings.
+
+    Parameters
+    ----------
+    dt : float
+        Physics time step (s). 1e-4 s resolves the stiffest mode (the landing
+        mass on the bottle's bottom, ~700 rad/s, and the grasp's stick
+        resonance) with omega*dt < 0.1; ``tests/test_sim_physics.py`` shows
+        that halving it does not change the results.
+    track_length_m : float
+        Length (m) of the surface texture generated for a bottle (covers the
+        grip travel with margin).
+
+    Examples
+    --------
+    >>> PhysicsParams().dt
+    0.0001
+    """
+
+    dt: float = 1e-4
+    track_length_m: float = 0.12
+
+    def __post_init__(self) -> None:
+        _validate(self)
+        if self.dt > 1e-3:
+            raise ParameterError(f"PhysicsParams.dt must be <= 0.001, got {self.dt!r}")

@@ -1,0 +1,1052 @@
+"""The simulated rig: a bottle in the i-Limb's tripod grasp, with the paper's sensors.
+
+:class:`Rig` owns the physics, the hand (:class:`SimHand`, a
+:class:`slipreflex.interfaces.Hand`) and the sensors. It is advanced from
+outside in increments of any size (``rig.advance_to(t)`` /
+``rig.advance(dt)``), which return the new DAQ samples
+(:class:`slipreflex.interfaces.DaqSample`, 333.33 Hz: slip-sensor volts,
+latest accelerometer reading in g, cumulative flow pulses); tactile frames
+come from samplers at any rate (``rig.tactile_sampler(260.0)``). The whole
+run is deterministic under ``seed`` and does not depend on how it is cut
+into calls.
+
+Timeline of a trial::
+
+    rig = Rig("TR", seed=1)          # t = 0: fingers open, bottle on its support
+    rig.grasp()                      # close to 0.8 N, settle, remove the support, settle
+    rig.perturb(Drop(), at=rig.t + 1)
+    trace = run_closed_loop(rig, reflex, 3.0)
+
+Truth (what no real sensor gives): :attr:`Rig.displacement` (bottle
+position below its grasp position, pad shear included), :attr:`Rig.slip`
+(sliding distance at the contacts), :attr:`Rig.velocity`,
+:attr:`Rig.slipping`, :attr:`Rig.onsets` (every stick -> slip transition),
+:meth:`Rig.slip_events`, :attr:`Rig.fallen` / :attr:`Rig.fall_time`.
+
+**Fallen out** means the bottle has slid ``Bottle.grip_travel_m`` (3 cm by
+default) below where it was grasped: the fingertips reach the shoulder of
+the bottle, the contacts are lost and the bottle drops.
+
+Examples
+--------
+>>> from slipreflex.sim import Rig
+>>> rig = Rig("TX", seed=0)
+>>> g = rig.grasp()
+>>> g.stable, round(g.force_n, 1) >= 0.8
+(True, True)
+>>> samples = rig.advance(0.03)
+>>> len(samples), samples[0].accel_g is not None
+(10, True)
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .. import hardware as hw
+from ..errors import ParameterError
+from ..hardware import Finger, HandCommand
+from ..interfaces import DaqSample
+from . import kernel as K
+from .objects import BOTTLES, WATER_DENSITY, Bottle, Drop, Pour, Surface
+from .params import FlowParams, HandParams, ImuParams, PhysicsParams, SlipSensorParams, TactileParams
+from .sensors import Track
+
+__all__ = ["Rig", "SimHand", "TactileSampler", "GraspResult", "DaqBlock", "SlipEvent", "seed_sequence"]
+
+_CHUNK_S = 0.25  # longest stretch one kernel call covers (bounds the buffers)
+_ROUND = 1e-9
+
+
+def seed_sequence(seed: int | np.random.SeedSequence | np.random.Generator | None) -> np.random.SeedSequence:
+    """Turn a seed, SeedSequence or Generator into a SeedSequence.
+
+    Parameters
+    ----------
+    seed : int, SeedSequence, Generator or None
+        None means 0 (the rig is deterministic by default).
+
+    Returns
+    -------
+    numpy.random.SeedSequence
+
+    Examples
+    --------
+    >>> seed_sequence(3).entropy
+    3
+    """
+    if seed is None:
+        return np.random.SeedSequence(0)
+    if isinstance(seed, np.random.SeedSequence):
+        return seed
+    if isinstance(seed, np.random.Generator):
+        return np.random.SeedSequence([int(v) for v in seed.integers(0, 2**63, size=4)])
+    if isinstance(seed, (int, np.integer)) and not isinstance(seed, bool) and seed >= 0:
+        return np.random.SeedSequence(int(seed))
+    raise ParameterError(f"seed must be a non-negative int, a SeedSequence or a Generator, got {seed!r}")
+
+
+@dataclass(frozen=True)
+class DaqBlock:
+    """DAQ samples (and the truth at the same instants) as arrays.
+
+    Attributes
+    ----------
+    seq : ndarray of int64
+        Sample numbers since the rig started (not wrapped).
+    t, volts : ndarray
+        Sample time (s) and slip-sensor volts (ADC-quantized).
+    accel : ndarray, shape (n, 3)
+        Latest accelerometer reading (g) at each sample.
+    accel_fresh : ndarray of bool
+        Whether a new accelerometer reading arrived since the previous sample.
+    flow_pulses : ndarray of int64
+        Cumulative flow-sensor pulses.
+    displacement, velocity, slip : ndarray
+        Truth: bottle position below the grasp (m), its velocity (m/s, down
+        positive), sliding distance at the contacts (m).
+    stuck, fallen : ndarray of bool
+        Truth: contacts stuck; bottle fallen out.
+    normal_force : ndarray
+        Truth: normal force per fingertip contact (N).
+    load_mass : ndarray
+        Truth: bottle + water + landed masses (kg).
+    fingers : ndarray, shape (n, 3)
+        Finger positions (thumb, index, middle), i-Limb units.
+    accel_true : ndarray
+        Truth: bottle acceleration (m/s^2, down positive).
+
+    Examples
+    --------
+    >>> from slipreflex.sim import Rig
+    >>> b = Rig("DK").advance_block(0.01)
+    >>> b.t.shape == b.volts.shape
+    True
+    """
+
+    seq: np.ndarray
+    t: np.ndarray
+    volts: np.ndarray
+    accel: np.ndarray
+    accel_fresh: np.ndarray
+    flow_pulses: np.ndarray
+    displacement: np.ndarray
+    velocity: np.ndarray
+    slip: np.ndarray
+    stuck: np.ndarray
+    fallen: np.ndarray
+    normal_force: np.ndarray
+    load_mass: np.ndarray
+    fingers: np.ndarray
+    accel_true: np.ndarray
+
+    @classmethod
+    def from_rows(cls, rows: np.ndarray, seq0: int) -> "DaqBlock":
+        """Build from kernel rows (internal layout).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> DaqBlock.from_rows(np.zeros((0, 18)), 0).t.size
+        0
+        """
+        n = rows.shape[0]
+        return cls(
+            seq=np.arange(seq0, seq0 + n, dtype=np.int64), t=rows[:, K.O_T].copy(),
+            volts=rows[:, K.O_VOLTS].copy(), accel=rows[:, K.O_AX:K.O_AZ + 1].copy(),
+            accel_fresh=rows[:, K.O_AFRESH] > 0, flow_pulses=rows[:, K.O_PULSES].astype(np.int64),
+            displacement=rows[:, K.O_X].copy(), velocity=rows[:, K.O_V].copy(), slip=rows[:, K.O_S].copy(),
+            stuck=rows[:, K.O_STUCK] > 0, fallen=rows[:, K.O_FALLEN] > 0, normal_force=rows[:, K.O_NC].copy(),
+            load_mass=rows[:, K.O_MASS].copy(), fingers=rows[:, K.O_Q0:K.O_Q2 + 1].copy(),
+            accel_true=rows[:, K.O_A].copy())
+
+    def samples(self) -> list[DaqSample]:
+        """The block as :class:`~slipreflex.interfaces.DaqSample` objects.
+
+        Examples
+        --------
+        >>> from slipreflex.sim import Rig
+        >>> Rig("TR").advance_block(0.006).samples()[0].seq
+        0
+        """
+        out = []
+        for i in range(self.t.size):
+            acc = tuple(float(a) for a in self.accel[i]) if self.accel_fresh[i] else None
+            out.append(DaqSample(seq=int(self.seq[i]), t=float(self.t[i]), slip_volts=float(self.volts[i]),
+                                 accel_g=acc, flow_pulses=int(self.flow_pulses[i])))
+        return out
+
+
+@dataclass(frozen=True)
+class SlipEvent:
+    """One episode of sliding (truth), from the first stick -> slip transition
+    after a quiet period to the last re-stick before the next quiet period.
+
+    Attributes
+    ----------
+    onset, end : float
+        Times (s); ``end`` is None if the contact was still sliding (or the
+        bottle fell) when the record ends.
+    distance : float
+        Sliding distance (m) over the episode.
+
+    Examples
+    --------
+    >>> SlipEvent(1.0, 1.2, 0.002).duration
+    0.2
+    """
+
+    onset: float
+    end: float | None
+    distance: float
+
+    @property
+    def duration(self) -> float | None:
+        """``end - onset`` (s), or None while open.
+
+        Examples
+        --------
+        >>> SlipEvent(1.0, None, 0.0).duration is None
+        True
+        """
+        return None if self.end is None else round(self.end - self.onset, 12)
+
+
+@dataclass(frozen=True)
+class GraspResult:
+    """Outcome of :meth:`Rig.grasp`.
+
+    Attributes
+    ----------
+    t_contact : float
+        When the tactile sensors first read the target force (s).
+    t_release : float
+        When the bottle's support was removed (s).
+    force_n : float
+        Normal force per contact after settling (N).
+    positions : dict
+        Finger positions after settling.
+    stable : bool
+        The bottle is held (stuck, not fallen) after settling.
+
+    Examples
+    --------
+    >>> from slipreflex.sim import Rig
+    >>> Rig("TR").grasp().positions[Finger.MIDDLE] > 0
+    True
+    """
+
+    t_contact: float
+    t_release: float
+    force_n: float
+    positions: dict
+    stable: bool
+
+
+class TactileSampler:
+    """Frames of one finger's 4 x 4 tactile array at a fixed rate.
+
+    Created by :meth:`Rig.tactile_sampler`; frames accumulate as the rig
+    advances and :meth:`read` returns those not yet read. With
+    ``keep=True`` every frame is also kept for :attr:`history`.
+
+    Examples
+    --------
+    >>> from slipreflex.sim import Rig
+    >>> from slipreflex.hardware import NMSD_FS
+    >>> rig = Rig("TR")
+    >>> s = rig.tactile_sampler(NMSD_FS)
+    >>> _ = rig.advance(0.1)
+    >>> t, frames = s.read()
+    >>> frames.shape[1:], len(t)
+    ((4, 4), 27)
+    """
+
+    def __init__(self, rig: "Rig", fs: float, finger: Finger, key: np.uint64, keep: bool) -> None:
+        self.fs = float(fs)
+        self.finger = Finger(finger)
+        self._rig = rig
+        self._key = key
+        self._keep = keep
+        self._t: list[np.ndarray] = []
+        self._f: list[np.ndarray] = []
+        self._hist_t: list[np.ndarray] = []
+        self._hist_f: list[np.ndarray] = []
+        # the first frame strictly after now (a frame at the current instant was due in the past)
+        self.next_index = 0 if rig._n == 0 else int(math.floor(rig.t * self.fs + 1e-9)) + 1
+
+    @property
+    def next_time(self) -> float:
+        """Time (s) of the next frame not produced yet.
+
+        Examples
+        --------
+        >>> from slipreflex.sim import Rig
+        >>> Rig("TR").tactile_sampler(100.0).next_time
+        0.0
+        """
+        return self.next_index / self.fs
+
+    def _push(self, t: np.ndarray, frames: np.ndarray) -> None:
+        self._t.append(t)
+        self._f.append(frames)
+        if self._keep:
+            self._hist_t.append(t)
+            self._hist_f.append(frames)
+
+    def read(self) -> tuple[np.ndarray, np.ndarray]:
+        """Frames produced since the last call: times (s) and ``(n, 4, 4)`` newtons.
+
+        Examples
+        --------
+        >>> from slipreflex.sim import Rig
+        >>> Rig("TR").tactile_sampler(380.0).read()[1].shape
+        (0, 4, 4)
+        """
+        t = np.concatenate(self._t) if self._t else np.zeros(0)
+        f = np.concatenate(self._f) if self._f else np.zeros((0,) + hw.TACTILE_SHAPE)
+        self._t.clear()
+        self._f.clear()
+        return t, f
+
+    @property
+    def history(self) -> tuple[np.ndarray, np.ndarray]:
+        """All frames since creation (only with ``keep=True``).
+
+        Examples
+        --------
+        >>> from slipreflex.sim import Rig
+        >>> Rig("TR").tactile_sampler(260.0, keep=True).history[0].size
+        0
+        """
+        t = np.concatenate(self._hist_t) if self._hist_t else np.zeros(0)
+        f = np.concatenate(self._hist_f) if self._hist_f else np.zeros((0,) + hw.TACTILE_SHAPE)
+        return t, f
+
+    def close(self) -> None:
+        """Stop sampling (the rig forgets this sampler).
+
+        Examples
+        --------
+        >>> from slipreflex.sim import Rig
+        >>> rig = Rig("TR"); s = rig.tactile_sampler(100.0); s.close()
+        >>> s in rig._samplers
+        False
+        """
+        if self in self._rig._samplers:
+            self._rig._samplers.remove(self)
+            self._rig._sync_samplers()
+
+
+class SimHand:
+    """The simulated i-Limb: position servos with a speed limit and a command latency.
+
+    Implements :class:`slipreflex.interfaces.Hand`. Commands take effect
+    ``latency`` seconds after they are given (rig time). Thumb, index and
+    middle are simulated with their dynamics; the other digits, the thumb
+    rotator and the wrist just take their targets after the latency.
+    Besides position targets it accepts the i-Limb's close / open / stop
+    commands with a PWM speed (0..297).
+
+    Examples
+    --------
+    >>> from slipreflex.sim import Rig
+    >>> from slipreflex.interfaces import Hand
+    >>> rig = Rig("TR")
+    >>> isinstance(rig.hand, Hand)
+    True
+    >>> rig.hand.set_positions({Finger.THUMB: 100})
+    >>> _ = rig.advance(0.5)
+    >>> rig.hand.positions()[Finger.THUMB]
+    100.0
+    """
+
+    def __init__(self, rig: "Rig", params: HandParams) -> None:
+        self._rig = rig
+        self.params = params
+        self._pending: list[tuple[int, int, HandCommand, tuple[Finger, ...], float]] = []
+        self._count = 0
+        self._others: dict[Finger, float] = {f: 0.0 for f in Finger if f not in hw.TRIPOD}
+
+    @property
+    def latency(self) -> float:
+        """Command latency (s).
+
+        Examples
+        --------
+        >>> from slipreflex.sim import Rig
+        >>> Rig("TR").hand.latency
+        0.01
+        """
+        return self.params.latency_s
+
+    def command(self, kind: HandCommand, fingers: Iterable[Finger], value: float = 0.0,
+                at: float | None = None) -> None:
+        """Queue one i-Limb command for some fingers.
+
+        Parameters
+        ----------
+        kind : HandCommand
+            POSITION (value = target 0..500), CLOSE / OPEN (value = PWM
+            0..297, the speed), or STOP (hold where the finger is when the
+            command arrives).
+        fingers : iterable of Finger
+        value : float
+        at : float, optional
+            Time the command is sent (default: now). Must not be before the
+            rig's time minus the latency.
+
+        Examples
+        --------
+        >>> from slipreflex.sim import Rig
+        >>> rig = Rig("TR")
+        >>> rig.hand.command(HandCommand.CLOSE, [Finger.INDEX], 297)
+        >>> _ = rig.advance(0.2)
+        >>> 80 < rig.hand.positions()[Finger.INDEX] < 100
+        True
+        """
+        kind = HandCommand(kind)
+        fingers = tuple(Finger(f) for f in fingers)
+        if not math.isfinite(value):
+            raise ParameterError(f"hand command value must be finite, got {value!r}")
+        sent = self._rig.t if at is None else float(at)
+        dt = self._rig.physics.dt
+        step = max(int(math.ceil((sent + self.params.latency_s) / dt - _ROUND)), self._rig._n)
+        self._pending.append((step, self._count, kind, fingers, float(value)))
+        self._count += 1
+        self._pending.sort()
+
+    def set_positions(self, targets: Mapping[Finger, float], at: float | None = None) -> None:
+        """Position targets (0..500, clipped) for the named fingers.
+
+        Examples
+        --------
+        >>> from slipreflex.sim import Rig
+        >>> Rig("TR").hand.set_positions({Finger.MIDDLE: 250})
+        """
+        for f, v in targets.items():
+            self.command(HandCommand.POSITION, [f], float(v), at=at)
+
+    def positions(self) -> dict[Finger, float]:
+        """Measured positions (rounded to whole units, as the control unit reports them).
+
+        Examples
+        --------
+        >>> from slipreflex.sim import Rig
+        >>> Rig("TR").hand.positions()[Finger.INDEX]
+        0.0
+        """
+        S = self._rig._S
+        out = {f: float(round(S[K.S_Q0 + i])) for i, f in enumerate(hw.TRIPOD)}
+        out.update({f: float(round(v)) for f, v in self._others.items()})
+        return dict(sorted(out.items()))
+
+    def _next_step(self) -> int | None:
+        return self._pending[0][0] if self._pending else None
+
+    def _apply_due(self, n: int) -> None:
+        S = self._rig._S
+        p = self.params
+        while self._pending and self._pending[0][0] <= n:
+            _, _, kind, fingers, value = self._pending.pop(0)
+            for f in fingers:
+                if f in hw.TRIPOD:
+                    i = hw.TRIPOD.index(f)
+                    if kind == HandCommand.POSITION:
+                        S[K.S_TGT0 + i] = min(max(value, hw.FINGER_MIN), hw.FINGER_MAX)
+                        S[K.S_SPD0 + i] = p.speed_units_s
+                    elif kind in (HandCommand.CLOSE, HandCommand.OPEN):
+                        S[K.S_TGT0 + i] = hw.FINGER_MAX if kind == HandCommand.CLOSE else hw.FINGER_MIN
+                        S[K.S_SPD0 + i] = p.speed_units_s * min(max(value, 0.0), hw.PWM_MAX) / hw.PWM_MAX
+                    else:
+                        S[K.S_TGT0 + i] = S[K.S_Q0 + i]
+                        S[K.S_SPD0 + i] = p.speed_units_s
+                else:
+                    top = hw.THUMB_ROTATOR_MAX if f == Finger.THUMB_ROTATOR else hw.FINGER_MAX
+                    if kind == HandCommand.POSITION:
+                        self._others[f] = min(max(value, 0.0), top)
+                    elif kind == HandCommand.CLOSE:
+                        self._others[f] = float(top)
+                    elif kind == HandCommand.OPEN:
+                        self._others[f] = 0.0
+
+
+class Rig:
+    """A bottle in the i-Limb's tripod grasp, with slip sensor, IMU, tactile arrays and flow sensor.
+
+    Parameters
+    ----------
+    bottle : Bottle or str
+        A :class:`Bottle` or a key of :data:`BOTTLES` ("TR", "DK", "TX").
+    seed : int, SeedSequence or Generator, optional
+        Seeds the surface texture and every noise stream (default 0). Same
+        seed, bit-identical traces.
+    hand, slip_sensor, imu, tactile, flow, physics : parameter dataclasses, optional
+        See :mod:`slipreflex.sim.params`.
+
+    Examples
+    --------
+    >>> rig = Rig("DK", seed=5)
+    >>> rig.t, rig.fallen
+    (0.0, False)
+    """
+
+    def __init__(self, bottle: Bottle | str = "TR", seed: int | np.random.SeedSequence | np.random.Generator
+                 | None = 0, *, hand: HandParams | None = None, slip_sensor: SlipSensorParams | None = None,
+                 imu: ImuParams | None = None, tactile: TactileParams | None = None, flow: FlowParams | None = None,
+                 physics: PhysicsParams | None = None) -> None:
+        if isinstance(bottle, str):
+            if bottle not in BOTTLES:
+                raise ParameterError(f"bottle: unknown bottle {bottle!r} (known: {', '.join(BOTTLES)})")
+            bottle = BOTTLES[bottle]
+        if not isinstance(bottle, Bottle):
+            raise ParameterError(f"bottle must be a Bottle or a name, got {bottle!r}")
+        self.bottle = bottle
+        self.hand_params = hand or HandParams()
+        self.slip_sensor = slip_sensor or SlipSensorParams()
+        self.imu = imu or ImuParams()
+        self.tactile_params = tactile or TactileParams()
+        self.flow = flow or FlowParams()
+        self.physics = physics or PhysicsParams()
+        ss = seed_sequence(seed)
+        self.seed = ss
+        tex_ss, key_ss, flow_ss = ss.spawn(3)
+        self._keys = key_ss.generate_state(8, dtype=np.uint64)
+        frng = np.random.default_rng(flow_ss)
+        flow_k = hw.FLOW_PULSES_PER_LITRE * (1.0 + self.flow.k_factor_sd * frng.standard_normal())
+        flow_phase = frng.random()
+        surf: Surface = bottle.surface  # type: ignore[assignment]
+        self.track = Track.build([(surf, self.physics.track_length_m)], np.random.default_rng(tex_ss),
+                                 lead=0.01, sensor=self.slip_sensor,
+                                 vibration_min_wavelength=self.tactile_params.vibration_min_wavelength_m)
+        self._P = self._params(flow_k, flow_phase)
+        self._S = np.zeros(K.S_SIZE)
+        self._S[K.S_STUCK] = 1.0
+        self._S[K.S_DIR] = 1.0
+        self._S[K.S_SUPPORTED] = 1.0
+        self._S[K.S_MASS] = bottle.mass_kg
+        self._S[K.S_SPD0:K.S_SPD0 + 3] = self.hand_params.speed_units_s
+        self._S[K.S_TFALL] = np.nan
+        self._C = np.zeros(K.C_SIZE, dtype=np.int64)
+        self._D = np.zeros((0, K.D_SIZE))
+        self._W = np.zeros((0, K.W_SIZE))
+        self.hand = SimHand(self, self.hand_params)
+        self._samplers: list[TactileSampler] = []
+        self._tac_rates = np.zeros(0)
+        self._tac_next = np.zeros(0, dtype=np.int64)
+        self._n_samplers_made = 0
+        self._oneoff = 0
+        self._daq_chunks: list[np.ndarray] = []
+        self._events: list[np.ndarray] = []
+        self.perturbations: list[tuple[float, Drop | Pour]] = []
+        cap_steps = int(math.ceil(_CHUNK_S / self.physics.dt)) + 2
+        self._daq_buf = np.empty((int(_CHUNK_S * 2 * hw.DAQ_FS) + 8, K.O_SIZE))
+        self._ev_buf = np.empty((3 * cap_steps + 8, 3))
+        self._counts = np.zeros(3, dtype=np.int64)
+        self._grasp: GraspResult | None = None
+
+    # ------------------------------------------------------------------ setup
+    def _params(self, flow_k: float, flow_phase: float) -> np.ndarray:
+        b, h, s, imu, ph = self.bottle, self.hand_params, self.slip_sensor, self.imu, self.physics
+        P = np.zeros(K.P_SIZE)
+        P[K.P_DT] = ph.dt
+        P[K.P_G] = hw.GRAVITY
+        P[K.P_MB] = b.mass_kg
+        P[K.P_MUS] = b.mu_s
+        P[K.P_MUK] = b.mu_k
+        P[K.P_VS] = b.stribeck_velocity_m_s
+        P[K.P_KT] = 3.0 * h.pad_shear_stiffness_n_m
+        P[K.P_CT] = 3.0 * h.pad_shear_damping_n_s_m
+        P[K.P_KN] = 1.0 / (1.0 / h.pad_normal_stiffness_n_m + 1.0 / h.finger_stiffness_n_m
+                           + 1.0 / b.wall_stiffness_n_m)
+        P[K.P_LAM] = h.travel_per_unit_m
+        P[K.P_QC] = (h.aperture_radius_m - b.diameter_m / 2.0) / h.travel_per_unit_m
+        P[K.P_KSERVO] = h.servo_gain
+        P[K.P_STALL] = h.stall_force_n
+        P[K.P_GRIP] = b.grip_travel_m
+        P[K.P_DAQ_T] = hw.DAQ_PERIOD_S
+        P[K.P_ACC_T] = 1.0 / imu.fs
+        P[K.P_ACC_ALPHA] = 1.0 - math.exp(-2.0 * math.pi * imu.dlpf_hz * ph.dt)
+        P[K.P_ACC_NOISE] = imu.noise_g
+        P[K.P_ACC_LSB] = 1.0 / imu.lsb_per_g
+        P[K.P_ACC_RANGE] = imu.range_g
+        tx, tz = math.radians(imu.tilt_x_deg), math.radians(imu.tilt_z_deg)
+        P[K.P_TILT_X] = math.sin(tx)
+        P[K.P_TILT_Z] = math.cos(tx) * math.sin(tz)
+        P[K.P_TILT_Y] = math.cos(tx) * math.cos(tz)
+        P[K.P_VCC] = s.supply_v
+        P[K.P_VSAT] = s.v_sat
+        P[K.P_KNEE] = s.knee_v
+        P[K.P_VNOISE] = s.noise_v
+        P[K.P_GAP] = s.gap_m
+        P[K.P_ADC_LSB] = hw.ADC_LSB
+        P[K.P_ADC_MAX] = (1 << hw.ADC_BITS) - 1
+        P[K.P_TRACK_DX] = self.track.dx
+        P[K.P_TRACK_OFF] = self.track.origin
+        P[K.P_FLOW_K] = flow_k
+        P[K.P_FLOW_PHASE] = flow_phase
+        P[K.P_DECAY] = math.exp(-ph.dt * h.pad_shear_stiffness_n_m / h.pad_shear_damping_n_s_m)
+        return P
+
+    # ------------------------------------------------------------------ time
+    @property
+    def _n(self) -> int:
+        return int(self._C[K.C_N])
+
+    @property
+    def t(self) -> float:
+        """Rig time (s).
+
+        Examples
+        --------
+        >>> Rig("TR").t
+        0.0
+        """
+        return self._n * self.physics.dt
+
+    @property
+    def next_daq_time(self) -> float:
+        """Time (s) of the next DAQ sample not produced yet.
+
+        Examples
+        --------
+        >>> Rig("TR").next_daq_time
+        0.0
+        """
+        return int(self._C[K.C_DAQ]) * hw.DAQ_PERIOD_S
+
+    def advance(self, duration: float) -> list[DaqSample]:
+        """Advance by ``duration`` seconds; return the new DAQ samples.
+
+        Examples
+        --------
+        >>> len(Rig("TR").advance(0.1))
+        34
+        """
+        return self.advance_to(self.t + duration)
+
+    def advance_to(self, t: float) -> list[DaqSample]:
+        """Advance to time ``t`` (s); return the DAQ samples with times in (previous t, t].
+
+        Examples
+        --------
+        >>> [round(s.t, 3) for s in Rig("TR").advance_to(0.007)]
+        [0.0, 0.003, 0.006]
+        """
+        return self.advance_block(t).samples()
+
+    def advance_block(self, t: float) -> DaqBlock:
+        """Like :meth:`advance_to`, but the samples (and truth) come as arrays.
+
+        Examples
+        --------
+        >>> Rig("TR").advance_block(1.0).volts.size
+        334
+        """
+        if not math.isfinite(t):
+            raise ParameterError(f"t must be finite, got {t!r}")
+        dt = self.physics.dt
+        n_end = int(math.ceil(t / dt - _ROUND))
+        seq0 = int(self._C[K.C_DAQ])
+        rows: list[np.ndarray] = []
+        chunk = int(_CHUNK_S / dt)
+        while True:
+            self.hand._apply_due(self._n)
+            if self._n >= n_end:
+                break
+            nxt = self.hand._next_step()
+            stop = min(n_end, self._n + chunk, nxt if nxt is not None and nxt > self._n else n_end)
+            rows.append(self._run(stop))
+        if not rows:
+            daq = np.zeros((0, K.O_SIZE))
+        else:
+            daq = rows[0] if len(rows) == 1 else np.concatenate(rows)
+        if daq.shape[0]:
+            self._daq_chunks.append(daq)
+        return DaqBlock.from_rows(daq, seq0)
+
+    def _run(self, stop: int) -> np.ndarray:
+        dt = self.physics.dt
+        span = (stop - self._n) * dt
+        ntac = sum(int(span * s.fs) + 2 for s in self._samplers)
+        tac = np.empty((ntac, K.T_SIZE))
+        out: list[np.ndarray] = []
+        tacs: list[np.ndarray] = []
+        while self._n < stop:
+            K.step_until(self._S, self._C, self._P, self._keys, self._D, self._W, self.track.rho,
+                         self._tac_rates, self._tac_next, stop, self._daq_buf, tac, self._ev_buf, self._counts)
+            nd, nt, ne = (int(c) for c in self._counts)
+            out.append(self._daq_buf[:nd].copy())
+            if nt:
+                tacs.append(tac[:nt].copy())
+            if ne:
+                self._events.append(self._ev_buf[:ne].copy())
+        if tacs:
+            self._emit_tactile(np.concatenate(tacs))
+        return out[0] if len(out) == 1 else np.concatenate(out)
+
+    # ------------------------------------------------------------------ tactile
+    def _sync_samplers(self) -> None:
+        self._tac_rates = np.array([s.fs for s in self._samplers], dtype=float)
+        self._tac_next = np.array([s.next_index for s in self._samplers], dtype=np.int64)
+
+    def _frames(self, snap: np.ndarray, key: np.uint64) -> np.ndarray:
+        tp = self.tactile_params
+        out = np.empty((snap.shape[0],) + hw.TACTILE_SHAPE)
+        K.tactile_frames(snap, self.track.vibration, self.track.dx, self.track.origin, key,
+                         tp.patch_sigma_taxels, tp.shear_shift_taxels, tp.noise_n, tp.resolution_n, out)
+        return out
+
+    def _emit_tactile(self, snap: np.ndarray) -> None:
+        for i, s in enumerate(self._samplers):
+            rows = snap[snap[:, K.T_ID] == i]
+            s.next_index = int(self._tac_next[i])
+            if rows.shape[0]:
+                s._push(rows[:, K.T_T].copy(), self._frames(rows, s._key))
+
+    def tactile_sampler(self, fs: float, finger: Finger = Finger.INDEX, *, keep: bool = False) -> TactileSampler:
+        """Start sampling a finger's 4 x 4 tactile array at ``fs`` Hz from now on.
+
+        Frames fall on the grid ``k / fs`` (from the first one at or after
+        the current time). The index finger and the thumb carry arrays.
+
+        Parameters
+        ----------
+        fs : float
+            Sampling rate (Hz), e.g. ``hardware.NMSD_FS`` (260) or ``hardware.SWT_FS`` (380).
+        finger : Finger
+            INDEX (default) or THUMB.
+        keep : bool
+            Also keep every frame for :attr:`TactileSampler.history`.
+
+        Returns
+        -------
+        TactileSampler
+
+        Examples
+        --------
+        >>> Rig("TR").tactile_sampler(380.0).fs
+        380.0
+        """
+        if not (isinstance(fs, (int, float)) and math.isfinite(fs) and 0 < fs <= 10000):
+            raise ParameterError(f"fs must be in (0, 10000] Hz, got {fs!r}")
+        finger = Finger(finger)
+        if finger not in (Finger.INDEX, Finger.THUMB):
+            raise ParameterError(f"finger: only INDEX and THUMB carry tactile arrays, got {finger.name}")
+        self._n_samplers_made += 1
+        key = K._mix(self._keys[2] + np.uint64(self._n_samplers_made * 1000 + int(finger)))
+        s = TactileSampler(self, fs, finger, np.uint64(key), keep)
+        self._samplers.append(s)
+        self._sync_samplers()
+        return s
+
+    def tactile(self, finger: Finger = Finger.INDEX) -> np.ndarray:
+        """One tactile frame ``(4, 4)`` (N) of ``finger`` at the current time.
+
+        Examples
+        --------
+        >>> Rig("TR").tactile().shape
+        (4, 4)
+        """
+        S = self._S
+        snap = np.array([[0, self._oneoff, self.t, S[K.S_NC], S[K.S_FT] / 3.0, S[K.S_S], S[K.S_FALLEN]]])
+        self._oneoff += 1
+        return self._frames(snap, np.uint64(K._mix(self._keys[3] + np.uint64(int(finger)))))[0]
+
+    # ------------------------------------------------------------------ grasp & perturbations
+    def grasp(self, force: float = hw.CONTACT_FORCE_N, *, speed: float | None = None,
+              settle: float | None = None) -> GraspResult:
+        """Close the tripod until the index and thumb tactile arrays read ``force``, then hold.
+
+        The fingers close at ``speed`` (units/s, default
+        ``HandParams.grasp_speed_units_s``); the index and thumb arrays are
+        read at ``HandParams.grasp_poll_fs``; a finger whose array reads at
+        least ``force`` (sum of its taxels) gets a STOP command (the middle
+        finger stops with the index, as it has no tactile array). After
+        ``settle`` seconds the bottle's support is removed, and after
+        another ``settle`` seconds the grasp is checked.
+
+        Returns
+        -------
+        GraspResult
+
+        Raises
+        ------
+        ParameterError
+            If the fingers close fully without reaching ``force``.
+
+        Examples
+        --------
+        >>> r = Rig("TR").grasp()
+        >>> r.stable
+        True
+        """
+        hp = self.hand_params
+        speed = hp.grasp_speed_units_s if speed is None else float(speed)
+        settle = hp.settle_s if settle is None else float(settle)
+        if not (0 < speed <= hp.speed_units_s):
+            raise ParameterError(f"speed must be in (0, {hp.speed_units_s}] units/s, got {speed!r}")
+        pwm = speed / hp.speed_units_s * hw.PWM_MAX
+        self.hand.command(HandCommand.CLOSE, hw.TRIPOD, pwm)
+        s_idx = self.tactile_sampler(hp.grasp_poll_fs, Finger.INDEX)
+        s_th = self.tactile_sampler(hp.grasp_poll_fs, Finger.THUMB)
+        stopped: set[Finger] = set()
+        t_contact = math.nan
+        t_limit = self.t + 1.5 * hw.FINGER_MAX / speed + 1.0
+        try:
+            while len(stopped) < 2:
+                if self.t > t_limit:
+                    raise ParameterError(f"grasp: fingers closed fully without reaching {force} N "
+                                         f"(bottle diameter {self.bottle.diameter_m} m too small?)")
+                self.advance_to(max(s_idx.next_time, self.t + self.physics.dt))
+                _, fi = s_idx.read()
+                _, ft = s_th.read()
+                if Finger.INDEX not in stopped and fi.shape[0] and fi[-1].sum() >= force:
+                    self.hand.command(HandCommand.STOP, [Finger.INDEX, Finger.MIDDLE])
+                    stopped.add(Finger.INDEX)
+                    t_contact = self.t if math.isnan(t_contact) else t_contact
+                if Finger.THUMB not in stopped and ft.shape[0] and ft[-1].sum() >= force:
+                    self.hand.command(HandCommand.STOP, [Finger.THUMB])
+                    stopped.add(Finger.THUMB)
+                    t_contact = self.t if math.isnan(t_contact) else t_contact
+        finally:
+            s_idx.close()
+            s_th.close()
+        self.advance(settle)
+        self._S[K.S_SUPPORTED] = 0.0
+        t_release = self.t
+        self.advance(settle)
+        S = self._S
+        stable = bool(S[K.S_FALLEN] == 0.0 and S[K.S_STUCK] > 0.0 and abs(S[K.S_V]) < 1e-3)
+        self._grasp = GraspResult(t_contact=t_contact, t_release=t_release, force_n=float(S[K.S_NC]),
+                                  positions=self.hand.positions(), stable=stable)
+        return self._grasp
+
+    def release_support(self) -> None:
+        """Remove the bottle's support without the grasp routine (the bottle hangs in the fingers).
+
+        Examples
+        --------
+        >>> rig = Rig("TR"); rig.release_support(); _ = rig.advance(0.5)
+        >>> rig.fallen
+        True
+        """
+        self._S[K.S_SUPPORTED] = 0.0
+
+    def perturb(self, what: Drop | Pour, at: float | None = None) -> None:
+        """Schedule a load change: a :class:`Drop` released, or a :class:`Pour` started, at ``at`` (s).
+
+        Parameters
+        ----------
+        what : Drop or Pour
+        at : float, optional
+            Rig time of the release / pump start (default: now). Not in the past.
+
+        Examples
+        --------
+        >>> rig = Rig("TR"); _ = rig.grasp()
+        >>> rig.perturb(Pour(rate_l_min=1.0, volume_ml=50), at=rig.t)
+        >>> _ = rig.advance(4.0)
+        >>> round(rig.load_mass - rig.bottle.mass_kg, 3)
+        0.05
+        """
+        at = self.t if at is None else float(at)
+        if not math.isfinite(at) or at < self.t - 1e-12:
+            raise ParameterError(f"at must be >= the rig time {self.t:.4f} s, got {at!r}")
+        g = hw.GRAVITY
+        if isinstance(what, Drop):
+            zeta = -math.log(max(what.restitution, 1e-6)) / math.sqrt(math.pi**2 + math.log(max(what.restitution,
+                                                                                                  1e-6))**2)
+            row = np.zeros(K.D_SIZE)
+            row[K.D_REL] = at
+            row[K.D_M] = what.mass_kg
+            row[K.D_H0] = self.bottle.height_m + what.height_m
+            row[K.D_KC] = what.contact_stiffness_n_m
+            row[K.D_CC] = 2.0 * zeta * math.sqrt(what.contact_stiffness_n_m * what.mass_kg)
+            self._D = np.vstack([self._D, row])
+        elif isinstance(what, Pour):
+            rate_l_s = what.rate_l_min / 60.0
+            row = np.zeros(K.W_SIZE)
+            row[K.W_START] = at
+            row[K.W_RATE_L_S] = rate_l_s
+            row[K.W_RATE_KG_S] = rate_l_s * 1e-3 * WATER_DENSITY
+            row[K.W_DUR] = what.duration_s
+            row[K.W_TOTAL_KG] = what.volume_ml * 1e-6 * WATER_DENSITY
+            row[K.W_DELAY] = math.sqrt(2.0 * what.fall_height_m / g)
+            row[K.W_JET_N] = row[K.W_RATE_KG_S] * math.sqrt(2.0 * g * what.fall_height_m)
+            self._W = np.vstack([self._W, row])
+        else:
+            raise ParameterError(f"perturb: expected a Drop or a Pour, got {what!r}")
+        self.perturbations.append((at, what))
+
+    # ------------------------------------------------------------------ truth
+    @property
+    def displacement(self) -> float:
+        """Bottle position below where it was grasped (m), pad shear included.
+
+        Examples
+        --------
+        >>> Rig("TR").displacement
+        0.0
+        """
+        return float(self._S[K.S_X])
+
+    @property
+    def slip(self) -> float:
+        """Sliding distance at the contacts (m).
+
+        Examples
+        --------
+        >>> Rig("TR").slip
+        0.0
+        """
+        return float(self._S[K.S_S])
+
+    @property
+    def velocity(self) -> float:
+        """Bottle velocity (m/s, down positive).
+
+        Examples
+        --------
+        >>> Rig("TR").velocity
+        0.0
+        """
+        return float(self._S[K.S_V])
+
+    @property
+    def slipping(self) -> bool:
+        """True while the contacts slide (or the bottle has fallen).
+
+        Examples
+        --------
+        >>> Rig("TR").slipping
+        False
+        """
+        return bool(self._S[K.S_STUCK] == 0.0)
+
+    @property
+    def normal_force(self) -> float:
+        """Normal force per contact (N).
+
+        Examples
+        --------
+        >>> Rig("TR").normal_force
+        0.0
+        """
+        return float(self._S[K.S_NC])
+
+    @property
+    def load_mass(self) -> float:
+        """Bottle + water + landed masses (kg).
+
+        Examples
+        --------
+        >>> Rig("TR").load_mass
+        0.04
+        """
+        return float(self._S[K.S_MASS])
+
+    @property
+    def fallen(self) -> bool:
+        """Whether the bottle has slid out of the grasp (see the module notes).
+
+        Examples
+        --------
+        >>> Rig("TR").fallen
+        False
+        """
+        return bool(self._S[K.S_FALLEN] > 0.0)
+
+    @property
+    def fall_time(self) -> float | None:
+        """When the bottle fell out (s), or None.
+
+        Examples
+        --------
+        >>> Rig("TR").fall_time is None
+        True
+        """
+        return float(self._S[K.S_TFALL]) if self.fallen else None
+
+    def events(self) -> np.ndarray:
+        """All physics events so far: rows (time, kind, displacement).
+
+        Kinds: 1 stick -> slip, 2 slip -> stick, 3 fallen out, 4 dropped mass landed.
+
+        Examples
+        --------
+        >>> Rig("TR").events().shape
+        (0, 3)
+        """
+        return np.concatenate(self._events) if self._events else np.zeros((0, 3))
+
+    @property
+    def onsets(self) -> np.ndarray:
+        """Times (s) of every stick -> slip transition.
+
+        Examples
+        --------
+        >>> Rig("TR").onsets.size
+        0
+        """
+        ev = self.events()
+        return ev[ev[:, 1] == K.E_ONSET, 0]
+
+    def slip_events(self, quiet: float = 0.1) -> list[SlipEvent]:
+        """Group stick/slip transitions into episodes separated by ``quiet`` seconds of sticking.
+
+        Parameters
+        ----------
+        quiet : float
+            Minimum stuck time (s) that separates two episodes.
+
+        Returns
+        -------
+        list of SlipEvent
+
+        Examples
+        --------
+        >>> Rig("TR").slip_events()
+        []
+        """
+        ev = self.events()
+        out: list[SlipEvent] = []
+        onset = None
+        last_stick = None
+        s_on = 0.0
+        x_stick = 0.0
+        for t, kind, x in ev:
+            if kind == K.E_ONSET:
+                if onset is not None and last_stick is not None and t - last_stick >= quiet:
+                    out.append(SlipEvent(onset, last_stick, x_stick - s_on))
+                    onset = None
+                if onset is None:
+                    onset, s_on = float(t), float(x)
+                last_stick = None
+            elif kind == K.E_STICK and onset is not None:
+                last_stick, x_stick = float(t), float(x)
+            elif kind == K.E_FALLEN and onset is not None:
+                out.append(SlipEvent(onset, None, float(x) - s_on))
+                onset = None
+        if onset is not None:
+            if last_stick is not None and self.t - last_stick >= quiet and not self.fallen:
+                out.append(SlipEvent(onset, last_stick, x_stick - s_on))
+            else:
+                out.append(SlipEvent(onset, None, self.displacement - s_on))
+        return out
+
+    def daq_history(self) -> DaqBlock:
+        """Every DAQ sample (and truth) produced since the rig started.
+
+        Examples
+        --------
+        >>> rig = Rig("TR"); _ = rig.advance(0.03)
+        >>> rig.daq_history().t.size
+        10
+        """
+        rows = np.concatenate(self._daq_chunks) if self._daq_chunks else np.zeros((0, K.O_SIZE))
+        return DaqBlock.from_rows(rows, 0)

@@ -1,0 +1,184 @@
+"""Sensor models that do not need the physics loop: surface textures and transfer curves.
+
+* :func:`texture` draws a unit-variance texture along a surface with a
+  power-law spectrum (deterministic under a seed);
+* :class:`Track` is what the slip sensor sees along a path: the spot-blurred
+  reflectance of a layout of surfaces, times their texture, sampled every
+  :data:`TRACK_DX` metres; the physics kernel interpolates it at the
+  surface's position under the sensor, so the signal moves when, and only
+  when, the surface moves;
+* :func:`opr5005_volts` is the OPR5005 driver's transfer curve
+  (reflectance -> volts before noise and ADC).
+
+Examples
+--------
+>>> import numpy as np
+>>> from slipreflex.sim.sensors import opr5005_volts
+>>> [round(float(v), 2) for v in opr5005_volts(np.array([0.333, 0.93]))]
+[3.34, 0.41]
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+
+from .objects import Surface
+from .params import SlipSensorParams
+
+__all__ = ["TRACK_DX", "texture", "Track", "opr5005_volts"]
+
+#: Spatial sampling of textures and tracks (m): 5 um, 8 samples per period of
+#: the finest default texture wavelength (40 um).
+TRACK_DX: float = 5e-6
+
+
+def texture(n: int, dx: float, exponent: float, min_wavelength: float, max_wavelength: float,
+            rng: np.random.Generator) -> np.ndarray:
+    """A periodic, zero-mean, unit-rms random texture with a power-law spectrum.
+
+    Parameters
+    ----------
+    n : int
+        Number of samples.
+    dx : float
+        Sample spacing (m).
+    exponent : float
+        Amplitude spectrum ``|A(k)| ~ k**-exponent`` inside the band.
+    min_wavelength, max_wavelength : float
+        Band limits (m).
+    rng : numpy.random.Generator
+        Source of the random phases and amplitudes.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``n`` samples, mean 0, rms 1 (all zeros if the band is empty).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = texture(4096, 5e-6, 1.0, 40e-6, 5e-3, np.random.default_rng(0))
+    >>> round(float(t.std()), 6), abs(float(t.mean())) < 1e-12
+    (1.0, True)
+    """
+    k = np.fft.rfftfreq(n, dx)
+    band = (k >= 1.0 / max_wavelength) & (k <= 1.0 / min_wavelength) & (k > 0)
+    amp = np.zeros_like(k)
+    amp[band] = k[band] ** (-exponent)
+    coef = (rng.standard_normal(k.size) + 1j * rng.standard_normal(k.size)) * amp
+    out = np.fft.irfft(coef, n)
+    sd = out.std()
+    return out / sd if sd > 0 else out
+
+
+def opr5005_volts(reflectance: np.ndarray | float, params: SlipSensorParams | None = None) -> np.ndarray:
+    """Mean output of the OPR5005 driver for a given effective reflectance.
+
+    ``V_lin = supply * (1 - reflectance)``, softly saturated at ``v_sat``
+    (see :class:`~slipreflex.sim.params.SlipSensorParams`). No noise, no ADC.
+
+    Parameters
+    ----------
+    reflectance : float or array
+        Effective reflectance(s) in [0, 1].
+    params : SlipSensorParams, optional
+
+    Returns
+    -------
+    numpy.ndarray
+
+    Examples
+    --------
+    >>> float(opr5005_volts(0.0))
+    5.0
+    """
+    p = params or SlipSensorParams()
+    vlin = p.supply_v * (1.0 - np.asarray(reflectance, dtype=float))
+    z = (vlin - p.v_sat) / p.knee_v
+    return p.v_sat + p.knee_v * np.logaddexp(0.0, z)
+
+
+@dataclass(frozen=True)
+class Track:
+    """What the slip sensor sees along a path over one or more surfaces.
+
+    Attributes
+    ----------
+    rho : numpy.ndarray
+        Effective reflectance every ``dx`` metres (texture included).
+    dx : float
+        Spacing (m).
+    origin : float
+        Index offset: surface position ``p`` (m) maps to sample ``(p + origin) / dx``.
+    vibration : numpy.ndarray
+        Unit-rms undulation felt by a pad sliding along the same path (drives
+        the tactile vibration), same grid.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from slipreflex.sim import SURFACES
+    >>> tr = Track.build([(SURFACES["white"], 0.01)], np.random.default_rng(0), lead=0.002)
+    >>> 0.85 < float(tr.rho[tr.rho.size // 2]) < 1.0
+    True
+    """
+
+    rho: np.ndarray
+    dx: float
+    origin: float
+    vibration: np.ndarray
+
+    @classmethod
+    def build(cls, layout: Sequence[tuple[Surface, float]], rng: np.random.Generator, *,
+              lead: float = 0.0, sensor: SlipSensorParams | None = None, dx: float = TRACK_DX,
+              vibration_min_wavelength: float = 0.1e-3) -> "Track":
+        """Lay surfaces end to end and sample what the sensor sees.
+
+        Parameters
+        ----------
+        layout : sequence of (Surface, length_m)
+            Surfaces in the order the sensor meets them. The first extends
+            ``lead`` metres before position 0 and the last extends to the end.
+        rng : numpy.random.Generator
+            Texture source (one independent texture per segment).
+        lead : float
+            Margin (m) before position 0 (for negative displacements).
+        sensor : SlipSensorParams, optional
+            For the spot size that blurs edges between surfaces.
+        dx : float
+            Grid spacing (m).
+        vibration_min_wavelength : float
+            Finest wavelength of the tactile undulation (m).
+
+        Returns
+        -------
+        Track
+        """
+        sensor = sensor or SlipSensorParams()
+        total = lead + sum(length for _, length in layout)
+        n = int(np.ceil(total / dx)) + 2
+        pos = np.arange(n) * dx - lead
+        edges = np.cumsum([0.0] + [length for _, length in layout])
+        seg = np.clip(np.searchsorted(edges, pos, side="right") - 1, 0, len(layout) - 1)
+        base = np.array([s.reflectance for s, _ in layout])[seg]
+        tex = np.zeros(n)
+        vib = np.zeros(n)
+        for i, (surf, _) in enumerate(layout):
+            mask = seg == i
+            t = texture(n, dx, surf.texture_exponent, surf.texture_min_wavelength_m,
+                        surf.texture_max_wavelength_m, rng)
+            tex[mask] = (surf.reflectance * surf.texture * t)[mask]
+            v = texture(n, dx, 1.0, vibration_min_wavelength, surf.texture_max_wavelength_m, rng)
+            vib[mask] = (surf.roughness * v)[mask]
+        if len(layout) > 1 and sensor.spot_sigma_m > 0:
+            half = int(np.ceil(4 * sensor.spot_sigma_m / dx))
+            xs = np.arange(-half, half + 1) * dx
+            ker = np.exp(-0.5 * (xs / sensor.spot_sigma_m) ** 2)
+            ker /= ker.sum()
+            padded = np.concatenate([np.full(half, base[0]), base, np.full(half, base[-1])])
+            base = np.convolve(padded, ker, mode="valid")
+        rho = np.clip(base + tex, 0.0, 1.0)
+        return cls(rho=np.ascontiguousarray(rho), dx=dx, origin=lead, vibration=np.ascontiguousarray(vib))
