@@ -393,11 +393,15 @@ def tactile_frames(snap, vib, vib_dx, vib_off, key, patch_sigma, shear_shift, no
     ``snap`` rows are (id, index, t, N_c, F_t, s, fallen). The pressure
     patch is a Gaussian of ``patch_sigma`` taxels centred on the array and
     shifted along the bottle axis by ``shear_shift * F_t / N_c``; the total
-    is ``N_c * (1 + vib(s))``, the undulation felt at the slip distance
-    ``s`` (so it changes only while sliding); then per-taxel noise (stream
+    is ``N_c * (1 + vib(s) - vib(0))``, the undulation felt at the slip
+    distance ``s`` relative to the grasp point (so it changes only while
+    sliding); then per-taxel noise (stream
     ``key``, counter = sample index), quantization, and clipping at 0.
     """
     nv = vib.shape[0]
+    i0 = int(np.floor(vib_off / vib_dx))
+    f0 = vib_off / vib_dx - i0
+    vib0 = vib[i0] + f0 * (vib[i0 + 1] - vib[i0])   # undulation where the bottle was grasped
     for r in range(snap.shape[0]):
         nc = snap[r, T_NC]
         idx = np.int64(snap[r, T_IDX])
@@ -411,7 +415,7 @@ def tactile_frames(snap, vib, vib_dx, vib_off, key, patch_sigma, shear_shift, no
                 i = nv - 2
                 fi = float(nv - 1)
             fr = fi - i
-            tot = nc * (1.0 + vib[i] + fr * (vib[i + 1] - vib[i]))
+            tot = nc * (1.0 + vib[i] + fr * (vib[i + 1] - vib[i]) - vib0)
             cy = 1.5 + shear_shift * snap[r, T_FT] / nc
         else:
             tot = 0.0

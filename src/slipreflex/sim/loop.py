@@ -115,8 +115,8 @@ class SimTrace:
         Examples
         --------
         >>> from slipreflex.sim import Rig, simulate_open_loop
-        >>> simulate_open_loop(Rig("TR"), 0.03).t.size
-        10
+        >>> simulate_open_loop(Rig("TR"), 0.03).t.size   # 0, 3, ..., 30 ms
+        11
         """
         return self.daq.t
 
@@ -140,7 +140,7 @@ class SimTrace:
         --------
         >>> from slipreflex.sim import Rig, simulate_open_loop
         >>> simulate_open_loop(Rig("TR"), 0.03).accel.shape
-        (10, 3)
+        (11, 3)
         """
         return self.daq.accel
 

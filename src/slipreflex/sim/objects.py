@@ -103,7 +103,9 @@ class Surface:
         visible.
     roughness : float
         Relative rms normal-force fluctuation a sliding contact on this
-        surface produces at the tactile pad (stick-slip micro-vibration).
+        surface produces at the tactile pad (stick-slip micro-vibration of a
+        soft pad: estimates of 8 % on smooth PET, where silicone chatters,
+        and 15 % on rough tape).
 
     Examples
     --------
@@ -140,17 +142,28 @@ class Surface:
 #: docs/simulator.md); "stand" is the 3D-printed stand around it (grey PLA,
 #: an estimate); "TR", "DK", "TX" are the bottles' surfaces (estimates).
 SURFACES: Mapping[str, Surface] = MappingProxyType({
-    # Calibrated: mean 0.40 V and 0.3-0.5 V excursions; 3.335 V mean, about 3.32-3.35 V
-    # excursions; smallest fixed-threshold spike spacing on white ~0.09 mm.
-    "white": Surface("white", reflectance=0.930, texture=0.016, texture_exponent=1.2, roughness=0.01),
-    "black": Surface("black", reflectance=0.333, texture=0.010, texture_exponent=1.2, roughness=0.01),
-    "stand": Surface("stand", reflectance=0.60, texture=0.010, texture_exponent=1.2, roughness=0.02),
+    # Calibrated to the paper's scan (Fig. 6-9; see docs/simulator.md): filtered level
+    # 0.34-0.46 V on white and 3.315-3.35 V on black, smallest fixed-threshold spike
+    # spacing on white 0.07-0.10 mm (5 seeds).
+    "white": Surface("white", reflectance=0.930, texture=0.020, texture_exponent=2.5,
+                     texture_max_wavelength_m=8e-3, roughness=0.01),
+    "black": Surface("black", reflectance=0.333, texture=0.005, texture_exponent=2.5,
+                     texture_max_wavelength_m=8e-3, roughness=0.01),
+    # Grey PLA stand around the test surface (estimate; only seen at the scan's ends).
+    "stand": Surface("stand", reflectance=0.60, texture=0.010, texture_exponent=2.5,
+                     texture_max_wavelength_m=8e-3, roughness=0.02),
+    # Bottles (estimates): a broad texture band (40 um .. 40 mm, flat slope per octave,
+    # exponent 1.5) so that slow slips (fine features pass the 10 Hz filter) and fast
+    # ones (coarse features) both move the signal.
     # Transparent PET: little light comes back (V ~3.5 V), smooth, weak texture.
-    "TR": Surface("TR", reflectance=0.30, texture=0.006, texture_exponent=1.2, roughness=0.01),
-    # Dark PET: the least reflective, smooth, the weakest texture.
-    "DK": Surface("DK", reflectance=0.22, texture=0.006, texture_exponent=1.2, roughness=0.01),
-    # Blue vinyl tape over the bottle: matte, rough, strong texture.
-    "TX": Surface("TX", reflectance=0.55, texture=0.02, texture_exponent=1.0, roughness=0.05),
+    "TR": Surface("TR", reflectance=0.30, texture=0.012, texture_exponent=1.5,
+                  texture_max_wavelength_m=0.04, roughness=0.08),
+    # Dark PET: the least reflective (V ~3.9 V), smooth, the weakest texture.
+    "DK": Surface("DK", reflectance=0.22, texture=0.010, texture_exponent=1.5,
+                  texture_max_wavelength_m=0.04, roughness=0.08),
+    # Blue vinyl tape over the bottle: matte (V ~2.2 V), rough, strong texture.
+    "TX": Surface("TX", reflectance=0.55, texture=0.025, texture_exponent=1.5,
+                  texture_max_wavelength_m=0.04, roughness=0.15),
 })
 
 

@@ -1045,8 +1045,8 @@ class Rig:
         Examples
         --------
         >>> rig = Rig("TR"); _ = rig.advance(0.03)
-        >>> rig.daq_history().t.size
-        10
+        >>> rig.daq_history().t.size   # 0, 3, ..., 30 ms
+        11
         """
         rows = np.concatenate(self._daq_chunks) if self._daq_chunks else np.zeros((0, K.O_SIZE))
         return DaqBlock.from_rows(rows, 0)

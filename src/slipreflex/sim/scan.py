@@ -52,7 +52,7 @@ class ScanSummary:
     ----------
     ranges : dict
         Region name -> (min, max) of the filtered volts inside that region
-        (1 mm in from its edges, clear of the spot's blur).
+        (2.5 mm in from its edges, clear of the spot's blur).
     spikes : dict
         Method ("fixed", "dath") -> spike count over the whole scan.
     spikes_in : dict
@@ -108,7 +108,7 @@ class ScanResult:
     analysis: dict = field(default_factory=dict)
 
     def analyse(self, threshold: float = 2 * hw.PAPER_LSB, cutoff: float = 10.0,
-                dath_samples: int = hw.WINDOW_N, margin: float = 1e-3) -> ScanSummary:
+                dath_samples: int = hw.WINDOW_N, margin: float = 2.5e-3) -> ScanSummary:
         """Filter, encode with the fixed threshold and with DATH, and summarize per region.
 
         Parameters

@@ -1,0 +1,118 @@
+"""``slipreflex scan``: the simulated characterization scan of the slip sensor (paper Fig. 4-9).
+
+The sensor moves 5 cm down the white/black test surface at 1 mm/s, 3 mm
+away (:func:`slipreflex.sim.scan`); the command writes the trace as CSV and
+a figure like the paper's Fig. 6-9 (filtered signal; accumulator with the
+threshold; spikes; fixed threshold and DATH), and prints the voltage range
+on white and on black, the spike count of each method and the smallest
+spike spacing in mm.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+from pathlib import Path
+
+import numpy as np
+
+NAME = "scan"
+HELP = "simulate the slip sensor's characterization scan (paper Fig. 4-9): CSV, figure, numbers"
+ORDER = 40
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Command-line options of ``slipreflex scan``."""
+    parser.add_argument("--seed", type=int, default=0, help="texture and noise seed (default 0)")
+    parser.add_argument("--speed", type=float, default=1.0, help="scan speed in mm/s (default 1, the paper's)")
+    parser.add_argument("--distance", type=float, default=50.0, help="scan length in mm (default 50)")
+    parser.add_argument("--threshold", type=float, default=0.008, help="base threshold in V (default 0.008)")
+    parser.add_argument("--out", type=Path, default=Path("out/scan"), help="output directory (default out/scan)")
+    parser.add_argument("--no-figure", action="store_true", help="skip the PNG figure")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the scan, write the files, print the numbers."""
+    from ..errors import ParameterError
+    from ..sim import scan
+
+    if args.speed <= 0 or args.distance <= 0:
+        raise ParameterError("--speed and --distance must be > 0")
+    result = scan(seed=args.seed, speed=args.speed * 1e-3, distance=args.distance * 1e-3)
+    summary = result.analyse(threshold=args.threshold)
+    out: Path = args.out
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise ParameterError(f"--out {out}: cannot create directory: {err.strerror}") from None
+    csv_path = out / "scan.csv"
+    frame = result.to_frame()
+    with csv_path.open("w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(list(frame))
+        cols = [np.asarray(v) for v in frame.values()]
+        for i in range(result.t.size):
+            w.writerow([repr(float(c[i])) if c.dtype.kind == "f" else str(int(c[i])) for c in cols])
+    print(f"scan: {args.distance:g} mm at {args.speed:g} mm/s, seed {args.seed}, {result.t.size} samples")
+    for region in ("white", "black"):
+        lo, hi = summary.ranges[region]
+        print(f"  {region:5s} filtered volts {lo:.3f} .. {hi:.3f} V")
+    print(f"  spikes over the whole scan: fixed {summary.spikes['fixed']}, DATH {summary.spikes['dath']}")
+    for region in ("white", "black"):
+        parts = []
+        for meth in ("fixed", "dath"):
+            sp = summary.min_spacing_mm[(meth, region)]
+            parts.append(f"{meth} {summary.spikes_in[(meth, region)]} spikes, smallest spacing "
+                         + ("-" if sp is None else f"{sp:.3f} mm"))
+        print(f"  on {region}: " + "; ".join(parts))
+    print(f"  wrote {csv_path}")
+    if not args.no_figure:
+        png = out / "scan.png"
+        _figure(result, summary, png, args.threshold)
+        print(f"  wrote {png}")
+    return 0
+
+
+def _figure(result, summary, path: Path, threshold: float) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    pos = result.position * 1000.0
+    x = result.analysis["filtered"]
+    fig = plt.figure(figsize=(11, 9), constrained_layout=True)
+    gs = fig.add_gridspec(4, 2)
+    ax = fig.add_subplot(gs[0, :])
+    ax.plot(pos, x, lw=0.8)
+    regions = {name: (a * 1000, b * 1000) for name, a, b in result.regions if name in ("white", "black")}
+    for a, b in regions.values():
+        ax.axvline(a, ls="--", c="grey", lw=0.8)
+        ax.axvline(b, ls="--", c="grey", lw=0.8)
+    ax.set(title="A  filtered slip-sensor output over the scan", xlabel="position (mm)", ylabel="V")
+    for col, name in enumerate(("white", "black")):
+        a, b = regions[name]
+        sel = (pos >= a + 2.5) & (pos <= b - 2.5)
+        axb = fig.add_subplot(gs[1, col])
+        axb.plot(pos[sel], x[sel], lw=0.8)
+        axb.set(title=f"B  {name}: filtered output", ylabel="V")
+        axc = fig.add_subplot(gs[2, col], sharex=axb)
+        for meth, color in (("fixed", "C0"), ("dath", "C2")):
+            tr = result.analysis[meth]
+            axc.plot(pos[sel], np.abs(tr.accumulator[sel]), lw=0.7, c=color, label=f"|acc| {meth}")
+            axc.plot(pos[sel], tr.threshold[sel], lw=0.9, c="C3" if meth == "fixed" else "C1",
+                     label=f"threshold {meth}")
+        axc.set(title=f"C  {name}: accumulator and threshold (base {threshold * 1000:g} mV)", ylabel="V")
+        axc.legend(fontsize=7, loc="upper right")
+        axd = fig.add_subplot(gs[3, col], sharex=axb)
+        for row, meth in enumerate(("fixed", "dath")):
+            ev = result.analysis[meth].events & sel
+            axd.vlines(pos[ev], row + 0.1, row + 0.9, lw=0.7, color=f"C{2 * row}")
+        axd.set_yticks([0.5, 1.5], ["fixed", "DATH"])
+        sp = summary.min_spacing_mm
+        axd.set(title=f"D  {name}: spikes (fixed {summary.spikes_in[('fixed', name)]}, "
+                      f"DATH {summary.spikes_in[('dath', name)]}; min spacing fixed "
+                      f"{'-' if sp[('fixed', name)] is None else format(sp[('fixed', name)], '.3f')} mm)",
+                xlabel="position (mm)")
+    fig.savefig(path, dpi=110)
+    plt.close(fig)

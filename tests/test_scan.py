@@ -1,0 +1,43 @@
+"""The characterization scan matches the paper's numbers (levels, DATH > fixed, ~0.09 mm spacing) and the CLI writes its files."""
+
+import numpy as np
+import pytest
+
+from slipreflex import hardware as hw
+from slipreflex.cli import main
+from slipreflex.sim import scan
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_scan_numbers_match_the_paper(seed):
+    r = scan(seed=seed)
+    assert r.position[-1] == pytest.approx(0.05, abs=1e-5) and np.allclose(np.diff(r.t), hw.DAQ_PERIOD_S)
+    s = r.analyse()
+    wlo, whi = s.ranges["white"]
+    blo, bhi = s.ranges["black"]
+    assert 0.28 < wlo < whi < 0.52            # paper: 300-500 mV on white
+    assert 3.30 < blo < bhi < 3.37            # paper: 3.32-3.35 V on black
+    assert s.spikes["dath"] > s.spikes["fixed"]
+    for region in ("white", "black"):
+        assert s.spikes_in[("dath", region)] > s.spikes_in[("fixed", region)] > 0
+    assert 0.05 < s.min_spacing_mm[("fixed", "white")] < 0.15   # paper: 0.09 mm
+
+
+def test_scan_only_moves_with_the_surface():
+    still = scan(seed=0, speed=1e-9, distance=1e-9 * 3.0, layout=(("white", 0.01),))
+    assert still.volts.std() < 2 * hw.ADC_LSB
+
+
+def test_scan_command_writes_csv_and_figure(tmp_path, capsys):
+    assert main(["scan", "--out", str(tmp_path), "--seed", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "white filtered volts" in out and "black filtered volts" in out
+    assert "smallest spacing" in out and "DATH" in out
+    header = (tmp_path / "scan.csv").read_text().splitlines()[0].split(",")
+    assert header[:4] == ["t", "position_mm", "volts", "filtered"] and "dath_threshold" in header
+    assert (tmp_path / "scan.png").stat().st_size > 10_000
+
+
+def test_scan_command_rejects_bad_arguments(capsys):
+    assert main(["scan", "--speed", "0", "--no-figure"]) == 2
+    assert "error" in capsys.readouterr().err
