@@ -260,9 +260,10 @@ class VirtualDevices:
     A background thread advances the rig to the wall-clock time since
     :meth:`start`, writes each new sample's frame to the DAQ port, and
     applies every i-Limb packet that arrives on the hand port to
-    ``rig.hand`` (position: the target; stop: hold the measured position;
-    close/open: move to the end of the range - the PWM value sets no speed
-    here). Perturbations run when :meth:`trigger` is called or their
+    ``rig.hand``: through ``rig.hand.command(kind, fingers, value)`` if the
+    hand has it (the simulated i-Limb does), else as position targets
+    (stop: hold the measured position; close/open: move to the end of the
+    range). Perturbations run when :meth:`trigger` is called or their
     scheduled time comes.
 
     Parameters
@@ -448,23 +449,28 @@ class VirtualDevices:
             item[1](self)
 
     def _apply_packet(self, cmds: tuple) -> None:
-        targets: dict[Finger, float] = {}
-        hold = [c.finger for c in cmds if c.command == HandCommand.STOP]
-        measured = self.rig.hand.positions() if hold else {}
-        for c in cmds:
-            if c.command == HandCommand.POSITION:
-                targets[c.finger] = float(c.value)
-            elif c.command == HandCommand.STOP:
-                if c.finger in measured:
-                    targets[c.finger] = float(measured[c.finger])
-            elif c.finger != Finger.WRIST:
-                lo, hi = value_range(c.finger, HandCommand.POSITION)
-                targets[c.finger] = float(hi if c.command == HandCommand.CLOSE else lo)
-        if targets:
-            try:
-                self.rig.hand.set_positions(targets)
-            except (ParameterError, ValueError, KeyError):
-                self.hand_errors += 1
+        hand = self.rig.hand
+        try:
+            if hasattr(hand, "command"):  # a hand that speaks i-Limb commands (the simulated one)
+                for c in cmds:
+                    hand.command(c.command, [c.finger], float(c.value))
+                return
+            targets: dict[Finger, float] = {}
+            hold = [c.finger for c in cmds if c.command == HandCommand.STOP]
+            measured = hand.positions() if hold else {}
+            for c in cmds:
+                if c.command == HandCommand.POSITION:
+                    targets[c.finger] = float(c.value)
+                elif c.command == HandCommand.STOP:
+                    if c.finger in measured:
+                        targets[c.finger] = float(measured[c.finger])
+                elif c.finger != Finger.WRIST:
+                    lo, hi = value_range(c.finger, HandCommand.POSITION)
+                    targets[c.finger] = float(hi if c.command == HandCommand.CLOSE else lo)
+            if targets:
+                hand.set_positions(targets)
+        except (ParameterError, ValueError, KeyError):
+            self.hand_errors += 1
 
     def _run(self) -> None:
         try:
