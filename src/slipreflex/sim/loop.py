@@ -37,7 +37,7 @@ import numpy as np
 
 from .. import hardware as hw
 from ..errors import ParameterError
-from ..hardware import Finger
+from ..hardware import Finger, HandCommand
 from ..interfaces import Reflex
 from . import kernel as K
 from .objects import Drop, Pour
@@ -317,7 +317,6 @@ def run_closed_loop(rig: Rig, reflex: Reflex, duration: float, *,
     lat = rig.hand.latency
     cmd_t: list[float] = []
     cmd_v: list[float] = []
-    send = rig.hand.set_positions
     eps = 1e-12
     tac_s = None
     if kind == "tactile":
@@ -327,16 +326,20 @@ def run_closed_loop(rig: Rig, reflex: Reflex, duration: float, *,
     try:
         if kind == "slip":
             step = reflex.step
-            while rig.next_daq_time <= t_end + eps:
-                horizon = min(t_end, max(rig.t + rig.physics.dt, rig.next_daq_time + lat))
-                b = rig.advance_block(horizon)
-                volts = b.volts.tolist()
-                mids = np.rint(b.fingers[:, 2]).tolist()
-                ts = b.t.tolist()
+            command = rig.hand.command
+            dt = rig.physics.dt
+            period = hw.DAQ_PERIOD_S
+            C = rig._C
+            while C[K.C_DAQ] * period <= t_end + eps:
+                horizon = min(t_end, max(int(C[K.C_N]) * dt + dt, int(C[K.C_DAQ]) * period + lat))
+                rows = rig._advance_rows(horizon)
+                volts = rows[:, K.O_VOLTS].tolist()
+                mids = np.rint(rows[:, K.O_Q2]).tolist()
+                ts = rows[:, K.O_T].tolist()
                 for v, pos, ts_k in zip(volts, mids, ts):
                     c = step(v, position=pos)
                     if c is not None:
-                        send({f: c for f in fingers}, at=ts_k)
+                        command(HandCommand.POSITION, fingers, float(c), at=ts_k)
                         cmd_t.append(ts_k)
                         cmd_v.append(float(c))
                 if rig.t >= t_end - eps and rig.next_daq_time > t_end + eps:
@@ -344,17 +347,18 @@ def run_closed_loop(rig: Rig, reflex: Reflex, duration: float, *,
         else:
             assert tac_s is not None
             step = reflex.step
+            command = rig.hand.command
             while tac_s.next_time <= t_end + eps:
                 horizon = min(t_end, max(rig.t + rig.physics.dt, tac_s.next_time + lat))
-                b = rig.advance_block(horizon)
+                rig._advance_rows(horizon)
                 tt, frames = tac_s.read()
-                # measured middle position at each frame time: from the DAQ-rate truth
+                # measured middle position at each frame time: the latest DAQ-rate value
                 for k in range(tt.size):
                     ts_k = float(tt[k])
-                    pos = float(round(_finger_at(rig, b, ts_k)))
+                    pos = float(round(_finger_at(rig, ts_k)))
                     c = step(frames[k], position=pos)
                     if c is not None:
-                        send({f: c for f in fingers}, at=ts_k)
+                        command(HandCommand.POSITION, fingers, float(c), at=ts_k)
                         cmd_t.append(ts_k)
                         cmd_v.append(float(c))
                 if rig.t >= t_end - eps and tac_s.next_time > t_end + eps:
@@ -368,13 +372,9 @@ def run_closed_loop(rig: Rig, reflex: Reflex, duration: float, *,
     return _trace(rig, t0, getattr(reflex, "name", type(reflex).__name__), cmd_t, cmd_v, tac_t, tac)
 
 
-def _finger_at(rig: Rig, block: DaqBlock, t: float) -> float:
+def _finger_at(rig: Rig, t: float) -> float:
     """Middle-finger position at time ``t``: the latest DAQ-rate value at or before ``t``."""
-    if block.t.size and block.t[0] <= t + 1e-12:
-        i = int(np.searchsorted(block.t, t + 1e-12, side="right")) - 1
-        return float(block.fingers[i, 2])
-    hist = rig._daq_chunks
-    for rows in reversed(hist):
+    for rows in reversed(rig._daq_chunks):
         if rows.shape[0] and rows[0, K.O_T] <= t + 1e-12:
             i = int(np.searchsorted(rows[:, K.O_T], t + 1e-12, side="right")) - 1
             return float(rows[i, K.O_Q2])

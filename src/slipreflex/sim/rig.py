@@ -41,6 +41,7 @@ Examples
 
 from __future__ import annotations
 
+import bisect
 import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
@@ -416,9 +417,8 @@ class SimHand:
         sent = self._rig.t if at is None else float(at)
         dt = self._rig.physics.dt
         step = max(int(math.ceil((sent + self.params.latency_s) / dt - _ROUND)), self._rig._n)
-        self._pending.append((step, self._count, kind, fingers, float(value)))
+        bisect.insort(self._pending, (step, self._count, kind, fingers, float(value)))
         self._count += 1
-        self._pending.sort()
 
     def set_positions(self, targets: Mapping[Finger, float], at: float | None = None) -> None:
         """Position targets (0..500, clipped) for the named fingers.
@@ -428,8 +428,11 @@ class SimHand:
         >>> from slipreflex.sim import Rig
         >>> Rig("TR").hand.set_positions({Finger.MIDDLE: 250})
         """
+        by_value: dict[float, list[Finger]] = {}
         for f, v in targets.items():
-            self.command(HandCommand.POSITION, [f], float(v), at=at)
+            by_value.setdefault(float(v), []).append(f)
+        for v, fingers in by_value.items():
+            self.command(HandCommand.POSITION, fingers, v, at=at)
 
     def positions(self) -> dict[Finger, float]:
         """Measured positions (rounded to whole units, as the control unit reports them).
@@ -547,6 +550,7 @@ class Rig:
         self._daq_buf = np.empty((int(_CHUNK_S * 2 * hw.DAQ_FS) + 8, K.O_SIZE))
         self._ev_buf = np.empty((3 * cap_steps + 8, 3))
         self._counts = np.zeros(3, dtype=np.int64)
+        self._no_tac = np.empty((0, K.T_SIZE))
         self._grasp: GraspResult | None = None
 
     # ------------------------------------------------------------------ setup
@@ -647,46 +651,56 @@ class Rig:
         >>> Rig("TR").advance_block(1.0).volts.size
         334
         """
+        seq0 = int(self._C[K.C_DAQ])
+        return DaqBlock.from_rows(self._advance_rows(t), seq0)
+
+    def _advance_rows(self, t: float) -> np.ndarray:
+        """Advance to ``t``; return the new DAQ rows in the kernel's layout (fast path)."""
         if not math.isfinite(t):
             raise ParameterError(f"t must be finite, got {t!r}")
         dt = self.physics.dt
         n_end = int(math.ceil(t / dt - _ROUND))
-        seq0 = int(self._C[K.C_DAQ])
         rows: list[np.ndarray] = []
         chunk = int(_CHUNK_S / dt)
+        hand = self.hand
+        C = self._C
         while True:
-            self.hand._apply_due(self._n)
-            if self._n >= n_end:
+            n = int(C[K.C_N])
+            if hand._pending:
+                hand._apply_due(n)
+            if n >= n_end:
                 break
-            nxt = self.hand._next_step()
-            stop = min(n_end, self._n + chunk, nxt if nxt is not None and nxt > self._n else n_end)
+            nxt = hand._pending[0][0] if hand._pending else n_end
+            stop = min(n_end, n + chunk, nxt if nxt > n else n_end)
             rows.append(self._run(stop))
         if not rows:
-            daq = np.zeros((0, K.O_SIZE))
-        else:
-            daq = rows[0] if len(rows) == 1 else np.concatenate(rows)
+            return np.zeros((0, K.O_SIZE))
+        daq = rows[0] if len(rows) == 1 else np.concatenate(rows)
         if daq.shape[0]:
             self._daq_chunks.append(daq)
-        return DaqBlock.from_rows(daq, seq0)
+        return daq
 
     def _run(self, stop: int) -> np.ndarray:
-        dt = self.physics.dt
-        span = (stop - self._n) * dt
-        ntac = sum(int(span * s.fs) + 2 for s in self._samplers)
-        tac = np.empty((ntac, K.T_SIZE))
+        C = self._C
+        span = (stop - int(C[K.C_N])) * self.physics.dt
+        if self._samplers:
+            tac = np.empty((sum(int(span * s.fs) + 2 for s in self._samplers), K.T_SIZE))
+        else:
+            tac = self._no_tac
         out: list[np.ndarray] = []
         tacs: list[np.ndarray] = []
-        while self._n < stop:
-            K.step_until(self._S, self._C, self._P, self._keys, self._D, self._W, self.track.rho,
-                         self._tac_rates, self._tac_next, stop, self._daq_buf, tac, self._ev_buf, self._counts)
-            nd, nt, ne = (int(c) for c in self._counts)
+        counts = self._counts
+        while C[K.C_N] < stop:
+            K.step_until(self._S, C, self._P, self._keys, self._D, self._W, self.track.rho,
+                         self._tac_rates, self._tac_next, stop, self._daq_buf, tac, self._ev_buf, counts)
+            nd, nt, ne = int(counts[0]), int(counts[1]), int(counts[2])
             out.append(self._daq_buf[:nd].copy())
             if nt:
                 tacs.append(tac[:nt].copy())
             if ne:
                 self._events.append(self._ev_buf[:ne].copy())
         if tacs:
-            self._emit_tactile(np.concatenate(tacs))
+            self._emit_tactile(tacs[0] if len(tacs) == 1 else np.concatenate(tacs))
         return out[0] if len(out) == 1 else np.concatenate(out)
 
     # ------------------------------------------------------------------ tactile
@@ -802,7 +816,7 @@ class Rig:
                 if self.t > t_limit:
                     raise ParameterError(f"grasp: fingers closed fully without reaching {force} N "
                                          f"(bottle diameter {self.bottle.diameter_m} m too small?)")
-                self.advance_to(max(s_idx.next_time, self.t + self.physics.dt))
+                self._advance_rows(max(s_idx.next_time, self.t + self.physics.dt))
                 _, fi = s_idx.read()
                 _, ft = s_th.read()
                 if Finger.INDEX not in stopped and fi.shape[0] and fi[-1].sum() >= force:
@@ -816,10 +830,10 @@ class Rig:
         finally:
             s_idx.close()
             s_th.close()
-        self.advance(settle)
+        self._advance_rows(self.t + settle)
         self._S[K.S_SUPPORTED] = 0.0
         t_release = self.t
-        self.advance(settle)
+        self._advance_rows(self.t + settle)
         S = self._S
         stable = bool(S[K.S_FALLEN] == 0.0 and S[K.S_STUCK] > 0.0 and abs(S[K.S_V]) < 1e-3)
         self._grasp = GraspResult(t_contact=t_contact, t_release=t_release, force_n=float(S[K.S_NC]),
