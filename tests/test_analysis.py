@@ -67,6 +67,17 @@ def test_onset_filter_is_30_hz_butterworth_and_rectifies():
     assert env[500:].std() < 0.002
 
 
+def test_noise_episodes_below_three_thresholds_are_not_onsets():
+    t, a = _accel(seed=4)
+    r0 = detect_onset(t, a, window=(1.0, 2.9))
+    a[(t >= 1.2) & (t < 1.21), 1] += 2.0 * r0.threshold   # a small knock: above threshold, under 3x
+    a[t >= 2.0, 1] += 0.1                                 # the slip
+    r = detect_onset(t, a, window=(1.0, 2.9))
+    assert 2.0 <= r.time < 2.02
+    literal = detect_onset(t, a, window=(1.0, 2.9), params=OnsetParams(peak_factor=0.0))
+    assert 1.2 <= literal.time < 1.23                     # the paper's literal first candidate
+
+
 def test_select_axis_and_bad_input():
     t, a = _accel()
     a[t > 1.5, 0] -= 0.2
@@ -113,7 +124,8 @@ def test_segment_pour_into_slip_events():
     env = np.zeros_like(t)
     for t0, dur in ((12.0, 0.4), (12.6, 0.1), (24.0, 0.5)):   # 12.0 and 12.6 are one slip
         env[(t >= t0) & (t < t0 + dur)] = 1.0
-    ev = segment_events(t, env, 0.5, (1.0, 29.0))
+    ev = segment_events(t, env, 0.3, (1.0, 29.0))
+    assert segment_events(t, 0.5 * env, 0.3, (1.0, 29.0)) == []   # peaks under 3 x threshold: noise
     assert len(ev) == 2
     assert ev[0].onset == pytest.approx(12.0, abs=1 / FS)
     assert ev[0].end == pytest.approx(12.7, abs=2 / FS)
@@ -145,6 +157,12 @@ def test_analyse_trial_drop_row():
     rows = analyse_trial(_streams(fell_out_time=3.2, method="nmsd", method_fs=260.0))
     assert not rows[0]["success"] and rows[0]["fell_out"]
     assert rows[0]["total_ms"] == pytest.approx(3 / 260.0 * 1e3)
+
+
+def test_a_late_command_is_not_a_response():
+    rows = analyse_trial(_streams(cmd_t=[3.5, 3.6], cmd_v=[210.0, 220.0]))   # 1.5 s after the onset
+    assert math.isnan(rows[0]["response_ms"]) and math.isnan(rows[0]["total_ms"])
+    assert rows[0]["success"]
 
 
 def test_analyse_trial_without_slip_gives_one_row():

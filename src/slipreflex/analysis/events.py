@@ -2,10 +2,11 @@
 
 A pour makes the bottle slip several times (the paper: near 200 ml and near
 400 ml). The paper analysed "all slips individually, as if they belonged to a
-separate trial". We segment with the same accelerometer envelope and threshold
-as the onset detector (:mod:`slipreflex.analysis.onset`): the samples above
-threshold inside the induction interval form *episodes*; episodes closer than
-``merge_s`` (default ``MERGE_S`` = 1 s) are one slip. Each slip's onset is the
+separate trial". We segment with the same accelerometer envelope, threshold and
+episodes as the onset detector (:func:`slipreflex.analysis.onset.episodes`:
+runs above threshold inside the induction interval that peak at three times
+the threshold or more); episodes closer than ``merge_s`` (default
+``MERGE_S`` = 1 s) are one slip. Each slip's onset is the
 first above-threshold sample of its episode, and its *window* (where its
 controller response is looked for) runs from ``lead_s`` before the onset to
 ``lead_s`` before the next slip's onset (or the end of the recording).
@@ -15,7 +16,7 @@ Examples
 >>> import numpy as np
 >>> t = np.arange(0, 10, 0.01)
 >>> env = np.zeros_like(t); env[(t > 2) & (t < 2.3)] = 1; env[(t > 6) & (t < 6.2)] = 1
->>> [(round(e.onset, 2), round(e.window[1], 2)) for e in segment_events(t, env, 0.5, (1.0, 9.0))]
+>>> [(round(e.onset, 2), round(e.window[1], 2)) for e in segment_events(t, env, 0.3, (1.0, 9.0))]
 [(2.01, 5.91), (6.01, 10.0)]
 """
 
@@ -72,7 +73,7 @@ class SlipEvent:
 
 def segment_events(t, envelope, threshold: float, interval: tuple[float, float], *,
                    merge_s: float = MERGE_S, lead_s: float = LEAD_S,
-                   t_end: float | None = None) -> list[SlipEvent]:
+                   t_end: float | None = None, params=None) -> list[SlipEvent]:
     """Split the above-threshold samples inside ``interval`` into slip events.
 
     Parameters
@@ -87,6 +88,8 @@ def segment_events(t, envelope, threshold: float, interval: tuple[float, float],
         See the module docstring.
     t_end : float, optional
         End of the last window (default: just after the last sample).
+    params : OnsetParams, optional
+        Episode rules (``join_s``, ``peak_factor``).
 
     Returns
     -------
@@ -102,19 +105,23 @@ def segment_events(t, envelope, threshold: float, interval: tuple[float, float],
     env = np.asarray(envelope, dtype=np.float64)
     if t.shape != env.shape or t.ndim != 1:
         raise DataError(f"times and envelope must be 1-D of equal length, got {t.shape}, {env.shape}")
+    from .onset import episodes
+
     lo, hi = float(interval[0]), float(interval[1])
-    idx = np.flatnonzero((env > threshold) & (t >= lo) & (t <= hi))
-    if idx.size == 0:
+    eps = episodes(t, env, threshold, (lo, hi), params)
+    if not eps:
         return []
-    tt = t[idx]
-    cut = np.flatnonzero(np.diff(tt) > merge_s)
-    starts = np.concatenate(([0], cut + 1))
-    ends = np.concatenate((cut, [tt.size - 1]))
+    groups: list[list[int]] = [[eps[0][0], eps[0][1]]]
+    for i0, i1 in eps[1:]:
+        if t[i0] - t[groups[-1][1]] > merge_s:
+            groups.append([i0, i1])
+        else:
+            groups[-1][1] = i1
     end_all = float(t[-1] + (t[-1] - t[-2] if t.size > 1 else 0.0)) if t_end is None else float(t_end)
-    onsets = tt[starts]
+    onsets = [float(t[g[0]]) for g in groups]
     out = []
-    for i, (s, e) in enumerate(zip(starts, ends)):
-        w0 = max(lo, onsets[i] - lead_s) if i == 0 else max(onsets[i] - lead_s, tt[ends[i - 1]])
-        w1 = onsets[i + 1] - lead_s if i + 1 < onsets.size else end_all
-        out.append(SlipEvent(float(tt[s]), float(tt[e]), (float(w0), float(w1))))
+    for i, (i0, i1) in enumerate(groups):
+        w0 = max(lo, onsets[i] - lead_s)
+        w1 = onsets[i + 1] - lead_s if i + 1 < len(onsets) else end_all
+        out.append(SlipEvent(onsets[i], float(t[i1]), (w0, w1)))
     return out

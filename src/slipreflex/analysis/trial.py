@@ -44,9 +44,12 @@ import numpy as np
 from ..errors import ParameterError
 from .events import LEAD_S, MERGE_S, segment_events
 from .metrics import ACTIVITY_GAP_S, controller_activity, response_time, suppressed
-from .onset import OnsetParams, accel_envelope, detect_onset, select_axis
+from .onset import OnsetParams, accel_envelope, detect_onset, rest_threshold_of, select_axis
 
-__all__ = ["TrialStreams", "analyse_trial", "RESULT_COLUMNS", "RAMP_METHODS"]
+__all__ = ["TrialStreams", "analyse_trial", "RESULT_COLUMNS", "RAMP_METHODS", "MAX_RESPONSE_S"]
+
+#: A command increase later than this after the onset (s) is not a response to that slip.
+MAX_RESPONSE_S: float = 1.0
 
 #: Methods whose command is a closing ramp: their "total" is the closing time generated.
 RAMP_METHODS: frozenset[str] = frozenset({"nmsd", "swt"})
@@ -159,8 +162,14 @@ def _load_at(s: TrialStreams, t: float) -> float:
 
 def analyse_trial(s: TrialStreams, onset_params: OnsetParams | None = None, *,
                   merge_s: float = MERGE_S, lead_s: float = LEAD_S,
-                  gap: float = ACTIVITY_GAP_S) -> list[dict[str, Any]]:
+                  gap: float = ACTIVITY_GAP_S,
+                  max_response_s: float = MAX_RESPONSE_S) -> list[dict[str, Any]]:
     """The paper's metrics for every slip event of one trial.
+
+    The controller's response to a slip is its first command increase in the
+    slip's window and no later than ``max_response_s`` after the onset;
+    without one, response and total are NaN (the method did not react to that
+    slip).
 
     Returns
     -------
@@ -202,17 +211,20 @@ def analyse_trial(s: TrialStreams, onset_params: OnsetParams | None = None, *,
     else:
         axis = select_axis(t, acc, (lo, hi), baseline_s=p.baseline_s)
         env = accel_envelope(t, acc[:, axis], p)
-        base = env[t < t[0] + p.baseline_s]
-        thr = float(base.mean() + p.k * base.std())
+        thr = rest_threshold_of(t, env, p)
         found = segment_events(t, env, thr, (lo, hi), merge_s=merge_s, lead_s=lead_s,
-                               t_end=float(s.t_end))
+                               t_end=float(s.t_end), params=p)
         events = [(e.onset, e.window) for e in found] or [(float("nan"), (lo, float(s.t_end)))]
     n_events = 0 if math.isnan(events[0][0]) else len(events)
 
     rows = []
     for i, (onset, window) in enumerate(events):
-        resp = response_time(onset, cmd_t, cmd_v, window=window, base=s.base_command)
+        first_by = window[1] if math.isnan(onset) else min(window[1], onset + max_response_s)
+        resp = response_time(onset, cmd_t, cmd_v, window=(window[0], first_by), base=s.base_command)
         act = controller_activity(cmd_t, cmd_v, window=window, base=s.base_command, gap=gap)
+        if act.n_increases and act.first >= first_by:
+            act = controller_activity(cmd_t, cmd_v, window=(window[0], first_by),
+                                      base=s.base_command, gap=gap)
         closing = act.closing_time(s.method_fs) if s.ramp else float("nan")
         total = closing if s.ramp else (act.span if act.n_increases else float("nan"))
         true_on = _nearest(truth, onset, window[0], window[1])
