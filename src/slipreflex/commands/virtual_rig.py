@@ -62,8 +62,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"daq: {dev.daq_path}", flush=True)
         print(f"hand: {dev.hand_path}", flush=True)
         print(f"p0: {grasp.position:g}", flush=True)
-        print(f"grasp: contact {grasp.force:.2f} N after {grasp.steps} steps; bottle {args.bottle}",
-              flush=True)
+        print(f"grasp: bottle {args.bottle}, {grasp.force:.2f} N per contact, "
+              f"{'stable' if grasp.stable else 'NOT stable'}", flush=True)
         print(f"run: slipreflex run --daq {dev.daq_path} --hand {dev.hand_path} --p0 {grasp.position:g}",
               flush=True)
         print("keys: d+Enter drop, p+Enter pour, q+Enter quit; SIGUSR1 drop, SIGUSR2 pour", flush=True)
@@ -76,6 +76,7 @@ def run(args: argparse.Namespace) -> int:
             while pending:
                 kind = pending.pop(0)
                 dev.trigger(kind)
+                print(f"{kind} at {dev.elapsed:.2f} s (signal)", flush=True)
             if not dev.running:
                 break
             if stdin_open:
