@@ -227,6 +227,8 @@ def analyse_trial(s: TrialStreams, onset_params: OnsetParams | None = None, *,
                                       base=s.base_command, gap=gap)
         closing = act.closing_time(s.method_fs) if s.ramp else float("nan")
         total = closing if s.ramp else (act.span if act.n_increases else float("nan"))
+        if math.isnan(onset):  # no slip found: activity is reported, but it is no slip's total
+            total = float("nan")
         true_on = _nearest(truth, onset, window[0], window[1])
         rows.append({
             "experiment": s.experiment, "bottle": s.bottle, "method": s.method,

@@ -1,0 +1,90 @@
+"""``slipreflex reproduce``: the paper's drop and pour experiments on the simulated rig.
+
+Runs every trial (by default 10 trials x 3 bottles x 2 experiments x 4
+methods) in parallel, analyses them as the paper does, and writes
+``results.csv``, ``summary.csv``, ``report.md`` and PNG figures to ``--out``.
+
+Examples
+--------
+>>> from slipreflex.cli import main
+>>> main(["reproduce", "--trials", "1", "--out", "/tmp/r"])  # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import argparse
+import shlex
+import sys
+from pathlib import Path
+
+NAME = "reproduce"
+HELP = "run the paper's drop and pour experiments on the simulated rig and write a report"
+ORDER = 30
+
+
+def _csv_list(kind: str, known: tuple[str, ...]):
+    def parse(text: str) -> tuple[str, ...]:
+        items = tuple(x.strip() for x in text.split(",") if x.strip())
+        bad = [x for x in items if x not in known]
+        if bad or not items:
+            raise argparse.ArgumentTypeError(
+                f"{kind}: unknown {', '.join(map(repr, bad)) or 'empty list'} (known: {', '.join(known)})")
+        return items
+    return parse
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Options of ``slipreflex reproduce``: every count and load parameter."""
+    from ..experiments import BOTTLE_NAMES, DEFAULT_SEED, EXPERIMENTS, METHODS
+
+    p.add_argument("--out", type=Path, default=Path("out/reproduce"),
+                   help="output directory (default: ./out/reproduce)")
+    p.add_argument("--trials", type=int, default=10, help="trials per bottle, experiment and method (10)")
+    p.add_argument("--bottles", type=_csv_list("bottles", BOTTLE_NAMES), default=BOTTLE_NAMES,
+                   help="comma-separated bottles (default: TR,DK,TX)")
+    p.add_argument("--methods", type=_csv_list("methods", METHODS), default=METHODS,
+                   help="comma-separated methods (default: fixed,dath,nmsd,swt)")
+    p.add_argument("--experiments", type=_csv_list("experiments", EXPERIMENTS), default=EXPERIMENTS,
+                   help="comma-separated experiments (default: drop,pour)")
+    p.add_argument("--seed", type=int, default=DEFAULT_SEED, help=f"master seed (default {DEFAULT_SEED})")
+    p.add_argument("--drop-mass", type=float, default=None, metavar="KG",
+                   help="dropped mass in kg (default: the paper's 0.010)")
+    p.add_argument("--drop-height", type=float, default=None, metavar="M",
+                   help="drop height above the opening in m (default: the paper's 0.02)")
+    p.add_argument("--pour-rate", type=float, default=None, metavar="L_MIN",
+                   help="pour rate in L/min (default: the paper's 1.0)")
+    p.add_argument("--pour-volume", type=float, default=None, metavar="ML",
+                   help="poured volume in ml (default: the paper's 500)")
+    p.add_argument("--rest", type=float, default=0.5, metavar="S",
+                   help="rest recorded before the perturbation, s (default 0.5; >= 0.25)")
+    p.add_argument("--after", type=float, default=2.0, metavar="S",
+                   help="recording after the drop / the pour's end, s (default 2)")
+    p.add_argument("--calibration", type=float, default=2.0, metavar="S",
+                   help="length of each at-rest calibration recording for the NMSD/SWT-SD thresholds, s (2)")
+    p.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--no-figures", action="store_true", help="skip the example-trial figures")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the grid, write the outputs, print a compact table."""
+    from ..analysis.report import terminal_table
+    from ..errors import ParameterError
+    from ..experiments import ReproduceConfig, run_reproduce, write_outputs
+
+    if args.jobs is not None and args.jobs < 1:
+        raise ParameterError(f"--jobs must be >= 1, got {args.jobs}")
+    config = ReproduceConfig(
+        trials=args.trials, bottles=tuple(args.bottles), methods=tuple(args.methods),
+        experiments=tuple(args.experiments), seed=args.seed, drop_mass_kg=args.drop_mass,
+        drop_height_m=args.drop_height, pour_rate_l_min=args.pour_rate, pour_volume_ml=args.pour_volume,
+        rest_s=args.rest, after_s=args.after, calibration_s=args.calibration)
+    result = run_reproduce(config, jobs=args.jobs, progress=not args.no_progress,
+                           plots=not args.no_figures)
+    command = "slipreflex " + " ".join(shlex.quote(a) for a in sys.argv[1:]) if sys.argv[1:] else None
+    paths = write_outputs(result, args.out, command=command)
+    print(terminal_table(result.summary))
+    print(f"{len(result.rows)} rows from {len(config.cells())} trials in {result.wall_s:.1f} s "
+          f"({result.jobs} jobs); wrote {paths['results'].parent}/"
+          "{results.csv, summary.csv, report.md, figures/}")
+    return 0
