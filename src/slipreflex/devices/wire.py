@@ -127,9 +127,9 @@ class Frame:
         Raw MPU6050 x, y, z counts; (0, 0, 0) unless ``accel_fresh``.
     flow_pulses : int
         Cumulative YF-S201 pulses as sent (wraps at 2**32).
-    index : int
+    index : int, optional
         Unwrapped sequence number: the parser counts on past 65535 (and across
-        gaps); :func:`decode_frame` sets it to ``seq``.
+        gaps). Defaults to ``seq`` (what :func:`decode_frame` gives).
 
     Examples
     --------
