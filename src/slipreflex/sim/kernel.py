@@ -82,8 +82,8 @@ W_SIZE = 7
 O_SIZE = 18
 
 # ---- tactile snapshot rows --------------------------------------------------
-T_ID, T_IDX, T_T, T_NC, T_FT, T_S, T_FALLEN = range(7)
-T_SIZE = 7
+T_ID, T_IDX, T_T, T_NC, T_FT, T_S, T_FALLEN, T_W = range(8)
+T_SIZE = 8
 
 # ---- events -----------------------------------------------------------------
 E_ONSET, E_STICK, E_FALLEN, E_LANDED = 1.0, 2.0, 3.0, 4.0
@@ -377,6 +377,7 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, n_end, daq_out, 
                 row[T_FT] = S[S_FT] / 3.0
                 row[T_S] = S[S_S]
                 row[T_FALLEN] = S[S_FALLEN]
+                row[T_W] = S[S_W] if S[S_STUCK] == 0.0 else 0.0
                 ntac += 1
                 tac_next[si] += 1
         n += 1
@@ -387,7 +388,8 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, n_end, daq_out, 
 
 
 @njit(cache=True)
-def tactile_frames(snap, vib, vib_dx, vib_off, key, patch_sigma, shear_shift, noise, resolution, out):
+def tactile_frames(snap, vib, vib_dx, vib_off, key, patch_sigma, shear_shift, noise, resolution, roughness,
+                   chatter_speed, out):
     """Build ``(4, 4)`` frames (N per taxel) from tactile snapshots.
 
     ``snap`` rows are (id, index, t, N_c, F_t, s, fallen). The pressure
@@ -416,6 +418,12 @@ def tactile_frames(snap, vib, vib_dx, vib_off, key, patch_sigma, shear_shift, no
                 fi = float(nv - 1)
             fr = fi - i
             tot = nc * (1.0 + vib[i] + fr * (vib[i + 1] - vib[i]) - vib0)
+            w = snap[r, T_W]
+            if w > 0.0:
+                amp = w / chatter_speed
+                if amp > 1.0:
+                    amp = 1.0
+                tot += nc * roughness * amp * normal(key + np.uint64(1), idx)
             cy = 1.5 + shear_shift * snap[r, T_FT] / nc
         else:
             tot = 0.0

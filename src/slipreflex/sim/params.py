@@ -236,6 +236,11 @@ class TactileParams:
     vibration_min_wavelength_m : float
         Finest wavelength (m) of the surface undulation the sliding pad
         feels: 0.1 mm (estimate; finer features are averaged by the pad).
+    chatter_speed_m_s : float
+        Sliding speed (m/s) above which the broadband chatter of the sliding
+        pad (stick-slip micro-events, relative rms = the surface's
+        ``roughness``) reaches full amplitude; below it grows linearly.
+        Estimate: 10 mm/s.
 
     Examples
     --------
@@ -248,6 +253,7 @@ class TactileParams:
     patch_sigma_taxels: float = 0.9
     shear_shift_taxels: float = 0.7
     vibration_min_wavelength_m: float = 0.1e-3
+    chatter_speed_m_s: float = 0.01
 
     def __post_init__(self) -> None:
         _validate(self, zero_ok=("noise_n", "resolution_n", "shear_shift_taxels"))

@@ -392,9 +392,10 @@ class SimHand:
         Parameters
         ----------
         kind : HandCommand
-            POSITION (value = target 0..500), CLOSE / OPEN (value = PWM
-            0..297, the speed), or STOP (hold where the finger is when the
-            command arrives).
+            POSITION (value = target 0..500, rounded to whole units as the
+            packet carries them), CLOSE / OPEN (value = PWM 0..297, the
+            speed), or STOP (hold the whole-unit position the finger has when
+            the command arrives).
         fingers : iterable of Finger
         value : float
         at : float, optional
@@ -460,13 +461,15 @@ class SimHand:
                 if f in hw.TRIPOD:
                     i = hw.TRIPOD.index(f)
                     if kind == HandCommand.POSITION:
-                        S[K.S_TGT0 + i] = min(max(value, hw.FINGER_MIN), hw.FINGER_MAX)
+                        # the packet carries whole units (value MSB, LSB)
+                        S[K.S_TGT0 + i] = min(max(round(value), hw.FINGER_MIN), hw.FINGER_MAX)
                         S[K.S_SPD0 + i] = p.speed_units_s
                     elif kind in (HandCommand.CLOSE, HandCommand.OPEN):
                         S[K.S_TGT0 + i] = hw.FINGER_MAX if kind == HandCommand.CLOSE else hw.FINGER_MIN
                         S[K.S_SPD0 + i] = p.speed_units_s * min(max(value, 0.0), hw.PWM_MAX) / hw.PWM_MAX
                     else:
-                        S[K.S_TGT0 + i] = S[K.S_Q0 + i]
+                        # STOP: the digit controller holds its encoder count (whole units)
+                        S[K.S_TGT0 + i] = round(S[K.S_Q0 + i])
                         S[K.S_SPD0 + i] = p.speed_units_s
                 else:
                     top = hw.THUMB_ROTATOR_MAX if f == Finger.THUMB_ROTATOR else hw.FINGER_MAX
@@ -712,7 +715,8 @@ class Rig:
         tp = self.tactile_params
         out = np.empty((snap.shape[0],) + hw.TACTILE_SHAPE)
         K.tactile_frames(snap, self.track.vibration, self.track.dx, self.track.origin, key,
-                         tp.patch_sigma_taxels, tp.shear_shift_taxels, tp.noise_n, tp.resolution_n, out)
+                         tp.patch_sigma_taxels, tp.shear_shift_taxels, tp.noise_n, tp.resolution_n,
+                         self.bottle.surface.roughness, tp.chatter_speed_m_s, out)
         return out
 
     def _emit_tactile(self, snap: np.ndarray) -> None:
@@ -767,7 +771,8 @@ class Rig:
         (4, 4)
         """
         S = self._S
-        snap = np.array([[0, self._oneoff, self.t, S[K.S_NC], S[K.S_FT] / 3.0, S[K.S_S], S[K.S_FALLEN]]])
+        w = S[K.S_W] if S[K.S_STUCK] == 0.0 else 0.0
+        snap = np.array([[0, self._oneoff, self.t, S[K.S_NC], S[K.S_FT] / 3.0, S[K.S_S], S[K.S_FALLEN], w]])
         self._oneoff += 1
         return self._frames(snap, np.uint64(K._mix(self._keys[3] + np.uint64(int(finger)))))[0]
 
