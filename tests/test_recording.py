@@ -142,3 +142,37 @@ def test_disk_full_mid_run_stops_recording_without_raising():
     rec.close()  # does not raise either
     with contextlib.suppress(OSError):
         buf.close()
+
+
+def test_sigkilled_run_leaves_a_recording_that_replays(tmp_path):
+    """End to end: `slipreflex run` on the virtual rig, killed with SIGKILL mid-run."""
+    from slipreflex.devices.simrig import SimRig
+    from slipreflex.devices.virtual import VirtualDevices
+    from slipreflex.recording import replay
+
+    sim = SimRig("TR", seed=2)
+    p0 = sim.grasp().position
+    path = tmp_path / "killed-run.mcap"
+    with VirtualDevices(sim, link_dir=str(tmp_path), schedule=[("drop", 0.5)]) as dev:
+        proc = subprocess.Popen([sys.executable, "-m", "slipreflex", "run", "--daq", dev.daq_path,
+                                 "--hand", dev.hand_path, "--p0", f"{p0:g}", "--record", str(path)],
+                                stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+        try:
+            assert proc.stdout.readline().startswith("running")
+            n = 0
+            deadline = time.monotonic() + 60
+            while n < 600 and time.monotonic() < deadline:  # about 1.8 s of samples on disk
+                n = len(read_recording(path).topic("/daq/samples"))
+                time.sleep(0.05)
+            assert n >= 600
+            proc.kill()
+            proc.wait(timeout=10)
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()
+            proc.stdout.close()
+    rec = read_recording(path)
+    assert not rec.complete and len(rec.topic("/daq/samples")) >= n
+    assert rec.topic("/hand/commands") and rec.topic("/chain/state")
+    assert replay(rec).identical
