@@ -117,3 +117,13 @@ def test_generator_seed():
     r1 = Rig("TR", seed=np.random.default_rng(5))
     r2 = Rig("TR", seed=np.random.default_rng(5))
     assert np.array_equal(r1.advance_block(0.1).volts, r2.advance_block(0.1).volts)
+
+
+def test_history_off_streams_the_same_samples():
+    a = Rig("TR", seed=1)
+    b = Rig("TR", seed=1, history=False)
+    sa, sb = a.advance(0.2), b.advance(0.2)
+    assert sa == sb
+    assert b.daq_history().t.size == 0 and a.daq_history().t.size == len(sa)
+    with pytest.raises(ParameterError, match="history"):
+        simulate_open_loop(b, 0.1)

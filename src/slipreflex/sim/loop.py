@@ -262,6 +262,8 @@ def simulate_open_loop(rig: Rig, duration: float, *, tactile_fs: float | None = 
     """
     if not (math.isfinite(duration) and duration >= 0):
         raise ParameterError(f"duration must be >= 0, got {duration!r}")
+    if not rig.history:
+        raise ParameterError("simulate_open_loop needs a Rig made with history=True")
     t0 = rig.t
     s = rig.tactile_sampler(tactile_fs, keep=True) if tactile_fs else None
     rig.advance_block(t0 + duration)
@@ -308,6 +310,8 @@ def run_closed_loop(rig: Rig, reflex: Reflex, duration: float, *,
     """
     if not (math.isfinite(duration) and duration >= 0):
         raise ParameterError(f"duration must be >= 0, got {duration!r}")
+    if not rig.history:
+        raise ParameterError("run_closed_loop needs a Rig made with history=True")
     kind = getattr(reflex, "input_kind", None)
     if kind not in ("slip", "tactile"):
         raise ParameterError(f"reflex.input_kind must be 'slip' or 'tactile', got {kind!r}")

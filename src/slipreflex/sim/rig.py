@@ -493,6 +493,11 @@ class Rig:
         seed, bit-identical traces.
     hand, slip_sensor, imu, tactile, flow, physics : parameter dataclasses, optional
         See :mod:`slipreflex.sim.params`.
+    history : bool
+        Keep every DAQ row for :meth:`daq_history` (needed by
+        :func:`~slipreflex.sim.run_closed_loop`; about 50 kB per simulated
+        second). A long real-time session that only streams samples can
+        turn it off.
 
     Examples
     --------
@@ -504,7 +509,7 @@ class Rig:
     def __init__(self, bottle: Bottle | str = "TR", seed: int | np.random.SeedSequence | np.random.Generator
                  | None = 0, *, hand: HandParams | None = None, slip_sensor: SlipSensorParams | None = None,
                  imu: ImuParams | None = None, tactile: TactileParams | None = None, flow: FlowParams | None = None,
-                 physics: PhysicsParams | None = None) -> None:
+                 physics: PhysicsParams | None = None, history: bool = True) -> None:
         if isinstance(bottle, str):
             if bottle not in BOTTLES:
                 raise ParameterError(f"bottle: unknown bottle {bottle!r} (known: {', '.join(BOTTLES)})")
@@ -547,6 +552,7 @@ class Rig:
         self._n_samplers_made = 0
         self._oneoff = 0
         self._daq_chunks: list[np.ndarray] = []
+        self.history = bool(history)
         self._events: list[np.ndarray] = []
         self.perturbations: list[tuple[float, Drop | Pour]] = []
         cap_steps = int(math.ceil(_CHUNK_S / self.physics.dt)) + 2
@@ -679,7 +685,7 @@ class Rig:
         if not rows:
             return np.zeros((0, K.O_SIZE))
         daq = rows[0] if len(rows) == 1 else np.concatenate(rows)
-        if daq.shape[0]:
+        if daq.shape[0] and self.history:
             self._daq_chunks.append(daq)
         return daq
 
@@ -1059,7 +1065,7 @@ class Rig:
         return out
 
     def daq_history(self) -> DaqBlock:
-        """Every DAQ sample (and truth) produced since the rig started.
+        """Every DAQ sample (and truth) produced since the rig started (empty with ``history=False``).
 
         Examples
         --------
