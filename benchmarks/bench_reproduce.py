@@ -1,0 +1,52 @@
+"""Wall time of the default reproduction (``slipreflex reproduce``), printed, not asserted.
+
+Runs the paper's full grid (10 trials x 3 bottles x 2 experiments x 4 methods)
+with the outputs written to a temporary directory, once to warm the numba
+cache if it is cold, then ``--repeat`` times measured.
+
+Usage::
+
+    python benchmarks/bench_reproduce.py [--jobs N] [--repeat R] [--trials T]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import tempfile
+import time
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
+    ap.add_argument("--repeat", type=int, default=1, help="measured runs (default 1)")
+    ap.add_argument("--trials", type=int, default=10, help="trials per cell (default: the paper's 10)")
+    ap.add_argument("--no-warmup", action="store_true", help="measure the first (possibly cold) run too")
+    args = ap.parse_args()
+
+    from slipreflex.experiments import ReproduceConfig, run_reproduce, write_outputs
+
+    config = ReproduceConfig(trials=args.trials)
+    jobs = args.jobs or os.cpu_count() or 1
+    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+          f"python {platform.python_version()}; jobs={jobs}; {len(config.cells())} trials")
+    if not args.no_warmup:
+        t0 = time.perf_counter()
+        run_reproduce(ReproduceConfig(trials=1, experiments=("drop",)), jobs=jobs, progress=False,
+                      plots=False)
+        print(f"warm-up (numba cache, worker start): {time.perf_counter() - t0:.1f} s")
+    for i in range(args.repeat):
+        with tempfile.TemporaryDirectory() as out:
+            t0 = time.perf_counter()
+            result = run_reproduce(config, jobs=jobs, progress=False)
+            t_run = time.perf_counter() - t0
+            write_outputs(result, out)
+            t_all = time.perf_counter() - t0
+        print(f"run {i + 1}: trials + analysis {t_run:.1f} s (calibration {result.calibration_s:.1f} s), "
+              f"with CSV/figures/report {t_all:.1f} s wall")
+
+
+if __name__ == "__main__":
+    main()
