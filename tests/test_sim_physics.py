@@ -26,7 +26,8 @@ def test_grasp_stops_near_contact_force_and_holds_the_empty_bottle():
     kn = rig._P[K.P_KN] * hp.travel_per_unit_m
     overshoot = (1.0 / hp.grasp_poll_fs + hp.latency_s + 0.03) * hp.grasp_speed_units_s * kn
     assert hw.CONTACT_FORCE_N <= g.force_n <= hw.CONTACT_FORCE_N + overshoot
-    assert len({g.positions[f] for f in hw.TRIPOD}) == 1
+    # thumb and index stop on their own sensors, so they may differ by a unit
+    assert max(g.positions[f] for f in hw.TRIPOD) - min(g.positions[f] for f in hw.TRIPOD) <= 1
     # held: the weight is below static friction capacity
     assert rig.bottle.mass_kg * G < _capacity(rig, rig.bottle.mu_s)
 

@@ -116,6 +116,12 @@ def normal(key, i):
     return np.sqrt(-2.0 * np.log(u1)) * np.cos(2.0 * np.pi * u2)
 
 
+@njit(cache=True)
+def derive_key(key, i):
+    """A new stream key from ``key`` and a small integer (wrap-around arithmetic)."""
+    return _mix(key ^ (np.uint64(i) * _GOLDEN))
+
+
 @njit(cache=True, inline="always")
 def _volts(P, track, keys, k, pos, fallen, q_mid):
     if fallen:
@@ -204,7 +210,7 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, n_end, daq_out, 
     cap_ev = ev_out.shape[0]
     nsamp = tac_rates.shape[0]
     while n < n_end:
-        if nev + 4 > cap_ev or nd + 2 > cap_daq:
+        if nev + 3 + D.shape[0] > cap_ev or nd + 2 > cap_daq:
             break
         t0 = n * dt
         t1 = (n + 1) * dt

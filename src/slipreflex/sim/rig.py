@@ -762,7 +762,7 @@ class Rig:
         if finger not in (Finger.INDEX, Finger.THUMB):
             raise ParameterError(f"finger: only INDEX and THUMB carry tactile arrays, got {finger.name}")
         self._n_samplers_made += 1
-        key = K._mix(self._keys[2] + np.uint64(self._n_samplers_made * 1000 + int(finger)))
+        key = K.derive_key(self._keys[2], self._n_samplers_made * 1000 + int(finger))
         s = TactileSampler(self, fs, finger, np.uint64(key), keep)
         self._samplers.append(s)
         self._sync_samplers()
@@ -780,7 +780,7 @@ class Rig:
         w = S[K.S_W] if S[K.S_STUCK] == 0.0 else 0.0
         snap = np.array([[0, self._oneoff, self.t, S[K.S_NC], S[K.S_FT] / 3.0, S[K.S_S], S[K.S_FALLEN], w]])
         self._oneoff += 1
-        return self._frames(snap, np.uint64(K._mix(self._keys[3] + np.uint64(int(finger)))))[0]
+        return self._frames(snap, np.uint64(K.derive_key(self._keys[3], int(finger))))[0]
 
     # ------------------------------------------------------------------ grasp & perturbations
     def grasp(self, force: float = hw.CONTACT_FORCE_N, *, speed: float | None = None,
