@@ -8,6 +8,7 @@ import io
 import json
 import os
 import subprocess
+import threading
 import sys
 import textwrap
 import time
@@ -68,6 +69,8 @@ def test_sigkill_leaves_a_file_readable_up_to_about_a_second_before(tmp_path):
     path = tmp_path / "killed.mcap"
     proc = subprocess.Popen([sys.executable, "-c", _CHILD, str(path)], stdout=subprocess.PIPE,
                             text=True)
+    killer = threading.Timer(90, proc.kill)  # bounds the test if the child hangs
+    killer.start()
     try:
         last = -1
         deadline = time.monotonic() + 30
@@ -80,6 +83,7 @@ def test_sigkill_leaves_a_file_readable_up_to_about_a_second_before(tmp_path):
         proc.kill()
         proc.wait(timeout=10)
     finally:
+        killer.cancel()
         if proc.poll() is None:
             proc.kill()
             proc.wait(timeout=10)
@@ -157,6 +161,8 @@ def test_sigkilled_run_leaves_a_recording_that_replays(tmp_path):
         proc = subprocess.Popen([sys.executable, "-m", "slipreflex", "run", "--daq", dev.daq_path,
                                  "--hand", dev.hand_path, "--p0", f"{p0:g}", "--record", str(path)],
                                 stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+        killer = threading.Timer(90, proc.kill)  # bounds the test if the child hangs
+        killer.start()
         try:
             assert proc.stdout.readline().startswith("running")
             n = 0
@@ -168,6 +174,7 @@ def test_sigkilled_run_leaves_a_recording_that_replays(tmp_path):
             proc.kill()
             proc.wait(timeout=10)
         finally:
+            killer.cancel()
             if proc.poll() is None:
                 proc.kill()
                 proc.wait()

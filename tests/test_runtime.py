@@ -8,6 +8,7 @@ import io
 import os
 import signal
 import subprocess
+import threading
 import sys
 import time
 
@@ -274,6 +275,8 @@ def test_ctrl_c_stops_cleanly_and_closes_the_recording(tmp_path):
     proc = subprocess.Popen([sys.executable, "-m", "slipreflex", "run", "--daq", "loop://",
                              "--hand", "loop://", "--p0", "100", "--record", str(path)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    killer = threading.Timer(90, proc.kill)  # bounds the test if the child hangs
+    killer.start()
     try:
         line = proc.stdout.readline()
         assert line.startswith("running"), line + proc.stderr.read()
@@ -282,6 +285,7 @@ def test_ctrl_c_stops_cleanly_and_closes_the_recording(tmp_path):
         proc.send_signal(signal.SIGINT)
         out, err = proc.communicate(timeout=30)
     finally:
+        killer.cancel()
         if proc.poll() is None:
             proc.kill()
             proc.communicate()

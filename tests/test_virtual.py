@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import signal
 import subprocess
+import threading
 import sys
 import time
 
@@ -88,6 +89,8 @@ def test_virtual_rig_command_keys_signals_schedule_and_run(tmp_path, capsys):
     proc = subprocess.Popen([sys.executable, "-m", "slipreflex", "virtual-rig", "--link-dir", str(tmp_path),
                              "--schedule", "drop@0.2", "--duration", "60"],
                             stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    killer = threading.Timer(90, proc.kill)  # bounds the test if the child hangs
+    killer.start()
     try:
         _, lines = _readline(proc, "keys")
         info = dict(line.split(": ", 1) for line in lines if ": " in line)
@@ -108,6 +111,7 @@ def test_virtual_rig_command_keys_signals_schedule_and_run(tmp_path, capsys):
         rest = proc.stdout.read()
         assert proc.wait(timeout=30) == 0
     finally:
+        killer.cancel()
         if proc.poll() is None:
             proc.kill()
             proc.wait()

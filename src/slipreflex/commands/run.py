@@ -85,7 +85,13 @@ def run(args: argparse.Namespace) -> int:
     params = chain_params(args, args.p0)
     reflex = SlipReflex.from_params(params)
     stop = threading.Event()
-    old = signal.signal(signal.SIGTERM, lambda *_: stop.set())
+
+    def on_signal(signum: int, _frame: object) -> None:
+        if stop.is_set() and signum == signal.SIGINT:
+            raise KeyboardInterrupt  # a second Ctrl-C: stop now
+        stop.set()  # the loop ends within one poll and everything is closed in order
+
+    old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
     recorder = None
     try:
         with SerialDaq(args.daq) as daq, ILimb(args.hand) as hand:
@@ -104,9 +110,12 @@ def run(args: argparse.Namespace) -> int:
             res = run_loop(daq, hand, reflex, recorder=recorder, duration=args.duration,
                            watchdog=args.watchdog, stop=stop, on_fault=print_fault)
     finally:
-        signal.signal(signal.SIGTERM, old)
+        for s, h in old.items():
+            signal.signal(s, h)
         if recorder is not None:
             recorder.close()
+    if stop.is_set():
+        print("stopped by signal", flush=True)
     print(res.summary(), flush=True)
     if recorder is not None:
         print(f"recorded to {recorder.path}" + (" (incomplete)" if res.recording_error else ""))
