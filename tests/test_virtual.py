@@ -119,3 +119,22 @@ def test_virtual_rig_command_keys_signals_schedule_and_run(tmp_path, capsys):
         proc.stdout.close()
     assert "perturbations [('drop', 0.2" in rest and "'pour'" in rest and rest.count("'drop'") == 2
     assert "hand packets applied (0 rejected)" in rest
+
+
+def test_tripod_grasp_routine_on_the_simulated_hand():
+    from slipreflex.devices.ilimb import tripod_grasp
+    from slipreflex.hardware import CONTACT_FORCE_N, Finger
+
+    rig = Rig("TR", seed=0)
+
+    def contact():  # both tactile arrays (index, thumb) must feel the object
+        return min(rig.tactile(Finger.INDEX).sum(), rig.tactile(Finger.THUMB).sum())
+
+    res = tripod_grasp(rig.hand, contact, step=2.0, settle=lambda: rig.advance(0.03))
+    assert res.contact and res.force >= CONTACT_FORCE_N
+    assert contact() >= CONTACT_FORCE_N
+    pos = rig.hand.positions()
+    assert all(abs(pos[f] - res.position) <= 2 for f in TRIPOD)
+    rig.release_support()
+    rig.advance(1.0)
+    assert not rig.fallen  # 0.8 N per contact holds the empty bottle
