@@ -348,6 +348,7 @@ def report_markdown(*, summary: Sequence[dict[str, Any]], rows: Sequence[dict[st
         lines += [f"- {d}" for d in diffs] + [""]
     else:
         lines += ["Every reported cell of ours is within the paper's mean ± 2 sd.", ""]
-    lines += list(discussion) + [""]
+    for para in discussion:
+        lines += [para, ""]
     lines += ["## The paper's other claims", ""] + [f"- {n}" for n in PAPER_NOTES] + [""]
     return "\n".join(lines)
