@@ -139,3 +139,25 @@ def test_flow_pulses_per_litre():
 def test_builtin_bottles_match_the_paper():
     for name, b in BOTTLES.items():
         assert b.mass_kg == 0.040 and b.height_m == 0.16 and b.surface.name == name
+
+
+@pytest.mark.parametrize("name", ["TR", "DK", "TX"])
+def test_texture_shows_slow_and_fast_slips(name):
+    from slipreflex.sim import scan
+
+    for speed in (1e-3, 0.1):                      # 1 mm/s and 100 mm/s
+        length = speed * 2.0
+        r = scan(seed=3, speed=speed, distance=length, layout=((name, length),))
+        x = slipreflex.lowpass(r.volts, fs=hw.DAQ_FS)
+        assert slipreflex.encode(x, dath=True)[30:].sum() >= 3, speed
+
+
+def test_squeezing_without_sliding_does_not_move_the_signal():
+    rig = Rig("TX", seed=6)
+    rig.grasp()
+    pos = rig.hand.positions()[hw.SLIP_FINGER]
+    rig.hand.set_positions({f: pos + 40 for f in hw.TRIPOD})
+    tr = simulate_open_loop(rig, 1.0)
+    assert tr.daq.normal_force[-1] > 3 * tr.daq.normal_force[0]
+    assert np.ptp(tr.daq.displacement) < 1e-9
+    assert slipreflex.encode(slipreflex.lowpass(tr.volts, fs=hw.DAQ_FS), dath=True).sum() == 0

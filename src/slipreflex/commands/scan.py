@@ -102,7 +102,8 @@ def _figure(result, summary, path: Path, threshold: float) -> None:
             axc.plot(pos[sel], np.abs(tr.accumulator[sel]), lw=0.7, c=color, label=f"|acc| {meth}")
             axc.plot(pos[sel], tr.threshold[sel], lw=0.9, c="C3" if meth == "fixed" else "C1",
                      label=f"threshold {meth}")
-        axc.set(title=f"C  {name}: accumulator and threshold (base {threshold * 1000:g} mV)", ylabel="V")
+        axc.set(ylabel="V")
+        axc.set_title(f"C  {name}: |accumulator| and threshold (base {threshold * 1000:g} mV)", fontsize=9)
         axc.legend(fontsize=7, loc="upper right")
         axd = fig.add_subplot(gs[3, col], sharex=axb)
         for row, meth in enumerate(("fixed", "dath")):
@@ -110,9 +111,10 @@ def _figure(result, summary, path: Path, threshold: float) -> None:
             axd.vlines(pos[ev], row + 0.1, row + 0.9, lw=0.7, color=f"C{2 * row}")
         axd.set_yticks([0.5, 1.5], ["fixed", "DATH"])
         sp = summary.min_spacing_mm
-        axd.set(title=f"D  {name}: spikes (fixed {summary.spikes_in[('fixed', name)]}, "
-                      f"DATH {summary.spikes_in[('dath', name)]}; min spacing fixed "
-                      f"{'-' if sp[('fixed', name)] is None else format(sp[('fixed', name)], '.3f')} mm)",
-                xlabel="position (mm)")
+        gap = sp[("fixed", name)]
+        axd.set(xlabel="position (mm)")
+        axd.set_title(f"D  {name}: spikes, fixed {summary.spikes_in[('fixed', name)]} "
+                      f"(min spacing {'-' if gap is None else format(gap, '.3f')} mm), "
+                      f"DATH {summary.spikes_in[('dath', name)]}", fontsize=9)
     fig.savefig(path, dpi=110)
     plt.close(fig)
