@@ -51,6 +51,8 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--duration", type=float, default=60.0, help="seconds of loop (default 60)")
     ap.add_argument("--no-record", action="store_true", help="run without the MCAP recording")
+    ap.add_argument("--realtime", action="store_true",
+                    help="run the loop under SCHED_FIFO (as 'slipreflex run --realtime')")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--schedule", default=None,
                     help="perturbations for the rig (default: a drop every 10 s, first at 5 s)")
@@ -61,7 +63,7 @@ def main(argv: list[str] | None = None) -> int:
     from slipreflex.devices.ilimb import ILimb
     from slipreflex.hardware import TRIPOD
     from slipreflex.recording import METADATA_NAME, Recorder
-    from slipreflex.runtime import run_loop
+    from slipreflex.runtime import realtime_priority, run_loop
 
     schedule = args.schedule
     if schedule is None:
@@ -75,6 +77,7 @@ def main(argv: list[str] | None = None) -> int:
             if not args.no_record:
                 rec = Recorder(os.path.join(tmp, "bench.mcap"), metadata={METADATA_NAME: {
                     "reflex_params": json.dumps(reflex.params.to_dict())}})
+            note = realtime_priority() if args.realtime else "normal priority"
             with SerialDaq(info["daq"]) as daq, ILimb(info["hand"]) as hand:
                 hand.set_positions({f: p0 for f in TRIPOD})
                 res = run_loop(daq, hand, reflex, recorder=rec, duration=args.duration)
@@ -99,7 +102,7 @@ def main(argv: list[str] | None = None) -> int:
           f"load average {os.getloadavg()[0]:.2f}")
     print(f"loop over virtual devices for {res.duration:.1f} s "
           f"({'recording to MCAP' if not args.no_record else 'no recording'}), p0 {p0:g}, "
-          f"rig schedule {schedule or 'none'}")
+          f"rig schedule {schedule or 'none'}; {note}")
     print(res.summary())
     if not args.no_record:
         print(f"recording: {size / 1e6:.1f} MB ({size / res.duration / 1e3:.0f} kB/s)")

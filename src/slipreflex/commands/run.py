@@ -68,6 +68,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--duration", type=float, default=None, help="stop after this many seconds")
     p.add_argument("--watchdog", type=float, default=0.1,
                    help="seconds without a valid sample before the fingers hold (0.1)")
+    p.add_argument("--realtime", action="store_true",
+                   help="ask for SCHED_FIFO real-time scheduling (Linux; needs privileges)")
     add_chain_arguments(p)
 
 
@@ -78,12 +80,14 @@ def run(args: argparse.Namespace) -> int:
     from ..devices.ilimb import ILimb
     from ..hardware import TRIPOD
     from ..recording import METADATA_NAME, Recorder
-    from ..runtime import print_fault, run_loop
+    from ..runtime import print_fault, realtime_priority, run_loop
 
     if args.duration is not None and not args.duration > 0:
         raise ParameterError(f"--duration must be > 0, got {args.duration}")
     params = chain_params(args, args.p0)
     reflex = SlipReflex.from_params(params)
+    if args.realtime:
+        print(realtime_priority(), flush=True)
     stop = threading.Event()
 
     def on_signal(signum: int, _frame: object) -> None:
