@@ -21,7 +21,7 @@ __all__ = [
     "PAPER_LSB", "WINDOW_N", "FINGER_MIN", "FINGER_MAX", "THUMB_ROTATOR_MAX", "PWM_MAX",
     "Finger", "HandCommand", "TRIPOD", "SLIP_FINGER", "ILIMB_START", "ILIMB_END",
     "ILIMB_BAUD", "FLOW_PULSES_PER_LITRE", "CONTACT_FORCE_N", "TACTILE_SHAPE",
-    "NMSD_FS", "SWT_FS", "GRAVITY",
+    "NMSD_FS", "SWT_FS", "GRAVITY", "IMU_RANGE_G", "IMU_LSB_PER_G", "SLIP_SENSOR_GAP_M",
 ]
 
 #: Nominal slip-sensor sampling rate the paper quotes (Hz); the chain's default ``fs``.
@@ -101,3 +101,8 @@ NMSD_FS: float = 260.0
 SWT_FS: float = 380.0
 #: Standard gravity (m/s^2).
 GRAVITY: float = 9.80665
+#: MPU6050 accelerometer full scale (g) and sensitivity (counts per g) at AFS_SEL = 0 (datasheet).
+IMU_RANGE_G: float = 2.0
+IMU_LSB_PER_G: int = 16384
+#: Gap (m) between the slip sensor and the surface, set by the finger cuff (paper II-D).
+SLIP_SENSOR_GAP_M: float = 0.003

@@ -30,6 +30,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from .. import hardware as hw
 from ..errors import ParameterError
 
 __all__ = ["HandParams", "SlipSensorParams", "ImuParams", "TactileParams", "FlowParams", "PhysicsParams"]
@@ -168,7 +169,7 @@ class SlipSensorParams:
     v_sat: float = 0.2
     knee_v: float = 0.15
     noise_v: float = 1.5e-3
-    gap_m: float = 0.003
+    gap_m: float = hw.SLIP_SENSOR_GAP_M
     spot_sigma_m: float = 0.8e-3
 
     def __post_init__(self) -> None:
@@ -204,8 +205,8 @@ class ImuParams:
     """
 
     fs: float = 1000.0
-    range_g: float = 2.0
-    lsb_per_g: float = 16384.0
+    range_g: float = hw.IMU_RANGE_G
+    lsb_per_g: float = float(hw.IMU_LSB_PER_G)
     noise_g: float = 4e-3
     dlpf_hz: float = 44.0
     tilt_x_deg: float = 3.0
