@@ -1058,7 +1058,7 @@ class Rig:
                 out.append(SlipEvent(onset, None, float(x) - s_on))
                 onset = None
         if onset is not None:
-            if last_stick is not None and self.t - last_stick >= quiet and not self.fallen:
+            if last_stick is not None and not self.slipping and not self.fallen:
                 out.append(SlipEvent(onset, last_stick, x_stick - s_on))
             else:
                 out.append(SlipEvent(onset, None, self.displacement - s_on))
