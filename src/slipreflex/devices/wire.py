@@ -72,7 +72,7 @@ FLOW_MODULO: int = 1 << 32
 #: Largest ADC reading (10-bit ADC).
 ADC_MAX: int = (1 << hardware.ADC_BITS) - 1
 #: MPU6050 accelerometer scale at its +-2 g range (AFS_SEL = 0): counts per g.
-ACCEL_LSB_PER_G: int = 16384
+ACCEL_LSB_PER_G: int = hardware.IMU_LSB_PER_G
 #: flags bit 0: the accel fields hold a reading completed during this period.
 FLAG_ACCEL_FRESH: int = 0x01
 #: flags bit 1: the last I2C transaction with the MPU6050 failed (NACK, bus error, timeout).
