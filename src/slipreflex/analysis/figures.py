@@ -176,29 +176,36 @@ def bar_chart(summary: Sequence[dict[str, Any]], experiment: str, metric: str,
     """
     plt = _plt()
     by, bottles, methods = _present(summary, experiment)
-    fig, ax = plt.subplots(figsize=(6.5, 3.4))
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    fig, ax = plt.subplots(figsize=(7.8, 3.4))
     width = 0.8 / max(1, len(methods))
+    handles = []
     for j, m in enumerate(methods):
         xs = np.arange(len(bottles)) + (j - (len(methods) - 1) / 2) * width
         mean = [by.get((b, m), {}).get(f"{metric}_mean_ms", np.nan) for b in bottles]
         sd = [by.get((b, m), {}).get(f"{metric}_sd_ms", np.nan) for b in bottles]
         mean = np.array([float(x) for x in mean])
         sd = np.nan_to_num(np.array([float(x) for x in sd]))
-        ax.bar(xs, np.nan_to_num(mean), width * 0.9, yerr=sd, capsize=3,
-               color=METHOD_COLORS.get(m, "0.5"), label=f"{METHOD_LABELS.get(m, m)} (ours)")
+        ok = np.isfinite(mean)
+        ax.bar(xs[ok], mean[ok], width * 0.9, yerr=sd[ok], capsize=3, color=METHOD_COLORS.get(m, "0.5"))
+        handles.append(Patch(color=METHOD_COLORS.get(m, "0.5"), label=f"{METHOD_LABELS.get(m, m)} (ours)"))
+        for x in xs[~ok]:
+            ax.text(x, 0, "n/a", ha="center", va="bottom", fontsize=6, rotation=90)
         for x, b in zip(xs, bottles):
             pv = paper_value(experiment, f"{metric}_ms", b, m)
             if pv is not None and pv.mean is not None:
                 ax.errorbar(x + width * 0.25, pv.mean, yerr=pv.sd, fmt="D", color="k", ms=3.5,
                             capsize=2, lw=0.8)
-    ax.errorbar([], [], yerr=[], fmt="D", color="k", ms=3.5, label="paper (mean ± sd)")
+    handles.append(Line2D([], [], marker="D", color="k", ms=3.5, lw=0.8, label="paper (mean ± sd)"))
     ax.set_xticks(np.arange(len(bottles)))
     ax.set_xticklabels(bottles)
     label = "response time" if metric == "response" else "total controller time"
     what = "sudden 10 g drop" if experiment == "drop" else "pouring 500 ml"
     ax.set_ylabel(f"{label} (ms)")
     ax.set_title(f"{label.capitalize()}, {what} (bars: sd)", fontsize=9)
-    ax.legend(fontsize=7, ncol=2)
+    ax.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     fig.tight_layout()
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -219,7 +226,7 @@ def success_chart(summary: Sequence[dict[str, Any]], path: str | Path) -> Path:
     """
     plt = _plt()
     exps = [e for e in ("drop", "pour") if any(s["experiment"] == e for s in summary)] or ["drop"]
-    fig, axes = plt.subplots(1, len(exps), figsize=(4.2 * len(exps), 3.2), squeeze=False)
+    fig, axes = plt.subplots(1, len(exps), figsize=(4.2 * len(exps), 3.4), squeeze=False)
     for ax, e in zip(axes[0], exps):
         by, bottles, methods = _present(summary, e)
         width = 0.8 / max(1, len(methods))
@@ -230,10 +237,12 @@ def success_chart(summary: Sequence[dict[str, Any]], path: str | Path) -> Path:
                    label=METHOD_LABELS.get(m, m))
         ax.set_xticks(np.arange(len(bottles)))
         ax.set_xticklabels(bottles)
-        ax.set_ylim(0, 105)
+        ax.set_ylim(-35, 105)
+        ax.set_yticks([0, 20, 40, 60, 80, 100])
+        ax.axhline(0, color="k", lw=0.6)
         ax.set_ylabel("slips suppressed (%)")
         ax.set_title(f"Success, {e}", fontsize=9)
-        ax.legend(fontsize=7)
+        ax.legend(fontsize=7, loc="lower left", framealpha=0.9)
     fig.tight_layout()
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)

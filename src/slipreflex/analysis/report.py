@@ -42,8 +42,13 @@ SUMMARY_COLUMNS: tuple[str, ...] = (
 )
 
 
+def _num(x: Any) -> float:
+    """A cell as float: "" (how write_csv stores NaN) and None are NaN."""
+    return float("nan") if x is None or (isinstance(x, str) and not x.strip()) else float(x)
+
+
 def _stats(values: Iterable[Any]) -> tuple[float, float, int]:
-    v = np.array([float(x) for x in values], dtype=float)
+    v = np.array([_num(x) for x in values], dtype=float)
     v = v[np.isfinite(v)]
     if v.size == 0:
         return float("nan"), float("nan"), 0
@@ -99,7 +104,7 @@ def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
             "experiment": e, "bottle": b, "method": m,
             "n_trials": len({(r.get("trial"), r.get("seed")) for r in g}),
             "n_rows": len(g),
-            "n_events": int(sum(1 for r in g if int(float(r.get("n_events", 1))) > 0)),
+            "n_events": int(sum(1 for r in g if _num(r.get("n_events", 1)) > 0)),
             "response_mean_ms": rm, "response_sd_ms": rs, "response_n": rn,
             "total_mean_ms": tm, "total_sd_ms": ts, "total_n": tn,
             "success_rate": float(np.mean(succ)) if succ else float("nan"), "success_n": len(succ),
@@ -260,7 +265,7 @@ def onset_markdown(rows: Sequence[dict[str, Any]]) -> str:
     """
     groups: dict[tuple[str, str], list[float]] = {}
     for r in rows:
-        groups.setdefault((r["experiment"], r["bottle"]), []).append(float(r.get("onset_error_ms", math.nan) or math.nan))
+        groups.setdefault((r["experiment"], r["bottle"]), []).append(_num(r.get("onset_error_ms")))
     lines = ["| experiment | bottle | error ms, mean ± sd (n) | min | max |", "|---|---|---|---|---|"]
     for (e, b) in sorted(groups, key=lambda k: group_key_order((k[0], k[1], ""))):
         v = np.array(groups[(e, b)], dtype=float)
