@@ -163,12 +163,12 @@ def fmt_mean_sd(mean: float, sd: float, n: int | None = None, digits: int = 0) -
 
     Examples
     --------
-    >>> fmt_mean_sd(50.26, 6.4, 10), fmt_mean_sd(float("nan"), float("nan"), 0)
-    ('50 ± 6 (10)', '-')
+    >>> fmt_mean_sd(50.26, 6.4, 10), fmt_mean_sd(float("nan"), float("nan"), 0), fmt_mean_sd(-0.2, 1.0)
+    ('50 ± 6 (10)', '-', '0 ± 1')
     """
     if n == 0 or mean is None or (isinstance(mean, float) and math.isnan(mean)):
         return "-"
-    s = f"{mean:.{digits}f}"
+    s = f"{round(mean, digits) + 0.0:.{digits}f}"   # + 0.0: no "-0"
     s += f" ± {sd:.{digits}f}" if sd == sd else ""
     return s + (f" ({n})" if n is not None else "")
 
