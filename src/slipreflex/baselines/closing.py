@@ -36,7 +36,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..hardware import FINGER_MAX, FINGER_MIN
-from ._validate import integer, number, setattr_frozen
+from ._validate import number, setattr_frozen
 
 __all__ = ["CLOSE_S", "ClosingParams", "Closer", "closing_commands"]
 
