@@ -88,6 +88,15 @@ def rig_and_drivers(tmp_path, **kw):
             hand.close()
 
 
+def _reflex(**kw):
+    """A reflex built and run once before the devices start (the first build compiles),
+    so the devices' scripted times fall inside the loop."""
+    reflex = SlipReflex(p0=P0, **kw)
+    reflex.step(0.4)
+    reflex.reset()
+    return reflex
+
+
 def _recorder(path, reflex):
     import json
     return Recorder(path, metadata={METADATA_NAME: {"reflex_params": json.dumps(reflex.params.to_dict())}})
@@ -95,7 +104,7 @@ def _recorder(path, reflex):
 
 def test_loop_over_virtual_devices_reacts_records_and_replays_exactly(tmp_path):
     path = tmp_path / "run.mcap"
-    reflex = SlipReflex(p0=P0)
+    reflex = _reflex()
     with rig_and_drivers(tmp_path, schedule=[("drop", 0.6)]) as (dev, daq, hand):
         with _recorder(path, reflex) as rec:
             res = run_loop(daq, hand, reflex, recorder=rec, duration=1.6)
@@ -131,8 +140,9 @@ def test_loop_over_virtual_devices_reacts_records_and_replays_exactly(tmp_path):
 
 def test_watchdog_holds_when_the_daq_stops_and_resumes_when_it_restarts(tmp_path):
     script = [(0.5, lambda d: d.pause_daq()), (0.9, lambda d: d.restart_daq())]
+    reflex = _reflex()
     with rig_and_drivers(tmp_path, script=script) as (dev, daq, hand):
-        res = run_loop(daq, hand, SlipReflex(p0=P0), duration=1.5)
+        res = run_loop(daq, hand, reflex, duration=1.5)
         history = list(dev.rig.hand.history)
         stops = dev.hand_packets
     kinds = [f.kind for f in res.faults]
@@ -145,10 +155,25 @@ def test_watchdog_holds_when_the_daq_stops_and_resumes_when_it_restarts(tmp_path
     assert res.samples > 0.5 * (1.5 - 0.4) * hw.DAQ_FS  # the loop kept running after
 
 
+def test_daq_port_that_disappears_and_comes_back(tmp_path):
+    script = [(0.4, lambda d: d.unplug("daq")), (0.8, lambda d: d.replug("daq"))]
+    reflex = _reflex()
+    with rig_and_drivers(tmp_path, script=script) as (dev, daq, hand):
+        res = run_loop(daq, hand, reflex, duration=1.4)
+        history = list(dev.rig.hand.history)
+    kinds = [f.kind for f in res.faults]
+    assert kinds[:2] == ["daq-port", "watchdog"] and "watchdog-clear" in kinds
+    assert res.daq_stats["disconnects"] == 1 and res.daq_stats["reconnects"] == 1
+    assert res.daq_stats["seq_gaps"] == 1  # the samples sent while unplugged are lost, and counted
+    assert all(v >= P0 for h in history for v in h.values())
+    assert res.samples > 0.5 * (1.4 - 0.4) * hw.DAQ_FS
+
+
 def test_hand_port_that_disappears_and_comes_back(tmp_path):
     script = [(0.5, lambda d: d.unplug("hand")), (0.9, lambda d: d.replug("hand"))]
+    reflex = _reflex()
     with rig_and_drivers(tmp_path, script=script, schedule=[("drop", 0.2)]) as (dev, daq, hand):
-        res = run_loop(daq, hand, SlipReflex(p0=P0), duration=1.5)
+        res = run_loop(daq, hand, reflex, duration=1.5)
         history = list(dev.rig.hand.history)
     kinds = [f.kind for f in res.faults]
     assert "hand-port" in kinds and "hand-port-restored" in kinds
@@ -165,8 +190,9 @@ def test_garbage_truncated_and_flipped_frames_while_running(tmp_path):
     script = [(0.3, lambda d: d.inject_daq(b"\xa5\x5a\x01 garbage \x00\xff" * 3)),
               (0.5, lambda d: d.inject_daq(wire.encode_frame(seq=7, adc=1)[:11])),
               (0.7, lambda d: d.inject_daq(bytes(bad)))]
+    reflex = _reflex()
     with rig_and_drivers(tmp_path, script=script) as (dev, daq, hand):
-        res = run_loop(daq, hand, SlipReflex(p0=P0), duration=1.0)
+        res = run_loop(daq, hand, reflex, duration=1.0)
     st = res.daq_stats
     assert st["garbage_bytes"] >= 20 and st["truncated"] >= 1 and st["crc_errors"] >= 1
     assert st["resyncs"] >= 3
