@@ -35,32 +35,37 @@ def _csv_list(kind: str, known: tuple[str, ...]):
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``slipreflex reproduce``: every count and load parameter."""
-    from ..experiments import BOTTLE_NAMES, DEFAULT_SEED, EXPERIMENTS, METHODS
+    import dataclasses
 
+    from ..experiments import BOTTLE_NAMES, EXPERIMENTS, METHODS, ReproduceConfig
+
+    d = {f.name: f.default for f in dataclasses.fields(ReproduceConfig)}
     p.add_argument("--out", type=Path, default=Path("out/reproduce"),
                    help="output directory (default: ./out/reproduce)")
-    p.add_argument("--trials", type=int, default=10, help="trials per bottle, experiment and method (10)")
+    p.add_argument("--trials", type=int, default=d["trials"],
+                   help=f"trials per bottle, experiment and method (default {d['trials']})")
     p.add_argument("--bottles", type=_csv_list("bottles", BOTTLE_NAMES), default=BOTTLE_NAMES,
-                   help="comma-separated bottles (default: TR,DK,TX)")
+                   help=f"comma-separated bottles (default: {','.join(BOTTLE_NAMES)})")
     p.add_argument("--methods", type=_csv_list("methods", METHODS), default=METHODS,
-                   help="comma-separated methods (default: fixed,dath,nmsd,swt)")
+                   help=f"comma-separated methods (default: {','.join(METHODS)})")
     p.add_argument("--experiments", type=_csv_list("experiments", EXPERIMENTS), default=EXPERIMENTS,
-                   help="comma-separated experiments (default: drop,pour)")
-    p.add_argument("--seed", type=int, default=DEFAULT_SEED, help=f"master seed (default {DEFAULT_SEED})")
+                   help=f"comma-separated experiments (default: {','.join(EXPERIMENTS)})")
+    p.add_argument("--seed", type=int, default=d["seed"], help=f"master seed (default {d['seed']})")
     p.add_argument("--drop-mass", type=float, default=None, metavar="KG",
-                   help="dropped mass in kg (default: the paper's 0.010)")
+                   help="dropped mass in kg (default: the paper's, slipreflex.sim.PAPER_DROP)")
     p.add_argument("--drop-height", type=float, default=None, metavar="M",
-                   help="drop height above the opening in m (default: the paper's 0.02)")
+                   help="drop height above the opening in m (default: the paper's, PAPER_DROP)")
     p.add_argument("--pour-rate", type=float, default=None, metavar="L_MIN",
-                   help="pour rate in L/min (default: the paper's 1.0)")
+                   help="pour rate in L/min (default: the paper's, slipreflex.sim.PAPER_POUR)")
     p.add_argument("--pour-volume", type=float, default=None, metavar="ML",
-                   help="poured volume in ml (default: the paper's 500)")
-    p.add_argument("--rest", type=float, default=0.5, metavar="S",
-                   help="rest recorded before the perturbation, s (default 0.5; >= 0.25)")
-    p.add_argument("--after", type=float, default=2.0, metavar="S",
-                   help="recording after the drop / the pour's end, s (default 2)")
-    p.add_argument("--calibration", type=float, default=2.0, metavar="S",
-                   help="length of each at-rest calibration recording for the NMSD/SWT-SD thresholds, s (2)")
+                   help="poured volume in ml (default: the paper's, PAPER_POUR)")
+    p.add_argument("--rest", type=float, default=d["rest_s"], metavar="S",
+                   help=f"rest recorded before the perturbation, s (default {d['rest_s']:g})")
+    p.add_argument("--after", type=float, default=d["after_s"], metavar="S",
+                   help=f"recording after the drop / the pour's end, s (default {d['after_s']:g})")
+    p.add_argument("--calibration", type=float, default=d["calibration_s"], metavar="S",
+                   help="length of each at-rest calibration recording for the NMSD/SWT-SD "
+                        f"thresholds, s (default {d['calibration_s']:g})")
     p.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--no-figures", action="store_true", help="skip the example-trial figures")
