@@ -183,3 +183,44 @@ def test_sigkilled_run_leaves_a_recording_that_replays(tmp_path):
     assert not rec.complete and len(rec.topic("/daq/samples")) >= n
     assert rec.topic("/hand/commands") and rec.topic("/chain/state")
     assert replay(rec).identical
+
+
+def _chain_recording(path, commands):
+    from slipreflex.chain import ReflexParams
+    meta = {METADATA_NAME: {"reflex_params": json.dumps(ReflexParams(p0=100.0).to_dict())}}
+    with Recorder(path, metadata=meta) as rec:
+        for k in range(32):
+            rec.write("/daq/samples", {"seq": k, "t": k * 0.003, "slip_volts": 0.4, "flow_pulses": 0,
+                                       "arrival": 0.0, "position": None}, k)
+        for seq, target in commands:
+            rec.write("/hand/commands", {"seq": seq, "t": seq * 0.003, "target": target,
+                                         "fingers": ["middle"], "sent": True, "latency": 1e-4}, 40)
+
+
+def test_replay_detects_a_recording_it_cannot_reproduce(tmp_path, capsys):
+    from slipreflex.cli import main
+
+    good, bad = tmp_path / "good.mcap", tmp_path / "bad.mcap"
+    _chain_recording(good, [(15, 100.0), (31, 100.0)])
+    _chain_recording(bad, [(15, 100.0), (31, 105.0)])
+    assert main(["replay", str(good)]) == 0
+    assert "commands: recorded 2, replayed 2 - identical" in capsys.readouterr().out
+    assert main(["replay", str(bad)]) == 1
+    assert "DIFFERENT from #1" in capsys.readouterr().out
+
+
+def test_reading_something_that_is_not_a_recording(tmp_path, capsys):
+    from slipreflex.cli import main
+    from slipreflex.errors import DataError
+
+    junk = tmp_path / "junk.mcap"
+    junk.write_bytes(b"not an mcap file at all")
+    with pytest.raises(DataError, match="not an MCAP file"):
+        read_recording(junk)
+    plain = tmp_path / "plain.mcap"
+    with Recorder(plain):
+        pass
+    assert main(["replay", str(plain)]) == 2
+    assert "no chain parameters" in capsys.readouterr().err
+    assert main(["export", str(plain)]) == 2
+    assert "no slip-sensor samples" in capsys.readouterr().err
