@@ -45,6 +45,8 @@ from typing import Any
 
 import numpy as np
 
+from .analysis.paper import BOTTLE_ORDER, METHOD_LABELS
+from .analysis.paper import EXPERIMENTS as PAPER_EXPERIMENTS
 from .analysis.trial import RESULT_COLUMNS
 from .errors import ParameterError
 
@@ -57,10 +59,10 @@ __all__ = [
 
 #: Methods in the paper's order of presentation.
 METHODS: tuple[str, ...] = ("fixed", "dath", "nmsd", "swt")
-#: Experiments: sudden load and gradual load.
-EXPERIMENTS: tuple[str, ...] = ("drop", "pour")
-#: The paper's bottles, in the canonical order used for seeds.
-BOTTLE_NAMES: tuple[str, ...] = ("TR", "DK", "TX")
+#: Experiments: sudden load and gradual load (the paper's, from :mod:`slipreflex.analysis.paper`).
+EXPERIMENTS: tuple[str, ...] = PAPER_EXPERIMENTS
+#: The paper's bottles (keys of ``slipreflex.sim.BOTTLES``), in the canonical order used for seeds.
+BOTTLE_NAMES: tuple[str, ...] = BOTTLE_ORDER
 #: The master seed of the default reproduction (the paper's publication date).
 DEFAULT_SEED: int = 20191215
 #: Columns of results.csv: the analysis columns plus the trial's grasp and perturbation.
@@ -681,10 +683,6 @@ def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str 
     return paths
 
 
-#: Method names as the paper prints them.
-METHOD_LABEL: dict[str, str] = {"fixed": "fixed", "dath": "DATH", "nmsd": "NMSD", "swt": "SWT-SD"}
-
-
 def _contact_force() -> float:
     """The grasp's contact force (N) from :mod:`slipreflex.hardware`.
 
@@ -774,7 +772,7 @@ def discussion_text(result: ReproduceResult) -> list[str]:
     tac = [r for r in rows if r["method"] in ("nmsd", "swt") and int(r["n_events"]) > 0]
     if tac:
         missed = "; ".join(
-            f"{METHOD_LABEL[m]} missed {pct(sub, lambda r: not _finite(r['response_ms']))} {e} slips"
+            f"{METHOD_LABELS[m]} missed {pct(sub, lambda r: not _finite(r['response_ms']))} {e} slips"
             for m in ("nmsd", "swt") for e in EXPERIMENTS
             if (sub := [r for r in tac if r["method"] == m and r["experiment"] == e]))
         out.append(
@@ -829,7 +827,7 @@ def discussion_text(result: ReproduceResult) -> list[str]:
                         "drop cannot separate the methods by success.")
     pour_rows = sel(experiment="pour")
     if pour_rows:
-        per = ", ".join(f"{METHOD_LABEL[m]} {pct(sel(experiment='pour', method=m), ok)}" for m in METHODS
+        per = ", ".join(f"{METHOD_LABELS[m]} {pct(sel(experiment='pour', method=m), ok)}" for m in METHODS
                         if sel(experiment="pour", method=m))
         text.append(f"In the pours: {per} (paper: 100% with DATH).")
     falls = [1e3 * (r["fell_out_s"] - r["onset_s"]) for r in fell
@@ -841,7 +839,7 @@ def discussion_text(result: ReproduceResult) -> list[str]:
             "The paper's bottles slipped more gently.")
     if pour_rows:
         resp = ", ".join(
-            f"{METHOD_LABEL[m]} {_median([r['response_ms'] for r in sel(experiment='pour', method=m)]):.0f} ms"
+            f"{METHOD_LABELS[m]} {_median([r['response_ms'] for r in sel(experiment='pour', method=m)]):.0f} ms"
             for m in METHODS if sel(experiment="pour", method=m))
         text.append(
             f"Median pour response: {resp}. NMSD commands on the very sample that detects (260 Hz) "
@@ -853,6 +851,6 @@ def discussion_text(result: ReproduceResult) -> list[str]:
         if any(pre.values()):
             text.append("Trials in which the command rose although the accelerometer never showed a "
                         "slip (the grip was raised on small motions and no slip followed): "
-                        + ", ".join(f"{METHOD_LABEL[m]} {n}" for m, n in pre.items() if n) + ".")
+                        + ", ".join(f"{METHOD_LABELS[m]} {n}" for m, n in pre.items() if n) + ".")
     out.append(" ".join(text))
     return out
