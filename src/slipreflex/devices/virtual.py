@@ -292,8 +292,23 @@ class VirtualDevices:
 
     Examples
     --------
-    >>> VirtualDevices.__name__
-    'VirtualDevices'
+    >>> import serial
+    >>> from slipreflex.devices.ilimb import ILimb
+    >>> from slipreflex.hardware import Finger
+    >>> class Rig:                     # no samples; a hand that remembers its targets
+    ...     class hand:
+    ...         got = {}
+    ...         def set_positions(targets): Rig.hand.got.update(targets)
+    ...         def positions(): return dict(Rig.hand.got)
+    ...     def advance_to(self, t): return []
+    >>> with VirtualDevices(Rig()) as dev:
+    ...     with ILimb(dev.hand_path) as hand:
+    ...         hand.set_positions({Finger.MIDDLE: 321})
+    ...     deadline = time.monotonic() + 5
+    ...     while dev.hand_packets < 1 and time.monotonic() < deadline:
+    ...         time.sleep(0.01)
+    >>> Rig.hand.got
+    {<Finger.MIDDLE: 2>: 321.0}
     """
 
     def __init__(self, rig: Any, *, link_dir: str | None = None,
