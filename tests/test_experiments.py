@@ -28,6 +28,9 @@ def test_config_defaults_come_from_the_simulator_and_validate():
         with pytest.raises(ParameterError):
             ReproduceConfig(**bad)
     assert closing_speed() == HandParams().speed_units_s
+    from slipreflex.experiments import BOTTLE_NAMES
+    from slipreflex.sim import BOTTLES
+    assert set(BOTTLE_NAMES) == set(BOTTLES)
 
 
 def test_seeds_are_spawned_and_independent_of_the_selection():
