@@ -666,6 +666,13 @@ def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str 
         like = "Figs. 10-12" if e == "drop" else "Fig. 15"
         figs.append((f"One {e} trial, bottle {b}, method {m} (like the paper's {like}): "
                      "I onset, II first response, III last change", f"figures/{name}"))
+        ons = [x for x in result.plots[key].onsets if _finite(x)]
+        if e == "pour" and ons:
+            zname = f"trial_{e}_{b}_{m}_zoom.png"
+            zoom = dataclasses.replace(result.plots[key], xlim=(ons[0] - 0.3, ons[0] + 1.0),
+                                       title=result.plots[key].title + ", around the first slip")
+            paths[zname] = F.plot_trial(zoom, fig_dir / zname)
+            figs.append((f"The same pour trial around its first slip ({b}, {m})", f"figures/{zname}"))
     for e in result.config.experiments:
         for metric in ("response", "total"):
             name = f"bars_{e}_{metric}.png"
