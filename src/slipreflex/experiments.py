@@ -620,9 +620,16 @@ def setup_lines(result: ReproduceResult, command: str | None = None) -> list[str
                 swt=result.thresholds.get("swt", float("nan")))
             + f"{REST_K:g} sd of each method's own statistic on {c.calibration_s:g} s rest "
             "recordings of all three bottles (pooled), the same for every bottle")
+    from .sim import BOTTLES
+
+    travel = sorted({BOTTLES[b].grip_travel_m for b in c.bottles})
     lines += [
         f"onset: paper's recipe with k = {ONSET_K:g} sd over the first 200 ms; slip episodes must "
         "peak at 3x the threshold; responses later than 1 s are not responses",
+        "success: the bottle had not slipped out completely by the end of the slip's window; "
+        "slipped out = the simulator's *fallen out*, the bottle has slid its grip travel ("
+        + ", ".join(f"{x * 1e2:g} cm" for x in travel)
+        + ") below where it was grasped, the fingertips reach the shoulder and lose contact",
         f"wall time {result.wall_s:.1f} s on {result.jobs} worker process(es) "
         f"({os.cpu_count()} cores), calibration {result.calibration_s:.1f} s",
     ]
