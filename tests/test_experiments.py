@@ -24,7 +24,8 @@ def test_config_defaults_come_from_the_simulator_and_validate():
     assert len(c.cells()) == 240
     assert ReproduceConfig(drop_mass_kg=0.02, pour_rate_l_min=2.0).pour.rate_l_min == 2.0
     for bad in (dict(trials=0), dict(methods=("dath", "x")), dict(bottles=()), dict(seed=-1),
-                dict(rest_s=0.1), dict(drop_mass_kg=-1.0), dict(experiments=("drop", "drop"))):
+                dict(rest_s=0.1), dict(drop_mass_kg=-1.0), dict(experiments=("drop", "drop")),
+                dict(rest_k=0.0), dict(swt_persist=-1)):
         with pytest.raises(ParameterError):
             ReproduceConfig(**bad)
     assert closing_speed() == HandParams().speed_units_s
@@ -61,6 +62,7 @@ def test_make_reflex_swaps_methods_by_name():
     assert isinstance(n, NMSD) and isinstance(s, SWTSD)
     assert (n.fs, s.fs) == (260.0, 380.0)
     assert n.params.speed == s.params.speed == closing_speed()
+    assert s.params.persist == 8 and make_reflex("swt", p0=1.0, thresholds=th, swt_persist=3).params.persist == 3
     with pytest.raises(ParameterError):
         make_reflex("nope", p0=0.0, thresholds=th)
 
@@ -69,6 +71,8 @@ def test_calibration_gives_one_positive_threshold_per_method():
     th = calibrate(ReproduceConfig(calibration_s=1.0))
     assert set(th) == {"nmsd", "swt"} and th["nmsd"] > 0 and th["swt"] > 0
     assert calibrate(ReproduceConfig(calibration_s=1.0, bottles=("TX",))) == th   # all bottles, always
+    th3 = calibrate(ReproduceConfig(calibration_s=1.0, rest_k=3.0))
+    assert th3["nmsd"] == pytest.approx(th["nmsd"] * 3 / 5)
 
 
 def test_a_drop_trial_is_deterministic_and_complete():

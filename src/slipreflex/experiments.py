@@ -48,6 +48,8 @@ import numpy as np
 from .analysis.paper import BOTTLE_ORDER, METHOD_LABELS, paper_value
 from .analysis.paper import EXPERIMENTS as PAPER_EXPERIMENTS
 from .analysis.trial import RESULT_COLUMNS
+from .baselines.calibration import REST_K
+from .baselines.swt import SWT_WINDOW
 from .errors import ParameterError
 
 __all__ = [
@@ -93,6 +95,13 @@ class ReproduceConfig:
         Recording after the drop / after the pour ends (s).
     calibration_s : float
         Length of each at-rest calibration recording of the threshold rule (s).
+    rest_k : float
+        Standard deviations of the at-rest statistic in the NMSD / SWT-SD
+        thresholds (the rule's k, default ``REST_K`` = 5); for sensitivity
+        studies, the same for every bottle.
+    swt_persist : int
+        SWT-SD persistence after the crossing (samples, default ``SWT_WINDOW``,
+        8 samples = 21 ms at 380 Hz).
 
     Examples
     --------
@@ -116,6 +125,8 @@ class ReproduceConfig:
     rest_s: float = 0.5
     after_s: float = 2.0
     calibration_s: float = 2.0
+    rest_k: float = REST_K
+    swt_persist: int = SWT_WINDOW
 
     def __post_init__(self) -> None:
         if isinstance(self.trials, bool) or not isinstance(self.trials, int) or self.trials < 1:
@@ -136,6 +147,10 @@ class ReproduceConfig:
             v = getattr(self, name)
             if not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
                 raise ParameterError(f"{name} must be a finite number > 0, got {v!r}")
+        if not isinstance(self.rest_k, (int, float)) or not math.isfinite(self.rest_k) or self.rest_k <= 0:
+            raise ParameterError(f"rest_k must be a finite number > 0, got {self.rest_k!r}")
+        if isinstance(self.swt_persist, bool) or not isinstance(self.swt_persist, int) or self.swt_persist < 0:
+            raise ParameterError(f"swt_persist must be an integer >= 0, got {self.swt_persist!r}")
         if self.rest_s < 0.25:
             raise ParameterError(f"rest_s must be >= 0.25 s (200 ms of rest set the onset threshold), "
                                  f"got {self.rest_s!r}")
@@ -300,7 +315,6 @@ def calibrate(config: ReproduceConfig) -> dict[str, float]:
     """
     from . import hardware as hw
     from .baselines import rest_statistic
-    from .baselines.calibration import REST_K
     from .sim import Rig, simulate_open_loop
 
     stats: dict[str, list[np.ndarray]] = {"nmsd": [], "swt": []}
@@ -316,11 +330,11 @@ def calibrate(config: ReproduceConfig) -> dict[str, float]:
         if not sd > 0:
             raise ParameterError(f"calibration: the simulated tactile array has no noise at rest; "
                                  f"cannot derive a {method} threshold")
-        out[method] = REST_K * sd
+        out[method] = float(config.rest_k) * sd
     return out
 
 
-def make_reflex(method: str, *, p0: float, thresholds: dict[str, float]):
+def make_reflex(method: str, *, p0: float, thresholds: dict[str, float], swt_persist: int | None = None):
     """The reflex of ``method``, starting from finger position ``p0``.
 
     * ``fixed`` / ``dath``: :class:`slipreflex.chain.SlipReflex` at the DAQ's
@@ -349,7 +363,8 @@ def make_reflex(method: str, *, p0: float, thresholds: dict[str, float]):
     if method == "swt":
         from .baselines import SWTSD
 
-        return SWTSD(threshold=thresholds["swt"], speed=closing_speed(), p0=float(p0))
+        extra = {} if swt_persist is None else {"persist": int(swt_persist)}
+        return SWTSD(threshold=thresholds["swt"], speed=closing_speed(), p0=float(p0), **extra)
     raise ParameterError(f"method: unknown {method!r} (known: {', '.join(METHODS)})")
 
 
@@ -420,7 +435,7 @@ def run_trial(cell: Cell, config: ReproduceConfig, thresholds: dict[str, float],
     rig = Rig(cell.bottle, seed=cell.seed)
     grasp = rig.grasp()
     p0 = float(round(grasp.positions[SLIP_FINGER]))
-    reflex = make_reflex(cell.method, p0=p0, thresholds=thresholds)
+    reflex = make_reflex(cell.method, p0=p0, thresholds=thresholds, swt_persist=config.swt_persist)
     t_pert = rig.t + config.rest_s
     load = config.drop if cell.experiment == "drop" else config.pour
     rig.perturb(load, at=t_pert)
@@ -592,7 +607,6 @@ def setup_lines(result: ReproduceResult, command: str | None = None) -> list[str
     """
     from . import hardware as hw
     from .analysis.onset import ONSET_K
-    from .baselines.calibration import REST_K
 
     c = result.config
     d, p = c.drop, c.pour
@@ -618,8 +632,9 @@ def setup_lines(result: ReproduceResult, command: str | None = None) -> list[str
             "NMSD threshold {nmsd:.3g} N/s, SWT-SD threshold {swt:.3g} N: ".format(
                 nmsd=result.thresholds.get("nmsd", float("nan")),
                 swt=result.thresholds.get("swt", float("nan")))
-            + f"{REST_K:g} sd of each method's own statistic on {c.calibration_s:g} s rest "
-            "recordings of all three bottles (pooled), the same for every bottle")
+            + f"{c.rest_k:g} sd of each method's own statistic on {c.calibration_s:g} s rest "
+            "recordings of all three bottles (pooled), the same for every bottle; SWT-SD persistence "
+            f"{c.swt_persist} samples after the crossing")
     from .sim import BOTTLES
 
     travel = sorted({BOTTLES[b].grip_travel_m for b in c.bottles})

@@ -66,6 +66,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--calibration", type=float, default=d["calibration_s"], metavar="S",
                    help="length of each at-rest calibration recording for the NMSD/SWT-SD "
                         f"thresholds, s (default {d['calibration_s']:g})")
+    p.add_argument("--rest-k", type=float, default=d["rest_k"], metavar="K",
+                   help="NMSD/SWT-SD thresholds: K sd of the statistic at rest, for sensitivity "
+                        f"studies (default {d['rest_k']:g}, the same for every bottle)")
+    p.add_argument("--swt-persist", type=int, default=d["swt_persist"], metavar="N",
+                   help=f"SWT-SD persistence after the crossing, samples (default {d['swt_persist']})")
     p.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--no-figures", action="store_true", help="skip the example-trial figures")
@@ -83,7 +88,8 @@ def run(args: argparse.Namespace) -> int:
         trials=args.trials, bottles=tuple(args.bottles), methods=tuple(args.methods),
         experiments=tuple(args.experiments), seed=args.seed, drop_mass_kg=args.drop_mass,
         drop_height_m=args.drop_height, pour_rate_l_min=args.pour_rate, pour_volume_ml=args.pour_volume,
-        rest_s=args.rest, after_s=args.after, calibration_s=args.calibration)
+        rest_s=args.rest, after_s=args.after, calibration_s=args.calibration, rest_k=args.rest_k,
+        swt_persist=args.swt_persist)
     result = run_reproduce(config, jobs=args.jobs, progress=not args.no_progress,
                            plots=not args.no_figures)
     command = "slipreflex " + " ".join(shlex.quote(a) for a in sys.argv[1:]) if sys.argv[1:] else None
