@@ -126,3 +126,18 @@ def test_daq_port_that_disappears_and_comes_back(tmp_path):
 def test_open_failure_names_the_port(tmp_path):
     with pytest.raises(DeviceError, match="missing"):
         SerialDaq(str(tmp_path / "missing"))
+
+
+def test_a_port_in_use_is_refused_with_a_clear_error():
+    from slipreflex.devices.ilimb import ILimb
+
+    port = PtyPort()
+    first = SerialDaq(port.path)
+    try:
+        with pytest.raises(DeviceError, match="exclusively lock"):
+            SerialDaq(port.path)
+        with pytest.raises(DeviceError, match="i-Limb"):
+            ILimb(port.path)  # e.g. --daq and --hand swapped onto the same device
+    finally:
+        first.close()
+        port.close()

@@ -123,7 +123,8 @@ class SerialDaq:
         import serial
 
         try:
-            ser = serial.serial_for_url(self.port_name, baudrate=wire.BAUD, timeout=0)
+            ser = serial.serial_for_url(self.port_name, baudrate=wire.BAUD, timeout=0,
+                                        exclusive="://" not in self.port_name)
         except (serial.SerialException, OSError, ValueError) as err:
             raise DeviceError(f"{self.port_name}: cannot open DAQ port: {err}") from None
         self._timeout = 0.0

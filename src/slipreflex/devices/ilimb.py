@@ -339,7 +339,8 @@ class ILimb:
 
         try:
             return serial.serial_for_url(self.port_name, baudrate=ILIMB_BAUD, timeout=0,
-                                         write_timeout=self.write_timeout)
+                                         write_timeout=self.write_timeout,
+                                         exclusive="://" not in self.port_name)
         except (serial.SerialException, OSError, ValueError) as err:
             raise DeviceError(f"{self.port_name}: cannot open i-Limb port: {err}") from None
 
