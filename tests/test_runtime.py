@@ -102,6 +102,21 @@ def _recorder(path, reflex):
     return Recorder(path, metadata={METADATA_NAME: {"reflex_params": json.dumps(reflex.params.to_dict())}})
 
 
+def _run_recorded(tmp_path, daq, hand, reflex, duration):
+    """run_loop with a recording; checks that nothing the loop saw is missing from it."""
+    path = tmp_path / "fault.mcap"
+    with _recorder(path, reflex) as rec:
+        res = run_loop(daq, hand, reflex, recorder=rec, duration=duration)
+    r = read_recording(path)
+    assert r.complete and res.recording_error is None
+    assert len(r.topic("/daq/samples")) == res.samples
+    assert len(r.topic("/hand/commands")) == res.commands
+    assert sum(m["sent"] for m in r.topic("/hand/commands")) == res.commands_sent
+    assert [f["kind"] for f in r.topic("/faults")] == [f.kind for f in res.faults]
+    assert replay(r).identical
+    return res
+
+
 def test_loop_over_virtual_devices_reacts_records_and_replays_exactly(tmp_path):
     path = tmp_path / "run.mcap"
     reflex = _reflex()
@@ -142,7 +157,7 @@ def test_watchdog_holds_when_the_daq_stops_and_resumes_when_it_restarts(tmp_path
     script = [(0.5, lambda d: d.pause_daq()), (0.9, lambda d: d.restart_daq())]
     reflex = _reflex()
     with rig_and_drivers(tmp_path, script=script) as (dev, daq, hand):
-        res = run_loop(daq, hand, reflex, duration=1.5)
+        res = _run_recorded(tmp_path, daq, hand, reflex, 1.5)
         history = list(dev.rig.hand.history)
         stops = dev.hand_packets
     kinds = [f.kind for f in res.faults]
@@ -159,7 +174,7 @@ def test_daq_port_that_disappears_and_comes_back(tmp_path):
     script = [(0.4, lambda d: d.unplug("daq")), (0.8, lambda d: d.replug("daq"))]
     reflex = _reflex()
     with rig_and_drivers(tmp_path, script=script) as (dev, daq, hand):
-        res = run_loop(daq, hand, reflex, duration=1.4)
+        res = _run_recorded(tmp_path, daq, hand, reflex, 1.4)
         history = list(dev.rig.hand.history)
     kinds = [f.kind for f in res.faults]
     assert kinds[:2] == ["daq-port", "watchdog"] and "watchdog-clear" in kinds
@@ -173,7 +188,7 @@ def test_hand_port_that_disappears_and_comes_back(tmp_path):
     script = [(0.5, lambda d: d.unplug("hand")), (0.9, lambda d: d.replug("hand"))]
     reflex = _reflex()
     with rig_and_drivers(tmp_path, script=script, schedule=[("drop", 0.2)]) as (dev, daq, hand):
-        res = run_loop(daq, hand, reflex, duration=1.5)
+        res = _run_recorded(tmp_path, daq, hand, reflex, 1.5)
         history = list(dev.rig.hand.history)
     kinds = [f.kind for f in res.faults]
     assert "hand-port" in kinds and "hand-port-restored" in kinds
@@ -192,7 +207,7 @@ def test_garbage_truncated_and_flipped_frames_while_running(tmp_path):
               (0.7, lambda d: d.inject_daq(bytes(bad)))]
     reflex = _reflex()
     with rig_and_drivers(tmp_path, script=script) as (dev, daq, hand):
-        res = run_loop(daq, hand, reflex, duration=1.0)
+        res = _run_recorded(tmp_path, daq, hand, reflex, 1.0)
     st = res.daq_stats
     assert st["garbage_bytes"] >= 20 and st["truncated"] >= 1 and st["crc_errors"] >= 1
     assert st["resyncs"] >= 3
