@@ -608,6 +608,9 @@ def setup_lines(result: ReproduceResult, command: str | None = None) -> list[str
     from . import hardware as hw
     from .analysis.onset import ONSET_K
 
+    from .chain import ReflexParams
+
+    rp = ReflexParams()
     c = result.config
     d, p = c.drop, c.pour
     lines = []
@@ -624,8 +627,9 @@ def setup_lines(result: ReproduceResult, command: str | None = None) -> list[str
         f"pour: {p.volume_ml:g} ml at {p.rate_l_min:g} L/min ({p.duration_s:.0f} s)",
         f"protocol: grasp to {hw.CONTACT_FORCE_N} N, settle (simulator's grasp routine), "
         f"{c.rest_s:g} s of rest recorded, perturbation, {c.after_s:g} s after it ends",
-        f"fixed / DATH: the paper's chain (theta0 = {2 * hw.PAPER_LSB} V, Kp = Ki = 5, "
-        f"N = {hw.WINDOW_N}) at the DAQ's {hw.DAQ_FS:.2f} Hz",
+        f"fixed / DATH: the paper's chain (theta0 = {rp.threshold:g} V, D = {rp.dath_samples}, "
+        f"N = {rp.n}, Kp = {rp.kp:g}, Ki = {rp.ki:g}, reset after {rp.reset_after} zero windows) "
+        f"at the DAQ's {hw.DAQ_FS:.2f} Hz",
     ]
     if result.thresholds:
         lines.append(
