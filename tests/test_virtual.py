@@ -15,9 +15,7 @@ from slipreflex.devices.ilimb import ILimb
 from slipreflex.devices.simrig import SimRig
 from slipreflex.devices.virtual import VirtualDevices
 from slipreflex.hardware import DAQ_PERIOD_S, SLIP_FINGER, TRIPOD
-from slipreflex.sim.loop import run_closed_loop
-from slipreflex.sim.objects import Pour
-from slipreflex.sim.rig import Rig
+from slipreflex.sim import Pour, Rig, run_closed_loop
 
 # A fast pour (150 ml at 3 L/min) that makes the bottle fall out of an unassisted grasp
 # about 3.2 s after the grasp, short enough for a real-time test.

@@ -74,8 +74,7 @@ class SimRig:
     """
 
     def __init__(self, bottle: Any = "TR", seed: int = 0, *, drop: Any = None, pour: Any = None) -> None:
-        from ..sim.objects import PAPER_DROP, PAPER_POUR
-        from ..sim.rig import Rig
+        from ..sim import PAPER_DROP, PAPER_POUR, Rig
 
         self.rig = Rig(bottle, seed=seed)
         self.drop = drop if drop is not None else PAPER_DROP
