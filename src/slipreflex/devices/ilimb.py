@@ -292,7 +292,9 @@ class ILimb:
         already open port (its owner keeps the right to close it; not
         reopened on failure).
     write_timeout : float
-        Seconds a write may block before it counts as a failure.
+        Seconds a write may block before it counts as a failure (a packet
+        takes 1.7 ms at 115200 baud; a write blocks only when the port has
+        stopped draining its buffer).
     reconnect_interval : float
         Minimum seconds between reopen attempts.
 
@@ -314,7 +316,7 @@ class ILimb:
     >>> hand.close(); loop.close()
     """
 
-    def __init__(self, port: Any, *, write_timeout: float = 0.05,
+    def __init__(self, port: Any, *, write_timeout: float = 0.01,
                  reconnect_interval: float = 0.2) -> None:
         self._owns = isinstance(port, str)
         self.port_name: str = port if isinstance(port, str) else str(getattr(port, "port", None) or port)
