@@ -57,7 +57,8 @@ from .objects import BOTTLES, WATER_DENSITY, Bottle, Drop, Pour, Surface
 from .params import FlowParams, HandParams, ImuParams, PhysicsParams, SlipSensorParams, TactileParams
 from .sensors import Track
 
-__all__ = ["Rig", "SimHand", "TactileSampler", "GraspResult", "DaqBlock", "SlipEvent", "seed_sequence"]
+__all__ = ["Rig", "SimHand", "TactileSampler", "GraspResult", "DaqBlock", "SlipEvent", "seed_sequence",
+           "fill_slip_sensor_params"]
 
 _CHUNK_S = 0.25  # longest stretch one kernel call covers (bounds the buffers)
 _ROUND = 1e-9
@@ -481,6 +482,33 @@ class SimHand:
                         self._others[f] = 0.0
 
 
+
+def fill_slip_sensor_params(P: np.ndarray, sensor: SlipSensorParams, track: Track) -> np.ndarray:
+    """Write the slip sensor's constants and its track into a kernel parameter vector.
+
+    The one place that maps :class:`SlipSensorParams` and a :class:`Track` onto the
+    kernel's slots; the rig and the scan both use it.
+
+    Examples
+    --------
+    >>> from slipreflex.sim.sensors import Track
+    >>> import numpy as np
+    >>> P = fill_slip_sensor_params(np.zeros(K.P_SIZE), SlipSensorParams(),
+    ...                             Track(np.zeros(4), 5e-6, 0.0, np.zeros(4)))
+    >>> float(P[K.P_VCC])
+    5.0
+    """
+    P[K.P_VCC] = sensor.supply_v
+    P[K.P_VSAT] = sensor.v_sat
+    P[K.P_KNEE] = sensor.knee_v
+    P[K.P_VNOISE] = sensor.noise_v
+    P[K.P_GAP] = sensor.gap_m
+    P[K.P_ADC_LSB] = hw.ADC_LSB
+    P[K.P_ADC_MAX] = (1 << hw.ADC_BITS) - 1
+    P[K.P_TRACK_DX] = track.dx
+    P[K.P_TRACK_OFF] = track.origin
+    return P
+
 class Rig:
     """A bottle in the i-Limb's tripod grasp, with slip sensor, IMU, tactile arrays and flow sensor.
 
@@ -591,15 +619,7 @@ class Rig:
         P[K.P_TILT_X] = math.sin(tx)
         P[K.P_TILT_Z] = math.cos(tx) * math.sin(tz)
         P[K.P_TILT_Y] = math.cos(tx) * math.cos(tz)
-        P[K.P_VCC] = s.supply_v
-        P[K.P_VSAT] = s.v_sat
-        P[K.P_KNEE] = s.knee_v
-        P[K.P_VNOISE] = s.noise_v
-        P[K.P_GAP] = s.gap_m
-        P[K.P_ADC_LSB] = hw.ADC_LSB
-        P[K.P_ADC_MAX] = (1 << hw.ADC_BITS) - 1
-        P[K.P_TRACK_DX] = self.track.dx
-        P[K.P_TRACK_OFF] = self.track.origin
+        fill_slip_sensor_params(P, s, self.track)
         P[K.P_FLOW_K] = flow_k
         P[K.P_FLOW_PHASE] = flow_phase
         P[K.P_DECAY] = math.exp(-ph.dt * h.pad_shear_stiffness_n_m / h.pad_shear_damping_n_s_m)

@@ -34,7 +34,7 @@ from ..errors import ParameterError
 from . import kernel as K
 from .objects import Surface, resolve_surface
 from .params import SlipSensorParams
-from .rig import seed_sequence
+from .rig import fill_slip_sensor_params, seed_sequence
 from .sensors import Track
 
 __all__ = ["scan", "ScanResult", "PAPER_LAYOUT", "ScanSummary"]
@@ -178,16 +178,7 @@ class ScanResult:
 
 
 def _sensor_params(sensor: SlipSensorParams, track: Track) -> np.ndarray:
-    P = np.zeros(K.P_SIZE)
-    P[K.P_VCC] = sensor.supply_v
-    P[K.P_VSAT] = sensor.v_sat
-    P[K.P_KNEE] = sensor.knee_v
-    P[K.P_VNOISE] = sensor.noise_v
-    P[K.P_GAP] = sensor.gap_m
-    P[K.P_ADC_LSB] = hw.ADC_LSB
-    P[K.P_ADC_MAX] = (1 << hw.ADC_BITS) - 1
-    P[K.P_TRACK_DX] = track.dx
-    P[K.P_TRACK_OFF] = track.origin
+    P = fill_slip_sensor_params(np.zeros(K.P_SIZE), sensor, track)
     P[K.P_LAM] = 1.0
     return P
 
