@@ -47,6 +47,24 @@ def build(cls: type, kwargs: dict[str, Any]):
     return cls(**kwargs)
 
 
+def resolve_params(cls: type, params: Any, kwargs: dict[str, Any]):
+    """The parameters a streaming method runs with: ``params``, keyword overrides, or both.
+
+    ``None`` builds ``cls`` from ``kwargs``; an instance with ``kwargs`` is copied with
+    those fields replaced (unknown ones are an error); anything but a ``cls`` is refused.
+    """
+    import dataclasses
+
+    if params is None:
+        return build(cls, kwargs)
+    if not isinstance(params, cls):
+        raise ParameterError(f"params must be an {cls.__name__}, got {type(params).__name__}")
+    if kwargs:
+        fields = {f.name: getattr(params, f.name) for f in dataclasses.fields(params)}
+        return build(cls, {**fields, **kwargs})
+    return params
+
+
 def as_frames(name: str, frames: Any) -> np.ndarray:
     """Return tactile frames as a finite float64 array of shape (K, 4, 4)."""
     arr = np.asarray(frames, dtype=np.float64)

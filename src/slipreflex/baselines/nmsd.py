@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from ..hardware import FINGER_MAX, FINGER_MIN, NMSD_FS
-from ._validate import as_frame, as_frames, build, number, setattr_frozen
+from ._validate import as_frame, as_frames, number, resolve_params, setattr_frozen
 from .closing import CLOSE_S, Closer, ClosingParams, closing_commands
 
 __all__ = ["NMSDParams", "NMSD", "nmsd_statistic", "nmsd_detections", "nmsd_commands"]
@@ -220,10 +220,7 @@ class NMSD:
     input_kind = "tactile"
 
     def __init__(self, params: NMSDParams | None = None, **kwargs: Any) -> None:
-        if params is None:
-            params = build(NMSDParams, kwargs)
-        elif kwargs:
-            params = build(NMSDParams, {**_asdict(params), **kwargs})
+        params = resolve_params(NMSDParams, params, kwargs)
         self.params = params
         self.fs = params.fs
         self._closer = Closer(params.closing)
@@ -295,9 +292,3 @@ class NMSD:
             self.detections += 1
         self._closer.feed(event, "events")
         return self._closer.step(position)
-
-
-def _asdict(params: Any) -> dict[str, Any]:
-    import dataclasses
-
-    return {f.name: getattr(params, f.name) for f in dataclasses.fields(params)}

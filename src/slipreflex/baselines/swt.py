@@ -41,9 +41,8 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ParameterError
 from ..hardware import FINGER_MAX, FINGER_MIN, SWT_FS
-from ._validate import as_frame, as_frames, build, integer, number, setattr_frozen
+from ._validate import as_frame, as_frames, integer, resolve_params, number, setattr_frozen
 from .closing import CLOSE_S, Closer, ClosingParams, closing_commands
 
 __all__ = ["SWTParams", "SWTSD", "swt_statistic", "swt_on", "swt_commands", "swt_kernel",
@@ -283,15 +282,7 @@ class SWTSD:
     input_kind = "tactile"
 
     def __init__(self, params: SWTParams | None = None, **kwargs: Any) -> None:
-        if params is None:
-            params = build(SWTParams, kwargs)
-        elif kwargs:
-            import dataclasses
-
-            params = build(SWTParams, {**{f.name: getattr(params, f.name)
-                                          for f in dataclasses.fields(params)}, **kwargs})
-        if not isinstance(params, SWTParams):
-            raise ParameterError(f"params must be an SWTParams, got {type(params).__name__}")
+        params = resolve_params(SWTParams, params, kwargs)
         self.params = params
         self.fs = params.fs
         self._closer = Closer(params.closing)
