@@ -51,6 +51,7 @@ from .analysis.trial import RESULT_COLUMNS
 from .baselines.calibration import REST_K
 from .baselines.swt import SWT_WINDOW
 from .errors import ParameterError
+from .validation import choices, integer, positive, set_field
 
 __all__ = [
     "METHODS", "EXPERIMENTS", "BOTTLE_NAMES", "DEFAULT_SEED", "ReproduceConfig", "Cell",
@@ -129,28 +130,13 @@ class ReproduceConfig:
     swt_persist: int = SWT_WINDOW
 
     def __post_init__(self) -> None:
-        if isinstance(self.trials, bool) or not isinstance(self.trials, int) or self.trials < 1:
-            raise ParameterError(f"trials must be an integer >= 1, got {self.trials!r}")
-        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
-            raise ParameterError(f"seed must be a non-negative integer, got {self.seed!r}")
+        set_field(self, "trials", integer("trials", self.trials, lo=1))
+        set_field(self, "seed", integer("seed", self.seed, lo=0))
         for name, known in (("bottles", BOTTLE_NAMES), ("methods", METHODS), ("experiments", EXPERIMENTS)):
-            val = tuple(getattr(self, name))
-            object.__setattr__(self, name, val)
-            if not val:
-                raise ParameterError(f"{name}: choose at least one of {', '.join(known)}")
-            for v in val:
-                if v not in known:
-                    raise ParameterError(f"{name}: unknown {v!r} (known: {', '.join(known)})")
-            if len(set(val)) != len(val):
-                raise ParameterError(f"{name}: repeated entries in {val}")
-        for name in ("rest_s", "after_s", "calibration_s"):
-            v = getattr(self, name)
-            if not isinstance(v, (int, float)) or not math.isfinite(v) or v <= 0:
-                raise ParameterError(f"{name} must be a finite number > 0, got {v!r}")
-        if not isinstance(self.rest_k, (int, float)) or not math.isfinite(self.rest_k) or self.rest_k <= 0:
-            raise ParameterError(f"rest_k must be a finite number > 0, got {self.rest_k!r}")
-        if isinstance(self.swt_persist, bool) or not isinstance(self.swt_persist, int) or self.swt_persist < 0:
-            raise ParameterError(f"swt_persist must be an integer >= 0, got {self.swt_persist!r}")
+            set_field(self, name, choices(name, getattr(self, name), known))
+        for name in ("rest_s", "after_s", "calibration_s", "rest_k"):
+            set_field(self, name, positive(name, getattr(self, name)))
+        set_field(self, "swt_persist", integer("swt_persist", self.swt_persist, lo=0))
         if self.rest_s < 0.25:
             raise ParameterError(f"rest_s must be >= 0.25 s (200 ms of rest set the onset threshold), "
                                  f"got {self.rest_s!r}")

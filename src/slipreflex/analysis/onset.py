@@ -50,7 +50,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import DataError, ParameterError
-from ._validate import number, setattr_frozen
+from ..validation import number, set_field
 
 __all__ = ["ONSET_K", "OnsetParams", "Onset", "select_axis", "accel_envelope", "rest_threshold_of",
            "episodes", "detect_onset"]
@@ -93,11 +93,11 @@ class OnsetParams:
     zero_phase: bool = False
 
     def __post_init__(self) -> None:
-        setattr_frozen(self, "cutoff", number("cutoff", self.cutoff, lo=0.0, lo_open=True))
-        setattr_frozen(self, "baseline_s", number("baseline_s", self.baseline_s, lo=0.0, lo_open=True))
-        setattr_frozen(self, "k", number("k", self.k, lo=0.0))
-        setattr_frozen(self, "peak_factor", number("peak_factor", self.peak_factor, lo=0.0))
-        setattr_frozen(self, "join_s", number("join_s", self.join_s, lo=0.0))
+        set_field(self, "cutoff", number("cutoff", self.cutoff, lo=0.0, lo_open=True))
+        set_field(self, "baseline_s", number("baseline_s", self.baseline_s, lo=0.0, lo_open=True))
+        set_field(self, "k", number("k", self.k, lo=0.0))
+        set_field(self, "peak_factor", number("peak_factor", self.peak_factor, lo=0.0))
+        set_field(self, "join_s", number("join_s", self.join_s, lo=0.0))
         if not isinstance(self.zero_phase, bool):
             raise ParameterError(f"zero_phase must be True or False, got {self.zero_phase!r}")
 

@@ -29,7 +29,8 @@ import numpy as np
 
 from ..errors import DataError, ParameterError
 from ..hardware import NMSD_FS
-from ._validate import as_frames, number
+from ..validation import number
+from ._validate import as_frames
 from .nmsd import nmsd_statistic
 from .swt import SWT_WINDOW, swt_statistic
 

@@ -36,7 +36,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..hardware import FINGER_MAX, FINGER_MIN
-from ._validate import number, setattr_frozen
+from ..validation import number, set_field
 
 __all__ = ["CLOSE_S", "ClosingParams", "Closer", "closing_commands"]
 
@@ -81,12 +81,12 @@ class ClosingParams:
     hi: float = float(FINGER_MAX)
 
     def __post_init__(self) -> None:
-        setattr_frozen(self, "fs", number("fs", self.fs, lo=0.0, lo_open=True))
-        setattr_frozen(self, "speed", number("speed", self.speed, lo=0.0, lo_open=True))
-        setattr_frozen(self, "close_s", number("close_s", self.close_s, lo=0.0, lo_open=True))
-        setattr_frozen(self, "p0", number("p0", self.p0))
-        setattr_frozen(self, "lo", number("lo", self.lo))
-        setattr_frozen(self, "hi", number("hi", self.hi))
+        set_field(self, "fs", number("fs", self.fs, lo=0.0, lo_open=True))
+        set_field(self, "speed", number("speed", self.speed, lo=0.0, lo_open=True))
+        set_field(self, "close_s", number("close_s", self.close_s, lo=0.0, lo_open=True))
+        set_field(self, "p0", number("p0", self.p0))
+        set_field(self, "lo", number("lo", self.lo))
+        set_field(self, "hi", number("hi", self.hi))
         if self.hi < self.lo:
             raise ParameterError(f"hi must be >= lo, got lo={self.lo!r}, hi={self.hi!r}")
 

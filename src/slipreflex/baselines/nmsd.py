@@ -34,7 +34,8 @@ from typing import Any
 import numpy as np
 
 from ..hardware import FINGER_MAX, FINGER_MIN, NMSD_FS
-from ._validate import as_frame, as_frames, number, resolve_params, setattr_frozen
+from ..validation import number, resolve_params, set_field
+from ._validate import as_frame, as_frames
 from .closing import CLOSE_S, Closer, ClosingParams, closing_commands
 
 __all__ = ["NMSDParams", "NMSD", "nmsd_statistic", "nmsd_detections", "nmsd_commands"]
@@ -73,8 +74,8 @@ class NMSDParams:
     hi: float = float(FINGER_MAX)
 
     def __post_init__(self) -> None:
-        setattr_frozen(self, "threshold", number("threshold", self.threshold, lo=0.0, lo_open=True))
-        setattr_frozen(self, "fs", number("fs", self.fs, lo=0.0, lo_open=True))
+        set_field(self, "threshold", number("threshold", self.threshold, lo=0.0, lo_open=True))
+        set_field(self, "fs", number("fs", self.fs, lo=0.0, lo_open=True))
         self.closing  # validates speed, close_s, p0, lo, hi
 
     @property

@@ -42,7 +42,8 @@ from typing import Any
 import numpy as np
 
 from ..hardware import FINGER_MAX, FINGER_MIN, SWT_FS
-from ._validate import as_frame, as_frames, integer, resolve_params, number, setattr_frozen
+from ..validation import integer, number, resolve_params, set_field
+from ._validate import as_frame, as_frames
 from .closing import CLOSE_S, Closer, ClosingParams, closing_commands
 
 __all__ = ["SWTParams", "SWTSD", "swt_statistic", "swt_on", "swt_commands", "swt_kernel",
@@ -93,9 +94,9 @@ class SWTParams:
     hi: float = float(FINGER_MAX)
 
     def __post_init__(self) -> None:
-        setattr_frozen(self, "threshold", number("threshold", self.threshold, lo=0.0, lo_open=True))
-        setattr_frozen(self, "fs", number("fs", self.fs, lo=0.0, lo_open=True))
-        setattr_frozen(self, "persist", integer("persist", self.persist, lo=0))
+        set_field(self, "threshold", number("threshold", self.threshold, lo=0.0, lo_open=True))
+        set_field(self, "fs", number("fs", self.fs, lo=0.0, lo_open=True))
+        set_field(self, "persist", integer("persist", self.persist, lo=0))
         self.closing  # validates speed, close_s, p0, lo, hi
 
     @property

@@ -1,0 +1,350 @@
+"""One set of parameter checks for the whole package (low in the import order).
+
+Every frozen parameter dataclass and every function that takes a user value
+checks it with these few functions, so the same value is accepted or refused
+the same way everywhere, and every refusal is a
+:class:`~slipreflex.errors.ParameterError` whose message starts with the
+parameter's name (pass ``"Cls.field"`` or ``"file.toml: field"`` as the name
+when the caller knows more about where the value came from).
+
+What counts as what:
+
+* a **number** is a real ``int``, ``float``, numpy integer or numpy floating
+  value, finite; ``bool`` is refused (``True`` is not a gain);
+* an **integer** is anything that :func:`operator.index` accepts (``int``,
+  numpy integers), except ``bool``; ``16.0`` is refused;
+* a **flag** is ``True``/``False`` (or a numpy bool);
+* a **choice** is one of a fixed set of strings.
+
+Each check returns the value in its plain Python type (``float``, ``int``,
+``bool``), so a dataclass stores the same thing whatever the caller passed.
+
+The contract for "a parameters object plus keyword overrides", used by every
+streaming object (``NMSD(params)``, ``NMSD(threshold=...)``,
+``NMSD(params, threshold=...)``): :func:`resolve_params`.
+
+Examples
+--------
+>>> import numpy as np
+>>> number("gain", np.float32(2.5), lo=0.0)
+2.5
+>>> integer("n", np.int64(16), lo=1)
+16
+>>> integer("n", 16.0)
+Traceback (most recent call last):
+...
+slipreflex.errors.ParameterError: n must be an integer, got 16.0
+>>> number("cutoff", 0.0, lo=0.0, lo_open=True)
+Traceback (most recent call last):
+...
+slipreflex.errors.ParameterError: cutoff must be a finite number > 0, got 0.0
+
+In a frozen dataclass:
+
+>>> from dataclasses import dataclass
+>>> @dataclass(frozen=True)
+... class Gain:
+...     kp: float = 5.0
+...     def __post_init__(self):
+...         set_field(self, "kp", number("kp", self.kp, lo=0.0))
+>>> Gain(np.int32(3)).kp, type(Gain(np.int32(3)).kp).__name__
+(3.0, 'float')
+>>> resolve_params(Gain, Gain(), {"kp": 2}).kp
+2.0
+>>> resolve_params(Gain, None, {"kd": 1})
+Traceback (most recent call last):
+...
+slipreflex.errors.ParameterError: unknown parameter(s) for Gain: kd (known: kp)
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import operator
+from collections.abc import Iterable, Sequence
+from typing import Any, TypeVar
+
+import numpy as np
+
+from .errors import ParameterError
+
+__all__ = ["number", "positive", "integer", "flag", "choice", "choices", "text", "set_field",
+           "build", "resolve_params"]
+
+T = TypeVar("T")
+
+_REAL = (int, float, np.integer, np.floating)
+
+
+def _bounds(lo: float | None, hi: float | None, lo_open: bool, hi_open: bool) -> str:
+    parts = []
+    if lo is not None:
+        parts.append(f"{'>' if lo_open else '>='} {lo:g}")
+    if hi is not None:
+        parts.append(f"{'<' if hi_open else '<='} {hi:g}")
+    return (" " + " and ".join(parts)) if parts else ""
+
+
+def _outside(value: float, lo: float | None, hi: float | None, lo_open: bool, hi_open: bool) -> bool:
+    if lo is not None and (value <= lo if lo_open else value < lo):
+        return True
+    return hi is not None and (value >= hi if hi_open else value > hi)
+
+
+def number(name: str, value: Any, *, lo: float | None = None, hi: float | None = None,
+           lo_open: bool = False, hi_open: bool = False) -> float:
+    """``value`` as a float, after checking it is a finite real within the bounds.
+
+    Parameters
+    ----------
+    name : str
+        The parameter's name, first word of the error message.
+    value : object
+        What the caller passed.
+    lo, hi : float, optional
+        Bounds; inclusive unless ``lo_open`` / ``hi_open``.
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    ParameterError
+        ``"<name> must be a finite number [bounds], got <value>"``.
+
+    Examples
+    --------
+    >>> number("mu", 0.4, lo=0.0, hi=2.0)
+    0.4
+    >>> number("mu", float("nan"))
+    Traceback (most recent call last):
+    ...
+    slipreflex.errors.ParameterError: mu must be a finite number, got nan
+    >>> number("mu", 3, lo=0.0, hi=2.0)
+    Traceback (most recent call last):
+    ...
+    slipreflex.errors.ParameterError: mu must be a finite number >= 0 and <= 2, got 3
+    """
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, _REAL) or not math.isfinite(value):
+        raise ParameterError(f"{name} must be a finite number{_bounds(lo, hi, lo_open, hi_open)}, "
+                             f"got {value!r}")
+    if _outside(value, lo, hi, lo_open, hi_open):
+        raise ParameterError(f"{name} must be a finite number{_bounds(lo, hi, lo_open, hi_open)}, "
+                             f"got {value!r}")
+    return float(value)
+
+
+def positive(name: str, value: Any, *, zero_ok: bool = False) -> float:
+    """``value`` as a float, checked finite and > 0 (>= 0 with ``zero_ok``).
+
+    Examples
+    --------
+    >>> positive("speed", 520)
+    520.0
+    >>> positive("speed", 0)
+    Traceback (most recent call last):
+    ...
+    slipreflex.errors.ParameterError: speed must be a finite number > 0, got 0
+    """
+    return number(name, value, lo=0.0, lo_open=not zero_ok)
+
+
+def integer(name: str, value: Any, *, lo: int | None = None, hi: int | None = None) -> int:
+    """``value`` as an int, after checking it is an integer (numpy integers too) within bounds.
+
+    Floats are refused even when integral (``16.0``), and so is ``bool``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> integer("window", np.uint8(8), lo=1)
+    8
+    >>> integer("window", 0, lo=1)
+    Traceback (most recent call last):
+    ...
+    slipreflex.errors.ParameterError: window must be an integer >= 1, got 0
+    >>> integer("seq", 300, lo=0, hi=255)
+    Traceback (most recent call last):
+    ...
+    slipreflex.errors.ParameterError: seq must be an integer >= 0 and <= 255, got 300
+    """
+    bounds = _bounds(lo, hi, False, False)
+    if isinstance(value, (bool, np.bool_)):
+        raise ParameterError(f"{name} must be an integer{bounds}, got {value!r}")
+    try:
+        out = operator.index(value)
+    except TypeError:
+        raise ParameterError(f"{name} must be an integer{bounds}, got {value!r}") from None
+    if _outside(out, lo, hi, False, False):
+        raise ParameterError(f"{name} must be an integer{bounds}, got {value!r}")
+    return int(out)
+
+
+def flag(name: str, value: Any) -> bool:
+    """``value`` as a bool, after checking it is ``True`` or ``False`` (numpy bools too).
+
+    Examples
+    --------
+    >>> flag("dath", True)
+    True
+    >>> flag("dath", 1)
+    Traceback (most recent call last):
+    ...
+    slipreflex.errors.ParameterError: dath must be True or False, got 1
+    """
+    if not isinstance(value, (bool, np.bool_)):
+        raise ParameterError(f"{name} must be True or False, got {value!r}")
+    return bool(value)
+
+
+def choice(name: str, value: Any, options: Iterable[T]) -> T:
+    """``value`` after checking it is one of ``options``.
+
+    Examples
+    --------
+    >>> choice("experiment", "drop", ("drop", "pour"))
+    'drop'
+    >>> choice("experiment", "shake", ("drop", "pour"))
+    Traceback (most recent call last):
+    ...
+    slipreflex.errors.ParameterError: experiment: unknown 'shake' (known: drop, pour)
+    """
+    opts = tuple(options)
+    try:
+        ok = value in opts
+    except TypeError:  # unhashable or incomparable
+        ok = False
+    if not ok:
+        raise ParameterError(f"{name}: unknown {value!r} (known: {', '.join(map(str, opts))})")
+    return value
+
+
+def choices(name: str, values: Any, options: Iterable[T], *, allow_empty: bool = False) -> tuple[T, ...]:
+    """``values`` as a tuple, after checking each is one of ``options``, once.
+
+    A single string is refused (``"dath"`` is not a list of methods).
+
+    Examples
+    --------
+    >>> choices("bottles", ["TR", "TX"], ("TR", "DK", "TX"))
+    ('TR', 'TX')
+    >>> choices("bottles", ("TR", "TR"), ("TR", "DK", "TX"))
+    Traceback (most recent call last):
+    ...
+    slipreflex.errors.ParameterError: bottles: repeated entries in ('TR', 'TR')
+    """
+    opts = tuple(options)
+    if isinstance(values, (str, bytes)) or not isinstance(values, Iterable):
+        raise ParameterError(f"{name} must be a sequence of {', '.join(map(str, opts))}, got {values!r}")
+    vals = tuple(values)
+    if not vals and not allow_empty:
+        raise ParameterError(f"{name}: choose at least one of {', '.join(map(str, opts))}")
+    for v in vals:
+        choice(name, v, opts)
+    if len(set(vals)) != len(vals):
+        raise ParameterError(f"{name}: repeated entries in {vals}")
+    return vals
+
+
+def text(name: str, value: Any) -> str:
+    """``value`` after checking it is a non-empty string.
+
+    Examples
+    --------
+    >>> text("Bottle.name", "TR")
+    'TR'
+    >>> text("Bottle.name", "")
+    Traceback (most recent call last):
+    ...
+    slipreflex.errors.ParameterError: Bottle.name must be a non-empty string, got ''
+    """
+    if not isinstance(value, str) or not value:
+        raise ParameterError(f"{name} must be a non-empty string, got {value!r}")
+    return value
+
+
+def set_field(obj: Any, name: str, value: Any) -> None:
+    """Store a checked value on a frozen dataclass from inside its ``__post_init__``.
+
+    Examples
+    --------
+    >>> from dataclasses import dataclass
+    >>> @dataclass(frozen=True)
+    ... class P:
+    ...     n: int = 1
+    ...     def __post_init__(self): set_field(self, "n", integer("n", self.n, lo=1))
+    >>> P(n=np.int16(4)).n
+    4
+    """
+    object.__setattr__(obj, name, value)
+
+
+def build(cls: type[T], kwargs: dict[str, Any]) -> T:
+    """Construct the dataclass ``cls`` from ``kwargs``; an unknown keyword is refused by name.
+
+    Examples
+    --------
+    >>> from dataclasses import dataclass
+    >>> @dataclass(frozen=True)
+    ... class P:
+    ...     n: int = 1
+    >>> build(P, {"n": 2}).n
+    2
+    >>> build(P, {"m": 2})
+    Traceback (most recent call last):
+    ...
+    slipreflex.errors.ParameterError: unknown parameter(s) for P: m (known: n)
+    """
+    known = {f.name for f in dataclasses.fields(cls)}
+    unknown = sorted(set(kwargs) - known)
+    if unknown:
+        raise ParameterError(
+            f"unknown parameter(s) for {cls.__name__}: {', '.join(unknown)} "
+            f"(known: {', '.join(sorted(known))})")
+    return cls(**kwargs)
+
+
+def resolve_params(cls: type[T], params: Any, overrides: dict[str, Any]) -> T:
+    """The one contract for "a parameters object plus keyword overrides".
+
+    * ``params is None``: build ``cls`` from ``overrides`` (missing required
+      fields and unknown keywords are errors);
+    * ``params`` given and no overrides: ``params`` as is;
+    * both: a copy of ``params`` with the overridden fields replaced (checked
+      again by ``cls``); an unknown keyword is an error;
+    * anything that is not a ``cls`` instance is refused.
+
+    Parameters
+    ----------
+    cls : type
+        A dataclass of parameters.
+    params : cls or None
+        The parameters object, if the caller gave one.
+    overrides : dict
+        The caller's keyword arguments.
+
+    Examples
+    --------
+    >>> from dataclasses import dataclass
+    >>> @dataclass(frozen=True)
+    ... class P:
+    ...     n: int = 1
+    ...     m: int = 2
+    >>> resolve_params(P, P(n=5), {"m": 7})
+    P(n=5, m=7)
+    >>> resolve_params(P, {"n": 5}, {})
+    Traceback (most recent call last):
+    ...
+    slipreflex.errors.ParameterError: params must be a P, got dict
+    """
+    if params is None:
+        return build(cls, dict(overrides))
+    if not isinstance(params, cls):
+        raise ParameterError(f"params must be a {cls.__name__}, got {type(params).__name__}")
+    if overrides:
+        fields = {f.name: getattr(params, f.name) for f in dataclasses.fields(params)}
+        return build(cls, {**fields, **overrides})
+    return params
+
