@@ -21,6 +21,9 @@ Runs (see :mod:`slipreflex.sim.loop`):
     :func:`run_closed_loop`, :func:`simulate_open_loop`, :class:`SimTrace`.
 Characterization (see :mod:`slipreflex.sim.scan`):
     :func:`scan`, :class:`ScanResult`.
+Uncertain constants (see :mod:`slipreflex.sim.uncertain`):
+    :data:`UNCERTAIN`, :class:`UncertainConstant`, :class:`Plant`,
+    :func:`plant_from_values`, :func:`load_ranges`.
 
 Examples
 --------
@@ -39,10 +42,12 @@ from .objects import (BOTTLES, PAPER_DROP, PAPER_POUR, SURFACES, Bottle, Drop, O
 from .params import FlowParams, HandParams, ImuParams, PhysicsParams, SlipSensorParams, TactileParams
 from .rig import DaqBlock, GraspResult, Rig, SimHand, SlipEvent, TactileSampler
 from .scan import ScanResult, scan
+from .uncertain import UNCERTAIN, Plant, UncertainConstant, load_ranges, plant_from_values
 
 __all__ = [
     "Bottle", "Surface", "Drop", "Pour", "Objects", "BOTTLES", "SURFACES", "PAPER_DROP", "PAPER_POUR",
     "load_objects", "HandParams", "SlipSensorParams", "ImuParams", "TactileParams", "FlowParams",
     "PhysicsParams", "Rig", "SimHand", "TactileSampler", "DaqBlock", "GraspResult", "SlipEvent",
     "SimTrace", "TRACE_COLUMNS", "run_closed_loop", "simulate_open_loop", "ScanResult", "scan",
+    "UNCERTAIN", "UncertainConstant", "Plant", "plant_from_values", "load_ranges",
 ]

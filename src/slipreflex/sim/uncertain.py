@@ -1,0 +1,426 @@
+"""The uncertain constants of the simulated plant, as data.
+
+Every constant of the plant whose value is not known from a datasheet or the
+paper appears ONCE here, with its unit, nominal value, plausible range,
+distribution, source (or the reason for the estimate) and the parameter
+fields it sets. The nominal values are the defaults of
+:mod:`slipreflex.sim.params` and :mod:`slipreflex.sim.objects`; a test checks
+that they agree, so the table cannot drift from the model.
+
+* :data:`UNCERTAIN` is the table (name -> :class:`UncertainConstant`).
+* :func:`plant_from_values` builds a :class:`Plant` (every parameter object a
+  :class:`~slipreflex.sim.Rig` takes, plus the paper's bottles) from a dict
+  of values; constants not given keep their nominal value.
+* :func:`load_ranges` reads a TOML file that narrows, widens or fixes any of
+  them and returns the modified table.
+* :meth:`UncertainConstant.value_at` maps a number in [0, 1] (a row of a
+  Sobol or Latin-hypercube design) onto the constant's distribution.
+
+How a constant maps onto the plant (``targets``): ``"hand.latency_s"`` sets a
+field of a parameter object (``hand``, ``slip_sensor``, ``imu``,
+``tactile``, ``flow``, ``physics``); ``"bottle.wall_stiffness_n_m"`` sets a
+field of every paper bottle; ``"bottle[TR,DK].mu_s"`` only of those;
+``"bottle.mu_k/mu_s"`` sets ``mu_k`` to the value times the bottle's
+(new) ``mu_s``.
+
+Examples
+--------
+>>> from slipreflex.sim.uncertain import UNCERTAIN, plant_from_values
+>>> UNCERTAIN["hand_latency"].unit
+'s'
+>>> plant = plant_from_values({"hand_latency": 0.02})
+>>> plant.hand.latency_s
+0.02
+>>> rig = plant.rig("TR", seed=1)
+>>> rig.hand.latency
+0.02
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any, Mapping
+
+from ..errors import ParameterError
+from .objects import BOTTLES, Bottle
+from .params import FlowParams, HandParams, ImuParams, PhysicsParams, SlipSensorParams, TactileParams
+
+__all__ = ["UncertainConstant", "UNCERTAIN", "Plant", "plant_from_values", "load_ranges", "nominal_values",
+           "DISTRIBUTIONS", "markdown_table"]
+
+#: Distributions a constant may have: uniform on [low, high], or log-uniform (for
+#: constants known to within a factor, such as stiffnesses and speeds).
+DISTRIBUTIONS: tuple[str, ...] = ("uniform", "loguniform")
+
+_SECTIONS = ("hand", "slip_sensor", "imu", "tactile", "flow", "physics")
+
+
+@dataclass(frozen=True, slots=True)
+class UncertainConstant:
+    """One uncertain plant constant.
+
+    Parameters
+    ----------
+    name : str
+        Identifier (used in TOML range files and as a results column).
+    unit : str
+        Unit of ``nominal``, ``low`` and ``high`` ("1" for a ratio).
+    nominal, low, high : float
+        The value the default plant uses and the plausible range
+        (``low <= nominal <= high``; ``low == high`` fixes it).
+    distribution : {"uniform", "loguniform"}
+        How a design spreads draws over the range.
+    source : str
+        The published source, or "estimate: " and the reason.
+    targets : tuple of str
+        The plant fields it sets (see the module notes).
+
+    Examples
+    --------
+    >>> c = UncertainConstant("k", "N/m", 100.0, 50.0, 200.0, "loguniform", "estimate: test", ("hand.x",))
+    >>> round(c.value_at(0.5), 9)
+    100.0
+    """
+
+    name: str
+    unit: str
+    nominal: float
+    low: float
+    high: float
+    distribution: str
+    source: str
+    targets: tuple[str, ...] = field(default_factory=tuple)
+
+    def __post_init__(self) -> None:
+        for f in ("nominal", "low", "high"):
+            v = getattr(self, f)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+                raise ParameterError(f"{self.name}.{f} must be a finite number, got {v!r}")
+        if not self.low <= self.nominal <= self.high:
+            raise ParameterError(f"{self.name}: need low <= nominal <= high, got {self.low!r} <= "
+                                 f"{self.nominal!r} <= {self.high!r}")
+        if self.distribution not in DISTRIBUTIONS:
+            raise ParameterError(f"{self.name}.distribution must be one of {', '.join(DISTRIBUTIONS)}, "
+                                 f"got {self.distribution!r}")
+        if self.distribution == "loguniform" and self.low <= 0:
+            raise ParameterError(f"{self.name}: a log-uniform range needs low > 0, got {self.low!r}")
+
+    @property
+    def fixed(self) -> bool:
+        """True when the range is a single value.
+
+        Examples
+        --------
+        >>> UNCERTAIN["hand_latency"].fixed
+        False
+        """
+        return self.low == self.high
+
+    def value_at(self, u: float) -> float:
+        """The value at quantile ``u`` in [0, 1] of the distribution.
+
+        Examples
+        --------
+        >>> c = UNCERTAIN["hand_latency"]
+        >>> c.value_at(0.0) == c.low and c.value_at(1.0) == c.high
+        True
+        """
+        if not 0.0 <= u <= 1.0:
+            raise ParameterError(f"{self.name}: quantile must be in [0, 1], got {u!r}")
+        if self.fixed:
+            return float(self.low)
+        if self.distribution == "loguniform":
+            return float(math.exp(math.log(self.low) + u * (math.log(self.high) - math.log(self.low))))
+        return float(self.low + u * (self.high - self.low))
+
+
+def _c(name: str, unit: str, nominal: float, low: float, high: float, dist: str, source: str,
+       *targets: str) -> UncertainConstant:
+    return UncertainConstant(name, unit, nominal, low, high, dist, source, tuple(targets))
+
+
+_B = BOTTLES
+_H = HandParams()
+_T = TactileParams()
+_S = SlipSensorParams()
+
+#: The table: every uncertain plant constant, by name. Nominal values are read from the
+#: parameter defaults (one definition); ranges and sources are documented in docs/simulator.md.
+UNCERTAIN: Mapping[str, UncertainConstant] = MappingProxyType({c.name: c for c in (
+    _c("pad_mu_s_pet", "1", _B["TR"].mu_s, 0.4, 1.2, "uniform",
+       "estimate: silicone rubber on smooth polymers, static coefficients 0.5-1.0 and higher on clean "
+       "smooth surfaces (engineering tables; soft fingertip studies 0.6-1.0)", "bottle[TR,DK].mu_s"),
+    _c("pad_mu_s_tape", "1", _B["TX"].mu_s, 0.5, 1.3, "uniform",
+       "estimate: as pad_mu_s_pet; matte vinyl tape grips a soft pad a little better", "bottle[TX].mu_s"),
+    _c("pad_mu_k_ratio", "1", round(_B["TR"].mu_k / _B["TR"].mu_s, 6), 0.6, 1.0, "uniform",
+       "estimate: kinetic friction of rubber on polymers 0-40 % below static", "bottle.mu_k/mu_s"),
+    _c("stribeck_velocity", "m/s", _B["TR"].stribeck_velocity_m_s, 1e-4, 1e-2, "loguniform",
+       "estimate: soft polymer contacts lose their static friction over 0.1-10 mm/s",
+       "bottle.stribeck_velocity_m_s"),
+    _c("wall_stiffness", "N/m", _B["TR"].wall_stiffness_n_m, 300.0, 1500.0, "loguniform",
+       "estimate: a thin 500 ml PET bottle dents 0.7-3 mm under a 1 N fingertip push",
+       "bottle.wall_stiffness_n_m"),
+    _c("hand_latency", "s", _H.latency_s, 0.005, 0.030, "uniform",
+       "estimate: 15-byte packet at 115200 baud (1.3 ms) plus control unit and digit controller",
+       "hand.latency_s"),
+    _c("finger_speed", "units/s", _H.speed_units_s, 400.0, 650.0, "uniform",
+       "i-Limb closes fully (0..500) in about 0.8-1.2 s (manufacturer; Belter et al. 2013 review)",
+       "hand.speed_units_s"),
+    _c("servo_gain", "1/s", _H.servo_gain, 20.0, 80.0, "loguniform",
+       "estimate: geared DC digit under position control settles small steps in 0.05-0.2 s",
+       "hand.servo_gain"),
+    _c("travel_per_unit", "m", _H.travel_per_unit_m, 0.12e-3, 0.3e-3, "uniform",
+       "estimate: the distal pad of a 9 cm digit sweeps 6-15 cm over 0..500", "hand.travel_per_unit_m"),
+    _c("pad_normal_stiffness", "N/m", _H.pad_normal_stiffness_n_m, 1500.0, 6000.0, "loguniform",
+       "estimate: 2-3 mm silicone pad, Shore 20-40 A", "hand.pad_normal_stiffness_n_m"),
+    _c("pad_shear_stiffness", "N/m", _H.pad_shear_stiffness_n_m, 1000.0, 4000.0, "loguniform",
+       "estimate: G A / h with G 0.1-0.4 MPa, 20 mm^2, 2 mm", "hand.pad_shear_stiffness_n_m"),
+    _c("tactile_noise", "N", _T.noise_n, 2e-3, 10e-3, "loguniform",
+       "estimate: piezoresistive 4 x 4 array with a 12-bit reading", "tactile.noise_n"),
+    _c("slip_sensor_noise", "V", _S.noise_v, 0.5e-3, 3e-3, "uniform",
+       "paper: noise below the 2-LSB threshold; the value is an estimate", "slip_sensor.noise_v"),
+)})
+
+
+def nominal_values(table: Mapping[str, UncertainConstant] | None = None) -> dict[str, float]:
+    """The nominal value of every constant of ``table`` (default :data:`UNCERTAIN`).
+
+    Examples
+    --------
+    >>> nominal_values()["hand_latency"]
+    0.01
+    """
+    return {k: float(c.nominal) for k, c in (table or UNCERTAIN).items()}
+
+
+def markdown_table(table: Mapping[str, UncertainConstant] | None = None) -> str:
+    """The table as Markdown (docs/simulator.md quotes it; a test keeps the two equal).
+
+    Examples
+    --------
+    >>> markdown_table().splitlines()[0].startswith("| constant |")
+    True
+    """
+    lines = ["| constant | unit | nominal | low | high | distribution | sets | source |",
+             "|---|---|---|---|---|---|---|---|"]
+    for c in (table or UNCERTAIN).values():
+        lines.append(f"| `{c.name}` | {c.unit} | {c.nominal:g} | {c.low:g} | {c.high:g} | {c.distribution} | "
+                     f"{', '.join(f'`{t}`' for t in c.targets)} | {c.source} |")
+    return "\n".join(lines)
+
+
+@dataclass(frozen=True)
+class Plant:
+    """Every parameter object of the simulated rig, and the bottles it holds.
+
+    Attributes
+    ----------
+    hand, slip_sensor, imu, tactile, flow, physics : parameter dataclasses
+    bottles : mapping of str to Bottle
+        The paper's bottles with this plant's friction and wall.
+    values : mapping of str to float
+        The uncertain constants this plant was built from.
+
+    Examples
+    --------
+    >>> Plant().bottles["TX"].name
+    'TX'
+    """
+
+    hand: HandParams = field(default_factory=HandParams)
+    slip_sensor: SlipSensorParams = field(default_factory=SlipSensorParams)
+    imu: ImuParams = field(default_factory=ImuParams)
+    tactile: TactileParams = field(default_factory=TactileParams)
+    flow: FlowParams = field(default_factory=FlowParams)
+    physics: PhysicsParams = field(default_factory=PhysicsParams)
+    bottles: Mapping[str, Bottle] = field(default_factory=lambda: dict(BOTTLES))
+    values: Mapping[str, float] = field(default_factory=nominal_values)
+
+    def rig_kwargs(self) -> dict[str, Any]:
+        """Keyword arguments for :class:`~slipreflex.sim.Rig` (all but the bottle and seed).
+
+        Examples
+        --------
+        >>> sorted(Plant().rig_kwargs())
+        ['flow', 'hand', 'imu', 'physics', 'slip_sensor', 'tactile']
+        """
+        return {s: getattr(self, s) for s in _SECTIONS}
+
+    def rig(self, bottle: str | Bottle, seed: Any = 0, **kwargs: Any):
+        """A :class:`~slipreflex.sim.Rig` of this plant holding ``bottle`` (a name of :attr:`bottles`).
+
+        Examples
+        --------
+        >>> Plant().rig("DK", seed=3).bottle.name
+        'DK'
+        """
+        from .rig import Rig
+
+        if isinstance(bottle, str):
+            if bottle not in self.bottles:
+                raise ParameterError(f"bottle: unknown bottle {bottle!r} (known: {', '.join(self.bottles)})")
+            bottle = self.bottles[bottle]
+        return Rig(bottle, seed, **self.rig_kwargs(), **kwargs)
+
+
+def _parse_target(target: str) -> tuple[str, tuple[str, ...] | None, str, str | None]:
+    """``"bottle[TR,DK].mu_k/mu_s"`` -> ("bottle", ("TR", "DK"), "mu_k", "mu_s")."""
+    head, _, fld = target.partition(".")
+    sel = None
+    if "[" in head:
+        head, _, rest = head.partition("[")
+        sel = tuple(s.strip() for s in rest.rstrip("]").split(","))
+    fld, _, ratio_of = fld.partition("/")
+    return head, sel, fld, (ratio_of or None)
+
+
+def plant_from_values(values: Mapping[str, float] | None = None, *,
+                      table: Mapping[str, UncertainConstant] | None = None) -> Plant:
+    """Build a :class:`Plant` from values of uncertain constants.
+
+    Parameters
+    ----------
+    values : mapping of str to float, optional
+        Values by constant name; constants not given keep their nominal value.
+    table : mapping, optional
+        The table to read names and nominal values from (default :data:`UNCERTAIN`).
+
+    Returns
+    -------
+    Plant
+
+    Raises
+    ------
+    ParameterError
+        On an unknown name or a value the parameter objects reject (the
+        message names the constant).
+
+    Examples
+    --------
+    >>> p = plant_from_values({"pad_mu_s_pet": 0.8, "pad_mu_k_ratio": 0.5})
+    >>> p.bottles["TR"].mu_s, p.bottles["TR"].mu_k, p.bottles["TX"].mu_s
+    (0.8, 0.4, 0.7)
+    """
+    table = UNCERTAIN if table is None else table
+    values = dict(values or {})
+    unknown = sorted(set(values) - set(table))
+    if unknown:
+        raise ParameterError(f"unknown uncertain constant {unknown[0]!r} (known: {', '.join(table)})")
+    full = {k: float(values.get(k, c.nominal)) for k, c in table.items()}
+    sections: dict[str, dict[str, float]] = {s: {} for s in _SECTIONS}
+    bottle_set: dict[str, dict[str, float]] = {b: {} for b in BOTTLES}
+    ratios: list[tuple[str, str, float, str]] = []
+    for name, val in full.items():
+        for target in table[name].targets:
+            head, sel, fld, ratio_of = _parse_target(target)
+            if head == "bottle":
+                for b in sel or tuple(BOTTLES):
+                    if ratio_of:
+                        ratios.append((b, fld, val, ratio_of))
+                    else:
+                        bottle_set[b][fld] = val
+            elif head in sections:
+                sections[head][fld] = val
+            else:
+                raise ParameterError(f"{name}: unknown target {target!r}")
+    for b, fld, val, ratio_of in ratios:
+        base = bottle_set[b].get(ratio_of, getattr(BOTTLES[b], ratio_of))
+        bottle_set[b][fld] = val * base
+    defaults = {"hand": HandParams, "slip_sensor": SlipSensorParams, "imu": ImuParams,
+                "tactile": TactileParams, "flow": FlowParams, "physics": PhysicsParams}
+    built: dict[str, Any] = {}
+    for s, kw in sections.items():
+        try:
+            built[s] = defaults[s](**kw)
+        except (ParameterError, TypeError) as err:
+            raise ParameterError(f"uncertain constants -> {s}: {err}") from None
+    bottles = {}
+    for b, kw in bottle_set.items():
+        try:
+            bottles[b] = replace(BOTTLES[b], **kw)
+        except (ParameterError, TypeError) as err:
+            raise ParameterError(f"uncertain constants -> bottle {b}: {err}") from None
+    return Plant(bottles=MappingProxyType(bottles), values=MappingProxyType(full), **built)
+
+
+_RANGE_KEYS = ("low", "high", "nominal", "fixed", "distribution")
+
+
+def load_ranges(path: str | Path, table: Mapping[str, UncertainConstant] | None = None
+                ) -> Mapping[str, UncertainConstant]:
+    """Read a TOML file that narrows, widens or fixes constants; return the modified table.
+
+    The file has one table per constant to change::
+
+        [hand_latency]          # narrow
+        low = 0.008
+        high = 0.015
+
+        [wall_stiffness]        # widen, and change the distribution
+        low = 200.0
+        high = 3000.0
+        distribution = "loguniform"
+
+        [pad_mu_k_ratio]        # fix
+        fixed = 0.8
+
+    Keys: ``low``, ``high``, ``nominal``, ``distribution``, or ``fixed`` alone.
+    A nominal value outside a new range is moved to the range's nearest end.
+
+    Raises
+    ------
+    ParameterError
+        Naming the file and the constant or key, on an unknown constant or key,
+        a bad value, ``low > high`` or a missing file.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "r.toml"
+    >>> _ = p.write_text("[hand_latency]\\nfixed = 0.02\\n")
+    >>> t = load_ranges(p)
+    >>> t["hand_latency"].fixed, t["hand_latency"].nominal
+    (True, 0.02)
+    """
+    table = UNCERTAIN if table is None else table
+    path = Path(path)
+    try:
+        with path.open("rb") as fh:
+            doc = tomllib.load(fh)
+    except (FileNotFoundError, IsADirectoryError):
+        raise ParameterError(f"{path}: no such file") from None
+    except tomllib.TOMLDecodeError as err:
+        raise ParameterError(f"{path}: invalid TOML: {err}") from None
+    out = dict(table)
+    for name, spec in doc.items():
+        if name not in table:
+            raise ParameterError(f"{path}: [{name}]: unknown constant (known: {', '.join(table)})")
+        if not isinstance(spec, dict):
+            raise ParameterError(f"{path}: {name} must be a table")
+        bad = sorted(set(spec) - set(_RANGE_KEYS))
+        if bad:
+            raise ParameterError(f"{path}: {name}.{bad[0]}: unknown key (use {', '.join(_RANGE_KEYS)})")
+        c = table[name]
+        if "fixed" in spec:
+            if set(spec) - {"fixed"}:
+                raise ParameterError(f"{path}: {name}: 'fixed' cannot be combined with other keys")
+            v = spec["fixed"]
+            kw: dict[str, Any] = {"low": v, "high": v, "nominal": v}
+        else:
+            kw = {k: spec[k] for k in ("low", "high", "distribution") if k in spec}
+            lo, hi = kw.get("low", c.low), kw.get("high", c.high)
+            nom = spec.get("nominal", c.nominal)
+            if isinstance(lo, (int, float)) and isinstance(hi, (int, float)) and isinstance(nom, (int, float)):
+                if lo > hi:
+                    raise ParameterError(f"{path}: {name}: low {lo!r} > high {hi!r}")
+                nom = min(max(nom, lo), hi)
+            kw["nominal"] = nom
+        try:
+            out[name] = replace(c, **kw)
+        except ParameterError as err:
+            raise ParameterError(f"{path}: {err}") from None
+    return MappingProxyType(out)
