@@ -19,7 +19,7 @@ from slipreflex.sim import PAPER_DROP, PAPER_POUR, HandParams
 def test_config_defaults_come_from_the_simulator_and_validate():
     c = ReproduceConfig()
     assert (c.trials, c.bottles, c.methods, c.experiments) == (
-        10, ("TR", "DK", "TX"), ("fixed", "dath", "nmsd", "swt"), ("drop", "pour"))
+        10, ("TR", "DK", "TX"), ("dath", "fixed", "nmsd", "swt"), ("drop", "pour"))
     assert c.drop == PAPER_DROP and c.pour == PAPER_POUR
     assert len(c.cells()) == 240
     assert ReproduceConfig(drop_mass_kg=0.02, pour_rate_l_min=2.0).pour.rate_l_min == 2.0

@@ -45,13 +45,14 @@ from typing import Any
 
 import numpy as np
 
-from .analysis.paper import BOTTLE_ORDER, METHOD_LABELS, paper_value
+from .analysis.paper import BOTTLE_ORDER, paper_value
 from .analysis.paper import EXPERIMENTS as PAPER_EXPERIMENTS
 from .analysis.trial import RESULT_COLUMNS
 from .baselines.calibration import REST_K
 from .baselines.swt import SWT_WINDOW
 from .errors import ParameterError
 from .validation import choices, integer, positive, set_field
+from . import methods
 
 __all__ = [
     "METHODS", "EXPERIMENTS", "BOTTLE_NAMES", "DEFAULT_SEED", "ReproduceConfig", "Cell",
@@ -60,8 +61,9 @@ __all__ = [
     "RESULTS_CSV_COLUMNS", "LANDING_S",
 ]
 
-#: Methods in the paper's order of presentation.
-METHODS: tuple[str, ...] = ("fixed", "dath", "nmsd", "swt")
+#: The paper's methods, in the one method order of :mod:`slipreflex.methods` (run by default;
+#: any registered method may be chosen).
+METHODS: tuple[str, ...] = methods.names(paper=True)
 #: Experiments: sudden load and gradual load (the paper's, from :mod:`slipreflex.analysis.paper`).
 EXPERIMENTS: tuple[str, ...] = PAPER_EXPERIMENTS
 #: The paper's bottles (keys of ``slipreflex.sim.BOTTLES``), in the canonical order used for seeds.
@@ -107,7 +109,7 @@ class ReproduceConfig:
     Examples
     --------
     >>> ReproduceConfig().trials, ReproduceConfig().methods
-    (10, ('fixed', 'dath', 'nmsd', 'swt'))
+    (10, ('dath', 'fixed', 'nmsd', 'swt'))
     >>> ReproduceConfig(bottles=("XX",))
     Traceback (most recent call last):
     ...
@@ -132,8 +134,9 @@ class ReproduceConfig:
     def __post_init__(self) -> None:
         set_field(self, "trials", integer("trials", self.trials, lo=1))
         set_field(self, "seed", integer("seed", self.seed, lo=0))
-        for name, known in (("bottles", BOTTLE_NAMES), ("methods", METHODS), ("experiments", EXPERIMENTS)):
+        for name, known in (("bottles", BOTTLE_NAMES), ("experiments", EXPERIMENTS)):
             set_field(self, name, choices(name, getattr(self, name), known))
+        set_field(self, "methods", choices("methods", self.methods, methods.names(), any_case=True))
         for name in ("rest_s", "after_s", "calibration_s", "rest_k"):
             set_field(self, name, positive(name, getattr(self, name)))
         set_field(self, "swt_persist", integer("swt_persist", self.swt_persist, lo=0))
@@ -274,24 +277,23 @@ def closing_speed() -> float:
     >>> closing_speed() > 0
     True
     """
-    from .sim import HandParams
-
-    return float(HandParams().speed_units_s)
+    return methods.MethodContext().closing_speed()
 
 
 def calibrate(config: ReproduceConfig) -> dict[str, float]:
-    """Thresholds of NMSD and SWT-SD by the one rule (k sd of the statistic at rest).
+    """Thresholds of the calibrated methods by the one rule (k sd of the statistic at rest).
 
     For every built-in bottle (always all three, whatever ``config.bottles``
     says), grasp with the bottle's calibration seed and record the index
-    tactile array at rest for ``calibration_s`` at 260 Hz and again at 380 Hz;
-    pool the recordings of each rate and apply
-    :func:`slipreflex.baselines.rest_threshold`.
+    tactile array at rest for ``calibration_s`` at the rate of every method
+    with a rest statistic (:func:`slipreflex.methods.calibrated`, in the
+    method order: NMSD's 260 Hz, then SWT-SD's 380 Hz); pool the recordings of
+    each method and apply :func:`slipreflex.baselines.rest_threshold`'s rule.
 
     Returns
     -------
     dict
-        ``{"nmsd": N/s, "swt": N}``.
+        Threshold by method name, e.g. ``{"nmsd": N/s, "swt": N}``.
 
     Examples
     --------
@@ -299,17 +301,17 @@ def calibrate(config: ReproduceConfig) -> dict[str, float]:
     >>> sorted(th), th["nmsd"] > 0 and th["swt"] > 0
     (['nmsd', 'swt'], True)
     """
-    from . import hardware as hw
     from .baselines import rest_statistic
     from .sim import Rig, simulate_open_loop
 
-    stats: dict[str, list[np.ndarray]] = {"nmsd": [], "swt": []}
+    specs = [methods.get(m) for m in methods.calibrated()]
+    stats: dict[str, list[np.ndarray]] = {s.name: [] for s in specs}
     for b in BOTTLE_NAMES:
         rig = Rig(b, seed=calibration_seed(config.seed, b))
         rig.grasp()
-        for method, fs in (("nmsd", hw.NMSD_FS), ("swt", hw.SWT_FS)):
-            tr = simulate_open_loop(rig, config.calibration_s, tactile_fs=fs)
-            stats[method].append(rest_statistic(tr.tactile, method, fs))
+        for spec in specs:
+            tr = simulate_open_loop(rig, config.calibration_s, tactile_fs=spec.fs)
+            stats[spec.name].append(rest_statistic(tr.tactile, spec.rest_statistic, spec.fs))
     out = {}
     for method, parts in stats.items():
         sd = float(np.std(np.concatenate(parts)))
@@ -320,14 +322,20 @@ def calibrate(config: ReproduceConfig) -> dict[str, float]:
     return out
 
 
-def make_reflex(method: str, *, p0: float, thresholds: dict[str, float], swt_persist: int | None = None):
-    """The reflex of ``method``, starting from finger position ``p0``.
+def method_context(config: ReproduceConfig, thresholds: dict[str, float]) -> methods.MethodContext:
+    """What every method of a run is built with: thresholds, the simulated hand's speed, options.
 
-    * ``fixed`` / ``dath``: :class:`slipreflex.chain.SlipReflex` at the DAQ's
-      rate with the paper's parameters (theta0 = 0.008 V, Kp = Ki = 5, ...);
-    * ``nmsd`` / ``swt``: :class:`slipreflex.baselines.NMSD` /
-      :class:`~slipreflex.baselines.SWTSD` with the calibrated threshold and
-      the simulated hand's closing speed.
+    Examples
+    --------
+    >>> method_context(ReproduceConfig(swt_persist=4), {}).options["swt_persist"]
+    4
+    """
+    return methods.MethodContext(thresholds=dict(thresholds), speed=closing_speed(),
+                                 options={"swt_persist": config.swt_persist})
+
+
+def make_reflex(method: str, *, p0: float, thresholds: dict[str, float], swt_persist: int | None = None):
+    """The reflex of ``method``, starting from finger position ``p0`` (via :func:`slipreflex.methods.make`).
 
     Examples
     --------
@@ -336,61 +344,31 @@ def make_reflex(method: str, *, p0: float, thresholds: dict[str, float], swt_per
     >>> make_reflex("swt", p0=200.0, thresholds={"swt": 0.02}).fs
     380.0
     """
-    from . import hardware as hw
-
-    if method in ("fixed", "dath"):
-        from .chain import SlipReflex
-
-        return SlipReflex(fs=hw.DAQ_FS, dath=method == "dath", p0=float(p0))
-    if method == "nmsd":
-        from .baselines import NMSD
-
-        return NMSD(threshold=thresholds["nmsd"], speed=closing_speed(), p0=float(p0))
-    if method == "swt":
-        from .baselines import SWTSD
-
-        extra = {} if swt_persist is None else {"persist": int(swt_persist)}
-        return SWTSD(threshold=thresholds["swt"], speed=closing_speed(), p0=float(p0), **extra)
-    raise ParameterError(f"method: unknown {method!r} (known: {', '.join(METHODS)})")
+    ctx = methods.MethodContext(thresholds=dict(thresholds), speed=closing_speed(),
+                                options={"swt_persist": swt_persist})
+    return methods.make(method, p0=p0, context=ctx)
 
 
-def _plot_data(cell: Cell, tr, reflex, streams, rows, t_pert: float, config: ReproduceConfig):
+def _plot_data(cell: Cell, spec: methods.MethodSpec, tr, reflex, rows, t_pert: float):
     """The streams of one trial for :func:`slipreflex.analysis.figures.plot_trial`."""
-    from . import hardware as hw
     from .analysis.figures import TrialPlot
     from .analysis.onset import OnsetParams, accel_envelope
 
     axis = int(rows[0]["axis"])
     env = accel_envelope(tr.t, tr.accel[:, axis], OnsetParams())
-    if cell.method in ("fixed", "dath"):
-        from .chain import run_chain
-
-        res = run_chain(tr.volts, reflex.params)
-        sensor_t, sensor, label = tr.t, res.filtered, "slip sensor, 10 Hz low-pass (V)"
-        ev = tr.t[res.events]
-        ev_label = "events (spikes)"
-    else:
-        from .baselines import nmsd_detections, swt_on
-
-        sensor_t = tr.tactile_t
-        sensor = tr.tactile.reshape(len(tr.tactile_t), -1).sum(axis=1)
-        label = "index tactile array, total force (N)"
-        if cell.method == "nmsd":
-            det = nmsd_detections(tr.tactile, reflex.fs, threshold=reflex.params.threshold)
-            ev_label = "NMSD detections"
-        else:
-            on = swt_on(tr.tactile, threshold=reflex.params.threshold, persist=reflex.params.persist)
-            det = on & ~np.concatenate(([False], on[:-1]))
-            ev_label = "SWT-SD ON starts"
-        ev = tr.tactile_t[det]
+    sensor_t, x = (tr.t, tr.volts) if spec.input_kind == "slip" else (tr.tactile_t, tr.tactile)
+    det = spec.detections(reflex, x) if spec.detections is not None else None
     pour = cell.experiment == "pour"
     xlim = None if pour else (t_pert - 0.3, min(tr.t_end, t_pert + 1.5))
     axes = "xyz"
     return TrialPlot(
         title=f"{cell.experiment} {cell.bottle} {cell.method} (trial {cell.trial}, seed {cell.seed})",
         accel_t=tr.t, accel=tr.accel[:, axis], accel_label=f"accelerometer ({axes[axis]} axis)",
-        envelope=env, threshold=float("nan"), sensor_t=sensor_t, sensor=sensor, sensor_label=label,
-        event_t=ev, event_label=ev_label, cmd_t=tr.cmd_t, cmd_v=tr.cmd_value,
+        envelope=env, threshold=float("nan"), sensor_t=None if det is None else sensor_t,
+        sensor=None if det is None else det.sensor,
+        sensor_label="" if det is None else det.sensor_label,
+        event_t=None if det is None else sensor_t[det.events],
+        event_label="" if det is None else det.event_label, cmd_t=tr.cmd_t, cmd_v=tr.cmd_value,
         load_t=tr.t if pour else None, load=tr.water_ml if pour else None,
         onsets=[r["onset_s"] for r in rows], responses=[r["onset_s"] + r["response_ms"] / 1e3 for r in rows],
         lasts=[r["last_change_s"] for r in rows], true_onsets=[r["true_onset_s"] for r in rows],
@@ -398,8 +376,12 @@ def _plot_data(cell: Cell, tr, reflex, streams, rows, t_pert: float, config: Rep
 
 
 def run_trial(cell: Cell, config: ReproduceConfig, thresholds: dict[str, float], *,
-              keep_plot: bool = False):
+              keep_plot: bool = False, spec: methods.MethodSpec | None = None):
     """Run and analyse one trial: grasp, rest, perturb, closed loop, metrics.
+
+    ``spec`` is the method's specification (default: the registry's entry for
+    ``cell.method``; a worker process gets it passed, so a method registered
+    only in the parent process runs too).
 
     Returns
     -------
@@ -421,7 +403,8 @@ def run_trial(cell: Cell, config: ReproduceConfig, thresholds: dict[str, float],
     rig = Rig(cell.bottle, seed=cell.seed)
     grasp = rig.grasp()
     p0 = float(round(grasp.positions[SLIP_FINGER]))
-    reflex = make_reflex(cell.method, p0=p0, thresholds=thresholds, swt_persist=config.swt_persist)
+    spec = spec or methods.get(cell.method)
+    reflex = spec.build(p0, dataclasses.replace(method_context(config, thresholds), method=spec.name))
     t_pert = rig.t + config.rest_s
     load = config.drop if cell.experiment == "drop" else config.pour
     rig.perturb(load, at=t_pert)
@@ -436,6 +419,7 @@ def run_trial(cell: Cell, config: ReproduceConfig, thresholds: dict[str, float],
         trial=cell.trial, accel_t=tr.t, accel=tr.accel, cmd_t=tr.cmd_t, cmd_v=tr.cmd_value,
         base_command=p0, induction=(start, t_pert + load_s + config.after_s), t_end=tr.t_end,
         fell_out_time=fall, true_onsets=[e.onset for e in tr.slip_events], method_fs=float(reflex.fs),
+        ramp=spec.ramp,
         load_t=tr.t if pour else None, load=tr.water_ml if pour else None,
         threshold=thresholds.get(cell.method, float(getattr(getattr(reflex, "params", None),
                                                              "threshold", float("nan")))))
@@ -449,7 +433,7 @@ def run_trial(cell: Cell, config: ReproduceConfig, thresholds: dict[str, float],
         # the simulator's slip episode: how long it slid (NaN while open / fallen) and how far
         r["true_slip_ms"] = float("nan") if ev is None or ev.end is None else 1e3 * (ev.end - ev.onset)
         r["true_slip_mm"] = float("nan") if ev is None else 1e3 * ev.distance
-    plot = _plot_data(cell, tr, reflex, streams, rows, t_pert, config) if keep_plot else None
+    plot = _plot_data(cell, spec, tr, reflex, rows, t_pert) if keep_plot else None
     return rows, plot
 
 
@@ -464,8 +448,9 @@ def _jet_fall_s(pour) -> float:
     return math.sqrt(2.0 * pour.fall_height_m / hw.GRAVITY)
 
 
-def _run_cell(cell: Cell, config: ReproduceConfig, thresholds: dict[str, float], keep_plot: bool):
-    return cell, run_trial(cell, config, thresholds, keep_plot=keep_plot)
+def _run_cell(cell: Cell, config: ReproduceConfig, thresholds: dict[str, float], keep_plot: bool,
+              spec: methods.MethodSpec):
+    return cell, run_trial(cell, config, thresholds, keep_plot=keep_plot, spec=spec)
 
 
 @dataclass
@@ -507,7 +492,7 @@ class ReproduceResult:
 
 def _order(row: dict[str, Any]) -> tuple:
     return (EXPERIMENTS.index(row["experiment"]), BOTTLE_NAMES.index(row["bottle"]),
-            METHODS.index(row["method"]), int(row["trial"]), int(row["event"]))
+            methods.names().index(row["method"]), int(row["trial"]), int(row["event"]))
 
 
 def run_reproduce(config: ReproduceConfig | None = None, *, jobs: int | None = None,
@@ -538,7 +523,7 @@ def run_reproduce(config: ReproduceConfig | None = None, *, jobs: int | None = N
     ...                       experiments=("drop",))
     >>> res = run_reproduce(cfg, jobs=1, progress=False, plots=False)
     >>> [(r["method"], r["n_events"]) for r in res.rows]
-    [('fixed', 1), ('dath', 1)]
+    [('dath', 1), ('fixed', 1)]
     """
     from tqdm import tqdm
 
@@ -549,10 +534,11 @@ def run_reproduce(config: ReproduceConfig | None = None, *, jobs: int | None = N
     if jobs < 1:
         raise ParameterError(f"jobs must be >= 1, got {jobs}")
     t0 = time.perf_counter()
-    thresholds = calibrate(config) if set(config.methods) & {"nmsd", "swt"} else {}
+    thresholds = calibrate(config) if set(config.methods) & set(methods.calibrated()) else {}
+    specs = {m: methods.get(m) for m in config.methods}
     t_cal = time.perf_counter() - t0
     cells = config.cells()
-    plot_method = "dath" if "dath" in config.methods else config.methods[0]
+    plot_method = methods.DATH if methods.DATH in config.methods else config.methods[0]
     want = {c.key for c in cells if plots and c.trial == 0 and c.method == plot_method}
     done: dict[tuple, tuple] = {}
     bar = tqdm(total=len(cells), file=sys.stderr, disable=not progress, desc="trials", unit="trial",
@@ -560,14 +546,15 @@ def run_reproduce(config: ReproduceConfig | None = None, *, jobs: int | None = N
     try:
         if jobs == 1:
             for c in cells:
-                _, res = _run_cell(c, config, thresholds, c.key in want)
+                _, res = _run_cell(c, config, thresholds, c.key in want, specs[c.method])
                 done[c.key] = res
                 bar.update()
                 if on_done:
                     on_done(c)
         else:
             with ProcessPoolExecutor(max_workers=jobs) as ex:
-                futs = [ex.submit(_run_cell, c, config, thresholds, c.key in want) for c in cells]
+                futs = [ex.submit(_run_cell, c, config, thresholds, c.key in want, specs[c.method])
+                        for c in cells]
                 for f in as_completed(futs):
                     c, res = f.result()
                     done[c.key] = res
@@ -813,7 +800,7 @@ def discussion_text(result: ReproduceResult) -> list[str]:
     tac = [r for r in rows if r["method"] in ("nmsd", "swt") and int(r["n_events"]) > 0]
     if tac:
         missed = "; ".join(
-            f"{METHOD_LABELS[m]} missed {pct(sub, lambda r: not _finite(r['response_ms']))} {e} slips"
+            f"{methods.label(m)} missed {pct(sub, lambda r: not _finite(r['response_ms']))} {e} slips"
             for m in ("nmsd", "swt") for e in EXPERIMENTS
             if (sub := [r for r in tac if r["method"] == m and r["experiment"] == e]))
         out.append(
@@ -868,7 +855,7 @@ def discussion_text(result: ReproduceResult) -> list[str]:
                         "drop cannot separate the methods by success.")
     pour_rows = sel(experiment="pour")
     if pour_rows:
-        per = ", ".join(f"{METHOD_LABELS[m]} {pct(sel(experiment='pour', method=m), ok)}" for m in METHODS
+        per = ", ".join(f"{methods.label(m)} {pct(sel(experiment='pour', method=m), ok)}" for m in methods.names()
                         if sel(experiment="pour", method=m))
         text.append(f"In the pours: {per} (paper: 100% with DATH).")
     falls = [1e3 * (r["fell_out_s"] - r["onset_s"]) for r in fell
@@ -880,18 +867,18 @@ def discussion_text(result: ReproduceResult) -> list[str]:
             "The paper's bottles slipped more gently.")
     if pour_rows:
         resp = ", ".join(
-            f"{METHOD_LABELS[m]} {_median([r['response_ms'] for r in sel(experiment='pour', method=m)]):.0f} ms"
-            for m in METHODS if sel(experiment="pour", method=m))
+            f"{methods.label(m)} {_median([r['response_ms'] for r in sel(experiment='pour', method=m)]):.0f} ms"
+            for m in methods.names() if sel(experiment="pour", method=m))
         text.append(
             f"Median pour response: {resp}. NMSD commands on the very sample that detects (260 Hz) "
             "and keeps closing at the hand's full speed, while the MPI raises the command only at "
             "the end of a 48 ms window, to P0 + Kp v + Ki h, so against a fast slip the paper's "
             "controller is at a disadvantage in the simulator.")
         pre = {m: sum(1 for r in sel(experiment="pour", method=m)
-                      if int(r["n_events"]) == 0 and r["n_increases"] > 0) for m in METHODS}
+                      if int(r["n_events"]) == 0 and r["n_increases"] > 0) for m in methods.names()}
         if any(pre.values()):
             text.append("Trials in which the command rose although the accelerometer never showed a "
                         "slip (the grip was raised on small motions and no slip followed): "
-                        + ", ".join(f"{METHOD_LABELS[m]} {n}" for m, n in pre.items() if n) + ".")
+                        + ", ".join(f"{methods.label(m)} {n}" for m, n in pre.items() if n) + ".")
     out.append(" ".join(text))
     return out

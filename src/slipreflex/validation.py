@@ -199,19 +199,27 @@ def flag(name: str, value: Any) -> bool:
     return bool(value)
 
 
-def choice(name: str, value: Any, options: Iterable[T]) -> T:
+def choice(name: str, value: Any, options: Iterable[T], *, any_case: bool = False) -> T:
     """``value`` after checking it is one of ``options``.
+
+    With ``any_case``, a string matches an option that differs only in case and the
+    option's spelling is returned.
 
     Examples
     --------
     >>> choice("experiment", "drop", ("drop", "pour"))
     'drop'
+    >>> choice("method", "DATH", ("fixed", "dath"), any_case=True)
+    'dath'
     >>> choice("experiment", "shake", ("drop", "pour"))
     Traceback (most recent call last):
     ...
     slipreflex.errors.ParameterError: experiment: unknown 'shake' (known: drop, pour)
     """
     opts = tuple(options)
+    if any_case and isinstance(value, str):
+        folded = {o.casefold(): o for o in opts if isinstance(o, str)}
+        value = folded.get(value.casefold(), value)
     try:
         ok = value in opts
     except TypeError:  # unhashable or incomparable
@@ -221,8 +229,11 @@ def choice(name: str, value: Any, options: Iterable[T]) -> T:
     return value
 
 
-def choices(name: str, values: Any, options: Iterable[T], *, allow_empty: bool = False) -> tuple[T, ...]:
+def choices(name: str, values: Any, options: Iterable[T], *, allow_empty: bool = False,
+            any_case: bool = False) -> tuple[T, ...]:
     """``values`` as a tuple, after checking each is one of ``options``, once.
+
+    ``any_case`` as in :func:`choice` (the options' spellings are returned).
 
     A single string is refused (``"dath"`` is not a list of methods).
 
@@ -238,11 +249,9 @@ def choices(name: str, values: Any, options: Iterable[T], *, allow_empty: bool =
     opts = tuple(options)
     if isinstance(values, (str, bytes)) or not isinstance(values, Iterable):
         raise ParameterError(f"{name} must be a sequence of {', '.join(map(str, opts))}, got {values!r}")
-    vals = tuple(values)
+    vals = tuple(choice(name, v, opts, any_case=any_case) for v in values)
     if not vals and not allow_empty:
         raise ParameterError(f"{name}: choose at least one of {', '.join(map(str, opts))}")
-    for v in vals:
-        choice(name, v, opts)
     if len(set(vals)) != len(vals):
         raise ParameterError(f"{name}: repeated entries in {vals}")
     return vals

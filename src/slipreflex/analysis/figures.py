@@ -28,13 +28,15 @@ from typing import Any
 
 import numpy as np
 
-from .paper import BOTTLE_ORDER, METHOD_LABELS, METHOD_ORDER, paper_value
+from .. import methods as _registry
+from .paper import BOTTLE_ORDER, paper_value
 
-__all__ = ["TrialPlot", "plot_trial", "bar_chart", "success_chart", "METHOD_COLORS"]
+__all__ = ["TrialPlot", "plot_trial", "bar_chart", "success_chart"]
 
-#: One colour per method, used by every figure.
-METHOD_COLORS: dict[str, str] = {"dath": "#1f77b4", "fixed": "#ff7f0e", "nmsd": "#2ca02c",
-                                 "swt": "#d62728"}
+
+def _color(m: str) -> str:
+    """A method's colour in every figure (its :class:`~slipreflex.methods.MethodSpec`), grey if unknown."""
+    return _registry.get(m).color if m.casefold() in _registry.names() else "0.5"
 
 
 def _plt():
@@ -157,7 +159,7 @@ def plot_trial(p: TrialPlot, path: str | Path) -> Path:
 def _present(summary, experiment):
     rows = [s for s in summary if s["experiment"] == experiment]
     bottles = [b for b in BOTTLE_ORDER if any(s["bottle"] == b for s in rows)]
-    methods = [m for m in METHOD_ORDER if any(s["method"] == m for s in rows)]
+    methods = [m for m in _registry.names() if any(s["method"] == m for s in rows)]
     return {(s["bottle"], s["method"]): s for s in rows}, bottles, methods
 
 
@@ -189,8 +191,8 @@ def bar_chart(summary: Sequence[dict[str, Any]], experiment: str, metric: str,
         mean = np.array([float(x) for x in mean])
         sd = np.nan_to_num(np.array([float(x) for x in sd]))
         ok = np.isfinite(mean)
-        ax.bar(xs[ok], mean[ok], width * 0.9, yerr=sd[ok], capsize=3, color=METHOD_COLORS.get(m, "0.5"))
-        handles.append(Patch(color=METHOD_COLORS.get(m, "0.5"), label=f"{METHOD_LABELS.get(m, m)} (ours)"))
+        ax.bar(xs[ok], mean[ok], width * 0.9, yerr=sd[ok], capsize=3, color=_color(m))
+        handles.append(Patch(color=_color(m), label=f"{_registry.label(m)} (ours)"))
         for x in xs[~ok]:
             ax.text(x, 0, "n/a", ha="center", va="bottom", fontsize=6, rotation=90)
         for x, b in zip(xs, bottles):
@@ -233,8 +235,8 @@ def success_chart(summary: Sequence[dict[str, Any]], path: str | Path) -> Path:
         for j, m in enumerate(methods):
             xs = np.arange(len(bottles)) + (j - (len(methods) - 1) / 2) * width
             rate = [100 * float(by.get((b, m), {}).get("success_rate", np.nan)) for b in bottles]
-            ax.bar(xs, np.nan_to_num(rate), width * 0.9, color=METHOD_COLORS.get(m, "0.5"),
-                   label=METHOD_LABELS.get(m, m))
+            ax.bar(xs, np.nan_to_num(rate), width * 0.9, color=_color(m),
+                   label=_registry.label(m))
         ax.set_xticks(np.arange(len(bottles)))
         ax.set_xticklabels(bottles)
         ax.set_ylim(-35, 105)

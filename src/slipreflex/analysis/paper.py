@@ -2,8 +2,8 @@
 
 ``PAPER`` maps ``(experiment, metric, bottle, method)`` to a
 :class:`Reported` value (mean and sd in ms, or a note where the paper gives
-only words). Methods use the package's names: ``"dath"``, ``"fixed"``,
-``"nmsd"``, ``"swt"``; experiments ``"drop"`` and ``"pour"``; metrics
+only words). Methods use the registry's names (:mod:`slipreflex.methods`;
+their order and labels are defined there); experiments ``"drop"`` and ``"pour"``; metrics
 ``"response_ms"`` and ``"total_ms"``. ``PAPER_SUCCESS`` holds the success
 rates the text states.
 
@@ -22,13 +22,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 __all__ = ["Reported", "PAPER", "PAPER_SUCCESS", "PAPER_NOTES", "paper_value",
-           "EXPERIMENTS", "METRICS", "BOTTLE_ORDER", "METHOD_ORDER", "METHOD_LABELS"]
+           "EXPERIMENTS", "METRICS", "BOTTLE_ORDER"]
 
 EXPERIMENTS: tuple[str, ...] = ("drop", "pour")
 METRICS: tuple[str, ...] = ("response_ms", "total_ms")
 BOTTLE_ORDER: tuple[str, ...] = ("TR", "DK", "TX")
-METHOD_ORDER: tuple[str, ...] = ("dath", "fixed", "nmsd", "swt")
-METHOD_LABELS: dict[str, str] = {"dath": "DATH", "fixed": "fixed", "nmsd": "NMSD", "swt": "SWT-SD"}
 
 
 @dataclass(frozen=True, slots=True)

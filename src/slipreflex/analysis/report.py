@@ -23,8 +23,9 @@ from typing import Any
 
 import numpy as np
 
-from .paper import (BOTTLE_ORDER, EXPERIMENTS, METHOD_LABELS, METHOD_ORDER, PAPER_SUCCESS,
-                    paper_value)
+from .. import methods
+from ..methods import label as _label
+from .paper import BOTTLE_ORDER, EXPERIMENTS, PAPER_SUCCESS, paper_value
 from .trial import RESULT_COLUMNS
 
 __all__ = ["SUMMARY_COLUMNS", "summarize", "write_csv", "read_csv", "terminal_table",
@@ -68,7 +69,15 @@ def group_key_order(key: tuple[str, str, str]) -> tuple:
     def idx(seq, x):
         return seq.index(x) if x in seq else len(seq)
     e, b, m = key
-    return (idx(EXPERIMENTS, e), e, idx(BOTTLE_ORDER, b), b, idx(METHOD_ORDER, m), m)
+    return (idx(EXPERIMENTS, e), e, idx(BOTTLE_ORDER, b), b, idx(methods.names(), m), m)
+
+
+def _table_methods(by: dict[tuple[str, str, str], Any]) -> list[str]:
+    """Columns of a comparison table: the paper's methods, then any other method that ran."""
+    ran = {k[2] for k in by}
+    return (list(methods.names(paper=True)) + [m for m in methods.names() if m in ran
+                                               and m not in methods.names(paper=True)]
+            + sorted(ran - set(methods.names())))
 
 
 def _truthy(x: Any) -> float:
@@ -185,7 +194,7 @@ def terminal_table(summary: Sequence[dict[str, Any]]) -> str:
     lines = [head]
     for s in summary:
         lines.append(
-            f"{s['experiment']:5} {s['bottle']:6} {METHOD_LABELS.get(s['method'], s['method']):7} "
+            f"{s['experiment']:5} {s['bottle']:6} {_label(s['method']):7} "
             f"{fmt_mean_sd(s['response_mean_ms'], s['response_sd_ms'], s['response_n']):17} "
             f"{fmt_mean_sd(s['total_mean_ms'], s['total_sd_ms'], s['total_n']):17} "
             f"{100 * s['success_rate']:.0f}% of {s['success_n']}")
@@ -201,16 +210,16 @@ def comparison_markdown(summary: Sequence[dict[str, Any]]) -> str:
     | experiment, metric | bottle | DATH paper | DATH ours | fixed paper | fixed ours | NMSD paper | NMSD ours | SWT-SD paper | SWT-SD ours |
     """
     by = {(s["experiment"], s["bottle"], s["method"]): s for s in summary}
-    cols = " | ".join(f"{METHOD_LABELS[m]} paper | {METHOD_LABELS[m]} ours" for m in METHOD_ORDER)
-    lines = [f"| experiment, metric | bottle | {cols} |",
-             "|---|---|" + "---|" * (2 * len(METHOD_ORDER))]
+    order = _table_methods(by)
+    cols = " | ".join(f"{_label(m)} paper | {_label(m)} ours" for m in order)
+    lines = [f"| experiment, metric | bottle | {cols} |", "|---|---|" + "---|" * (2 * len(order))]
     exps = [e for e in EXPERIMENTS if any(k[0] == e for k in by)] or list(EXPERIMENTS)
     bottles = [b for b in BOTTLE_ORDER if any(k[1] == b for k in by)] or list(BOTTLE_ORDER)
     for e in exps:
         for metric, label in (("response", "response ms"), ("total", "total ms")):
             for b in bottles:
                 cells = []
-                for m in METHOD_ORDER:
+                for m in order:
                     p = paper_value(e, f"{metric}_ms", b, m)
                     s = by.get((e, b, m))
                     ours = fmt_mean_sd(s[f"{metric}_mean_ms"], s[f"{metric}_sd_ms"],
@@ -219,7 +228,7 @@ def comparison_markdown(summary: Sequence[dict[str, Any]]) -> str:
                 lines.append(f"| {e}, {label} | {b} | " + " | ".join(cells) + " |")
     for e in exps:
         cells = []
-        for m in METHOD_ORDER:
+        for m in order:
             pt = PAPER_SUCCESS.get((e, "all", m), "-")
             ours = [by[(e, b, m)] for b in bottles if (e, b, m) in by]
             if ours:
@@ -242,12 +251,13 @@ def success_markdown(summary: Sequence[dict[str, Any]]) -> str:
     | drop | TX | 90% (10) | 90 % | not run | - | not run | - | not run | - |
     """
     by = {(s["experiment"], s["bottle"], s["method"]): s for s in summary}
-    cols = " | ".join(f"{METHOD_LABELS[m]} ours | paper" for m in METHOD_ORDER)
-    lines = [f"| experiment | bottle | {cols} |", "|---|---|" + "---|" * (2 * len(METHOD_ORDER))]
+    order = _table_methods(by)
+    cols = " | ".join(f"{_label(m)} ours | paper" for m in order)
+    lines = [f"| experiment | bottle | {cols} |", "|---|---|" + "---|" * (2 * len(order))]
     keys = sorted({(e, b) for e, b, _ in by}, key=lambda k: group_key_order((k[0], k[1], "")))
     for e, b in keys:
         cells = []
-        for m in METHOD_ORDER:
+        for m in order:
             s = by.get((e, b, m))
             cells.append(f"{100 * s['success_rate']:.0f}% ({s['success_n']})" if s else "not run")
             cells.append(PAPER_SUCCESS.get((e, b, m), "-"))
@@ -309,7 +319,7 @@ def pour_slips_markdown(rows: Sequence[dict[str, Any]]) -> str:
         def med(v):
             v = [x for x in v if x == x]
             return f"{np.median(v):.0f}" if v else "-"
-        lines.append(f"| {b} | {METHOD_LABELS.get(m, m)} | {np.mean(n):.1f} | "
+        lines.append(f"| {b} | {_label(m)} | {np.mean(n):.1f} | "
                      f"{100 * np.mean([k >= 2 for k in n]):.0f}% | {med(first)} | {med(second)} |")
     return "\n".join(lines)
 
@@ -334,10 +344,10 @@ def differences(summary: Sequence[dict[str, Any]], *, tolerance_sd: float = 2.0)
             m = float(s[f"{metric}_mean_ms"])
             if math.isnan(m):
                 out.append(f"{s['experiment']}, {metric}, {s['bottle']}, "
-                           f"{METHOD_LABELS[s['method']]}: no value of ours (paper {p.text()} ms)")
+                           f"{_label(s['method'])}: no value of ours (paper {p.text()} ms)")
                 continue
             if abs(m - p.mean) > tolerance_sd * p.sd:
-                out.append(f"{s['experiment']}, {metric}, {s['bottle']}, {METHOD_LABELS[s['method']]}: "
+                out.append(f"{s['experiment']}, {metric}, {s['bottle']}, {_label(s['method'])}: "
                            f"ours {m:.0f} ms vs paper {p.text()} ms ({m - p.mean:+.0f} ms, "
                            f"{m / p.mean:.1f}x)")
     return out

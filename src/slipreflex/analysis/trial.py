@@ -36,23 +36,21 @@ Examples
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+from .. import methods
 from ..errors import ParameterError
 from .events import LEAD_S, MERGE_S, segment_events
 from .metrics import ACTIVITY_GAP_S, controller_activity, response_time, suppressed
 from .onset import OnsetParams, accel_envelope, detect_onset, rest_threshold_of, select_axis
 
-__all__ = ["TrialStreams", "analyse_trial", "RESULT_COLUMNS", "RAMP_METHODS", "MAX_RESPONSE_S"]
+__all__ = ["TrialStreams", "analyse_trial", "RESULT_COLUMNS", "MAX_RESPONSE_S"]
 
 #: A command increase later than this after the onset (s) is not a response to that slip.
 MAX_RESPONSE_S: float = 1.0
-
-#: Methods whose command is a closing ramp: their "total" is the closing time generated.
-RAMP_METHODS: frozenset[str] = frozenset({"nmsd", "swt"})
 
 #: Columns of results.csv, in order (one definition; the writer and the tests use it).
 RESULT_COLUMNS: tuple[str, ...] = (
@@ -94,6 +92,11 @@ class TrialStreams:
         A load signal (e.g. poured volume in ml) to report at each onset.
     threshold : float
         The reflex's detection threshold (reported only).
+    ramp : bool or None
+        Whether the method's command is a closing ramp, so its *total* is the
+        closing time it generated (NMSD, SWT-SD); None reads it from the
+        method's specification (:mod:`slipreflex.methods`), False for a method
+        that is not registered.
 
     Examples
     --------
@@ -122,22 +125,14 @@ class TrialStreams:
     load_t: Any = None
     load: Any = None
     threshold: float = float("nan")
-    extra: dict = field(default_factory=dict)
+    ramp: bool | None = None
 
     def __post_init__(self) -> None:
         if self.experiment not in ("drop", "pour"):
             raise ParameterError(f"experiment must be 'drop' or 'pour', got {self.experiment!r}")
-
-    @property
-    def ramp(self) -> bool:
-        """Whether the method's total is a closing time (NMSD, SWT-SD).
-
-        Examples
-        --------
-        >>> RAMP_METHODS >= {"nmsd", "swt"}
-        True
-        """
-        return self.method in RAMP_METHODS
+        if self.ramp is None:
+            registered = self.method.casefold() in methods.names() if isinstance(self.method, str) else False
+            object.__setattr__(self, "ramp", methods.get(self.method).ramp if registered else False)
 
 
 def _nearest(values: np.ndarray, x: float, lo: float, hi: float) -> float:

@@ -31,8 +31,6 @@ from ..errors import DataError, ParameterError
 from ..hardware import NMSD_FS
 from ..validation import number
 from ._validate import as_frames
-from .nmsd import nmsd_statistic
-from .swt import SWT_WINDOW, swt_statistic
 
 __all__ = ["REST_K", "rest_statistic", "rest_threshold"]
 
@@ -40,15 +38,17 @@ __all__ = ["REST_K", "rest_statistic", "rest_threshold"]
 REST_K: float = 5.0
 
 
-def rest_statistic(frames, method: str, fs: float = NMSD_FS) -> np.ndarray:
+def rest_statistic(frames, method, fs: float = NMSD_FS) -> np.ndarray:
     """The method's signed statistic on a rest recording, warm-up samples dropped.
 
     Parameters
     ----------
     frames : array_like, shape (K, 4, 4)
         Tactile frames of the rig at rest, at the method's rate.
-    method : {"nmsd", "swt"}
-        Which statistic.
+    method : str or callable
+        A registered method with a rest statistic (``"nmsd"``, ``"swt"``, or one
+        registered in :mod:`slipreflex.methods`), or the statistic itself,
+        ``statistic(frames, fs) -> 1-D array``.
     fs : float
         Sampling rate (used by NMSD's derivative).
 
@@ -64,22 +64,31 @@ def rest_statistic(frames, method: str, fs: float = NMSD_FS) -> np.ndarray:
     (48,)
     """
     f = as_frames("frames", frames)
-    if method == "nmsd":
-        return nmsd_statistic(f, fs)[2:].ravel()
-    if method == "swt":
-        return swt_statistic(f)[SWT_WINDOW - 1:].ravel()
-    raise ParameterError(f"method must be 'nmsd' or 'swt', got {method!r}")
+    return np.asarray(_statistic(method)(f, fs), dtype=np.float64).ravel()
 
 
-def rest_threshold(frames, method: str, fs: float = NMSD_FS, *, k: float = REST_K) -> float:
+def _statistic(method):
+    """The rest statistic of ``method``: the callable itself, or the registry's entry."""
+    if callable(method):
+        return method
+    from .. import methods  # the registry sits above the baselines; only its table is read here
+
+    stat = methods.get(method).rest_statistic
+    if stat is None:
+        raise ParameterError(f"method {method!r} has no rest statistic "
+                             f"(methods with one: {', '.join(methods.calibrated())})")
+    return stat
+
+
+def rest_threshold(frames, method, fs: float = NMSD_FS, *, k: float = REST_K) -> float:
     """Threshold = ``k`` x standard deviation of the method's statistic at rest.
 
     Parameters
     ----------
     frames : array_like, shape (K, 4, 4)
         Tactile frames of the rig at rest, at the method's rate.
-    method : {"nmsd", "swt"}
-        Which statistic.
+    method : str or callable
+        A method with a rest statistic, or the statistic (see :func:`rest_statistic`).
     fs : float
         Sampling rate (Hz).
     k : float

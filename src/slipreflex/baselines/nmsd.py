@@ -38,7 +38,8 @@ from ..validation import number, resolve_params, set_field
 from ._validate import as_frame, as_frames
 from .closing import CLOSE_S, Closer, ClosingParams, closing_commands
 
-__all__ = ["NMSDParams", "NMSD", "nmsd_statistic", "nmsd_detections", "nmsd_commands"]
+__all__ = ["NMSDParams", "NMSD", "nmsd_statistic", "nmsd_detections", "nmsd_commands",
+           "nmsd_rest_statistic"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -120,6 +121,20 @@ def nmsd_statistic(frames, fs: float = NMSD_FS) -> np.ndarray:
         d = np.diff(f, axis=0) * fs
         s[2:] = np.diff(d, axis=0)
     return s
+
+
+def nmsd_rest_statistic(frames, fs: float = NMSD_FS) -> np.ndarray:
+    """NMSD's statistic on a rest recording, pooled over taxels, warm-up frames dropped.
+
+    What :func:`slipreflex.baselines.rest_threshold` measures the spread of.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> nmsd_rest_statistic(np.zeros((10, 4, 4))).shape
+    (128,)
+    """
+    return nmsd_statistic(frames, fs)[2:].ravel()
 
 
 def nmsd_detections(frames, fs: float = NMSD_FS, *, threshold: float) -> np.ndarray:

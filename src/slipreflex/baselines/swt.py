@@ -47,6 +47,7 @@ from ._validate import as_frame, as_frames
 from .closing import CLOSE_S, Closer, ClosingParams, closing_commands
 
 __all__ = ["SWTParams", "SWTSD", "swt_statistic", "swt_on", "swt_commands", "swt_kernel",
+           "swt_rest_statistic",
            "SWT_WINDOW", "SWT_LEVEL", "SWT_WAVELET"]
 
 #: Moving-window length (samples): 21 ms at 380 Hz, as in the paper.
@@ -179,6 +180,20 @@ def swt_statistic(frames) -> np.ndarray:
         win = np.ascontiguousarray(np.swapaxes(win, 1, 2))                         # (k-7, 8, 16)
         out[SWT_WINDOW - 1:] = _apply(_kernel(), win).reshape(-1, *f.shape[1:])
     return out
+
+
+def swt_rest_statistic(frames, fs: float = SWT_FS) -> np.ndarray:
+    """SWT-SD's statistic on a rest recording, pooled over taxels, warm-up frames dropped.
+
+    ``fs`` is accepted for a uniform signature (the statistic does not depend on it).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> swt_rest_statistic(np.zeros((10, 4, 4))).shape
+    (48,)
+    """
+    return swt_statistic(frames)[SWT_WINDOW - 1:].ravel()
 
 
 def swt_on(frames, *, threshold: float, persist: int = SWT_WINDOW) -> np.ndarray:

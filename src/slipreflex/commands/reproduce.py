@@ -22,14 +22,17 @@ HELP = "run the paper's drop and pour experiments on the simulated rig and write
 ORDER = 30
 
 
-def _csv_list(kind: str, known: tuple[str, ...]):
+def _csv_list(kind: str, known, *, any_case: bool = False):
+    """An argparse type: a comma-separated list of ``known()`` names (checked when parsed)."""
     def parse(text: str) -> tuple[str, ...]:
-        items = tuple(x.strip() for x in text.split(",") if x.strip())
-        bad = [x for x in items if x not in known]
-        if bad or not items:
-            raise argparse.ArgumentTypeError(
-                f"{kind}: unknown {', '.join(map(repr, bad)) or 'empty list'} (known: {', '.join(known)})")
-        return items
+        from ..errors import ParameterError
+        from ..validation import choices
+
+        try:
+            return choices(kind, [x.strip() for x in text.split(",") if x.strip()], known(),
+                           any_case=any_case)
+        except ParameterError as err:
+            raise argparse.ArgumentTypeError(str(err)) from None
     return parse
 
 
@@ -37,6 +40,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``slipreflex reproduce``: every count and load parameter."""
     import dataclasses
 
+    from .. import methods
     from ..experiments import BOTTLE_NAMES, EXPERIMENTS, METHODS, ReproduceConfig
 
     d = {f.name: f.default for f in dataclasses.fields(ReproduceConfig)}
@@ -44,11 +48,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="output directory (default: ./out/reproduce)")
     p.add_argument("--trials", type=int, default=d["trials"],
                    help=f"trials per bottle, experiment and method (default {d['trials']})")
-    p.add_argument("--bottles", type=_csv_list("bottles", BOTTLE_NAMES), default=BOTTLE_NAMES,
+    p.add_argument("--bottles", type=_csv_list("bottles", lambda: BOTTLE_NAMES), default=BOTTLE_NAMES,
                    help=f"comma-separated bottles (default: {','.join(BOTTLE_NAMES)})")
-    p.add_argument("--methods", type=_csv_list("methods", METHODS), default=METHODS,
-                   help=f"comma-separated methods (default: {','.join(METHODS)})")
-    p.add_argument("--experiments", type=_csv_list("experiments", EXPERIMENTS), default=EXPERIMENTS,
+    p.add_argument("--methods", type=_csv_list("methods", methods.names, any_case=True), default=METHODS,
+                   help=f"comma-separated methods, any case (registered: {','.join(methods.names())}; "
+                        f"default: {','.join(METHODS)})")
+    p.add_argument("--experiments", type=_csv_list("experiments", lambda: EXPERIMENTS),
+                   default=EXPERIMENTS,
                    help=f"comma-separated experiments (default: {','.join(EXPERIMENTS)})")
     p.add_argument("--seed", type=int, default=d["seed"], help=f"master seed (default {d['seed']})")
     p.add_argument("--drop-mass", type=float, default=None, metavar="KG",

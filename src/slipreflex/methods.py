@@ -1,0 +1,480 @@
+"""The registry of reflex methods: one specification per method, in one place.
+
+Every slip-detection / reflex method the package can run (the paper's fixed
+threshold and DATH chains, NMSD, SWT-SD, and any method added later or by
+user code) is described by one frozen :class:`MethodSpec`: its name, the
+label tables print, which stream it reads, the rate it runs at, whether its
+command is a closing ramp, how to build it, how figures draw its detections,
+and, for methods whose threshold is calibrated at rest, the statistic the
+threshold rule measures. The experiment runner, the report, the figures, the
+CLI's ``--methods`` and the study read only these specifications, so a method
+registered here works everywhere without touching them.
+
+In the spirit of Gymnasium's ``register`` / ``make``:
+
+* :func:`names` lists the registered methods in their one order
+  (registration order: the paper's DATH, fixed, NMSD, SWT-SD first, as in its table);
+* :func:`make` builds a fresh reflex by name (any case: ``"DATH"`` is ``"dath"``);
+* :func:`register` adds a method; :func:`get` returns its specification.
+
+Adding a method
+---------------
+A method built on the paper's chain (:class:`slipreflex.chain.SlipReflex`) with
+other parameters takes two lines: :func:`chain_method` writes the
+specification (builder and detection drawing included) from the chain's
+keyword parameters.
+
+>>> from slipreflex import methods
+>>> methods.register(methods.chain_method("dath-d8", "DATH, D = 8", dath=True, dath_samples=8))
+>>> "dath-d8" in methods.names()
+True
+>>> methods.make("DATH-D8", p0=200.0).params.dath_samples
+8
+>>> methods.unregister("dath-d8")
+
+Any other method writes a builder ``build(p0, context, **params)`` returning an
+object that satisfies :class:`slipreflex.interfaces.Reflex` (check it with
+:func:`slipreflex.testing.check_reflex`). For runs in worker processes
+(``reproduce --jobs N``) the builder must be picklable: a module-level
+function, or a :func:`functools.partial` of one.
+
+>>> from slipreflex.chain import SlipReflex
+>>> def build_slow(p0, context, **params):
+...     return SlipReflex(fs=333.0, n=32, p0=p0, **params)
+>>> methods.register(methods.MethodSpec(name="slow", label="slow MPI", input_kind="slip",
+...                                     fs=333.0, build=build_slow))
+>>> methods.make("slow", p0=100.0).params.n
+32
+>>> methods.unregister("slow")
+
+Examples
+--------
+>>> names()[:4]
+('dath', 'fixed', 'nmsd', 'swt')
+>>> get("SWT").label, get("swt").ramp, get("dath").input_kind
+('SWT-SD', True, 'slip')
+>>> make("nmsd", threshold=40.0, speed=500.0).fs
+260.0
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import re
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from . import hardware as hw
+from .errors import ParameterError
+from .interfaces import InputKind, Reflex
+from .validation import choice, flag, positive, text
+
+__all__ = ["MethodSpec", "MethodContext", "Detections", "register", "unregister", "get", "names",
+           "make", "label", "canonical", "chain_method", "calibrated", "FIXED", "DATH", "NMSD", "SWT"]
+
+#: Names of the paper's four methods (the one place they are spelled).
+FIXED, DATH, NMSD, SWT = "fixed", "dath", "nmsd", "swt"
+
+_NAME = re.compile(r"^[a-z][a-z0-9_.-]*$")
+
+
+@dataclass(frozen=True)
+class MethodContext:
+    """What a builder may need beyond the method's own parameters.
+
+    Parameters
+    ----------
+    thresholds : mapping of str to float
+        Thresholds calibrated at rest, by method name
+        (:func:`slipreflex.experiments.calibrate`).
+    speed : float or None
+        The hand's closing speed (finger units per second) for methods that
+        ramp the command; None takes the simulated hand's
+        (``slipreflex.sim.HandParams().speed_units_s``).
+    options : mapping
+        Run-wide settings a builder may read (``swt_persist`` from
+        ``reproduce --swt-persist``); a builder ignores the ones it does not know.
+    method : str
+        The method being built (set by :func:`make`); :attr:`threshold` reads
+        its entry of ``thresholds``.
+
+    Examples
+    --------
+    >>> MethodContext(thresholds={"nmsd": 40.0}, method="nmsd").threshold
+    40.0
+    >>> MethodContext(speed=300.0).closing_speed()
+    300.0
+    """
+
+    thresholds: Mapping[str, float] = field(default_factory=dict)
+    speed: float | None = None
+    options: Mapping[str, Any] = field(default_factory=dict)
+    method: str = ""
+
+    @property
+    def threshold(self) -> float | None:
+        """The calibrated threshold of :attr:`method`, or None.
+
+        Examples
+        --------
+        >>> MethodContext().threshold is None
+        True
+        """
+        return self.thresholds.get(self.method)
+
+    def closing_speed(self) -> float:
+        """:attr:`speed`, or the simulated hand's closing speed when it is None.
+
+        Examples
+        --------
+        >>> MethodContext().closing_speed() > 0
+        True
+        """
+        if self.speed is not None:
+            return positive("speed", self.speed)
+        from .sim import HandParams
+
+        return float(HandParams().speed_units_s)
+
+
+@dataclass(frozen=True)
+class Detections:
+    """What a trial figure draws for a method: its sensor trace and its detections.
+
+    Parameters
+    ----------
+    sensor : numpy.ndarray, shape (K,)
+        The trace to draw, one value per input sample.
+    sensor_label : str
+        Axis label of the trace.
+    events : numpy.ndarray of bool, shape (K,)
+        Samples at which the method detected something.
+    event_label : str
+        Legend of the detections.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> int(Detections(np.zeros(3), "x", np.array([False, True, False]), "spikes").events.sum())
+    1
+    """
+
+    sensor: np.ndarray
+    sensor_label: str
+    events: np.ndarray
+    event_label: str
+
+
+@dataclass(frozen=True)
+class MethodSpec:
+    """Everything the package needs to know about one method.
+
+    Parameters
+    ----------
+    name : str
+        Registry key, lower case (``[a-z][a-z0-9_.-]*``); names are matched
+        case-insensitively.
+    label : str
+        How tables and figures name it ("SWT-SD").
+    input_kind : {"slip", "tactile"}
+        The stream its ``step`` reads.
+    fs : float
+        The rate (Hz) it runs at (and records its calibration at).
+    build : callable
+        ``build(p0, context, **params) -> Reflex``: a fresh reflex starting
+        from finger position ``p0``; ``context`` is a :class:`MethodContext`;
+        ``params`` override the method's defaults.
+    ramp : bool
+        Its command is a closing ramp (NMSD's rule): the paper's *total* is the
+        closing time it generated, not the span of its command changes.
+    detections : callable, optional
+        ``detections(reflex, x) -> Detections``, with ``x`` the method's input
+        stream of a whole trial (volts, or tactile frames); None draws no trace.
+    rest_statistic : callable, optional
+        ``rest_statistic(frames, fs) -> 1-D array``: the signed statistic whose
+        spread at rest sets the method's threshold
+        (:func:`slipreflex.baselines.rest_threshold`); None when the method
+        needs no calibration.
+    color : str
+        Its colour in every figure (a matplotlib colour).
+    paper : bool
+        One of the paper's four methods (run by default).
+
+    Examples
+    --------
+    >>> get("fixed").paper, get("fixed").rest_statistic is None
+    (True, True)
+    """
+
+    name: str
+    label: str
+    input_kind: InputKind
+    fs: float
+    build: Callable[..., Reflex]
+    ramp: bool = False
+    detections: Callable[[Any, np.ndarray], Detections] | None = None
+    rest_statistic: Callable[[np.ndarray, float], np.ndarray] | None = None
+    color: str = "0.5"
+    paper: bool = False
+
+    def __post_init__(self) -> None:
+        text("MethodSpec.name", self.name)
+        if not _NAME.match(self.name):
+            raise ParameterError(f"MethodSpec.name must be lower case letters, digits, '-', '_' or '.', "
+                                 f"starting with a letter, got {self.name!r}")
+        text("MethodSpec.label", self.label)
+        choice("MethodSpec.input_kind", self.input_kind, ("slip", "tactile"))
+        object.__setattr__(self, "fs", positive("MethodSpec.fs", self.fs))
+        for name in ("build", "detections", "rest_statistic"):
+            v = getattr(self, name)
+            if not callable(v) and not (v is None and name != "build"):
+                raise ParameterError(f"MethodSpec.{name} must be callable, got {v!r}")
+        flag("MethodSpec.ramp", self.ramp)
+        flag("MethodSpec.paper", self.paper)
+
+
+_REGISTRY: dict[str, MethodSpec] = {}
+
+
+def register(spec: MethodSpec, *, replace: bool = False) -> None:
+    """Add ``spec`` to the registry (at the end of the method order).
+
+    Parameters
+    ----------
+    spec : MethodSpec
+    replace : bool
+        Allow replacing a method of the same name (keeps its place).
+
+    Examples
+    --------
+    >>> register(get("dath"))
+    Traceback (most recent call last):
+    ...
+    slipreflex.errors.ParameterError: method 'dath' is already registered (pass replace=True)
+    """
+    if not isinstance(spec, MethodSpec):
+        raise ParameterError(f"register() takes a MethodSpec, got {type(spec).__name__}")
+    if spec.name in _REGISTRY and not replace:
+        raise ParameterError(f"method {spec.name!r} is already registered (pass replace=True)")
+    _REGISTRY[spec.name] = spec
+
+
+def unregister(name: str) -> None:
+    """Remove a method from the registry.
+
+    Examples
+    --------
+    >>> register(chain_method("tmp", "tmp")); unregister("TMP"); "tmp" in names()
+    False
+    """
+    _REGISTRY.pop(canonical(name))
+
+
+def canonical(name: str) -> str:
+    """The registered name ``name`` refers to (any case).
+
+    Raises
+    ------
+    ParameterError
+        ``"method: unknown 'x' (known: fixed, dath, ...)"``.
+
+    Examples
+    --------
+    >>> canonical("SWT")
+    'swt'
+    """
+    return choice("method", name.strip() if isinstance(name, str) else name, _REGISTRY, any_case=True)
+
+
+def get(name: str) -> MethodSpec:
+    """The specification of a registered method (any case).
+
+    Examples
+    --------
+    >>> get("Nmsd").fs
+    260.0
+    """
+    return _REGISTRY[canonical(name)]
+
+
+def names(*, paper: bool = False) -> tuple[str, ...]:
+    """Registered method names in the one method order (``paper=True``: the paper's four).
+
+    Examples
+    --------
+    >>> names(paper=True)
+    ('dath', 'fixed', 'nmsd', 'swt')
+    """
+    return tuple(n for n, s in _REGISTRY.items() if s.paper or not paper)
+
+
+def calibrated() -> tuple[str, ...]:
+    """Methods whose threshold is calibrated at rest (they have a ``rest_statistic``), in order.
+
+    Examples
+    --------
+    >>> calibrated()[:2]
+    ('nmsd', 'swt')
+    """
+    return tuple(n for n, s in _REGISTRY.items() if s.rest_statistic is not None)
+
+
+def label(name: str) -> str:
+    """The label of a method for tables; an unregistered name labels itself.
+
+    Examples
+    --------
+    >>> label("swt"), label("not-a-method")
+    ('SWT-SD', 'not-a-method')
+    """
+    spec = _REGISTRY.get(name.casefold()) if isinstance(name, str) else None
+    return spec.label if spec else str(name)
+
+
+def make(name: str, *, p0: float = 0.0, context: MethodContext | None = None, **params: Any) -> Reflex:
+    """Build a fresh reflex of the method ``name``.
+
+    Parameters
+    ----------
+    name : str
+        A registered method (any case).
+    p0 : float
+        Starting finger position (the grasp's).
+    context : MethodContext, optional
+        Calibrated thresholds, closing speed and run options.
+    **params
+        The method's own parameters, overriding its defaults and the context
+        (an unknown one is an error of the method's parameter class).
+
+    Examples
+    --------
+    >>> make("swt", context=MethodContext(thresholds={"swt": 0.02}, speed=500.0)).params.threshold
+    0.02
+    >>> make("dath", p0=200.0, kp=3.0).params.kp
+    3.0
+    """
+    spec = get(name)
+    ctx = dataclasses.replace(context or MethodContext(), method=spec.name)
+    return spec.build(float(p0), ctx, **params)
+
+
+# --- the built-in methods -------------------------------------------------------------------
+
+
+def _build_chain(chain_params: Mapping[str, Any], p0: float, context: MethodContext,
+                 **params: Any) -> Reflex:
+    from .chain import SlipReflex
+
+    return SlipReflex(**{"fs": hw.DAQ_FS, **chain_params, **params, "p0": p0})
+
+
+def _chain_detections(reflex: Any, volts: np.ndarray) -> Detections:
+    from .chain import run_chain
+
+    res = run_chain(volts, reflex.params)
+    return Detections(res.filtered, f"slip sensor, {reflex.params.cutoff:g} Hz low-pass (V)",
+                      np.asarray(res.events, dtype=bool), "events (spikes)")
+
+
+def chain_method(name: str, label: str, *, color: str = "0.5", paper: bool = False,
+                 **chain_params: Any) -> MethodSpec:
+    """The specification of a method that is the paper's chain with other parameters.
+
+    Parameters
+    ----------
+    name, label : str
+        Registry name and table label.
+    color : str
+        Figure colour.
+    paper : bool
+        One of the paper's methods.
+    **chain_params
+        Keyword parameters of :class:`slipreflex.chain.SlipReflex`
+        (``dath``, ``threshold``, ``dath_samples``, ``n``, ``kp``, ...); the
+        chain runs at the DAQ's rate unless ``fs`` is given.
+
+    Examples
+    --------
+    >>> spec = chain_method("dath-n8", "DATH, N = 8", dath=True, n=8)
+    >>> spec.build(150.0, MethodContext()).params.n, spec.input_kind
+    (8, 'slip')
+    """
+    fs = chain_params.get("fs", hw.DAQ_FS)
+    return MethodSpec(name=name, label=label, input_kind="slip", fs=fs,
+                      build=functools.partial(_build_chain, dict(chain_params)),
+                      detections=_chain_detections, color=color, paper=paper)
+
+
+def _tactile_kwargs(context: MethodContext, params: dict[str, Any]) -> dict[str, Any]:
+    """Threshold and speed from the context unless the caller gave them."""
+    if "threshold" not in params:
+        if context.threshold is None:
+            raise ParameterError(f"{context.method} needs a threshold: pass threshold=... or a context "
+                                 "with calibrated thresholds (slipreflex.experiments.calibrate)")
+        params["threshold"] = context.threshold
+    if "speed" not in params:
+        params["speed"] = context.closing_speed()
+    return params
+
+
+def _build_nmsd(p0: float, context: MethodContext, **params: Any) -> Reflex:
+    from .baselines import NMSD as _NMSD
+
+    return _NMSD(p0=p0, **_tactile_kwargs(context, params))
+
+
+def _build_swt(p0: float, context: MethodContext, **params: Any) -> Reflex:
+    from .baselines import SWTSD
+
+    if "persist" not in params and context.options.get("swt_persist") is not None:
+        params["persist"] = context.options["swt_persist"]
+    return SWTSD(p0=p0, **_tactile_kwargs(context, params))
+
+
+def _total_force(frames: np.ndarray) -> np.ndarray:
+    return np.asarray(frames, dtype=float).reshape(len(frames), -1).sum(axis=1)
+
+
+_FORCE_LABEL = "index tactile array, total force (N)"
+
+
+def _nmsd_detections(reflex: Any, frames: np.ndarray) -> Detections:
+    from .baselines import nmsd_detections
+
+    det = nmsd_detections(frames, reflex.fs, threshold=reflex.params.threshold)
+    return Detections(_total_force(frames), _FORCE_LABEL, det, "NMSD detections")
+
+
+def _swt_detections(reflex: Any, frames: np.ndarray) -> Detections:
+    from .baselines import swt_on
+
+    on = swt_on(frames, threshold=reflex.params.threshold, persist=reflex.params.persist)
+    starts = on & ~np.concatenate(([False], on[:-1]))
+    return Detections(_total_force(frames), _FORCE_LABEL, starts, "SWT-SD ON starts")
+
+
+def _nmsd_rest(frames: np.ndarray, fs: float) -> np.ndarray:
+    from .baselines import nmsd_rest_statistic
+
+    return nmsd_rest_statistic(frames, fs)
+
+
+def _swt_rest(frames: np.ndarray, fs: float) -> np.ndarray:
+    from .baselines import swt_rest_statistic
+
+    return swt_rest_statistic(frames, fs)
+
+
+# the paper's table order (DATH, fixed, NMSD, SWT-SD) is the one method order everywhere
+register(chain_method(DATH, "DATH", dath=True, color="#1f77b4", paper=True))
+register(chain_method(FIXED, "fixed", dath=False, color="#ff7f0e", paper=True))
+register(MethodSpec(name=NMSD, label="NMSD", input_kind="tactile", fs=hw.NMSD_FS, build=_build_nmsd,
+                    ramp=True, detections=_nmsd_detections, rest_statistic=_nmsd_rest,
+                    color="#2ca02c", paper=True))
+register(MethodSpec(name=SWT, label="SWT-SD", input_kind="tactile", fs=hw.SWT_FS, build=_build_swt,
+                    ramp=True, detections=_swt_detections, rest_statistic=_swt_rest,
+                    color="#d62728", paper=True))
