@@ -54,7 +54,8 @@ from typing import Any
 import numpy as np
 
 from .. import hardware as hw
-from .paper import BOTTLE_ORDER, EXPERIMENTS, METHOD_LABELS, PAPER
+from ..methods import label as _label
+from .paper import BOTTLE_ORDER, EXPERIMENTS, PAPER
 
 __all__ = [
     "HOLDS", "FAILS", "NOT_TESTABLE", "VERDICTS", "ABOUT_VOLTS", "ABOUT_REL", "ABOUT_RATE_POINTS",
@@ -287,7 +288,7 @@ def _scan_spikes(ci: ClaimInput) -> tuple[str, str]:
 def _need(ci: ClaimInput, experiment: str, methods: Sequence[str], bottles: Sequence[str] = BOTTLE_ORDER,
           column: str = "response_ms") -> str | None:
     """Why a claim is not testable (missing cells or values), or None."""
-    miss = [f"{METHOD_LABELS[m]} {b}" for m in methods for b in bottles
+    miss = [f"{_label(m)} {b}" for m in methods for b in bottles
             if ci.cell_mean(experiment, b, m, column) != ci.cell_mean(experiment, b, m, column)]
     return f"no {column} for {experiment}: " + ", ".join(miss) if miss else None
 
@@ -361,7 +362,7 @@ def _pour_faster(ci: ClaimInput) -> tuple[str, str]:
     for b in bottles:
         v = {m: ci.cell_mean("pour", b, m, "response_ms") for m in fast + slow}
         ok &= max(v[m] for m in fast) < min(v[m] for m in slow)
-        parts.append(f"{b} " + ", ".join(f"{METHOD_LABELS[m]} {_ms(v[m])}" for m in fast + slow))
+        parts.append(f"{b} " + ", ".join(f"{_label(m)} {_ms(v[m])}" for m in fast + slow))
     return _verdict(ok), "pour mean response (ms): " + "; ".join(parts)
 
 
@@ -604,7 +605,7 @@ def _window_sd() -> Contradiction:
     floor = window_phase_sd_ms()
     low = [(e, b, m, v.sd) for (e, metric, b, m), v in PAPER.items()
            if metric == "response_ms" and m in ("fixed", "dath") and v.sd is not None and v.sd < floor]
-    cells = ", ".join(f"{e} {b} {METHOD_LABELS[m]} {sd:g}" for e, b, m, sd in low)
+    cells = ", ".join(f"{e} {b} {_label(m)} {sd:g}" for e, b, m, sd in low)
     return Contradiction(
         "response sd below the window's phase",
         f"a free-running {hw.WINDOW_N}-sample window at {hw.DAQ_FS:.2f} Hz "
