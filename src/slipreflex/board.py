@@ -1,0 +1,525 @@
+"""The reflex as the microcontroller runs it: the Python twin of ``firmware/reflex/``.
+
+The C99 core in ``firmware/reflex/reflex.c`` runs the chain of shared SPEC section 1
+in integer fixed point on 10-bit ADC counts. This module does the same integer
+operations, in the same order, so the two agree bit for bit on every sample; the
+shared vectors in ``tests/data/board/vectors.txt`` and random signals check that
+(tests/test_board.py). docs/firmware.md states the formats:
+
+* filter: 2nd-order Butterworth low-pass in direct form I, coefficients with
+  :data:`COEF_Q` = 24 fractional bits (``b = g (1, 2, 1)``, ``a = (1, a1, a2)``,
+  ``4 g = 2**24 + a1 + a2`` so the DC gain is exactly 1), output in counts with
+  :data:`SIG_Q` = 16 fractional bits, rounded half up (add ``2**23``, arithmetic
+  shift right by 24) -- the chain's only rounding;
+* encoder: the float chain's rules on Q16 counts; theta0 = 0.008 V =
+  1.6384 counts = 107374 in Q16; DATH's ``|x_k - x_(k-1)|`` is the exact difference
+  of two Q16 samples;
+* windows and MPI: integers (the MPI is exact, commands are whole positions).
+
+Examples
+--------
+>>> import numpy as np
+>>> adc = np.r_[np.full(32, 300), 300 + np.round(10 * np.sin(np.arange(64) / 3.0))].astype(int)
+>>> res = run_board_chain(adc, dath=True)
+>>> res.counts.tolist(), res.commands.tolist()
+([0, 0, 5, 9, 7, 6], [0, 0, 50, 115, 140, 165])
+>>> BoardParams.from_chain().theta0          # 0.008 V in Q16 counts
+107374
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from . import hardware as hw
+from .errors import DataError, ParameterError
+
+__all__ = [
+    "COEF_Q", "SIG_Q", "H_MAX", "BoardParams", "BoardChain", "BoardReflex", "BoardResult",
+    "run_board_chain", "adc_counts", "quantize_lowpass", "volts_to_q16",
+]
+
+#: Fractional bits of the filter coefficients.
+COEF_Q: int = 24
+#: Fractional bits of the signals (filtered samples, thresholds, accumulator), in counts.
+SIG_Q: int = 16
+#: The MPI integral saturates here; output-neutral (docs/firmware.md).
+H_MAX: int = 65535
+#: Largest ADC reading.
+ADC_MAX: int = (1 << hw.ADC_BITS) - 1
+_ROUND = 1 << (COEF_Q - 1)
+
+
+def adc_counts(volts: float) -> int:
+    """Volts -> the count the board's 10-bit ADC reads (floor at 5 V / 1024, clipped).
+
+    The AVR's ADC returns ``floor(V * 1024 / Vref)``, saturated to 0..1023; the
+    simulated sensor (``slipreflex.sim``) quantises the same way, so its volts come
+    back as exact counts.
+
+    Parameters
+    ----------
+    volts : float
+        Finite input voltage.
+
+    Returns
+    -------
+    int
+
+    Examples
+    --------
+    >>> adc_counts(2.5), adc_counts(300 * 5 / 1024), adc_counts(-0.1), adc_counts(7.0)
+    (512, 300, 0, 1023)
+    """
+    if not math.isfinite(volts):
+        raise DataError(f"slip-sensor volts must be finite, got {volts!r}")
+    return int(min(max(math.floor(volts / hw.ADC_LSB), 0), ADC_MAX))
+
+
+def volts_to_q16(volts: float) -> int:
+    """A voltage difference as Q16 counts, rounded half up (thresholds, floor, x0).
+
+    Examples
+    --------
+    >>> volts_to_q16(0.008)      # 1.6384 counts
+    107374
+    """
+    return math.floor(volts / hw.ADC_LSB * (1 << SIG_Q) + 0.5)
+
+
+def quantize_lowpass(fs: float = hw.DAQ_FS, cutoff: float = 10.0) -> tuple[int, int, int]:
+    """Integer coefficients ``(g, a1, a2)`` in Q24 of the chain's Butterworth low-pass.
+
+    ``a1`` is rounded to nearest; ``g`` is ``(2**24 + a1 + a2) / 4`` rounded, and
+    ``a2`` is then set to ``4 g - 2**24 - a1`` (a change of at most 2 in Q24), so
+    that the DC gain is exactly one and a constant input passes unchanged.
+
+    Examples
+    --------
+    >>> quantize_lowpass()
+    (131201, -29103869, 12851457)
+    """
+    from .chain.filters import _design
+
+    sos, _ = _design(float(fs), float(cutoff))
+    one = 1 << COEF_Q
+    a1 = math.floor(float(sos[0, 4]) * one + 0.5)
+    a2 = math.floor(float(sos[0, 5]) * one + 0.5)
+    g = math.floor((one + a1 + a2) / 4 + 0.5)
+    return g, a1, 4 * g - one - a1
+
+
+def _int(name: str, value: Any, lo: int, hi: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not lo <= value <= hi:
+        raise ParameterError(f"{name} must be an integer in {lo}..{hi}, got {value!r}")
+    return int(value)
+
+
+# field -> (lo, hi) of the C type in struct reflex_params
+_RANGES: dict[str, tuple[int, int]] = {
+    "g": (-2**31, 2**31 - 1), "a1": (-2**31, 2**31 - 1), "a2": (-2**31, 2**31 - 1),
+    "theta0": (0, 2**31 - 1), "dath_floor": (0, 2**31 - 1), "x0": (0, ADC_MAX << SIG_Q),
+    "p0": (-32768, 32767), "lo": (-32768, 32767), "hi": (-32768, 32767),
+    "adc_min": (0, ADC_MAX), "adc_max": (0, ADC_MAX), "stuck_after": (0, 65535),
+    "dath_samples": (1, 255), "n": (1, 255), "kp": (0, 255), "ki": (0, 255),
+    "reset_after": (1, 255),
+}
+
+
+@dataclass(frozen=True, slots=True)
+class BoardParams:
+    """The C core's ``struct reflex_params``: every parameter in integer units.
+
+    Build it from the float chain's parameters with :meth:`from_chain`. Fields
+    are those of the C struct (Q24 coefficients, Q16 thresholds, whole positions);
+    ``x0`` is None when the reference starts at the first filtered sample.
+
+    Examples
+    --------
+    >>> p = BoardParams.from_chain(dath=True, p0=125)
+    >>> p.dath, p.theta0, p.p0, p.n
+    (True, 107374, 125, 16)
+    >>> BoardParams.from_chain(kp=2.5)
+    Traceback (most recent call last):
+    ...
+    slipreflex.errors.ParameterError: kp must be a whole number for the board, got 2.5
+    """
+
+    g: int
+    a1: int
+    a2: int
+    theta0: int
+    filter: bool = True
+    dath: bool = False
+    dath_samples: int = hw.WINDOW_N
+    dath_floor: int = 0
+    x0: int | None = None
+    n: int = hw.WINDOW_N
+    p0: int = 0
+    kp: int = 5
+    ki: int = 5
+    reset_after: int = 10
+    lo: int = hw.FINGER_MIN
+    hi: int = hw.FINGER_MAX
+    adc_min: int = 0
+    adc_max: int = ADC_MAX
+    stuck_after: int = 0
+
+    def __post_init__(self) -> None:
+        for name, (lo, hi) in _RANGES.items():
+            value = getattr(self, name)
+            if name == "x0" and value is None:
+                continue
+            object.__setattr__(self, name, _int(name, value, lo, hi))
+        for name in ("filter", "dath"):
+            if not isinstance(getattr(self, name), bool):
+                raise ParameterError(f"{name} must be True or False, got {getattr(self, name)!r}")
+        if self.lo > self.hi:
+            raise ParameterError(f"lo must be <= hi, got lo={self.lo}, hi={self.hi}")
+        if self.adc_min > self.adc_max:
+            raise ParameterError(f"adc_min must be <= adc_max, got {self.adc_min} > {self.adc_max}")
+
+    @classmethod
+    def from_chain(cls, params=None, *, adc_min: int = 0, adc_max: int = ADC_MAX,
+                   stuck_after: int = 0, **kwargs) -> "BoardParams":
+        """Quantise the float chain's parameters (:class:`~slipreflex.ReflexParams`).
+
+        Parameters
+        ----------
+        params : ReflexParams, optional
+            Or the same fields as keywords (``fs`` defaults to the board's 333.33 Hz).
+            Volts become Q16 counts (:func:`volts_to_q16`); positions and gains must
+            be whole numbers.
+        adc_min, adc_max, stuck_after : int
+            Fault rules (the defaults never fault on a 10-bit reading).
+
+        Returns
+        -------
+        BoardParams
+
+        Examples
+        --------
+        >>> BoardParams.from_chain(x0=0.0).x0
+        0
+        """
+        from .chain.params import ReflexParams
+
+        if params is not None and kwargs:
+            raise TypeError("give either params or keyword parameters, not both")
+        if params is None:
+            params = ReflexParams.from_dict({"fs": hw.DAQ_FS, **kwargs})
+        p = params
+        whole = {}
+        for name in ("p0", "kp", "ki", "lo", "hi"):
+            value = getattr(p, name)
+            if value != math.floor(value):
+                raise ParameterError(f"{name} must be a whole number for the board, got {value!r}")
+            whole[name] = int(value)
+        g, a1, a2 = quantize_lowpass(p.fs, p.cutoff)
+        return cls(g=g, a1=a1, a2=a2, theta0=volts_to_q16(p.threshold), filter=p.filter,
+                   dath=p.dath, dath_samples=p.dath_samples, dath_floor=volts_to_q16(p.dath_floor),
+                   x0=None if p.x0 is None else volts_to_q16(p.x0), n=p.n,
+                   reset_after=p.reset_after, adc_min=adc_min, adc_max=adc_max,
+                   stuck_after=stuck_after, **whole)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain dict of every field.
+
+        Examples
+        --------
+        >>> BoardParams.from_chain().to_dict()["g"]
+        131201
+        """
+        return dataclasses.asdict(self)
+
+
+class BoardChain:
+    """Streaming integer chain on ADC counts: ``reflex_step`` of the C core.
+
+    Attributes after each :meth:`step`: ``x`` (the filtered sample, Q16 counts,
+    kept over faults), ``event``, ``fault``, ``window`` (the sample completed a
+    window), ``v`` (its count) and ``command`` (the command in force).
+
+    Examples
+    --------
+    >>> c = BoardChain(BoardParams.from_chain())
+    >>> [c.step(300) for _ in range(16)][-1], c.v, c.command
+    (True, 0, 0)
+    """
+
+    def __init__(self, params: BoardParams) -> None:
+        if not isinstance(params, BoardParams):
+            raise ParameterError(f"params must be BoardParams, got {type(params).__name__}")
+        self.params = params
+        self.reset()
+
+    def reset(self) -> None:
+        """Back to ``reflex_init``: P0 = p0, command = clip(p0), nothing seen."""
+        p = self.params
+        self.y1 = self.y2 = self.x = 0
+        self.prev = self.acc = 0
+        self.theta = p.theta0
+        self.r1 = self.r2 = 0
+        self.P0 = p.p0
+        self.m = min(max(p.p0, p.lo), p.hi)
+        self.h = 0
+        self.last_adc, self.same = 0xFFFF, 0
+        self.remaining = 0
+        self.primed = self.started = False
+        self.in_window = self.count = self.zeros = 0
+        self.event = self.fault = self.window = False
+        self.v = 0
+
+    @property
+    def command(self) -> int:
+        """The command in force (the last MPI output, or clip(p0))."""
+        return self.m
+
+    def _prime(self, r: int) -> None:
+        xq = r << SIG_Q
+        self.r1 = self.r2 = r
+        self.y1 = self.y2 = xq
+        p = self.params
+        self.prev = p.x0 if (not self.started and p.x0 is not None) else xq
+        self.acc = 0
+        self.theta = p.theta0
+        self.remaining = 0
+        self.primed = self.started = True
+
+    def _lowpass(self, r: int) -> int:
+        p = self.params
+        acc = p.g * ((r + 2 * self.r1 + self.r2) << SIG_Q) - p.a1 * self.y1 - p.a2 * self.y2
+        y = (acc + _ROUND) >> COEF_Q      # Python's >> floors, like the AVR's arithmetic shift
+        self.r2, self.r1 = self.r1, r
+        self.y2, self.y1 = self.y1, y
+        return y
+
+    def _encode(self, x: int) -> bool:
+        p = self.params
+        d = x - self.prev
+        self.acc += d
+        y = abs(self.acc) > self.theta
+        if y:
+            self.acc = 0
+        if p.dath:
+            if self.remaining > 0:
+                self.remaining -= 1
+                if self.remaining == 0:
+                    self.theta = p.theta0
+            elif y:
+                self.theta = max(abs(d), p.dath_floor)
+                self.remaining = p.dath_samples
+        self.prev = x
+        return y
+
+    def _mpi(self, v: int, position: int | None) -> None:
+        p = self.params
+        self.h = min(self.h + v, H_MAX)
+        pi = self.P0 + p.kp * v + p.ki * self.h
+        self.m = min(max(max(pi, self.m), p.lo), p.hi)
+        if v == 0:
+            self.zeros += 1
+            if self.zeros == p.reset_after:
+                self.P0 = self.m if position is None else position
+                self.h = 0
+                self.zeros = 0
+        else:
+            self.zeros = 0
+
+    def step(self, adc: int, position: int | None = None) -> bool:
+        """One ADC reading in; True when it completed a window (then see ``v``, ``command``).
+
+        Parameters
+        ----------
+        adc : int
+            The reading, 0..65535 as the C ``uint16_t`` (above 1023 is a fault).
+        position : int, optional
+            Measured slip-finger position (-32768..32767), P0 at an MPI reset.
+        """
+        p = self.params
+        fault = adc > ADC_MAX or adc < p.adc_min or adc > p.adc_max
+        self.same = min(self.same + 1, 0xFFFF) if adc == self.last_adc else 0
+        self.last_adc = adc
+        if p.stuck_after and self.same >= p.stuck_after:
+            fault = True
+        self.fault, self.event = fault, False
+        if fault:
+            self.primed = False
+        else:
+            if not self.primed:
+                self._prime(adc)
+            self.x = self._lowpass(adc) if p.filter else adc << SIG_Q
+            self.event = self._encode(self.x)
+        self.window, self.v = False, 0
+        self.count += self.event
+        self.in_window += 1
+        if self.in_window == p.n:
+            self.window, self.v = True, self.count
+            self.in_window = self.count = 0
+            self._mpi(self.v, position)
+        return self.window
+
+
+@dataclass(frozen=True)
+class BoardResult:
+    """Everything the board chain produced over a run of ADC counts.
+
+    Attributes
+    ----------
+    params : BoardParams
+    adc : numpy.ndarray of int64
+    filtered : numpy.ndarray of int64
+        Per sample: x_k in Q16 counts (the last good one on a fault sample).
+    events, faults : numpy.ndarray of bool
+        Per sample.
+    counts, commands : numpy.ndarray of int64
+        Per complete window.
+
+    Examples
+    --------
+    >>> res = run_board_chain([300] * 40)
+    >>> res.counts.tolist(), res.window_end_index().tolist(), res.filtered[0] == 300 << SIG_Q
+    ([0, 0], [15, 31], np.True_)
+    """
+
+    params: BoardParams
+    adc: np.ndarray
+    filtered: np.ndarray
+    events: np.ndarray
+    faults: np.ndarray
+    counts: np.ndarray
+    commands: np.ndarray
+
+    def window_end_index(self) -> np.ndarray:
+        """Index of the sample that completes each window."""
+        return np.arange(1, self.counts.size + 1) * self.params.n - 1
+
+    def sample_columns(self) -> dict[str, np.ndarray]:
+        """Per-sample columns as the board runner writes them: sample, event."""
+        return {"sample": np.arange(self.events.size), "event": self.events.astype(np.int64)}
+
+    def window_columns(self) -> dict[str, np.ndarray]:
+        """Per-window columns as the board runner writes them: window, v, command."""
+        return {"window": np.arange(self.counts.size), "v": self.counts, "command": self.commands}
+
+
+def _as_counts(adc_counts) -> np.ndarray:
+    arr = np.asarray(adc_counts)
+    if arr.ndim != 1:
+        raise DataError(f"adc_counts must be one-dimensional, got shape {arr.shape}")
+    if arr.size and not np.issubdtype(arr.dtype, np.integer):
+        vals = arr.astype(float)
+        bad = np.flatnonzero(~np.isfinite(vals) | (vals != np.floor(vals)))
+        if bad.size:
+            i = int(bad[0])
+            raise DataError(f"adc_counts[{i}] is {arr[i].item()!r}: ADC counts must be whole numbers")
+    arr = arr.astype(np.int64)
+    bad = np.flatnonzero((arr < 0) | (arr > ADC_MAX))
+    if bad.size:
+        i = int(bad[0])
+        raise DataError(f"adc_counts[{i}] is {arr[i]}: ADC counts must be in 0..{ADC_MAX}")
+    return arr
+
+
+def run_board_chain(adc_counts, params: BoardParams | None = None, *, positions=None,
+                    **kwargs) -> BoardResult:
+    """Run the board's chain over ADC counts, as the firmware does, sample by sample.
+
+    Parameters
+    ----------
+    adc_counts : array_like of int
+        10-bit readings, 0..1023 (anything else raises DataError naming the index).
+    params : BoardParams, optional
+        Or keywords for :meth:`BoardParams.from_chain` (``dath=True``, ``p0=125``, ...).
+    positions : sequence of int or None, optional
+        Per window, the measured slip-finger position passed to the MPI (None: none).
+
+    Returns
+    -------
+    BoardResult
+        Identical to feeding :class:`BoardChain` one reading at a time (it is that loop).
+
+    Examples
+    --------
+    >>> run_board_chain([300] * 16 + [310] * 16, dath=True).counts.tolist()
+    [0, 8]
+    """
+    if params is not None and kwargs:
+        raise TypeError("give either params or keyword parameters, not both")
+    p = params if params is not None else BoardParams.from_chain(**kwargs)
+    arr = _as_counts(adc_counts)
+    chain = BoardChain(p)
+    k = arr.size
+    filtered = np.zeros(k, dtype=np.int64)
+    events = np.zeros(k, dtype=bool)
+    faults = np.zeros(k, dtype=bool)
+    nwin = k // p.n
+    pos = [None] * nwin if positions is None else list(positions)
+    if len(pos) < nwin:
+        raise DataError(f"positions has {len(pos)} values, the run has {nwin} windows")
+    counts = np.zeros(nwin, dtype=np.int64)
+    commands = np.zeros(nwin, dtype=np.int64)
+    z = 0
+    for i, a in enumerate(arr.tolist()):
+        if chain.step(a, pos[z] if z < nwin else None):
+            counts[z], commands[z] = chain.v, chain.command
+            z += 1
+        filtered[i], events[i], faults[i] = chain.x, chain.event, chain.fault
+    return BoardResult(p, arr, filtered, events, faults, counts, commands)
+
+
+class BoardReflex:
+    """The board's chain behind the :class:`~slipreflex.interfaces.Reflex` protocol.
+
+    Takes slip-sensor volts like the float :class:`~slipreflex.SlipReflex`,
+    quantises them as the board's ADC does (:func:`adc_counts`) and runs
+    :class:`BoardChain`; a measured position is rounded half up to a whole position.
+    Named ``"dath-board"`` or ``"fixed-board"``.
+
+    Parameters
+    ----------
+    params : BoardParams, optional
+        Or keywords for :meth:`BoardParams.from_chain`.
+
+    Examples
+    --------
+    >>> r = BoardReflex(dath=True, p0=100)
+    >>> r.name, r.input_kind, round(r.fs, 2)
+    ('dath-board', 'slip', 333.33)
+    >>> [r.step(1.5) for _ in range(16)][-1]
+    100.0
+    """
+
+    input_kind = "slip"
+
+    def __init__(self, params: BoardParams | None = None, *, fs: float = hw.DAQ_FS,
+                 **kwargs) -> None:
+        if params is not None and kwargs:
+            raise TypeError("give either params or keyword parameters, not both")
+        self.fs = float(fs)
+        self.params = params if params is not None else BoardParams.from_chain(fs=fs, **kwargs)
+        self.chain = BoardChain(self.params)
+
+    @property
+    def name(self) -> str:
+        """``"dath-board"`` or ``"fixed-board"``."""
+        return "dath-board" if self.params.dath else "fixed-board"
+
+    def reset(self) -> None:
+        """Restore the initial state."""
+        self.chain.reset()
+
+    def step(self, sample: float, position: float | None = None) -> float | None:
+        """One sample in volts; the new command when a window completes, else None."""
+        pos = None if position is None else min(max(math.floor(float(position) + 0.5), -32768), 32767)
+        volts = float(sample)
+        # A NaN or inf reading is a fault, like a reading outside 0..1023 on the board.
+        adc = adc_counts(volts) if math.isfinite(volts) else 0xFFFF
+        if self.chain.step(adc, pos):
+            return float(self.chain.command)
+        return None
