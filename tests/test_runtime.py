@@ -126,7 +126,11 @@ def test_loop_over_virtual_devices_reacts_records_and_replays_exactly(tmp_path):
         assert dev.triggered and dev.triggered[0][0] == "drop"
         sent = [h[hw.Finger.MIDDLE] for h in dev.rig.hand.history]
     assert res.samples > 100 and res.commands > 5 and res.events > 0
-    assert res.latencies.size == res.commands_sent == res.commands
+    # Commands go out from the reflex's first rise above p0 on; before it the fingers stay held.
+    rec_cmds = read_recording(path).topic("/hand/commands")
+    first_rise = next(k for k, m in enumerate(rec_cmds) if m["target"] > P0)
+    assert [m["sent"] for m in rec_cmds] == [k >= first_rise for k in range(len(rec_cmds))]
+    assert res.latencies.size == res.commands_sent == res.commands - first_rise > 0
     assert np.all(res.latencies > 0)
     assert max(sent) >= P0 + 20 and min(sent) >= P0  # the reflex closed, never opened
     assert not [f for f in res.faults if f.kind != "watchdog"]
@@ -244,11 +248,11 @@ class _Samples:
 def test_out_of_range_command_is_not_sent_and_the_loop_goes_on():
     loop = serial.serial_for_url("loop://", timeout=0)
     hand = ILimb(loop)
-    res = run_loop(_Samples(50), hand, _Wild(), duration=0.4)
+    res = run_loop(_Samples(50), hand, _Wild(), p0=P0, duration=0.4)
     assert res.samples == 50 and res.commands == 50 and res.commands_sent == 0
     rejected = [f for f in res.faults if f.kind == "command-rejected"]
     assert len(rejected) == 50 and "600" in rejected[0].message
-    # Only the watchdog's hold (STOP) reached the port: never the bad value.
+    # Only the safe start's and the watchdog's holds (STOP) reached the port: never the bad value.
     packets = PacketParser().feed(loop.read(10_000))
     assert packets and all(c.command == hw.HandCommand.STOP for p in packets for c in p)
     hand.close()
@@ -281,7 +285,8 @@ def test_disk_full_mid_run_is_recorded_as_a_fault_and_the_reflex_keeps_running()
     rec.close()
     with contextlib.suppress(OSError):
         buf.close()
-    assert res.samples == 2000 and res.commands_sent == 2000 // 16
+    # a still sensor: every window's command stays at p0, so nothing needs sending
+    assert res.samples == 2000 and res.commands == 2000 // 16 and res.commands_sent == 0
     assert [f.kind for f in res.faults].count("recording") == 1
     assert "No space left" in res.recording_error
     hand.close()

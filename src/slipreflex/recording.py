@@ -23,7 +23,9 @@ started, on the PC's clock):
 /chain/state       per sample: filtered value, threshold in force, event (bool)
 /chain/events      one message per spike
 /chain/windows     one message per complete window: spike count
-/hand/commands     reflex commands: target, fingers, sent (bool), latency (s)
+/hand/commands     reflex commands: target (the reflex's output), fingers, targets (the
+                   position sent to each finger: its start plus the rise of the
+                   reflex's command, never below the start), sent (bool), latency (s)
 /faults            watchdog, device and recording faults, with the action taken
 /stats             periodic DAQ and loop counters
 =================  ===========================================================
@@ -73,6 +75,7 @@ TOPICS: dict[str, tuple[str, dict[str, Any]]] = {
     "/chain/windows": ("slipreflex.Window", {"seq": _I, "t": "number", "count": _I}),
     "/hand/commands": ("slipreflex.Command", {"seq": _I, "t": "number", "target": "number",
                                               "fingers": {"type": "array", "items": {"type": _S}},
+                                              "targets": {"type": "object"},
                                               "sent": _B, "latency": _N}),
     "/faults": ("slipreflex.Fault", {"time": "number", "kind": _S, "message": _S, "action": _S}),
     "/stats": ("slipreflex.Stats", {"time": "number", "counters": {"type": "object"}}),

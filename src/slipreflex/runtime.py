@@ -45,25 +45,30 @@ Examples
 from __future__ import annotations
 
 import gc
+import json
 import math
 import os
 import sys
 import threading
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from .errors import DeviceError, ParameterError
-from .hardware import SLIP_FINGER, TRIPOD, Finger
-from .interfaces import DaqSample
+from .hardware import FINGER_MAX, FINGER_MIN, SLIP_FINGER, THUMB_ROTATOR_MAX, TRIPOD, Finger
+from .interfaces import DaqSample, Hand
 
-__all__ = ["Fault", "RunResult", "run_loop", "print_fault", "realtime_priority", "WATCHDOG_S"]
+__all__ = ["Fault", "RunResult", "run_loop", "print_fault", "realtime_priority", "WATCHDOG_S",
+           "start_positions", "safe_start", "WATCHDOG_MIN_S", "WATCHDOG_MAX_S"]
 
 #: Seconds without a valid sample after which the watchdog holds the fingers.
 WATCHDOG_S: float = 0.1
+#: Bounds of the watchdog (s): shorter trips on the DAQ's normal jitter, longer is no watchdog.
+WATCHDOG_MIN_S: float = 0.02
+WATCHDOG_MAX_S: float = 0.5
 
 
 @dataclass(frozen=True, slots=True)
@@ -126,6 +131,11 @@ class RunResult:
         True if stopped by Ctrl-C.
     recording_error : str or None
         Why the recording stopped early, if it did.
+    start : dict
+        Position (finger name -> units) each finger held at start, after the
+        safe start's STOP: no command the loop sent was below it.
+    initial_command : str
+        What the loop sent first (the STOP of the safe start).
 
     Examples
     --------
@@ -145,6 +155,8 @@ class RunResult:
     duration: float = 0.0
     interrupted: bool = False
     recording_error: str | None = None
+    start: dict[str, float] = field(default_factory=dict)
+    initial_command: str = ""
 
     def latency_ms(self) -> dict[str, float]:
         """p50, p99 and max of the command latency in milliseconds (NaN if none).
@@ -196,7 +208,124 @@ def _num(x: Any) -> float | None:
     return x if math.isfinite(x) else None
 
 
-def run_loop(source: Any, hand: Any, reflex: Any, *, recorder: Any = None,
+def start_positions(p0: float | Mapping[Any, float], fingers: Sequence[Finger] = TRIPOD,
+                    *, where: str = "p0") -> dict[Finger, float]:
+    """Validate ``p0`` and give one start position per finger.
+
+    Parameters
+    ----------
+    p0 : float or mapping of Finger (or finger name) to float
+        One position for every finger, or one per finger (every finger of
+        ``fingers`` must be given). Positions are whole i-Limb units in the
+        finger's range (0..500).
+    fingers : sequence of Finger
+    where : str
+        Name used in error messages (e.g. ``"--p0"``).
+
+    Returns
+    -------
+    dict of Finger to float
+
+    Raises
+    ------
+    ParameterError
+        A missing or unknown finger, or a position that is not a whole
+        number in range; the message names ``where`` and the finger.
+
+    Examples
+    --------
+    >>> start_positions({"thumb": 149, "index": 147, "middle": 147})[Finger.THUMB]
+    149.0
+    >>> start_positions(600)
+    Traceback (most recent call last):
+    ...
+    slipreflex.errors.ParameterError: p0: THUMB must be a whole position in 0..500, got 600
+    """
+    fingers = tuple(Finger(f) for f in fingers)
+    if isinstance(p0, Mapping):
+        given: dict[Finger, Any] = {}
+        for k, v in p0.items():
+            try:
+                f = Finger[k.upper()] if isinstance(k, str) else Finger(k)
+                if f not in fingers:
+                    raise KeyError(k)
+            except (KeyError, ValueError):
+                raise ParameterError(f"{where}: finger {k!r} is not one of the grasping fingers "
+                                     f"(fingers: {', '.join(x.name.lower() for x in fingers)})") from None
+            given[f] = v
+        missing = [f.name.lower() for f in fingers if f not in given]
+        if missing:
+            raise ParameterError(f"{where}: no position for {', '.join(missing)} "
+                                 f"(give every finger, e.g. thumb=149,index=147,middle=147)")
+    else:
+        given = {f: p0 for f in fingers}
+    out: dict[Finger, float] = {}
+    for f in fingers:
+        v = given[f]
+        hi = THUMB_ROTATOR_MAX if f == Finger.THUMB_ROTATOR else FINGER_MAX
+        ok = (not isinstance(v, bool) and isinstance(v, (int, float, np.integer, np.floating))
+              and math.isfinite(v) and float(v).is_integer() and FINGER_MIN <= v <= hi)
+        if not ok:
+            raise ParameterError(f"{where}: {f.name} must be a whole position in {FINGER_MIN}..{hi}, "
+                                 f"got {v!r}")
+        out[f] = float(v)
+    return out
+
+
+def safe_start(hand: Hand, p0: float | Mapping[Any, float],
+               fingers: Sequence[Finger] = TRIPOD) -> dict[Finger, float]:
+    """Hold the fingers where they are, then tell where each one holds.
+
+    The hand is told to STOP (``hand.hold(fingers)``; a hand without
+    ``hold`` is sent nothing): the fingers are never moved to a value at
+    start. Each finger's start position is the larger of its ``p0`` and the
+    position the hand reports for it (a hand that measures its fingers, or a
+    driver that remembers the targets it wrote), so that a ``p0`` given too
+    low can never make a later command open a finger the hand reports
+    closed further. The i-Limb reports no positions over its serial
+    protocol, so for it the start is the ``p0`` given, per finger, as the
+    grasp routine found it.
+
+    Parameters
+    ----------
+    hand : Hand
+    p0 : float or mapping
+        See :func:`start_positions`.
+    fingers : sequence of Finger
+
+    Returns
+    -------
+    dict of Finger to float
+        Start position per finger: no command ``run_loop`` sends is below it.
+
+    Raises
+    ------
+    ParameterError
+        A bad ``p0`` (before anything is sent).
+
+    Examples
+    --------
+    >>> class Hand:                        # a hand that measures its fingers
+    ...     def __init__(self): self.sent = []
+    ...     def set_positions(self, t): self.sent.append(t)
+    ...     def positions(self): return {Finger.THUMB: 149.0, Finger.INDEX: 147.0, Finger.MIDDLE: 147.0}
+    ...     def hold(self, fingers): self.sent.append("stop")
+    >>> h = Hand()
+    >>> safe_start(h, 0)[Finger.THUMB], h.sent
+    (149.0, ['stop'])
+    """
+    start = start_positions(p0, fingers)
+    if hasattr(hand, "hold"):
+        hand.hold(tuple(start))
+    reported = hand.positions()
+    for f, v in reported.items():
+        if f in start and v is not None and math.isfinite(v) and v > start[f]:
+            start[f] = float(v)
+    return start
+
+
+def run_loop(source: Any, hand: Any, reflex: Any, *, p0: float | Mapping[Any, float] | None = None,
+             recorder: Any = None,
              duration: float | None = None, watchdog: float = WATCHDOG_S, poll: float = 0.01,
              fingers: Sequence[Finger] = TRIPOD, stop: threading.Event | None = None,
              on_fault: Callable[[Fault], None] | None = None, stats_interval: float = 1.0,
@@ -215,6 +344,12 @@ def run_loop(source: Any, hand: Any, reflex: Any, *, recorder: Any = None,
         ``set_positions(targets)``; optional ``hold(fingers)``.
     reflex : Reflex
         A slip reflex (``input_kind == "slip"``), e.g. :class:`slipreflex.chain.SlipReflex`.
+    p0 : float or mapping of Finger to float, optional
+        Position each finger holds at start, as the grasp routine left it (one
+        value or one per finger; default: the reflex's initial command). The
+        loop starts with :func:`safe_start` (STOP, never a move) and sends
+        each finger the reflex's command shifted by that finger's start
+        relative to the reflex's own start, never below the finger's start.
     recorder : Recorder, optional
         Where every stream goes.
     duration : float, optional
@@ -257,17 +392,31 @@ def run_loop(source: Any, hand: Any, reflex: Any, *, recorder: Any = None,
     ...     def hold(self, fingers): self.held += 1
     >>> h = Hand()
     >>> r = run_loop(Silent(), h, SlipReflex(), duration=0.3, poll=0.01)
-    >>> [f.kind for f in r.faults], h.held
-    (['watchdog'], 1)
+    >>> [f.kind for f in r.faults], h.held      # the safe start's STOP, then the watchdog's
+    (['watchdog'], 2)
     """
     if getattr(reflex, "input_kind", "slip") != "slip":
         raise ParameterError(f"run_loop: reflex {getattr(reflex, 'name', reflex)!r} reads "
                              f"{reflex.input_kind!r}, but the DAQ provides the slip sensor")
-    if not (watchdog > 0 and poll > 0):
-        raise ParameterError(f"run_loop: watchdog and poll must be > 0, got {watchdog!r}, {poll!r}")
+    if not WATCHDOG_MIN_S <= watchdog <= WATCHDOG_MAX_S:
+        raise ParameterError(f"run_loop: watchdog must be in {WATCHDOG_MIN_S:g}..{WATCHDOG_MAX_S:g} s, "
+                             f"got {watchdog!r}")
+    if not 0 < poll <= watchdog:
+        raise ParameterError(f"run_loop: poll must be in (0, watchdog], got {poll!r}")
     fingers = tuple(Finger(f) for f in fingers)
     finger_names = [f.name.lower() for f in fingers]
-    res = RunResult()
+    ref0 = getattr(reflex, "command", None)  # the reflex's own start (SlipReflex: clip(p0))
+    if p0 is None:
+        if not isinstance(ref0, (int, float)) or not math.isfinite(ref0):
+            raise ParameterError("run_loop: give p0 (the reflex has no initial command)")
+        p0 = ref0
+    start = safe_start(hand, p0, fingers)  # STOP first: nothing moves before the reflex asks
+    if not isinstance(ref0, (int, float)) or not math.isfinite(ref0):
+        ref0 = start.get(SLIP_FINGER, next(iter(start.values())))
+    shift = {f: start[f] - ref0 for f in fingers}  # reflex frame -> each finger's own
+    slip_shift = start[SLIP_FINGER] - ref0 if SLIP_FINGER in start else 0.0
+    res = RunResult(start={f.name.lower(): v for f, v in start.items()},
+                    initial_command="STOP " + ",".join(finger_names))
     latencies: list[float] = []
     t0 = clock()
     wall0 = time.time_ns()
@@ -275,6 +424,10 @@ def run_loop(source: Any, hand: Any, reflex: Any, *, recorder: Any = None,
 
     def ns(t: float) -> int:
         return wall0 + int((t - t0) * 1e9)
+
+    def targets_for(cmd: float) -> dict[Finger, float]:
+        # never below a finger's start; a NaN passes through for the driver to reject
+        return {f: (start[f] if cmd + shift[f] < start[f] else cmd + shift[f]) for f in fingers}
 
     def record(topic: str, msg: dict[str, Any], t: float) -> None:
         if rec_ok and not recorder.write(topic, msg, ns(t)):
@@ -295,14 +448,14 @@ def run_loop(source: Any, hand: Any, reflex: Any, *, recorder: Any = None,
             on_fault(f)
         record("/faults", f.to_dict(), clock())
 
-    last_target: float | None = None
+    last_target: dict[Finger, float] | None = None
 
     def hold() -> None:
         try:
             if hasattr(hand, "hold"):
                 hand.hold(fingers)
             elif last_target is not None:
-                hand.set_positions({f: last_target for f in fingers})
+                hand.set_positions(last_target)
         except (DeviceError, ParameterError) as err:
             fault("hold-failed", str(err), "hand keeps its last target")
 
@@ -314,10 +467,14 @@ def run_loop(source: Any, hand: Any, reflex: Any, *, recorder: Any = None,
 
     # Objects that exist now (the package, numpy, the chain, the drivers) are never
     # garbage; freezing them keeps the cyclic GC's occasional full passes short.
+    if recorder is not None and hasattr(recorder, "add_metadata"):
+        recorder.add_metadata("start", {"p0": json.dumps(res.start), "reflex_start": repr(ref0),
+                                        "initial_command": res.initial_command})
     gc.freeze()
     last_valid = t0
     stalled = False
     hand_ok = True
+    risen = False
     last_flow: int | None = None
     next_stats = t0 + stats_interval
     pending: list[tuple[DaqSample, float, float | None, float | None, Any, bool, int | None,
@@ -345,12 +502,20 @@ def run_loop(source: Any, hand: Any, reflex: Any, *, recorder: Any = None,
                         pos = hand.positions().get(SLIP_FINGER)
                     except DeviceError:
                         pass
+                    if pos is not None:
+                        pos -= slip_shift  # in the reflex's frame
                     cmd = reflex.step(s.slip_volts, pos)
                     sent = False
                     lat = None
                     if cmd is not None:
+                        targets = targets_for(cmd)
+                        # Until the reflex first asks for more grip than at start, nothing is sent:
+                        # the fingers stay held (STOP) where they are.
+                        risen = risen or any(targets[f] > start[f] or not math.isfinite(targets[f])
+                                             for f in fingers)
+                    if cmd is not None and risen:
                         try:
-                            hand.set_positions({f: cmd for f in fingers})
+                            hand.set_positions(targets)
                         except ParameterError as err:
                             fault("command-rejected", str(err), "not sent; fingers hold their last target")
                         except DeviceError as err:
@@ -361,7 +526,7 @@ def run_loop(source: Any, hand: Any, reflex: Any, *, recorder: Any = None,
                             lat = clock() - arrival
                             latencies.append(lat)
                             sent = True
-                            last_target = cmd
+                            last_target = targets
                             if not hand_ok:
                                 hand_ok = True
                                 fault("hand-port-restored", "hand port is back", "commands resumed")
@@ -403,8 +568,10 @@ def run_loop(source: Any, hand: Any, reflex: Any, *, recorder: Any = None,
                         record("/chain/windows", {"seq": s.seq, "t": s.t, "count": int(count)}, arr)
                     if cmd is not None:
                         record("/hand/commands", {"seq": s.seq, "t": s.t, "target": float(cmd),
-                                                  "fingers": finger_names, "sent": sent,
-                                                  "latency": lat}, arr)
+                                                  "fingers": finger_names, "targets": {
+                                                      f.name.lower(): _num(v)
+                                                      for f, v in targets_for(cmd).items()},
+                                                  "sent": sent, "latency": lat}, arr)
                 for item in pending:
                     last_flow = item[0].flow_pulses
                 pending.clear()

@@ -11,13 +11,18 @@ from __future__ import annotations
 import argparse
 import datetime
 import json
+import math
 import signal
 import sys
 import threading
 from pathlib import Path
+from typing import Any
 
 from .. import __version__
 from ..errors import ParameterError
+from ..hardware import DAQ_FS, FINGER_MAX, SLIP_FINGER, TRIPOD, Finger
+
+from ..runtime import WATCHDOG_MAX_S, WATCHDOG_MIN_S, WATCHDOG_S
 
 NAME = "run"
 HELP = "run the slip reflex in real time: read the DAQ port, drive the i-Limb port, record to MCAP"
@@ -32,7 +37,8 @@ def add_chain_arguments(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("reflex chain")
     g.add_argument("--method", choices=("fixed", "dath"), default="dath",
                    help="fixed threshold or Dynamic Adaptive Threshold (default: dath)")
-    g.add_argument("--fs", type=float, default=d.fs, help=f"sampling rate the chain assumes, Hz ({d.fs:g})")
+    g.add_argument("--fs", type=float, default=DAQ_FS,
+                   help=f"sampling rate the chain assumes, Hz (the DAQ's {DAQ_FS:.2f})")
     g.add_argument("--cutoff", type=float, default=d.cutoff, help=f"low-pass cutoff, Hz ({d.cutoff:g})")
     g.add_argument("--no-filter", action="store_true", help="input is already filtered")
     g.add_argument("--threshold", type=float, default=d.threshold, help=f"theta0 in V ({d.threshold:g})")
@@ -55,19 +61,65 @@ def chain_params(args: argparse.Namespace, p0: float):
                         p0=p0, kp=args.kp, ki=args.ki, reset_after=args.reset_after)
 
 
+def parse_p0(text: str) -> dict[Finger, float]:
+    """Parse ``--p0``: ``thumb=149,index=147,middle=147``, ``149,147,147`` (tripod order) or ``147``.
+
+    Examples
+    --------
+    >>> {f.name: v for f, v in parse_p0("thumb=149, index=147, middle=147").items()}
+    {'THUMB': 149.0, 'INDEX': 147.0, 'MIDDLE': 147.0}
+    >>> parse_p0("147")[Finger.THUMB]
+    147.0
+    """
+    from ..runtime import start_positions
+
+    items = [x.strip() for x in str(text).split(",") if x.strip()]
+    if not items:
+        raise ParameterError("--p0: empty (give thumb=..,index=..,middle=.. or one position)")
+    try:
+        if all("=" in x for x in items):
+            given: Any = {k.strip(): float(v) for k, v in (x.split("=", 1) for x in items)}
+        elif len(items) == 1:
+            given = float(items[0])
+        elif len(items) == len(TRIPOD):
+            given = {f: float(v) for f, v in zip(TRIPOD, items)}
+        else:
+            raise ParameterError(f"--p0 {text!r}: give one position, {len(TRIPOD)} (thumb,index,middle) "
+                                 f"or finger=position items")
+    except ValueError:
+        raise ParameterError(f"--p0 {text!r}: positions must be numbers in 0..{FINGER_MAX}") from None
+    return start_positions(given, TRIPOD, where="--p0")
+
+
+def check_arguments(args: argparse.Namespace) -> dict[Finger, float]:
+    """Check every option of ``run`` (before any port is opened); return the per-finger p0."""
+    if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
+        raise ParameterError(f"--duration must be a number of seconds > 0, got {args.duration}")
+    if not (WATCHDOG_MIN_S <= args.watchdog <= WATCHDOG_MAX_S):
+        raise ParameterError(f"--watchdog must be in {WATCHDOG_MIN_S:g}..{WATCHDOG_MAX_S:g} s "
+                             f"(a hold needs a bounded wait), got {args.watchdog}")
+    p0 = parse_p0(args.p0)
+    chain_params(args, p0[SLIP_FINGER])  # validates every chain option
+    return p0
+
+
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``slipreflex run``."""
     p.add_argument("--daq", required=True, help="DAQ serial port (e.g. /dev/ttyACM0, or a virtual-rig path)")
     p.add_argument("--hand", required=True, help="i-Limb control unit serial port (e.g. /dev/ttyUSB0)")
-    p.add_argument("--p0", type=float, required=True,
-                   help="position (0..500) at which the tripod holds the object; the loop first "
-                        "commands the tripod there and the MPI starts from it (virtual-rig prints it)")
+    p.add_argument("--p0", required=True,
+                   help="position (0..500) at which each tripod finger holds the object, as the grasp "
+                        "routine left it: thumb=149,index=147,middle=147 (virtual-rig prints this), "
+                        "or one value for all three. The loop starts with STOP (fingers stay where "
+                        "they are), the MPI starts from the middle finger's p0, and no finger is ever "
+                        "commanded below its p0")
     p.add_argument("--record", type=Path, default=None,
                    help="MCAP file to record to (default: run-YYYYmmdd-HHMMSS.mcap here)")
     p.add_argument("--no-record", action="store_true", help="do not record")
     p.add_argument("--duration", type=float, default=None, help="stop after this many seconds")
-    p.add_argument("--watchdog", type=float, default=0.1,
-                   help="seconds without a valid sample before the fingers hold (0.1)")
+    p.add_argument("--watchdog", type=float, default=WATCHDOG_S,
+                   help=f"seconds without a valid sample before the fingers hold "
+                        f"({WATCHDOG_MIN_S:g}..{WATCHDOG_MAX_S:g}; {WATCHDOG_S:g})")
     p.add_argument("--realtime", action="store_true",
                    help="ask for SCHED_FIFO real-time scheduling (Linux; needs privileges)")
     add_chain_arguments(p)
@@ -78,13 +130,11 @@ def run(args: argparse.Namespace) -> int:
     from ..chain import SlipReflex
     from ..devices.daq import SerialDaq
     from ..devices.ilimb import ILimb
-    from ..hardware import TRIPOD
     from ..recording import METADATA_NAME, Recorder
     from ..runtime import print_fault, realtime_priority, run_loop
 
-    if args.duration is not None and not args.duration > 0:
-        raise ParameterError(f"--duration must be > 0, got {args.duration}")
-    params = chain_params(args, args.p0)
+    p0 = check_arguments(args)  # everything, before a port opens or a byte is sent
+    params = chain_params(args, p0[SLIP_FINGER])
     reflex = SlipReflex.from_params(params)
     if args.realtime:
         print(realtime_priority(), flush=True)
@@ -95,29 +145,35 @@ def run(args: argparse.Namespace) -> int:
             raise KeyboardInterrupt  # a second Ctrl-C: stop now
         stop.set()  # the loop ends within one poll and everything is closed in order
 
-    old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
     recorder = None
+    if not args.no_record:
+        path = args.record or Path(f"run-{datetime.datetime.now():%Y%m%d-%H%M%S}.mcap")
+        meta = {"version": __version__, "reflex": reflex.name,
+                "reflex_params": json.dumps(params.to_dict()),
+                "fingers": json.dumps([f.name.lower() for f in TRIPOD]),
+                "p0": json.dumps({f.name.lower(): v for f, v in p0.items()}),
+                "daq": args.daq, "hand": args.hand, "watchdog_s": repr(args.watchdog),
+                "started": datetime.datetime.now(datetime.timezone.utc).isoformat()}
+        recorder = Recorder(path, metadata={METADATA_NAME: meta})  # fails before the ports open
+    old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
+    started = False
     try:
         with SerialDaq(args.daq) as daq, ILimb(args.hand) as hand:
-            if not args.no_record:
-                path = args.record or Path(f"run-{datetime.datetime.now():%Y%m%d-%H%M%S}.mcap")
-                meta = {"version": __version__, "reflex": reflex.name,
-                        "reflex_params": json.dumps(params.to_dict()),
-                        "fingers": json.dumps([f.name.lower() for f in TRIPOD]),
-                        "daq": args.daq, "hand": args.hand, "watchdog_s": repr(args.watchdog),
-                        "started": datetime.datetime.now(datetime.timezone.utc).isoformat()}
-                recorder = Recorder(path, metadata={METADATA_NAME: meta})  # fails before the run
-            hand.set_positions({f: args.p0 for f in TRIPOD})  # validated; holds the grasp
-            print(f"running {reflex.name} reflex: daq {args.daq}, hand {args.hand}, p0 {args.p0:g}"
+            started = True
+            print(f"running {reflex.name} reflex: daq {args.daq}, hand {args.hand}, p0 "
+                  + ",".join(f"{f.name.lower()}={v:g}" for f, v in p0.items())
                   + (f", recording {recorder.path}" if recorder else "") + " (Ctrl-C stops)",
                   flush=True)
-            res = run_loop(daq, hand, reflex, recorder=recorder, duration=args.duration,
+            # run_loop starts with STOP: the fingers stay where the grasp left them
+            res = run_loop(daq, hand, reflex, p0=p0, recorder=recorder, duration=args.duration,
                            watchdog=args.watchdog, stop=stop, on_fault=print_fault)
     finally:
         for s, h in old.items():
             signal.signal(s, h)
         if recorder is not None:
             recorder.close()
+            if not started:  # the ports did not open: leave no empty recording behind
+                Path(recorder.path).unlink(missing_ok=True)
     if stop.is_set():
         print("stopped by signal", flush=True)
     print(res.summary(), flush=True)

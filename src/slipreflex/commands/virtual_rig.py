@@ -11,7 +11,7 @@ Examples
 >>> main(["virtual-rig", "--schedule", "drop@2.0", "--duration", "10"])  # doctest: +SKIP
 daq: /dev/pts/5
 hand: /dev/pts/6
-p0: 212
+p0: thumb=213,index=212,middle=212
 """
 
 from __future__ import annotations
@@ -61,10 +61,10 @@ def run(args: argparse.Namespace) -> int:
     try:
         print(f"daq: {dev.daq_path}", flush=True)
         print(f"hand: {dev.hand_path}", flush=True)
-        print(f"p0: {grasp.position:g}", flush=True)
+        print(f"p0: {grasp.p0_text()}", flush=True)
         print(f"grasp: bottle {args.bottle}, {grasp.force:.2f} N per contact, "
               f"{'stable' if grasp.stable else 'NOT stable'}", flush=True)
-        print(f"run: slipreflex run --daq {dev.daq_path} --hand {dev.hand_path} --p0 {grasp.position:g}",
+        print(f"run: slipreflex run --daq {dev.daq_path} --hand {dev.hand_path} --p0 {grasp.p0_text()}",
               flush=True)
         print("keys: d+Enter drop, p+Enter pour, q+Enter quit; SIGUSR1 drop, SIGUSR2 pour", flush=True)
         dev.start()

@@ -18,11 +18,11 @@ True
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from ..errors import ParameterError
-from ..hardware import SLIP_FINGER
+from ..hardware import SLIP_FINGER, TRIPOD, Finger
 from ..interfaces import DaqSample
 
 __all__ = ["SimRig", "SimGrasp"]
@@ -42,6 +42,10 @@ class SimGrasp:
         Whether the bottle hangs still in the fingers.
     t : float
         Rig time (s) when the grasp routine finished.
+    positions : dict of Finger to float
+        Measured position of every tripod finger after the grasp: the
+        per-finger ``p0`` that ``slipreflex run --p0`` takes (the thumb often
+        stops at another position than the index and middle).
 
     Examples
     --------
@@ -53,6 +57,17 @@ class SimGrasp:
     force: float
     stable: bool
     t: float
+    positions: dict = field(default_factory=dict)
+
+    def p0_text(self) -> str:
+        """The positions as ``run --p0`` takes them: ``thumb=149,index=147,middle=147``.
+
+        Examples
+        --------
+        >>> SimGrasp(147.0, 0.8, True, 2.5, {Finger.THUMB: 149.0, Finger.MIDDLE: 147.0}).p0_text()
+        'thumb=149,middle=147'
+        """
+        return ",".join(f"{f.name.lower()}={v:g}" for f, v in self.positions.items())
 
 
 class SimRig:
@@ -100,7 +115,8 @@ class SimRig:
         """
         g = self.rig.grasp()
         return SimGrasp(position=float(g.positions[SLIP_FINGER]), force=float(g.force_n),
-                        stable=bool(g.stable), t=self.rig.t)
+                        stable=bool(g.stable), t=self.rig.t,
+                        positions={f: float(g.positions[f]) for f in TRIPOD})
 
     def advance_to(self, t: float) -> list[DaqSample]:
         """Advance to ``t`` seconds after the first call; return the new samples.
