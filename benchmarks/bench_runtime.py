@@ -61,7 +61,8 @@ def main(argv: list[str] | None = None) -> int:
     from slipreflex.chain import SlipReflex
     from slipreflex.devices.daq import SerialDaq
     from slipreflex.devices.ilimb import ILimb
-    from slipreflex.hardware import TRIPOD
+    from slipreflex.commands.run import parse_p0
+    from slipreflex.hardware import SLIP_FINGER
     from slipreflex.recording import METADATA_NAME, Recorder
     from slipreflex.runtime import realtime_priority, run_loop
 
@@ -71,16 +72,15 @@ def main(argv: list[str] | None = None) -> int:
     with tempfile.TemporaryDirectory() as tmp:
         rig, info = start_rig(tmp, schedule, args.seed)
         try:
-            p0 = float(info["p0"])
-            reflex = SlipReflex(dath=True, p0=p0)
+            p0 = parse_p0(info["p0"])  # per finger, as `run --p0` takes it
+            reflex = SlipReflex(dath=True, p0=p0[SLIP_FINGER])
             rec = None
             if not args.no_record:
                 rec = Recorder(os.path.join(tmp, "bench.mcap"), metadata={METADATA_NAME: {
                     "reflex_params": json.dumps(reflex.params.to_dict())}})
             note = realtime_priority() if args.realtime else "normal priority"
             with SerialDaq(info["daq"]) as daq, ILimb(info["hand"]) as hand:
-                hand.set_positions({f: p0 for f in TRIPOD})
-                res = run_loop(daq, hand, reflex, recorder=rec, duration=args.duration)
+                res = run_loop(daq, hand, reflex, p0=p0, recorder=rec, duration=args.duration)
             if rec is not None:
                 rec.close()
                 size = os.path.getsize(rec.path)
@@ -101,7 +101,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"machine: {platform.machine()}, {os.cpu_count()} cpus, python {platform.python_version()}, "
           f"load average {os.getloadavg()[0]:.2f}")
     print(f"loop over virtual devices for {res.duration:.1f} s "
-          f"({'recording to MCAP' if not args.no_record else 'no recording'}), p0 {p0:g}, "
+          f"({'recording to MCAP' if not args.no_record else 'no recording'}), p0 {info['p0']}, "
           f"rig schedule {schedule or 'none'}; {note}")
     print(res.summary())
     if not args.no_record:
