@@ -318,3 +318,19 @@ def test_bad_input_is_named():
     with pytest.raises(DataError, match="positions has 1 values"):
         board.run_board_chain([0] * 32, positions=[3])
     assert math.isfinite(board.volts_to_q16(0.0))
+
+
+def test_board_methods_run_in_reproduce_beside_the_float_chain():
+    from slipreflex import methods
+    from slipreflex.experiments import ReproduceConfig, run_reproduce
+
+    assert {"dath-board", "fixed-board"} <= set(methods.names())
+    assert "dath-board" not in methods.names(paper=True)
+    r = methods.make("dath-board", p0=123.6)
+    assert isinstance(r, board.BoardReflex) and r.params.p0 == 124 and r.params.dath
+    cfg = ReproduceConfig(trials=1, bottles=("TX",), methods=("dath", "dath-board"),
+                          experiments=("drop",))
+    res = run_reproduce(cfg, jobs=1, progress=False, plots=True)
+    by = {row["method"]: row for row in res.rows}
+    assert set(by) == {"dath", "dath-board"}
+    assert by["dath-board"]["n_increases"] > 0 and math.isfinite(by["dath-board"]["response_ms"])

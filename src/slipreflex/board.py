@@ -41,7 +41,7 @@ from .errors import DataError, ParameterError
 
 __all__ = [
     "COEF_Q", "SIG_Q", "H_MAX", "BoardParams", "BoardChain", "BoardReflex", "BoardResult",
-    "run_board_chain", "adc_counts", "quantize_lowpass", "volts_to_q16",
+    "run_board_chain", "adc_counts", "quantize_lowpass", "volts_to_q16", "board_detections",
 ]
 
 #: Fractional bits of the filter coefficients.
@@ -523,3 +523,30 @@ class BoardReflex:
         if self.chain.step(adc, pos):
             return float(self.chain.command)
         return None
+
+
+def board_detections(reflex: BoardReflex, volts) -> tuple[np.ndarray, np.ndarray]:
+    """The filtered trace (volts) and spikes of a board reflex over a whole trial's volts.
+
+    NaN or inf volts are faults, as in :meth:`BoardReflex.step`.
+
+    Returns
+    -------
+    x : numpy.ndarray of float
+        Filtered samples converted back to volts (Q16 counts x ADC_LSB / 2**16).
+    events : numpy.ndarray of bool
+
+    Examples
+    --------
+    >>> x, ev = board_detections(BoardReflex(), [1.0] * 4 + [1.2] * 8)
+    >>> ev.nonzero()[0].tolist(), round(float(x[0]), 4)
+    ([6, 7, 8, 9, 10, 11], 0.9961)
+    """
+    chain = BoardChain(reflex.params)
+    v = np.asarray(volts, dtype=float)
+    x = np.empty(v.size)
+    events = np.zeros(v.size, dtype=bool)
+    for i, volt in enumerate(v.tolist()):
+        chain.step(adc_counts(volt) if math.isfinite(volt) else 0xFFFF)
+        x[i], events[i] = chain.x * hw.ADC_LSB / (1 << SIG_Q), chain.event
+    return x, events

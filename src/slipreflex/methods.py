@@ -478,3 +478,26 @@ register(MethodSpec(name=NMSD, label="NMSD", input_kind="tactile", fs=hw.NMSD_FS
 register(MethodSpec(name=SWT, label="SWT-SD", input_kind="tactile", fs=hw.SWT_FS, build=_build_swt,
                     ramp=True, detections=_swt_detections, rest_statistic=_swt_rest,
                     color="#d62728", paper=True))
+
+
+# The paper's chain as the microcontroller runs it (fixed point, slipreflex.board): beside the
+# float chain in `reproduce --methods dath,dath-board`; not one of the paper's methods.
+def _build_board(dath: bool, p0: float, context: MethodContext, **params: Any) -> Reflex:
+    from .board import BoardReflex
+
+    return BoardReflex(**{"dath": dath, **params, "p0": int(np.floor(p0 + 0.5))})
+
+
+def _board_detections(reflex: Any, volts: np.ndarray) -> Detections:
+    from .board import board_detections
+
+    x, events = board_detections(reflex, volts)
+    return Detections(x, "slip sensor on the board, Q16 low-pass (V)", events, "events (spikes)")
+
+
+register(MethodSpec(name="dath-board", label="DATH (board)", input_kind="slip", fs=hw.DAQ_FS,
+                    build=functools.partial(_build_board, True), detections=_board_detections,
+                    color="#17becf"))
+register(MethodSpec(name="fixed-board", label="fixed (board)", input_kind="slip", fs=hw.DAQ_FS,
+                    build=functools.partial(_build_board, False), detections=_board_detections,
+                    color="#bcbd22"))
