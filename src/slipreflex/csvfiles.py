@@ -31,7 +31,12 @@ import numpy as np
 
 from .errors import DataError
 
-__all__ = ["INPUT_COLUMNS", "SAMPLE_COLUMNS", "WINDOW_COLUMNS", "read_slip_csv", "write_columns"]
+__all__ = ["INPUT_COLUMNS", "SAMPLE_COLUMNS", "WINDOW_COLUMNS", "read_slip_csv", "write_columns",
+           "read_preamble", "PREAMBLE_PREFIX"]
+
+#: Lines before the column header that start with this are ``# key: value`` facts about the
+#: file (``slipreflex export`` writes the run's p0 and chain parameters there; docs/runtime.md).
+PREAMBLE_PREFIX: str = "#"
 
 INPUT_COLUMNS: tuple[str, str] = ("t", "x")
 SAMPLE_COLUMNS: tuple[str, ...] = ("t", "x", "threshold", "event")
@@ -84,7 +89,8 @@ def read_slip_csv(path: str | os.PathLike, fs: float | None = None) -> tuple[np.
             rows = list(csv.reader(fh))
     except (OSError, UnicodeDecodeError) as err:
         raise DataError(f"{path}: cannot read: {getattr(err, 'strerror', None) or err}") from None
-    rows = [(i + 1, [c.strip() for c in row]) for i, row in enumerate(rows) if any(c.strip() for c in row)]
+    rows = [(i + 1, [c.strip() for c in row]) for i, row in enumerate(rows)
+            if any(c.strip() for c in row) and not row[0].lstrip().startswith(PREAMBLE_PREFIX)]
     if not rows:
         raise DataError(f"{path}: file is empty")
     first_line, header = rows[0]
@@ -126,7 +132,50 @@ def _is_text(cell: str) -> bool:
     return False
 
 
-def write_columns(path: str | os.PathLike, columns: Mapping[str, Sequence]) -> None:
+def read_preamble(path: str | os.PathLike) -> dict[str, str]:
+    """The ``# key: value`` lines at the top of a CSV, as a dict (empty if none).
+
+    Parameters
+    ----------
+    path : path-like
+
+    Returns
+    -------
+    dict of str to str
+        Keys and values stripped; values as written (JSON where the writer put JSON).
+
+    Raises
+    ------
+    DataError
+        Unreadable file, or a preamble line without ``key: value``; the
+        message names the file and line.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "h.csv"
+    >>> write_columns(p, {"t": [0.0], "x": [0.4]}, preamble={"p0": '{"middle": 147.0}'})
+    >>> read_preamble(p)
+    {'p0': '{"middle": 147.0}'}
+    """
+    path = Path(path)
+    out: dict[str, str] = {}
+    try:
+        with path.open(newline="") as fh:
+            for line_no, line in enumerate(fh, 1):
+                if not line.lstrip().startswith(PREAMBLE_PREFIX):
+                    break
+                key, sep, value = line.lstrip()[len(PREAMBLE_PREFIX):].partition(":")
+                if not sep or not key.strip():
+                    raise DataError(f"{path}, line {line_no}: expected '# key: value', got {line.strip()!r}")
+                out[key.strip()] = value.strip()
+    except (OSError, UnicodeDecodeError) as err:
+        raise DataError(f"{path}: cannot read: {getattr(err, 'strerror', None) or err}") from None
+    return out
+
+
+def write_columns(path: str | os.PathLike, columns: Mapping[str, Sequence], *,
+                  preamble: Mapping[str, str] | None = None) -> None:
     """Write equal-length columns to a CSV atomically.
 
     The file appears under its name only once it is complete (written to a
@@ -139,6 +188,8 @@ def write_columns(path: str | os.PathLike, columns: Mapping[str, Sequence]) -> N
         Destination.
     columns : mapping of str to sequence
         Column name to values; all the same length.
+    preamble : mapping of str to str, optional
+        Written first as ``# key: value`` lines (one line each; see :func:`read_preamble`).
 
     Examples
     --------
@@ -156,6 +207,10 @@ def write_columns(path: str | os.PathLike, columns: Mapping[str, Sequence]) -> N
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
     try:
         with os.fdopen(fd, "w", newline="") as fh:
+            for key, value in (preamble or {}).items():
+                if "\n" in f"{key}{value}" or ":" in key:
+                    raise ValueError(f"preamble of {path}: key {key!r} or its value spans lines or has ':'")
+                fh.write(f"{PREAMBLE_PREFIX} {key}: {value}\n")
             w = csv.writer(fh, lineterminator="\n")
             w.writerow(names)
             w.writerows(zip(*(c.tolist() for c in cols)))

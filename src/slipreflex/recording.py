@@ -658,30 +658,81 @@ def export_csv(path: str | os.PathLike, out: str | os.PathLike | None = None, *,
     """
     from pathlib import Path
 
-    from .csvfiles import write_columns
-
     rec = read_recording(path)
     samples = rec.topic("/daq/samples")
     if not samples:
         raise DataError(f"{rec.path}: no slip-sensor samples to export")
     main = Path(out) if out is not None else Path(rec.path).with_suffix(".csv")
-    write_columns(main, {"t": [s["t"] for s in samples], "x": [s["slip_volts"] for s in samples]})
+    companions = {
+        "imu": ("/daq/imu", ("t", "ax", "ay", "az")),
+        "flow": ("/daq/flow", ("t", "pulses")),
+        "events": ("/chain/events", ("t",)),
+        "windows": ("/chain/windows", ("t", "count")),
+        "commands": ("/hand/commands", ("t", "target", "sent", "latency")),
+        "faults": ("/faults", ("time", "kind", "message", "action")),
+    } if all_streams else {}
+    targets = [main] + [main.with_name(f"{main.stem}-{suffix}.csv") for suffix in companions]
+    for target in targets:  # every destination checked before the first file is written
+        _check_output(target)
+    _write_csv(main, {"t": [s["t"] for s in samples], "x": [s["slip_volts"] for s in samples]},
+               preamble=export_preamble(rec))
     written = [str(main)]
     if all_streams:
-        companions = {
-            "imu": ("/daq/imu", ("t", "ax", "ay", "az")),
-            "flow": ("/daq/flow", ("t", "pulses")),
-            "events": ("/chain/events", ("t",)),
-            "windows": ("/chain/windows", ("t", "count")),
-            "commands": ("/hand/commands", ("t", "target", "sent", "latency")),
-            "faults": ("/faults", ("time", "kind", "message", "action")),
-        }
-        for suffix, (topic, cols) in companions.items():
+        for target, (topic, cols) in zip(targets[1:], companions.values()):
             msgs = rec.topic(topic)
-            target = main.with_name(f"{main.stem}-{suffix}.csv")
-            write_columns(target, {c: ["" if m.get(c) is None else m.get(c) for m in msgs] for c in cols})
+            _write_csv(target, {c: ["" if m.get(c) is None else m.get(c) for m in msgs] for c in cols})
             written.append(str(target))
     return written
 
 
-__all__ += ["chain_params_of", "ReplayResult", "replay", "export_csv"]
+#: Version of the ``# key: value`` preamble that :func:`export_csv` writes (docs/runtime.md).
+EXPORT_FORMAT: str = "slipreflex-export 1"
+
+
+def export_preamble(rec: Recording) -> dict[str, str]:
+    """The facts an exported CSV carries in its ``# key: value`` preamble.
+
+    ``format`` (:data:`EXPORT_FORMAT`), ``source`` (the recording),
+    ``reflex`` (method), ``reflex_params`` (the run's
+    :class:`~slipreflex.chain.ReflexParams` as JSON, ``ReflexParams.from_dict``
+    rebuilds it, p0 included) and ``p0`` (JSON, the start position of each
+    finger) - each only when the recording has it.
+
+    Examples
+    --------
+    >>> import json
+    >>> meta = {METADATA_NAME: {"reflex": "dath", "p0": json.dumps({"middle": 147.0})}}
+    >>> export_preamble(Recording("r.mcap", metadata=meta))["p0"]
+    '{"middle": 147.0}'
+    """
+    meta = rec.metadata.get(METADATA_NAME, {})
+    start = rec.metadata.get("start", {})
+    out = {"format": EXPORT_FORMAT, "source": os.path.basename(str(rec.path))}
+    for key in ("reflex", "reflex_params"):
+        if key in meta:
+            out[key] = meta[key]
+    p0 = start.get("p0", meta.get("p0"))
+    if p0 is not None:
+        out["p0"] = p0
+    return out
+
+
+def _check_output(target: Any) -> None:
+    """Refuse a destination that is a folder, a device or another non-regular file, or whose
+    folder does not exist: export never replaces anything but a regular file."""
+    if target.exists() and not target.is_file():
+        raise RecordingError(f"{target}: exists and is not a regular file; refusing to replace it")
+    if not target.parent.is_dir():
+        raise RecordingError(f"{target}: folder {target.parent} does not exist")
+
+
+def _write_csv(target: Any, columns: Mapping[str, Any], **kw: Any) -> None:
+    from .csvfiles import write_columns
+
+    try:
+        write_columns(target, columns, **kw)
+    except OSError as err:
+        raise RecordingError(f"{target}: cannot write: {err.strerror or err}") from None
+
+
+__all__ += ["chain_params_of", "ReplayResult", "replay", "export_csv", "export_preamble", "EXPORT_FORMAT"]
