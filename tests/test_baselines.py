@@ -28,30 +28,21 @@ def _synthetic(fs: float, seconds: float, seed: int, noise: float = 0.005) -> np
     return f
 
 
-def _stream(reflex, frames, positions=None):
-    out = []
-    for k, fr in enumerate(frames):
-        p = None if positions is None or np.isnan(positions[k]) else float(positions[k])
-        v = reflex.step(fr, position=p)
-        out.append(np.nan if v is None else v)
-    return np.array(out)
-
-
 @pytest.mark.parametrize("seed", [0, 1, 2])
-def test_nmsd_streaming_equals_batch(seed):
+def test_nmsd_streaming_equals_batch(seed, stream):
     frames = _synthetic(NMSD_FS, 2.0, seed)
     params = NMSDParams(threshold=rest_threshold(frames[:100], "nmsd", NMSD_FS), speed=800.0, p0=120.0)
     positions = np.where(np.arange(len(frames)) % 3 == 0, 150.0 + seed, np.nan)
     for pos in (None, positions):
         batch = nmsd_commands(frames, params, positions=pos)
         r = NMSD(params)
-        stream = _stream(r, frames, pos)
-        np.testing.assert_array_equal(np.isnan(batch), np.isnan(stream))
-        np.testing.assert_array_equal(batch[~np.isnan(batch)], stream[~np.isnan(stream)])
+        out = stream(r, frames, pos)
+        np.testing.assert_array_equal(np.isnan(batch), np.isnan(out))
+        np.testing.assert_array_equal(batch[~np.isnan(batch)], out[~np.isnan(out)])
         assert np.isfinite(batch).sum() > 0
         # reset restores the initial state: a second pass gives the same bits
         r.reset()
-        np.testing.assert_array_equal(_stream(r, frames, pos), stream)
+        np.testing.assert_array_equal(stream(r, frames, pos), out)
     det = nmsd_detections(frames, NMSD_FS, threshold=params.threshold)
     r = NMSD(params)
     events = []
@@ -63,16 +54,16 @@ def test_nmsd_streaming_equals_batch(seed):
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
-def test_swt_streaming_equals_batch(seed):
+def test_swt_streaming_equals_batch(seed, stream):
     frames = _synthetic(SWT_FS, 2.0, seed)
     params = SWTParams(threshold=rest_threshold(frames[:150], "swt", SWT_FS), speed=800.0, p0=120.0)
     positions = np.where(np.arange(len(frames)) % 4 == 0, 140.0, np.nan)
     for pos in (None, positions):
         batch = swt_commands(frames, params, positions=pos)
         r = SWTSD(params)
-        stream = _stream(r, frames, pos)
-        np.testing.assert_array_equal(np.isnan(batch), np.isnan(stream))
-        np.testing.assert_array_equal(batch[~np.isnan(batch)], stream[~np.isnan(stream)])
+        out = stream(r, frames, pos)
+        np.testing.assert_array_equal(np.isnan(batch), np.isnan(out))
+        np.testing.assert_array_equal(batch[~np.isnan(batch)], out[~np.isnan(out)])
         assert np.isfinite(batch).sum() > 0
     on = swt_on(frames, threshold=params.threshold)
     r = SWTSD(params)
@@ -178,6 +169,7 @@ def test_interface_and_validation():
         SWTParams(threshold=0.0, speed=1.0)
     with pytest.raises(ParameterError, match="persist"):
         SWTParams(threshold=1.0, speed=1.0, persist=-1)
-    with pytest.raises(DataError):
-        nmsd_statistic(np.zeros((5, 3, 4)))
+    for bad in (np.zeros(5), np.zeros((5, 3, 4, 2))):    # any (K, rows, cols) or (K, channels), nothing else
+        with pytest.raises(DataError):
+            nmsd_statistic(bad)
     assert NMSD(NMSDParams(threshold=1.0, speed=2.0), threshold=3.0).params.threshold == 3.0

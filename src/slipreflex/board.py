@@ -514,6 +514,26 @@ class BoardReflex:
         """Restore the initial state."""
         self.chain.reset()
 
+    @property
+    def last_event(self) -> bool:
+        """The last sample was a spike (the :class:`~slipreflex.interfaces.Reflex` diagnostics)."""
+        return bool(self.chain.event)
+
+    @property
+    def last_filtered(self) -> float:
+        """The filtered sample in volts (NaN on a fault sample)."""
+        return math.nan if self.chain.fault else self.chain.x * hw.ADC_LSB / (1 << SIG_Q)
+
+    @property
+    def last_threshold(self) -> float:
+        """The encoder threshold in force, in volts."""
+        return self.chain.theta * hw.ADC_LSB / (1 << SIG_Q)
+
+    @property
+    def last_count(self) -> int | None:
+        """The window's spike count if the last sample completed a window, else None."""
+        return int(self.chain.v) if self.chain.window else None
+
     def step(self, sample: float, position: float | None = None) -> float | None:
         """One sample in volts; the new command when a window completes, else None."""
         pos = None if position is None else min(max(math.floor(float(position) + 0.5), -32768), 32767)

@@ -114,22 +114,36 @@ class Reflex(Protocol):
     Attributes
     ----------
     name : str
-        Method name used by the trial runner ("fixed", "dath", "nmsd", "swt").
+        Method name used by the trial runner (a name of :mod:`slipreflex.methods`).
     input_kind : {"slip", "tactile"}
         Which stream ``step`` expects.
     fs : float
         The rate (Hz) at which ``step`` must be called.
+    last_event : bool
+        Diagnostics of the last ``step`` (what the runtime records and replay
+        compares): the step detected something (a spike of the chain, a
+        detection of NMSD, the start of an SWT-SD ON period).
+    last_filtered : float
+        The filtered input the method looked at (NaN where the method has no
+        scalar filtered signal, or the sample was skipped).
+    last_threshold : float or None
+        The detection threshold in force (None if the method has none).
+    last_count : int or None
+        The window's spike count when the step completed a window, else None.
 
     ``step(sample, position=None)`` takes one sample (a float for "slip", a
-    ``(4, 4)`` array for "tactile") and the hand's measured slip-finger
-    position if known; it returns a new target position for the grasping
-    fingers, or None when the command does not change. ``reset()`` restores
-    the initial state.
+    frame array for "tactile") and the hand's measured slip-finger position if
+    known; it returns a new target position for the grasping fingers, or None
+    when the command does not change. A non-finite sample is skipped (None) or
+    refused with :class:`~slipreflex.errors.DataError`; it never becomes a
+    command. ``reset()`` restores the initial state bit for bit.
+    :func:`slipreflex.testing.check_reflex` checks all of this.
 
     Examples
     --------
     >>> class Never:
     ...     name, input_kind, fs = "never", "slip", 333.0
+    ...     last_event, last_filtered, last_threshold, last_count = False, float("nan"), None, None
     ...     def step(self, sample, position=None): return None
     ...     def reset(self): pass
     >>> isinstance(Never(), Reflex)
@@ -139,6 +153,10 @@ class Reflex(Protocol):
     name: str
     input_kind: InputKind
     fs: float
+    last_event: bool
+    last_filtered: float
+    last_threshold: float | None
+    last_count: int | None
 
     def step(self, sample: float | np.ndarray, position: float | None = None) -> float | None: ...
 

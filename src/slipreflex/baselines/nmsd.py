@@ -29,16 +29,16 @@ Examples
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
-from ..hardware import FINGER_MAX, FINGER_MIN, NMSD_FS
+from ..hardware import FINGER_MAX, FINGER_MIN, NMSD_FS, TACTILE_SHAPE
 from ..validation import number, resolve_params, set_field
-from ._validate import as_frame, as_frames
-from .closing import CLOSE_S, Closer, ClosingParams, closing_commands
+from ._validate import as_frames, frame_shape
+from .closing import CLOSE_S, ClosingParams, closing_commands
+from .shell import TactileReflex
 
-__all__ = ["NMSDParams", "NMSD", "nmsd_statistic", "nmsd_detections", "nmsd_commands",
+__all__ = ["NMSDParams", "NMSD", "NMSDDetector", "nmsd_statistic", "nmsd_detections", "nmsd_commands",
            "nmsd_rest_statistic"]
 
 
@@ -59,6 +59,9 @@ class NMSDParams:
         Closing time per detection (s); 45 ms in the paper.
     p0, lo, hi : float
         Initial target and target saturation (finger units).
+    shape : tuple of int
+        Shape of one tactile frame: (rows, cols) or (channels,); the 4 x 4
+        array by default.
 
     Examples
     --------
@@ -73,10 +76,12 @@ class NMSDParams:
     p0: float = 0.0
     lo: float = float(FINGER_MIN)
     hi: float = float(FINGER_MAX)
+    shape: tuple[int, ...] = TACTILE_SHAPE
 
     def __post_init__(self) -> None:
         set_field(self, "threshold", number("threshold", self.threshold, lo=0.0, lo_open=True))
         set_field(self, "fs", number("fs", self.fs, lo=0.0, lo_open=True))
+        set_field(self, "shape", frame_shape("shape", self.shape))
         self.closing  # validates speed, close_s, p0, lo, hi
 
     @property
@@ -97,14 +102,14 @@ def nmsd_statistic(frames, fs: float = NMSD_FS) -> np.ndarray:
 
     Parameters
     ----------
-    frames : array_like, shape (K, 4, 4)
+    frames : array_like, shape (K, rows, cols) or (K, channels)
         Tactile forces (N) at ``fs``.
     fs : float
         Sampling rate (Hz).
 
     Returns
     -------
-    numpy.ndarray, shape (K, 4, 4)
+    numpy.ndarray, same shape as ``frames``
         The statistic; zero for the first two frames (no second difference yet).
 
     Examples
@@ -142,7 +147,7 @@ def nmsd_detections(frames, fs: float = NMSD_FS, *, threshold: float) -> np.ndar
 
     Parameters
     ----------
-    frames : array_like, shape (K, 4, 4)
+    frames : array_like, shape (K, rows, cols) or (K, channels)
         Tactile forces (N).
     fs : float
         Sampling rate (Hz).
@@ -161,7 +166,8 @@ def nmsd_detections(frames, fs: float = NMSD_FS, *, threshold: float) -> np.ndar
     [False, False, False, True, False]
     """
     threshold = number("threshold", threshold, lo=0.0, lo_open=True)
-    over = (np.abs(nmsd_statistic(frames, fs)) > threshold).reshape(-1, 16).any(axis=1)
+    s = nmsd_statistic(frames, fs)
+    over = (np.abs(s) > threshold).reshape(len(s), -1).any(axis=1)
     prev = np.concatenate(([False], over[:-1]))
     return over & ~prev
 
@@ -173,7 +179,7 @@ def nmsd_commands(frames, params: NMSDParams, positions=None) -> np.ndarray:
 
     Parameters
     ----------
-    frames : array_like, shape (K, 4, 4)
+    frames : array_like, shape (K, rows, cols) or (K, channels)
         Tactile forces (N) at ``params.fs``.
     params : NMSDParams
         The reflex parameters.
@@ -196,8 +202,50 @@ def nmsd_commands(frames, params: NMSDParams, positions=None) -> np.ndarray:
     return closing_commands(det, params.closing, mode="events", positions=positions)
 
 
-class NMSD:
+class NMSDDetector:
+    """NMSD's per-frame detector: change of the force derivative, rising edges over threshold.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> d = NMSDDetector(fs=260.0, threshold=50.0)
+    >>> [d.update(np.full(16, v))[2] for v in (0.0, 0.0, 0.0, -1.0)]
+    [False, False, False, True]
+    """
+
+    def __init__(self, fs: float, threshold: float) -> None:
+        self.fs, self.threshold = fs, threshold
+        self._prev: np.ndarray | None = None
+        self._prev_d: np.ndarray | None = None
+        self._over = False
+
+    def update(self, f: np.ndarray) -> tuple[float, bool, bool]:
+        """One flat frame in; (largest ``|s_k|``, detection, detection).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> NMSDDetector(fs=1.0, threshold=1.0).update(np.zeros(2))
+        (0.0, False, False)
+        """
+        s = 0.0
+        if self._prev is not None:
+            d = (f - self._prev) * self.fs
+            if self._prev_d is not None:
+                s = float(np.max(np.abs(d - self._prev_d)))
+            self._prev_d = d
+        self._prev = f
+        over = s > self.threshold
+        event = over and not self._over
+        self._over = over
+        return s, event, event
+
+
+class NMSD(TactileReflex):
     """Streaming NMSD reflex (implements :class:`slipreflex.interfaces.Reflex`).
+
+    The shared :class:`~slipreflex.baselines.shell.TactileReflex` shell with
+    :class:`NMSDDetector`; every detection adds ``close_s`` of closing.
 
     Parameters
     ----------
@@ -233,78 +281,8 @@ class NMSD:
     """
 
     name = "nmsd"
-    input_kind = "tactile"
+    params_class = NMSDParams
+    mode = "events"
 
-    def __init__(self, params: NMSDParams | None = None, **kwargs: Any) -> None:
-        params = resolve_params(NMSDParams, params, kwargs)
-        self.params = params
-        self.fs = params.fs
-        self._closer = Closer(params.closing)
-        self.reset()
-
-    def reset(self) -> None:
-        """Restore the initial state.
-
-        Examples
-        --------
-        >>> r = NMSD(threshold=1.0, speed=100.0); r.reset(); r.detections
-        0
-        """
-        self._prev: np.ndarray | None = None
-        self._prev_d: np.ndarray | None = None
-        self._over = False
-        self._closer.reset()
-        self.last_statistic = 0.0
-        self.last_event = False
-        self.detections = 0
-
-    @property
-    def closing_s(self) -> float:
-        """Total closing time generated since the last reset (s).
-
-        Examples
-        --------
-        >>> NMSD(threshold=1.0, speed=100.0).closing_s
-        0.0
-        """
-        return self._closer.closing_samples / self.fs
-
-    @property
-    def closing(self) -> bool:
-        """True while the fingers are being told to close.
-
-        Examples
-        --------
-        >>> NMSD(threshold=1.0, speed=100.0).closing
-        False
-        """
-        return self._closer.closing
-
-    def step(self, frame, position: float | None = None) -> float | None:
-        """Take one (4, 4) tactile frame; return a new finger target or None.
-
-        Examples
-        --------
-        >>> import numpy as np
-        >>> r = NMSD(threshold=50.0, speed=520.0)
-        >>> out = [r.step(np.full((4, 4), v)) for v in (0.0, 0.0, 0.0, -1.0)]
-        >>> out[-1], r.last_event
-        (2.0, True)
-        """
-        f = as_frame("frame", frame)
-        s = 0.0
-        if self._prev is not None:
-            d = (f - self._prev) * self.fs
-            if self._prev_d is not None:
-                s = float(np.max(np.abs(d - self._prev_d)))
-            self._prev_d = d
-        self._prev = f
-        over = s > self.params.threshold
-        event = over and not self._over
-        self._over = over
-        self.last_statistic = s
-        self.last_event = event
-        if event:
-            self.detections += 1
-        self._closer.feed(event, "events")
-        return self._closer.step(position)
+    def _detector(self) -> NMSDDetector:
+        return NMSDDetector(self.params.fs, self.params.threshold)

@@ -37,16 +37,16 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
-from ..hardware import FINGER_MAX, FINGER_MIN, SWT_FS
+from ..hardware import FINGER_MAX, FINGER_MIN, SWT_FS, TACTILE_SHAPE
 from ..validation import integer, number, resolve_params, set_field
-from ._validate import as_frame, as_frames
-from .closing import CLOSE_S, Closer, ClosingParams, closing_commands
+from ._validate import as_frames, frame_shape
+from .closing import CLOSE_S, ClosingParams, closing_commands
+from .shell import TactileReflex
 
-__all__ = ["SWTParams", "SWTSD", "swt_statistic", "swt_on", "swt_commands", "swt_kernel",
+__all__ = ["SWTParams", "SWTSD", "SWTDetector", "swt_statistic", "swt_on", "swt_commands", "swt_kernel",
            "swt_rest_statistic",
            "SWT_WINDOW", "SWT_LEVEL", "SWT_WAVELET"]
 
@@ -78,6 +78,9 @@ class SWTParams:
         Closing quantum of the NMSD rule used while ON (s).
     p0, lo, hi : float
         Initial target and target saturation (finger units).
+    shape : tuple of int
+        Shape of one tactile frame: (rows, cols) or (channels,); the 4 x 4
+        array by default.
 
     Examples
     --------
@@ -93,11 +96,13 @@ class SWTParams:
     p0: float = 0.0
     lo: float = float(FINGER_MIN)
     hi: float = float(FINGER_MAX)
+    shape: tuple[int, ...] = TACTILE_SHAPE
 
     def __post_init__(self) -> None:
         set_field(self, "threshold", number("threshold", self.threshold, lo=0.0, lo_open=True))
         set_field(self, "fs", number("fs", self.fs, lo=0.0, lo_open=True))
         set_field(self, "persist", integer("persist", self.persist, lo=0))
+        set_field(self, "shape", frame_shape("shape", self.shape))
         self.closing  # validates speed, close_s, p0, lo, hi
 
     @property
@@ -156,12 +161,12 @@ def swt_statistic(frames) -> np.ndarray:
 
     Parameters
     ----------
-    frames : array_like, shape (K, 4, 4)
+    frames : array_like, shape (K, rows, cols) or (K, channels)
         Tactile forces (N).
 
     Returns
     -------
-    numpy.ndarray, shape (K, 4, 4)
+    numpy.ndarray, same shape as ``frames``
         ``c_k``; zero for the first 7 frames (window not yet full).
 
     Examples
@@ -176,8 +181,8 @@ def swt_statistic(frames) -> np.ndarray:
     out = np.zeros_like(f)
     if k >= SWT_WINDOW:
         flat = f.reshape(k, -1)
-        win = np.lib.stride_tricks.sliding_window_view(flat, SWT_WINDOW, axis=0)  # (k-7, 16, 8)
-        win = np.ascontiguousarray(np.swapaxes(win, 1, 2))                         # (k-7, 8, 16)
+        win = np.lib.stride_tricks.sliding_window_view(flat, SWT_WINDOW, axis=0)  # (k-7, taxels, 8)
+        win = np.ascontiguousarray(np.swapaxes(win, 1, 2))                         # (k-7, 8, taxels)
         out[SWT_WINDOW - 1:] = _apply(_kernel(), win).reshape(-1, *f.shape[1:])
     return out
 
@@ -201,7 +206,7 @@ def swt_on(frames, *, threshold: float, persist: int = SWT_WINDOW) -> np.ndarray
 
     Parameters
     ----------
-    frames : array_like, shape (K, 4, 4)
+    frames : array_like, shape (K, rows, cols) or (K, channels)
         Tactile forces (N).
     threshold : float
         Threshold on ``|c_k|`` (N).
@@ -235,7 +240,7 @@ def swt_commands(frames, params: SWTParams, positions=None) -> np.ndarray:
 
     Parameters
     ----------
-    frames : array_like, shape (K, 4, 4)
+    frames : array_like, shape (K, rows, cols) or (K, channels)
         Tactile forces (N) at ``params.fs``.
     params : SWTParams
         The reflex parameters.
@@ -258,8 +263,56 @@ def swt_commands(frames, params: SWTParams, positions=None) -> np.ndarray:
     return closing_commands(on, params.closing, mode="hold", positions=positions)
 
 
-class SWTSD:
+class SWTDetector:
+    """SWT-SD's per-frame detector: level-3 detail over the last 8 frames, persistence, ON/OFF.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> d = SWTDetector(threshold=0.1, persist=1, taxels=1)
+    >>> [d.update(np.array([1.0 if k >= 8 else 0.0]))[1] for k in range(11)][8:]
+    [False, True, True]
+    """
+
+    def __init__(self, threshold: float, persist: int, taxels: int) -> None:
+        self.threshold, self.persist = threshold, persist
+        self._kernel = _kernel()
+        self._win = np.zeros((SWT_WINDOW, taxels))
+        self._n = 0
+        self._run = np.zeros(taxels, dtype=np.int64)
+        self._on = False
+
+    def update(self, f: np.ndarray) -> tuple[float, bool, bool]:
+        """One flat frame in; (largest ``|c_k|``, ON, ON started).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> SWTDetector(threshold=1.0, persist=0, taxels=2).update(np.zeros(2))
+        (0.0, False, False)
+        """
+        self._win[:-1] = self._win[1:]
+        self._win[-1] = f
+        self._n += 1
+        if self._n >= SWT_WINDOW:
+            c = _apply(self._kernel, self._win)
+            over = np.abs(c) > self.threshold
+            stat = float(np.max(np.abs(c)))
+        else:
+            over = np.zeros(self._win.shape[1], dtype=bool)
+            stat = 0.0
+        self._run = np.where(over, self._run + 1, 0)
+        on = bool((self._run > self.persist).any())
+        started = on and not self._on
+        self._on = on
+        return stat, on, started
+
+
+class SWTSD(TactileReflex):
     """Streaming SWT-SD reflex (implements :class:`slipreflex.interfaces.Reflex`).
+
+    The shared :class:`~slipreflex.baselines.shell.TactileReflex` shell with
+    :class:`SWTDetector`; the fingers close while the ON/OFF signal is ON.
 
     Parameters
     ----------
@@ -292,74 +345,26 @@ class SWTSD:
     >>> r = SWTSD(threshold=0.1, speed=380.0)
     >>> isinstance(r, Reflex), r.name, r.input_kind, r.fs
     (True, 'swt', 'tactile', 380.0)
+    >>> r = SWTSD(threshold=0.1, speed=380.0, persist=1)
+    >>> out = [r.step(np.full((4, 4), 1.0 if k >= 8 else 0.0)) for k in range(11)]
+    >>> out[8:], r.last_on
+    ([None, 1.0, 2.0], True)
     """
 
     name = "swt"
-    input_kind = "tactile"
+    params_class = SWTParams
+    mode = "hold"
 
-    def __init__(self, params: SWTParams | None = None, **kwargs: Any) -> None:
-        params = resolve_params(SWTParams, params, kwargs)
-        self.params = params
-        self.fs = params.fs
-        self._closer = Closer(params.closing)
-        self._kernel = _kernel()
-        self.reset()
-
-    def reset(self) -> None:
-        """Restore the initial state.
-
-        Examples
-        --------
-        >>> r = SWTSD(threshold=1.0, speed=100.0); r.reset(); r.last_on
-        False
-        """
-        self._win = np.zeros((SWT_WINDOW, 16))
-        self._n = 0
-        self._run = np.zeros(16, dtype=np.int64)
-        self._closer.reset()
-        self.last_statistic = 0.0
-        self.last_on = False
-        self.last_event = False
-        self.detections = 0
+    def _detector(self) -> SWTDetector:
+        return SWTDetector(self.params.threshold, self.params.persist, int(np.prod(self.params.shape)))
 
     @property
-    def closing_s(self) -> float:
-        """Total closing time generated since the last reset (s).
+    def last_on(self) -> bool:
+        """The ON/OFF slip signal at the last step.
 
         Examples
         --------
-        >>> SWTSD(threshold=1.0, speed=100.0).closing_s
-        0.0
+        >>> SWTSD(threshold=1.0, speed=100.0).last_on
+        False
         """
-        return self._closer.closing_samples / self.fs
-
-    def step(self, frame, position: float | None = None) -> float | None:
-        """Take one (4, 4) tactile frame; return a new finger target or None.
-
-        Examples
-        --------
-        >>> import numpy as np
-        >>> r = SWTSD(threshold=0.1, speed=380.0, persist=1)
-        >>> out = [r.step(np.full((4, 4), 1.0 if k >= 8 else 0.0)) for k in range(11)]
-        >>> out[8:], r.last_on
-        ([None, 1.0, 2.0], True)
-        """
-        f = as_frame("frame", frame)
-        self._win[:-1] = self._win[1:]
-        self._win[-1] = f
-        self._n += 1
-        if self._n >= SWT_WINDOW:
-            c = _apply(self._kernel, self._win)
-            over = np.abs(c) > self.params.threshold
-            self.last_statistic = float(np.max(np.abs(c)))
-        else:
-            over = np.zeros(16, dtype=bool)
-            self.last_statistic = 0.0
-        self._run = np.where(over, self._run + 1, 0)
-        on = bool((self._run > self.params.persist).any())
-        self.last_event = on and not self.last_on
-        self.last_on = on
-        if self.last_event:
-            self.detections += 1
-        self._closer.feed(on, "hold")
-        return self._closer.step(position)
+        return self.last_trigger
