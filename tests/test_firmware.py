@@ -70,6 +70,12 @@ def test_build_is_strict_and_reports_size(build):
     assert m, log
     flash, ram = int(m[1]), int(m[2])
     assert 500 < flash < 8192 and 16 < ram < 512
+    for elf, total in (("daq-reflex", 32768), ("hand2560", 262144)):
+        m = re.search(rf"{elf} size: flash (\d+) of {total} bytes .*RAM (\d+) of", log)
+        assert m, log
+        assert flash < int(m[1]) < 8192 and ram < int(m[2]) < 512
+        assert (build_dir / f"{elf}.hex").read_text().startswith(":")
+    assert "-mmcu=atmega2560" in log and "-DHAND_UART1" in log
     assert (build_dir / "daq.hex").read_text().startswith(":")
 
 
@@ -82,6 +88,9 @@ def test_c_header_matches_python():
         "WIRE_FRAME_LEN": wire.FRAME_LEN, "WIRE_BAUD": wire.BAUD, "WIRE_ADC_MAX": wire.ADC_MAX,
         "WIRE_FLAG_ACCEL_FRESH": wire.FLAG_ACCEL_FRESH, "WIRE_FLAG_IMU_ERROR":
         wire.FLAG_IMU_ERROR, "WIRE_FLAG_OVERRUN": wire.FLAG_OVERRUN,
+        "WIRE_VERSION_REFLEX": wire.VERSION_REFLEX, "WIRE_FRAME_LEN_REFLEX": wire.FRAME_LEN_REFLEX,
+        "WIRE_REFLEX_SPIKE": wire.REFLEX_SPIKE, "WIRE_REFLEX_WINDOW": wire.REFLEX_WINDOW,
+        "WIRE_REFLEX_FAULT": wire.REFLEX_FAULT, "WIRE_REFLEX_HAND": wire.REFLEX_HAND,
     }
 
 
@@ -89,7 +98,7 @@ def test_c_encoder_passes_shared_vectors(build):
     proc = subprocess.run([str(build[0] / "test_vectors"), str(VECTORS)],
                           capture_output=True, text=True)
     assert proc.returncode == 0, proc.stdout
-    assert re.search(r"9 good frames, 12 bad frames checked, \d+ streams skipped, 0 failures",
+    assert re.search(r"13 good frames, 17 bad frames checked, \d+ streams skipped, 0 failures",
                      proc.stdout), proc.stdout
 
 

@@ -21,7 +21,7 @@ def _records(kind: str) -> list[list[str]]:
     for line in VECTORS.read_text().splitlines():
         if line and not line.startswith("#"):
             parts = line.split(" ")
-            assert parts[0] in "FBS", line
+            assert parts[0] in "FRBS", line
             if parts[0] == kind:
                 rows.append(parts[1:])
     return rows
@@ -32,12 +32,13 @@ def _hex(text: str) -> bytes:
 
 
 F_ROWS = _records("F")
+R_ROWS = _records("R")
 B_ROWS = _records("B")
 S_ROWS = _records("S")
 
 
 def test_vector_file_has_every_kind():
-    assert len(F_ROWS) >= 8 and len(B_ROWS) >= 10 and len(S_ROWS) >= 20
+    assert len(F_ROWS) >= 8 and len(R_ROWS) >= 4 and len(B_ROWS) >= 10 and len(S_ROWS) >= 20
     reasons = {row[2] for row in B_ROWS}
     assert reasons == {"truncated", "sync", "crc", "version", "adc"}
 
@@ -74,11 +75,33 @@ def test_good_vectors(row):
     assert parser.stats.frames == 1 and parser.stats.garbage_bytes == 0
 
 
+@pytest.mark.parametrize("row", R_ROWS, ids=[r[0] for r in R_ROWS])
+def test_good_version_2_vectors(row):
+    """Frames of a board running the reflex: decoded, re-encoded, parsed among v1 frames."""
+    name, hx, *fields = row
+    raw = _hex(hx)
+    seq, flags, adc, ax, ay, az, flow, bits, v, command, x = map(int, fields)
+    f = wire.decode_frame(raw)
+    assert len(raw) == wire.FRAME_LEN_REFLEX and raw[2] == wire.VERSION_REFLEX
+    assert (f.seq, f.flags, f.adc, f.accel, f.flow_pulses) == (seq, flags, adc, (ax, ay, az), flow)
+    assert f.reflex == wire.ReflexFields(bits, v, command, x)
+    accel = (ax, ay, az) if flags & wire.FLAG_ACCEL_FRESH else None
+    assert wire.encode_frame(seq, adc, accel, flow, flags & ~wire.FLAG_ACCEL_FRESH,
+                             reflex=f.reflex) == raw
+    v1 = wire.encode_frame(seq=(seq + 1) % 65536, adc=1)
+    parser = wire.FrameParser()
+    got = parser.feed(raw + v1)
+    assert [g.reflex for g in got] == [f.reflex, None] and parser.stats.garbage_bytes == 0
+    assert f.to_sample().slip_volts == adc * hardware.ADC_LSB
+    with pytest.raises(ParameterError, match="reflex.bits"):
+        wire.encode_frame(seq, adc, reflex=wire.ReflexFields(0x80, 0, 0, 0))
+
+
 @pytest.mark.parametrize("row", B_ROWS, ids=[r[0] for r in B_ROWS])
 def test_bad_vectors(row):
     name, hx, reason = row
     raw = _hex(hx)
-    words = {"truncated": "bytes, expected 20", "sync": "sync", "crc": "bad CRC",
+    words = {"truncated": "bytes, expected (20|28)", "sync": "sync", "crc": "bad CRC",
              "version": "unknown version", "adc": "out of range"}[reason]
     with pytest.raises(DataError, match=words):
         wire.decode_frame(raw)
@@ -117,7 +140,8 @@ def test_stream_vectors(row):
         assert [f.seq for f in frames] == want_seqs
         assert stats.bytes_fed == len(data)
         assert stats.pending == 0
-        assert stats.bytes_fed == wire.FRAME_LEN * stats.frames + stats.garbage_bytes
+        assert stats.bytes_fed == sum(wire.FRAME_LEN_REFLEX if f.reflex else wire.FRAME_LEN
+                                      for f in frames) + stats.garbage_bytes
 
 
 def test_unwrapping_and_time_across_wrap():
@@ -185,22 +209,31 @@ def test_feed_rejects_text():
     assert issubclass(ParameterError, SlipreflexError)
 
 
-def test_fuzz_recovers_every_untouched_frame():
+@pytest.mark.parametrize("version", [wire.VERSION, wire.VERSION_REFLEX])
+def test_fuzz_recovers_every_untouched_frame(version):
     """Corrupt some frames (bit flips, dropped and inserted bytes) in a long stream:
     every untouched frame comes back, nothing that was not sent comes back, and the
-    counters add up."""
+    counters add up (for version-1 and version-2 streams)."""
     rng = np.random.default_rng(1234)
+    size = wire.FRAME_LEN if version == wire.VERSION else wire.FRAME_LEN_REFLEX
+
+    def reflex():
+        if version == wire.VERSION:
+            return None
+        return wire.ReflexFields(int(rng.integers(0, 16)), int(rng.integers(0, 256)),
+                                 int(rng.integers(-32768, 32768)), int(rng.integers(-2**31, 2**31)))
+
     n = 3000
     sent, damaged, chunks = [], set(), []
     for k in range(n):
         seq = (60000 + k) % wire.SEQ_MODULO
         accel = tuple(int(a) for a in rng.integers(-32768, 32768, 3)) if k % 3 else None
         raw = bytearray(wire.encode_frame(seq, int(rng.integers(0, 1024)), accel,
-                                          int(rng.integers(0, 2**32))))
+                                          int(rng.integers(0, 2**32)), reflex=reflex()))
         sent.append(bytes(raw))
         if k % 4 == 2 and rng.random() < 0.5:  # never two damaged frames in a row
             how = rng.integers(0, 3)
-            pos = int(rng.integers(0, wire.FRAME_LEN))
+            pos = int(rng.integers(0, size))
             if how == 0:
                 raw[pos] ^= 1 << int(rng.integers(0, 8))
             elif how == 1:
@@ -223,12 +256,12 @@ def test_fuzz_recovers_every_untouched_frame():
                 if (60000 + k) % wire.SEQ_MODULO not in damaged]
     assert got_seqs == expected
     assert {bytes(wire.encode_frame(f.seq, f.adc, f.accel if f.accel_fresh else None,
-                                    f.flow_pulses)) for f in got} <= set(sent)
+                                    f.flow_pulses, reflex=f.reflex)) for f in got} <= set(sent)
     s = parser.stats
     assert s.frames == len(expected)
     assert s.seq_gaps == len(damaged) and s.frames_lost == len(damaged)
     assert s.crc_errors + s.truncated >= 1
-    assert s.bytes_fed == len(data) == wire.FRAME_LEN * s.frames + s.garbage_bytes
+    assert s.bytes_fed == len(data) == size * s.frames + s.garbage_bytes
     assert got[-1].index == 60000 + n - 1  # unwrapped past 65535
 
 

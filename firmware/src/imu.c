@@ -38,7 +38,11 @@ static uint8_t fresh, error;
 
 void imu_init(void)
 {
+#if defined(__AVR_ATmega2560__)
+    PORTD |= _BV(PD0) | _BV(PD1);    /* weak pull-ups on SCL/SDA (boards add 4.7k) */
+#else
     PORTC |= _BV(PC4) | _BV(PC5);    /* weak pull-ups on SDA/SCL (boards add 4.7k) */
+#endif
     TWSR = 0;                        /* prescaler 1 */
     TWBR = (uint8_t)TWBR_VALUE;
     TWCR = _BV(TWEN);

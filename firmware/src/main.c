@@ -11,15 +11,34 @@
  * Pins: A0/PC0 slip sensor (0..5 V), A4/PC4 SDA and A5/PC5 SCL to the MPU6050,
  * D2/PD2 (INT0) YF-S201 signal, D1/PD1 (TXD) to the USB-serial bridge. See
  * docs/firmware.md.
+ *
+ * Build options (firmware/Makefile):
+ *   REFLEX_ON_BOARD  the main loop also runs the reflex chain (firmware/reflex/) on every
+ *                    ADC reading and sends version-2 frames carrying its spike, window
+ *                    count, command and filtered sample. REFLEX_DATH (0/1) and REFLEX_P0
+ *                    choose the encoder and the initial position.
+ *   HAND_UART1       (ATmega2560, with REFLEX_ON_BOARD) the standalone reflex: when the
+ *                    command rises, an i-Limb position packet for the tripod goes out on
+ *                    UART1 at 115200 baud. On the ATmega2560 (Arduino Mega) the pins are
+ *                    A0/PF0 slip sensor, D20/PD1 SDA, D21/PD0 SCL, D2/PE4 (INT4) flow
+ *                    sensor, D1/PE1 TXD0 to the PC, D18/PD3 TXD1 to the hand.
  */
 #include <avr/interrupt.h>
 #include <avr/io.h>
 #include <avr/sleep.h>
 #include <avr/wdt.h>
 #include <util/atomic.h>
+#include <stddef.h>
 
 #include "imu.h"
 #include "wire.h"
+#ifdef REFLEX_ON_BOARD
+#include "reflex.h"
+#include "reflex_config.h"
+#endif
+#if defined(HAND_UART1) && !(defined(REFLEX_ON_BOARD) && defined(UDR1))
+#error "HAND_UART1 needs REFLEX_ON_BOARD and a second UART (ATmega2560)"
+#endif
 
 #ifndef F_CPU
 #error "F_CPU must be defined (16000000UL)"
@@ -44,13 +63,19 @@ _Static_assert((unsigned long long)F_CPU / TIMER1_PRESCALE * PERIOD_US % 1000000
 _Static_assert(F_CPU % (16UL * WIRE_BAUD) == 0, "baud divider is not exact at F_CPU");
 #define UBRR_VALUE (F_CPU / (16UL * WIRE_BAUD) - 1UL)                        /* 3 */
 
+#ifdef REFLEX_ON_BOARD
+#define FRAME_LEN WIRE_FRAME_LEN_REFLEX
+#else
+#define FRAME_LEN WIRE_FRAME_LEN
+#endif
+
 /* Transmit ring: 64 bytes = 3 frames. A frame takes 0.8 ms on the wire, a period is
  * 3 ms, so at most one frame is ever queued; a frame is only queued when it fits
  * whole, so the buffer cannot overflow even if the host stops reading (frames are then
  * dropped, flagged OVERRUN, and the seq gap shows). */
 #define TX_SIZE 64u
 #define TX_MASK (TX_SIZE - 1u)
-_Static_assert((TX_SIZE & TX_MASK) == 0 && TX_SIZE >= 2u * WIRE_FRAME_LEN, "TX ring size");
+_Static_assert((TX_SIZE & TX_MASK) == 0 && TX_SIZE >= 2u * FRAME_LEN, "TX ring size");
 static uint8_t tx_buf[TX_SIZE];
 static volatile uint8_t tx_head;     /* written by the main loop */
 static volatile uint8_t tx_tail;     /* written by the UDRE interrupt */
@@ -85,11 +110,19 @@ ISR(ADC_vect)
     snap_ready = 1;
 }
 
-ISR(INT0_vect)
+#if defined(__AVR_ATmega2560__)
+#define FLOW_VECT INT4_vect          /* Mega pin D2 = PE4; INT0/INT1 are the TWI pins there */
+#else
+#define FLOW_VECT INT0_vect          /* Uno pin D2 = PD2 */
+#endif
+ISR(FLOW_VECT)
 {
     flow_count++;
 }
 
+#ifndef USART_UDRE_vect
+#define USART_UDRE_vect USART0_UDRE_vect   /* the ATmega2560 numbers its UARTs */
+#endif
 ISR(USART_UDRE_vect)
 {
     uint8_t t = tx_tail;
@@ -104,11 +137,11 @@ static void tx_frame(const uint8_t *frame)
 {
     uint8_t h = tx_head;
     uint8_t used = (uint8_t)(h - tx_tail) & TX_MASK;
-    if (TX_SIZE - 1u - used < WIRE_FRAME_LEN) {
+    if (TX_SIZE - 1u - used < FRAME_LEN) {
         overrun = WIRE_FLAG_OVERRUN;     /* host not draining: drop, never overflow */
         return;
     }
-    for (uint8_t i = 0; i < WIRE_FRAME_LEN; i++) {
+    for (uint8_t i = 0; i < FRAME_LEN; i++) {
         tx_buf[h] = frame[i];
         h = (h + 1u) & TX_MASK;
     }
@@ -117,6 +150,94 @@ static void tx_frame(const uint8_t *frame)
         UCSR0B |= _BV(UDRIE0);
     }
 }
+
+#ifdef REFLEX_ON_BOARD
+#ifndef REFLEX_DATH
+#define REFLEX_DATH 1
+#endif
+#ifndef REFLEX_P0
+#define REFLEX_P0 0
+#endif
+/* The fault rules of the board: readings within 8 counts (39 mV) of the rails mean
+ * a disconnected or shorted sensor (the OPR5005 gives 0.3..3.35 V, i.e. 61..686 counts);
+ * 1000 identical readings in a row (3 s) mean a stuck converter or a dead sensor. */
+#define REFLEX_ADC_MIN 8u
+#define REFLEX_ADC_MAX_OK 1015u
+#define REFLEX_STUCK_AFTER 1000u
+static const struct reflex_params chain_params = {
+    .g = REFLEX_CFG_G, .a1 = REFLEX_CFG_A1, .a2 = REFLEX_CFG_A2,
+    .theta0 = REFLEX_CFG_THETA0, .dath_floor = 0, .x0 = 0,
+    .p0 = REFLEX_P0, .lo = REFLEX_CFG_LO, .hi = REFLEX_CFG_HI,
+    .adc_min = REFLEX_ADC_MIN, .adc_max = REFLEX_ADC_MAX_OK, .stuck_after = REFLEX_STUCK_AFTER,
+    .filter = 1, .dath = REFLEX_DATH, .dath_samples = REFLEX_CFG_DATH_SAMPLES, .x0_given = 0,
+    .n = REFLEX_CFG_N, .kp = REFLEX_CFG_KP, .ki = REFLEX_CFG_KI,
+    .reset_after = REFLEX_CFG_RESET_AFTER,
+};
+static struct reflex_state chain;
+#endif
+
+#ifdef HAND_UART1
+/* i-Limb control unit on UART1, 8N1 at 115200 baud: with U2X1 the nearest divider at
+ * 16 MHz is UBRR1 = 16, i.e. 117647 baud, +2.12 % (docs/firmware.md). */
+#define HAND_BAUD 115200UL
+#define HAND_UBRR ((F_CPU + 4UL * HAND_BAUD) / (8UL * HAND_BAUD) - 1UL)           /* 16 */
+#define HAND_START 0x24u
+#define HAND_END 0x21u
+#define HAND_POSITION 3u
+#define HAND_FINGERS 3u                   /* tripod: thumb 0, index 1, middle 2 */
+#define HAND_PACKET_LEN (3u + 4u * HAND_FINGERS)
+static uint8_t hand_buf[HAND_PACKET_LEN];
+static volatile uint8_t hand_idx = HAND_PACKET_LEN;   /* == LEN: nothing in flight */
+/* The last position sent survives a watchdog reset (.noinit, with its complement as a
+ * check), so a reset board resumes from it and never commands the hand open. */
+static uint16_t hand_sent __attribute__((section(".noinit")));
+static uint16_t hand_sent_check __attribute__((section(".noinit")));
+static uint8_t hand_pending;
+
+ISR(USART1_UDRE_vect)
+{
+    uint8_t i = hand_idx;
+    UDR1 = hand_buf[i++];
+    hand_idx = i;
+    if (i == HAND_PACKET_LEN)
+        UCSR1B &= (uint8_t)~_BV(UDRIE1);
+}
+
+static void hand_setup(void)
+{
+    UBRR1H = (uint8_t)(HAND_UBRR >> 8);
+    UBRR1L = (uint8_t)HAND_UBRR;
+    UCSR1A = _BV(U2X1);
+    UCSR1C = _BV(UCSZ11) | _BV(UCSZ10);
+    UCSR1B = _BV(TXEN1);
+}
+
+/* Queue a position packet for the tripod; if one is still in flight, send the latest
+ * command when it is done (main loop). Returns 1 if queued now. */
+static uint8_t hand_send(uint16_t pos)
+{
+    if (hand_idx != HAND_PACKET_LEN) {
+        hand_pending = 1;
+        return 0;
+    }
+    uint8_t *p = hand_buf;
+    *p++ = HAND_START;
+    *p++ = 4u * HAND_FINGERS;
+    for (uint8_t f = 0; f < HAND_FINGERS; f++) {
+        *p++ = f;
+        *p++ = HAND_POSITION;
+        *p++ = (uint8_t)(pos >> 8);
+        *p++ = (uint8_t)pos;
+    }
+    *p = HAND_END;
+    hand_sent = pos;
+    hand_sent_check = (uint16_t)~pos;
+    hand_pending = 0;
+    hand_idx = 0;
+    UCSR1B |= _BV(UDRIE1);
+    return 1;
+}
+#endif
 
 static void setup(void)
 {
@@ -132,12 +253,24 @@ static void setup(void)
     DIDR0 = _BV(ADC0D);
     ADCSRA = ADCSRA_ON;
 
-    /* Flow sensor on INT0 (PD2), falling edge, pull-up on (open-collector output). */
+    /* Flow sensor on INT0 (PD2; INT4/PE4 on the Mega), falling edge, pull-up on
+     * (open-collector output). */
+#if defined(__AVR_ATmega2560__)
+    DDRE &= (uint8_t)~_BV(PE4);
+    PORTE |= _BV(PE4);
+    EICRB = _BV(ISC41);
+    EIFR = _BV(INTF4);
+    EIMSK = _BV(INT4);
+#else
     DDRD &= (uint8_t)~_BV(PD2);
     PORTD |= _BV(PD2);
     EICRA = _BV(ISC01);
     EIFR = _BV(INTF0);
     EIMSK = _BV(INT0);
+#endif
+#ifdef HAND_UART1
+    hand_setup();
+#endif
 
     imu_init();
 
@@ -151,8 +284,21 @@ static void setup(void)
 
 int main(void)
 {
+#ifdef HAND_UART1
+    uint8_t watchdog_reset = MCUSR & _BV(WDRF);
+#endif
     MCUSR = 0;                           /* clear WDRF so the watchdog can be re-set */
     wdt_enable(WDTO_60MS);
+#ifdef REFLEX_ON_BOARD
+    reflex_init(&chain, &chain_params);
+#endif
+#ifdef HAND_UART1
+    if (!watchdog_reset || (uint16_t)~hand_sent_check != hand_sent || hand_sent > REFLEX_CFG_HI)
+        hand_sent = (uint16_t)chain.m;   /* power-on: nothing sent yet, start at clip(p0) */
+    else if ((int16_t)hand_sent > chain.m)
+        chain.m = chain.P0 = (int16_t)hand_sent;   /* resume from where the hand was sent */
+    hand_sent_check = (uint16_t)~hand_sent;
+#endif
     setup();
     set_sleep_mode(SLEEP_MODE_IDLE);     /* timers, ADC, TWI and UART keep running */
     sei();
@@ -170,8 +316,28 @@ int main(void)
         s = snap;
         snap_ready = 0;
         sei();
-        uint8_t frame[WIRE_FRAME_LEN];
+        uint8_t frame[FRAME_LEN];
+#ifdef REFLEX_ON_BOARD
+        struct reflex_out out;
+        struct wire_reflex r;
+        reflex_step(&chain, &chain_params, s.adc, NULL, &out);
+        r.bits = (uint8_t)((out.event ? WIRE_REFLEX_SPIKE : 0u) |
+                           (out.window ? WIRE_REFLEX_WINDOW : 0u) |
+                           (out.fault ? WIRE_REFLEX_FAULT : 0u));
+#ifdef HAND_UART1
+        /* Only a rise moves the hand, never a lower position; on a faulty reading the
+         * hand holds (a rise waits for the next window with a good reading). */
+        if ((out.window || hand_pending) && !out.fault && out.command > (int16_t)hand_sent
+            && hand_send((uint16_t)out.command))
+            r.bits |= WIRE_REFLEX_HAND;
+#endif
+        r.v = out.v;
+        r.command = out.command;
+        r.x = chain.x;
+        wire_encode_reflex(frame, &s, &r);
+#else
         wire_encode(frame, &s);
+#endif
         tx_frame(frame);
     }
 }

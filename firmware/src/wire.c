@@ -28,21 +28,45 @@ static uint8_t *put16(uint8_t *p, uint16_t v)
     return p + 2;
 }
 
-void wire_encode(uint8_t out[WIRE_FRAME_LEN], const struct wire_sample *s)
+/* Version byte .. flow (offsets 2..17), shared by both versions; returns the end. */
+static uint8_t *put_body(uint8_t *out, uint8_t version, const struct wire_sample *s)
 {
     uint8_t fresh = s->flags & WIRE_FLAG_ACCEL_FRESH;
     uint8_t *p = out;
     *p++ = WIRE_SYNC0;
     *p++ = WIRE_SYNC1;
-    *p++ = WIRE_VERSION;
+    *p++ = version;
     p = put16(p, s->seq);
     *p++ = s->flags;
     p = put16(p, s->adc);
     for (uint8_t i = 0; i < 3; i++)
         p = put16(p, fresh ? (uint16_t)s->accel[i] : 0u);
     p = put16(p, (uint16_t)s->flow);
-    p = put16(p, (uint16_t)(s->flow >> 16));
-    uint16_t crc = wire_crc16(0xFFFFu, out + 2, WIRE_FRAME_LEN - 4);
-    *p++ = (uint8_t)(crc >> 8);   /* CRC big-endian: CRC over bytes 2..19 is then 0 */
-    *p = (uint8_t)crc;
+    return put16(p, (uint16_t)(s->flow >> 16));
+}
+
+/* CRC over bytes 2 .. len-3, appended big-endian: the CRC over bytes 2..len-1 is then 0. */
+static void put_crc(uint8_t *out, uint8_t len)
+{
+    uint16_t crc = wire_crc16(0xFFFFu, out + 2, (uint8_t)(len - 4u));
+    out[len - 2u] = (uint8_t)(crc >> 8);
+    out[len - 1u] = (uint8_t)crc;
+}
+
+void wire_encode(uint8_t out[WIRE_FRAME_LEN], const struct wire_sample *s)
+{
+    put_body(out, WIRE_VERSION, s);
+    put_crc(out, WIRE_FRAME_LEN);
+}
+
+void wire_encode_reflex(uint8_t out[WIRE_FRAME_LEN_REFLEX], const struct wire_sample *s,
+                        const struct wire_reflex *r)
+{
+    uint8_t *p = put_body(out, WIRE_VERSION_REFLEX, s);
+    *p++ = r->bits;
+    *p++ = r->v;
+    p = put16(p, (uint16_t)r->command);
+    p = put16(p, (uint16_t)(uint32_t)r->x);
+    put16(p, (uint16_t)((uint32_t)r->x >> 16));
+    put_crc(out, WIRE_FRAME_LEN_REFLEX);
 }

@@ -21,6 +21,15 @@
 #define WIRE_FLAG_IMU_ERROR 0x02u
 #define WIRE_FLAG_OVERRUN 0x04u
 
+/* Version 2 (firmware built with the reflex on board): the version-1 fields, then the
+ * chain's output for this sample, then the CRC. */
+#define WIRE_VERSION_REFLEX 2u
+#define WIRE_FRAME_LEN_REFLEX 28u
+#define WIRE_REFLEX_SPIKE 0x01u     /* the encoder fired on this sample */
+#define WIRE_REFLEX_WINDOW 0x02u    /* this sample completed a window: v is its count */
+#define WIRE_REFLEX_FAULT 0x04u     /* reading out of range or stuck: sample skipped */
+#define WIRE_REFLEX_HAND 0x08u      /* a hand packet with this command was queued */
+
 /* One sample period's values, in the board's raw units. */
 struct wire_sample {
     uint16_t seq;
@@ -30,10 +39,22 @@ struct wire_sample {
     uint32_t flow;      /* cumulative flow-sensor pulses */
 };
 
+/* The chain's output for one sample (version 2 frames). */
+struct wire_reflex {
+    uint8_t bits;       /* WIRE_REFLEX_* */
+    uint8_t v;          /* spikes in the window this sample completed, else 0 */
+    int16_t command;    /* finger command in force after this sample */
+    int32_t x;          /* filtered sample, Q16 ADC counts */
+};
+
 /* CRC-16/CCITT-FALSE: poly 0x1021, init 0xFFFF, not reflected, no final xor. */
 uint16_t wire_crc16(uint16_t crc, const uint8_t *data, uint8_t len);
 
 /* Write the 20-byte frame of `s` into `out`. */
 void wire_encode(uint8_t out[WIRE_FRAME_LEN], const struct wire_sample *s);
+
+/* Write the 28-byte version-2 frame of `s` and the chain's output `r` into `out`. */
+void wire_encode_reflex(uint8_t out[WIRE_FRAME_LEN_REFLEX], const struct wire_sample *s,
+                        const struct wire_reflex *r);
 
 #endif

@@ -126,7 +126,11 @@ def check(outdir: str | Path, imu: bool = True) -> Report:
     for name in ("crc_errors", "truncated", "invalid", "garbage_bytes", "seq_gaps"):
         if getattr(s, name):
             err.append(f"{getattr(s, name)} {name.replace('_', ' ')}")
-    if s.pending >= wire.FRAME_LEN:
+    # Frames of a board running the reflex are longer (version 2); all have one length.
+    size = wire.FRAME_LEN_REFLEX if frames and frames[0].reflex is not None else wire.FRAME_LEN
+    if len({f.reflex is None for f in frames}) > 1:
+        err.append("version-1 and version-2 frames mixed in one capture")
+    if s.pending >= size:
         err.append(f"{s.pending} bytes left undecoded")
     if len(frames) < 100:
         err.append(f"only {len(frames)} frames")
@@ -141,7 +145,7 @@ def check(outdir: str | Path, imu: bool = True) -> Report:
 
     # Timing: the first byte of frame k (frames are back to back from byte 0, as there
     # is no garbage and no gap) and conversion start k.
-    t_first = cycles[np.arange(len(frames)) * wire.FRAME_LEN]
+    t_first = cycles[np.arange(len(frames)) * size]
     rep.period_uart_cycles = _slope(t_first)
     adc_t = np.array(adc_t, dtype=np.int64)
     if len(adc_t) < len(frames):

@@ -20,9 +20,12 @@ HEADER = """\
 #
 # F <name> <hex> <seq> <flags> <adc> <ax> <ay> <az> <flow>
 #     One good frame and its decoded fields (decimal).
+# R <name> <hex> <seq> <flags> <adc> <ax> <ay> <az> <flow> <bits> <v> <command> <x>
+#     One good version-2 frame (board running the reflex) and its decoded fields.
 # B <name> <hex> <reason>
 #     Bytes that decode_frame() must reject; reason is one of
-#     truncated (fewer than 20 bytes), sync, crc, version, adc.
+#     truncated (not the 20 or 28 bytes the version byte asks for), sync, crc,
+#     version, adc.
 # S <name> <hex> <frames> <crc_errors> <truncated> <invalid> <garbage_bytes> <resyncs> <seq_gaps> <frames_lost> <seqs>
 #     A byte stream fed to FrameParser.feed() in one piece, then flush(); the
 #     expected counters and the seq of every good frame, comma-separated
@@ -66,7 +69,25 @@ def main(out=sys.stdout) -> None:
         f = wire.decode_frame(raw)
         p(f"F {name} {raw.hex()} {f.seq} {f.flags} {f.adc} {f.accel[0]} {f.accel[1]} "
           f"{f.accel[2]} {f.flow_pulses}\n")
+    RF = wire.ReflexFields
+    good2 = [
+        ("reflex_quiet", dict(seq=0, adc=300), RF(0, 0, 0, 300 << 16)),
+        ("reflex_spike_window", dict(seq=47, adc=305, accel=(10, -20, 16384), flow_pulses=3),
+         RF(wire.REFLEX_SPIKE | wire.REFLEX_WINDOW, 3, 40, 19988480)),
+        ("reflex_hand", dict(seq=65535, adc=1023, flow_pulses=2**32 - 1),
+         RF(wire.REFLEX_SPIKE | wire.REFLEX_WINDOW | wire.REFLEX_HAND, 16, 500, 67043328)),
+        ("reflex_fault_negative", dict(seq=9, adc=0, flags=wire.FLAG_IMU_ERROR),
+         RF(wire.REFLEX_FAULT, 0, -32768, -2**31)),
+    ]
+    for name, kw, r in good2:
+        raw = enc(**kw, reflex=r)
+        frames[name] = raw
+        f = wire.decode_frame(raw)
+        p(f"R {name} {raw.hex()} {f.seq} {f.flags} {f.adc} {f.accel[0]} {f.accel[1]} "
+          f"{f.accel[2]} {f.flow_pulses} {f.reflex.bits} {f.reflex.v} {f.reflex.command} "
+          f"{f.reflex.x}\n")
     b = frames["accel_1g_z"]
+    b2 = frames["reflex_spike_window"]
     bad = [
         ("empty", b"", "truncated"),
         ("sync_only", b[:2], "truncated"),
@@ -78,8 +99,13 @@ def main(out=sys.stdout) -> None:
         ("crc_high_bit", flip(b, 18, 0x80), "crc"),
         ("payload_bit", flip(b, 7, 0x10), "crc"),
         ("seq_bit", flip(b, 3), "crc"),
-        ("version_2", forged(version=2), "version"),
+        ("version_3", forged(version=3), "version"),
         ("adc_1024", forged(adc=1024), "adc"),
+        ("v2_cut_20", b2[:20], "truncated"),
+        ("v2_cut_27", b2[:27], "truncated"),
+        ("v2_crc_low_bit", flip(b2, 27), "crc"),
+        ("v2_command_bit", flip(b2, 20, 0x02), "crc"),
+        ("v2_as_v1", b2[:2] + b"\x01" + b2[3:], "truncated"),
     ]
     for name, raw, reason in bad:
         p(f"B {name} {raw.hex() or '-'} {reason}\n")
@@ -117,15 +143,23 @@ def main(out=sys.stdout) -> None:
         ("sync_in_payload", b"".join(sp)),
         ("sync_in_payload_bad_crc", sp[0] + flip(sp[1], 18) + sp[2]),
         ("sync_in_payload_truncated", sp[0] + sp[1][:10] + sp[2]),
-        ("invalid_version", a0 + forged(version=2, seq=101) + a2),
+        ("invalid_version", a0 + forged(version=3, seq=101) + a2),
         ("invalid_adc", a0 + forged(adc=2000, seq=101) + a2),
         ("doubled_sync", b"\xa5\x5a" + a0),
+        ("v2_clean", b"".join(enc(seq=k, adc=300 + k, reflex=RF(k % 2, 0, k, (300 + k) << 16))
+                              for k in range(3))),
+        ("v1_then_v2", a0 + enc(seq=101, adc=5, reflex=RF(0, 0, 7, 5 << 16)) + a2),
+        ("v2_bad_crc_middle", a0 + flip(enc(seq=101, adc=5, reflex=RF(0, 0, 7, 5 << 16)), 25)
+         + a2),
+        ("v2_truncated_middle", a0 + enc(seq=101, adc=5, reflex=RF(0, 0, 7, 5 << 16))[:22] + a2),
+        ("v2_truncated_end", a0 + enc(seq=101, adc=5, reflex=RF(0, 0, 7, 5 << 16))[:27]),
     ]
     for name, data in streams:
         parser = wire.FrameParser()
         got = parser.feed(data) + parser.flush()
         s = parser.stats
-        assert s.bytes_fed == wire.FRAME_LEN * s.frames + s.garbage_bytes + s.pending
+        assert s.bytes_fed == sum(wire.FRAME_LEN_REFLEX if f.reflex else wire.FRAME_LEN
+                                  for f in got) + s.garbage_bytes + s.pending
         seq_list = ",".join(str(f.seq) for f in got) or "-"
         p(f"S {name} {data.hex() or '-'} {s.frames} {s.crc_errors} {s.truncated} {s.invalid} "
           f"{s.garbage_bytes} {s.resyncs} {s.seq_gaps} {s.frames_lost} {seq_list}\n")

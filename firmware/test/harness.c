@@ -2,18 +2,22 @@
  * harness.c -- runs the DAQ firmware under simavr with simulated peripherals.
  *
  *   build/harness FIRMWARE.elf OUTDIR SECONDS [--no-imu | --imu-from S] [--flow-hz HZ]
- *                 [--seed N] [--profile]
+ *                 [--seed N] [--profile] [--mcu atmega328p|atmega2560] [--adc FILE]
  *
- * Simulated around an ATmega328P at 16 MHz, AVcc = 5 V:
+ * Simulated around an ATmega328P (or --mcu atmega2560) at 16 MHz, AVcc = 5 V:
  *   - slip sensor on ADC0: at every conversion start a new pseudo-random count 0..1023
  *     is injected (as the millivolts that simavr converts back to exactly that count);
- *   - YF-S201 on PD2/INT0: a square wave at --flow-hz (default 97 Hz);
+ *     with --adc FILE the counts come from FILE (whitespace-separated integers 0..1023),
+ *     the last one repeated when the file runs out;
+ *   - YF-S201 on PD2/INT0 (PE4/INT4 on the ATmega2560): a square wave at --flow-hz
+ *     (default 97 Hz);
  *   - MPU6050 at I2C address 0x68 on the TWI bus: registers, auto-increment, sleep bit
  *     (power-on value of PWR_MGMT_1 is 0x40: asleep, readings frozen at 0 until the
  *     firmware wakes it). Every burst read starting at ACCEL_XOUT_H latches a new
  *     pseudo-random reading. --no-imu leaves the bus empty (every address NACKed);
  *     --imu-from S plugs a powered-on (asleep) MPU6050 in at S simulated seconds.
- *   - UART0 captured byte by byte with the CPU cycle at which the firmware wrote UDR0.
+ *   - UART0 captured byte by byte with the CPU cycle at which the firmware wrote UDR0;
+ *     on the ATmega2560 UART1 too (the i-Limb hand), into uart1.bin / uart1_cycles.bin.
  *
  * Writes OUTDIR/uart.bin (the bytes), OUTDIR/uart_cycles.bin (uint64 little-endian
  * cycle per byte) and OUTDIR/events.txt, one event per line:
@@ -50,9 +54,12 @@
 
 static avr_t *avr;
 static FILE *events;
-static uint8_t *uart_bytes;
-static uint64_t *uart_cycles;
-static size_t uart_n, uart_cap;
+struct capture {
+    uint8_t *bytes;
+    uint64_t *cycles;
+    size_t n, cap;
+};
+static struct capture uart[2];
 static uint64_t sleep_cycles;
 static uint64_t rng_state = 0x9E3779B97F4A7C15ull;
 
@@ -74,19 +81,22 @@ static uint64_t busy_cycles(void) { return avr->cycle - sleep_cycles; }
 /* ---- UART capture ---------------------------------------------------------------- */
 static void uart_out(struct avr_irq_t *irq, uint32_t value, void *param)
 {
-    (void)irq; (void)param;
-    if (uart_n == uart_cap) {
-        uart_cap = uart_cap ? 2 * uart_cap : 1 << 16;
-        uart_bytes = realloc(uart_bytes, uart_cap);
-        uart_cycles = realloc(uart_cycles, uart_cap * sizeof *uart_cycles);
-        if (!uart_bytes || !uart_cycles) { perror("realloc"); exit(2); }
+    (void)irq;
+    struct capture *c = param;
+    if (c->n == c->cap) {
+        c->cap = c->cap ? 2 * c->cap : 1 << 16;
+        c->bytes = realloc(c->bytes, c->cap);
+        c->cycles = realloc(c->cycles, c->cap * sizeof *c->cycles);
+        if (!c->bytes || !c->cycles) { perror("realloc"); exit(2); }
     }
-    uart_bytes[uart_n] = (uint8_t)value;
-    uart_cycles[uart_n++] = avr->cycle;
+    c->bytes[c->n] = (uint8_t)value;
+    c->cycles[c->n++] = avr->cycle;
 }
 
 /* ---- ADC: inject a new count at every conversion start --------------------------- */
 static avr_irq_t *adc0_irq;
+static uint32_t *adc_file;          /* --adc: counts to inject, in order */
+static size_t adc_file_n, adc_file_i;
 
 static void adc_trigger(struct avr_irq_t *irq, uint32_t value, void *param)
 {
@@ -95,7 +105,11 @@ static void adc_trigger(struct avr_irq_t *irq, uint32_t value, void *param)
     if (m.mux.kind != ADC_MUX_SINGLE || m.mux.src != 0)
         fprintf(events, "E %llu adc-mux kind=%u src=%u\n", (unsigned long long)avr->cycle,
                 (unsigned)m.mux.kind, (unsigned)m.mux.src);
-    uint32_t count = rng() % 1024u;
+    uint32_t count;
+    if (adc_file)
+        count = adc_file[adc_file_i < adc_file_n ? adc_file_i++ : adc_file_n - 1];
+    else
+        count = rng() % 1024u;
     /* simavr converts as floor(mV * 1023 / Vref): pick the smallest mV giving count. */
     uint32_t mv = (count * VREF_MV + 1022u) / 1023u;
     if (mv * 1023u / VREF_MV != count) { fprintf(stderr, "adc inversion\n"); exit(2); }
@@ -200,6 +214,23 @@ static void write_file(const char *dir, const char *name, const void *data, size
     if (!f || fwrite(data, 1, n, f) != n || fclose(f) != 0) { perror(path); exit(2); }
 }
 
+static void read_adc_file(const char *path)
+{
+    FILE *f = fopen(path, "r");
+    if (!f) { perror(path); exit(2); }
+    size_t cap = 1024;
+    long v;
+    adc_file = malloc(cap * sizeof *adc_file);
+    while (fscanf(f, "%ld", &v) == 1) {
+        if (v < 0 || v > 1023) { fprintf(stderr, "%s: count %ld out of 0..1023\n", path, v); exit(2); }
+        if (adc_file_n == cap)
+            adc_file = realloc(adc_file, (cap *= 2) * sizeof *adc_file);
+        adc_file[adc_file_n++] = (uint32_t)v;
+    }
+    if (!feof(f) || adc_file_n == 0) { fprintf(stderr, "%s: expected integers 0..1023\n", path); exit(2); }
+    fclose(f);
+}
+
 int main(int argc, char **argv)
 {
     if (argc < 4) {
@@ -207,7 +238,7 @@ int main(int argc, char **argv)
                         "[--flow-hz HZ] [--seed N] [--profile]\n", argv[0]);
         return 2;
     }
-    const char *elf = argv[1], *outdir = argv[2];
+    const char *elf = argv[1], *outdir = argv[2], *mcu = "atmega328p";
     double seconds = atof(argv[3]), flow_hz = 97.0, imu_from = 0.0;
     int profile = 0;
     mpu.present = 1;
@@ -216,6 +247,8 @@ int main(int argc, char **argv)
         else if (!strcmp(argv[i], "--profile")) profile = 1;
         else if (!strcmp(argv[i], "--imu-from") && i + 1 < argc) imu_from = atof(argv[++i]);
         else if (!strcmp(argv[i], "--flow-hz") && i + 1 < argc) flow_hz = atof(argv[++i]);
+        else if (!strcmp(argv[i], "--mcu") && i + 1 < argc) mcu = argv[++i];
+        else if (!strcmp(argv[i], "--adc") && i + 1 < argc) read_adc_file(argv[++i]);
         else if (!strcmp(argv[i], "--seed") && i + 1 < argc)
             rng_state ^= strtoull(argv[++i], NULL, 0) * 0xD1B54A32D192ED03ull;
         else { fprintf(stderr, "unknown option %s\n", argv[i]); return 2; }
@@ -225,10 +258,12 @@ int main(int argc, char **argv)
     elf_firmware_t fw;
     memset(&fw, 0, sizeof fw);
     if (elf_read_firmware(elf, &fw) != 0) { fprintf(stderr, "cannot read %s\n", elf); return 2; }
-    strcpy(fw.mmcu, "atmega328p");
+    int mega = !strcmp(mcu, "atmega2560");
+    if (!mega && strcmp(mcu, "atmega328p")) { fprintf(stderr, "unknown --mcu %s\n", mcu); return 2; }
+    snprintf(fw.mmcu, sizeof fw.mmcu, "%s", mcu);
     fw.frequency = F_CPU_HZ;
     avr = avr_make_mcu_by_name(fw.mmcu);
-    if (!avr) { fprintf(stderr, "simavr has no atmega328p\n"); return 2; }
+    if (!avr) { fprintf(stderr, "simavr has no %s\n", mcu); return 2; }
     avr_init(avr);
     avr_load_firmware(avr, &fw);
     avr->vcc = avr->avcc = avr->aref = VREF_MV;
@@ -240,18 +275,22 @@ int main(int argc, char **argv)
     events = fopen(path, "w");
     if (!events) { perror(path); return 2; }
 
-    uint32_t flags = 0;
-    avr_ioctl(avr, AVR_IOCTL_UART_GET_FLAGS('0'), &flags);
-    flags &= ~AVR_UART_FLAG_STDIO;
-    avr_ioctl(avr, AVR_IOCTL_UART_SET_FLAGS('0'), &flags);
-    avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ('0'), UART_IRQ_OUTPUT),
-                            uart_out, NULL);
+    for (int u = 0; u < 1 + mega; u++) {
+        char name = (char)('0' + u);
+        uint32_t flags = 0;
+        avr_ioctl(avr, AVR_IOCTL_UART_GET_FLAGS(name), &flags);
+        flags &= ~AVR_UART_FLAG_STDIO;
+        avr_ioctl(avr, AVR_IOCTL_UART_SET_FLAGS(name), &flags);
+        avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_UART_GETIRQ(name), UART_IRQ_OUTPUT),
+                                uart_out, &uart[u]);
+    }
 
     adc0_irq = avr_io_getirq(avr, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_ADC0);
     avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_ADC_GETIRQ, ADC_IRQ_OUT_TRIGGER),
                             adc_trigger, NULL);
 
-    flow_irq = avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('D'), IOPORT_IRQ_PIN2);
+    flow_irq = mega ? avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('E'), IOPORT_IRQ_PIN4)
+                    : avr_io_getirq(avr, AVR_IOCTL_IOPORT_GETIRQ('D'), IOPORT_IRQ_PIN2);
     avr_raise_irq(flow_irq, 1);
     flow_half_period = F_CPU_HZ / (2.0 * flow_hz);
     flow_next = 1000.0 + flow_half_period;   /* first edge after reset settles */
@@ -273,7 +312,7 @@ int main(int argc, char **argv)
 
     const uint64_t end = (uint64_t)(seconds * F_CPU_HZ);
     int state = cpu_Running;
-    static uint64_t pc_cycles[32768];
+    static uint64_t pc_cycles[262144];
     while (avr->cycle < end) {
         if (profile) {
             uint32_t pc = avr->pc;
@@ -299,10 +338,14 @@ int main(int argc, char **argv)
     fprintf(events, "X %llu %llu\n", (unsigned long long)avr->cycle,
             (unsigned long long)sleep_cycles);
     fclose(events);
-    write_file(outdir, "uart.bin", uart_bytes, uart_n);
-    write_file(outdir, "uart_cycles.bin", uart_cycles, uart_n * sizeof *uart_cycles);
+    write_file(outdir, "uart.bin", uart[0].bytes, uart[0].n);
+    write_file(outdir, "uart_cycles.bin", uart[0].cycles, uart[0].n * sizeof *uart[0].cycles);
+    if (mega) {
+        write_file(outdir, "uart1.bin", uart[1].bytes, uart[1].n);
+        write_file(outdir, "uart1_cycles.bin", uart[1].cycles, uart[1].n * sizeof *uart[1].cycles);
+    }
     printf("harness: %.3f s simulated, %zu UART bytes, CPU busy %.2f%% of cycles%s\n",
-           (double)avr->cycle / F_CPU_HZ, uart_n,
+           (double)avr->cycle / F_CPU_HZ, uart[0].n,
            100.0 * (double)(avr->cycle - sleep_cycles) / (double)avr->cycle,
            (state == cpu_Done || state == cpu_Crashed) ? ", FIRMWARE STOPPED" : "");
     return (state == cpu_Done || state == cpu_Crashed) ? 1 : 0;

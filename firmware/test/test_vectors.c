@@ -4,7 +4,8 @@
  *
  *   build/test_vectors ../tests/data/wire/vectors.txt
  *
- * F records: encode the decoded fields with wire_encode() and compare the bytes.
+ * F records: encode the decoded fields with wire_encode() and compare the bytes;
+ * R records (version 2): the same with wire_encode_reflex().
  * B records: a small reference decoder must reject the bytes for the stated reason.
  * S records (parser streams) are Python-only and are counted, not checked.
  * Prints one line per failure and a summary; exit status 0 only if all pass.
@@ -42,10 +43,13 @@ static int parse_hex(const char *tok, uint8_t *out)
 /* Reference verdict for one candidate frame. */
 static const char *verdict(const uint8_t *b, int len)
 {
-    if (len != (int)WIRE_FRAME_LEN) return "truncated";
+    /* The version byte gives the length; an unknown version is checked as version 1. */
+    int want = (len > 2 && b[0] == WIRE_SYNC0 && b[1] == WIRE_SYNC1
+                && b[2] == WIRE_VERSION_REFLEX) ? (int)WIRE_FRAME_LEN_REFLEX : (int)WIRE_FRAME_LEN;
+    if (len != want) return "truncated";
     if (b[0] != WIRE_SYNC0 || b[1] != WIRE_SYNC1) return "sync";
-    if (wire_crc16(0xFFFFu, b + 2, WIRE_FRAME_LEN - 2) != 0) return "crc";
-    if (b[2] != WIRE_VERSION) return "version";
+    if (wire_crc16(0xFFFFu, b + 2, (uint8_t)(want - 2)) != 0) return "crc";
+    if (b[2] != WIRE_VERSION && b[2] != WIRE_VERSION_REFLEX) return "version";
     if ((unsigned)(b[6] | b[7] << 8) > WIRE_ADC_MAX) return "adc";
     return "ok";
 }
@@ -84,12 +88,13 @@ int main(int argc, char **argv)
             fails++;
             continue;
         }
-        if (kind == 'F') {
-            long seq, flags, adc, ax, ay, az;
+        if (kind == 'F' || kind == 'R') {
+            long seq, flags, adc, ax, ay, az, bits = 0, v = 0, command = 0, x = 0;
             unsigned long flow;
+            int want = kind == 'F' ? 7 : 11;
             nf++;
-            if (sscanf(rest, "%ld %ld %ld %ld %ld %ld %lu", &seq, &flags, &adc, &ax, &ay, &az,
-                       &flow) != 7) {
+            if (sscanf(rest, "%ld %ld %ld %ld %ld %ld %lu %ld %ld %ld %ld", &seq, &flags, &adc,
+                       &ax, &ay, &az, &flow, &bits, &v, &command, &x) != want) {
                 printf("FAIL line %d (%s): bad fields\n", lineno, name);
                 fails++;
                 continue;
@@ -98,11 +103,19 @@ int main(int argc, char **argv)
                 .seq = (uint16_t)seq, .flags = (uint8_t)flags, .adc = (uint16_t)adc,
                 .accel = {(int16_t)ax, (int16_t)ay, (int16_t)az}, .flow = (uint32_t)flow,
             };
-            uint8_t out[WIRE_FRAME_LEN];
-            wire_encode(out, &s);
-            if (len != (int)WIRE_FRAME_LEN || memcmp(out, bytes, WIRE_FRAME_LEN) != 0) {
-                printf("FAIL F %s: encoder gives ", name);
-                for (unsigned i = 0; i < WIRE_FRAME_LEN; i++) printf("%02x", out[i]);
+            uint8_t out[WIRE_FRAME_LEN_REFLEX];
+            unsigned n = WIRE_FRAME_LEN;
+            if (kind == 'F') {
+                wire_encode(out, &s);
+            } else {
+                struct wire_reflex r = {.bits = (uint8_t)bits, .v = (uint8_t)v,
+                                        .command = (int16_t)command, .x = (int32_t)x};
+                wire_encode_reflex(out, &s, &r);
+                n = WIRE_FRAME_LEN_REFLEX;
+            }
+            if (len != (int)n || memcmp(out, bytes, n) != 0) {
+                printf("FAIL %c %s: encoder gives ", kind, name);
+                for (unsigned i = 0; i < n; i++) printf("%02x", out[i]);
                 printf(", vector has %s\n", hex);
                 fails++;
             } else if (strcmp(verdict(bytes, len), "ok") != 0) {

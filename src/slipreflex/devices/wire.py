@@ -21,6 +21,19 @@ frame is zero)::
      14  4  flow        uint32, cumulative YF-S201 pulses, wraps at 2**32
      18  2  crc         CRC-16/CCITT-FALSE of bytes 2..17, big-endian
 
+Version 2 (:data:`VERSION_REFLEX`, :data:`FRAME_LEN_REFLEX` = 28 bytes) is sent by a
+board running the reflex itself (``firmware/`` built with ``REFLEX_ON_BOARD``): bytes
+0..17 as above with version 0x02, then the chain's output for the sample
+(:class:`ReflexFields`), then the CRC::
+
+     18  1  reflex      bit0 SPIKE, bit1 WINDOW, bit2 FAULT, bit3 HAND
+     19  1  v           spikes in the window this sample completed (else 0)
+     20  2  command     int16, finger command in force after this sample
+     22  4  x           int32, filtered sample in Q16 ADC counts
+     26  2  crc         CRC-16/CCITT-FALSE of bytes 2..25, big-endian
+
+The parser reads both versions from one stream (the version byte gives the length).
+
 Examples
 --------
 >>> from slipreflex.devices import wire
@@ -50,7 +63,8 @@ from ..interfaces import DaqSample
 __all__ = [
     "SYNC", "VERSION", "FRAME_LEN", "PAYLOAD_LEN", "BAUD", "SEQ_MODULO", "FLOW_MODULO",
     "ADC_MAX", "ACCEL_LSB_PER_G", "FLAG_ACCEL_FRESH", "FLAG_IMU_ERROR", "FLAG_OVERRUN",
-    "crc16", "Frame", "encode_frame", "encode_sample", "decode_frame",
+    "VERSION_REFLEX", "FRAME_LEN_REFLEX", "REFLEX_SPIKE", "REFLEX_WINDOW", "REFLEX_FAULT",
+    "REFLEX_HAND", "ReflexFields", "crc16", "Frame", "encode_frame", "encode_sample", "decode_frame",
     "adc_from_volts", "accel_raw_from_g", "ParserStats", "FrameParser",
 ]
 
@@ -86,6 +100,72 @@ _KNOWN_FLAGS = FLAG_ACCEL_FRESH | FLAG_IMU_ERROR | FLAG_OVERRUN
 _BODY = struct.Struct("<BHBHhhhI")
 assert _BODY.size == PAYLOAD_LEN
 _CRC = struct.Struct(">H")
+
+#: Protocol version of a board running the reflex on board (adds the chain's output).
+VERSION_REFLEX: int = 2
+#: Bytes per version-2 frame.
+FRAME_LEN_REFLEX: int = 28
+#: Version-2 ``reflex`` byte: the encoder fired on this sample.
+REFLEX_SPIKE: int = 0x01
+#: This sample completed a window; ``v`` is its spike count.
+REFLEX_WINDOW: int = 0x02
+#: The reading was out of range or stuck: the chain skipped it (and the hand holds).
+REFLEX_FAULT: int = 0x04
+#: A hand packet with this command was queued on the board's hand UART.
+REFLEX_HAND: int = 0x08
+_KNOWN_REFLEX = REFLEX_SPIKE | REFLEX_WINDOW | REFLEX_FAULT | REFLEX_HAND
+# reflex bits, v, command, x: offsets 18..25 of a version-2 frame.
+_REFLEX = struct.Struct("<BBhi")
+assert PAYLOAD_LEN + _REFLEX.size + 4 == FRAME_LEN_REFLEX
+_LENGTHS = {VERSION: FRAME_LEN, VERSION_REFLEX: FRAME_LEN_REFLEX}
+
+
+@dataclass(frozen=True, slots=True)
+class ReflexFields:
+    """What a board running the reflex reports with each sample (version-2 frames).
+
+    Parameters
+    ----------
+    bits : int
+        ``REFLEX_*`` bits.
+    v : int
+        Spikes in the window this sample completed (0 unless ``window``).
+    command : int
+        Finger command in force after this sample.
+    x : int
+        Filtered sample, Q16 ADC counts (``slipreflex.board``).
+
+    Examples
+    --------
+    >>> r = ReflexFields(bits=REFLEX_SPIKE | REFLEX_WINDOW, v=3, command=40, x=300 << 16)
+    >>> r.spike, r.window, r.fault, r.hand
+    (True, True, False, False)
+    """
+
+    bits: int
+    v: int
+    command: int
+    x: int
+
+    @property
+    def spike(self) -> bool:
+        """The encoder fired on this sample."""
+        return bool(self.bits & REFLEX_SPIKE)
+
+    @property
+    def window(self) -> bool:
+        """This sample completed a window."""
+        return bool(self.bits & REFLEX_WINDOW)
+
+    @property
+    def fault(self) -> bool:
+        """The reading was skipped as out of range or stuck."""
+        return bool(self.bits & REFLEX_FAULT)
+
+    @property
+    def hand(self) -> bool:
+        """A hand packet was queued with this sample's command."""
+        return bool(self.bits & REFLEX_HAND)
 
 
 def crc16(data: bytes | bytearray | memoryview, crc: int = 0xFFFF) -> int:
@@ -130,6 +210,8 @@ class Frame:
     index : int, optional
         Unwrapped sequence number: the parser counts on past 65535 (and across
         gaps). Defaults to ``seq`` (what :func:`decode_frame` gives).
+    reflex : ReflexFields or None, optional
+        The board's chain output (version-2 frames); None for version 1.
 
     Examples
     --------
@@ -144,6 +226,7 @@ class Frame:
     accel: tuple[int, int, int]
     flow_pulses: int
     index: int = field(default=-1)
+    reflex: ReflexFields | None = None
 
     def __post_init__(self) -> None:
         if self.index == -1:
@@ -218,7 +301,7 @@ def _check_int(name: str, value: object, lo: int, hi: int) -> int:
 
 
 def encode_frame(seq: int, adc: int, accel: Sequence[int] | None = None,
-                 flow_pulses: int = 0, flags: int = 0) -> bytes:
+                 flow_pulses: int = 0, flags: int = 0, reflex: ReflexFields | None = None) -> bytes:
     """Build one frame from raw board values.
 
     Parameters
@@ -235,11 +318,13 @@ def encode_frame(seq: int, adc: int, accel: Sequence[int] | None = None,
     flags : int, optional
         Extra flags (``FLAG_IMU_ERROR``, ``FLAG_OVERRUN``); ``FLAG_ACCEL_FRESH``
         follows from ``accel`` and must not be passed.
+    reflex : ReflexFields, optional
+        Given: a version-2 frame carrying the board's chain output.
 
     Returns
     -------
     bytes
-        :data:`FRAME_LEN` bytes.
+        :data:`FRAME_LEN` bytes (:data:`FRAME_LEN_REFLEX` with ``reflex``).
 
     Raises
     ------
@@ -264,7 +349,14 @@ def encode_frame(seq: int, adc: int, accel: Sequence[int] | None = None,
             raise ParameterError(f"accel must have 3 values (x, y, z), got {len(accel)}")
         ax, ay, az = (_check_int(f"accel[{i}]", a, -32768, 32767) for i, a in enumerate(accel))
         flags |= FLAG_ACCEL_FRESH
-    body = _BODY.pack(VERSION, seq, flags, adc, ax, ay, az, flow)
+    if reflex is None:
+        body = _BODY.pack(VERSION, seq, flags, adc, ax, ay, az, flow)
+    else:
+        r = reflex
+        body = _BODY.pack(VERSION_REFLEX, seq, flags, adc, ax, ay, az, flow) + _REFLEX.pack(
+            _check_int("reflex.bits", r.bits, 0, _KNOWN_REFLEX), _check_int("reflex.v", r.v, 0, 255),
+            _check_int("reflex.command", r.command, -32768, 32767),
+            _check_int("reflex.x", r.x, -2**31, 2**31 - 1))
     return SYNC + body + _CRC.pack(crc16(body))
 
 
@@ -350,16 +442,27 @@ def encode_sample(sample: DaqSample, flags: int = 0) -> bytes:
                         flow_pulses=sample.flow_pulses, flags=flags)
 
 
+def _frame_len(buf: bytes | bytearray | memoryview, i: int) -> int:
+    """Length of the frame starting at ``i`` by its version byte (v1 length if unknown)."""
+    return _LENGTHS.get(buf[i + 2], FRAME_LEN) if len(buf) > i + 2 else FRAME_LEN
+
+
 def _unpack(raw: bytes | bytearray | memoryview) -> tuple[Frame | None, str]:
-    """Decode a FRAME_LEN candidate that starts with SYNC; (frame, "") or (None, reason)."""
-    if crc16(raw[2:FRAME_LEN]) != 0:
+    """Decode a candidate that starts with SYNC, of its version's length; (frame, "") or
+    (None, reason)."""
+    n = len(raw)
+    if crc16(raw[2:n]) != 0:
         return None, "bad CRC"
     version, seq, flags, adc, ax, ay, az, flow = _BODY.unpack_from(raw, 2)
-    if version != VERSION:
-        return None, f"unknown version {version} (expected {VERSION})"
+    if _LENGTHS.get(version) != n:
+        return None, f"unknown version {version} (expected {VERSION} or {VERSION_REFLEX})"
     if adc > ADC_MAX:
         return None, f"adc {adc} out of range 0..{ADC_MAX}"
-    return Frame(seq=seq, flags=flags, adc=adc, accel=(ax, ay, az), flow_pulses=flow), ""
+    reflex = None
+    if version == VERSION_REFLEX:
+        reflex = ReflexFields(*_REFLEX.unpack_from(raw, 2 + PAYLOAD_LEN))
+    return Frame(seq=seq, flags=flags, adc=adc, accel=(ax, ay, az), flow_pulses=flow,
+                 reflex=reflex), ""
 
 
 def decode_frame(data: bytes | bytearray | memoryview) -> Frame:
@@ -368,7 +471,7 @@ def decode_frame(data: bytes | bytearray | memoryview) -> Frame:
     Parameters
     ----------
     data : bytes-like
-        :data:`FRAME_LEN` bytes.
+        :data:`FRAME_LEN` bytes (version 1) or :data:`FRAME_LEN_REFLEX` (version 2).
 
     Returns
     -------
@@ -391,8 +494,9 @@ def decode_frame(data: bytes | bytearray | memoryview) -> Frame:
     """
     data = bytes(data)
     short = f"{data[:4].hex()}...{data[-2:].hex()}" if len(data) > 8 else data.hex()
-    if len(data) != FRAME_LEN:
-        raise DataError(f"frame {short}: {len(data)} bytes, expected {FRAME_LEN}")
+    want = _frame_len(data, 0) if data[:2] == SYNC else FRAME_LEN
+    if len(data) != want:
+        raise DataError(f"frame {short}: {len(data)} bytes, expected {want}")
     if data[:2] != SYNC:
         raise DataError(f"frame {short}: does not start with sync {SYNC.hex()}")
     frame, reason = _unpack(data)
@@ -577,7 +681,7 @@ class FrameParser:
             c["resyncs"] += 1
             self._lost_lock = False
         return Frame(frame.seq, frame.flags, frame.adc, frame.accel, frame.flow_pulses,
-                     self._index)
+                     self._index, frame.reflex)
 
     def _scan(self, final: bool) -> list[Frame]:
         buf, c, out = self._buf, self._c, []
@@ -591,38 +695,40 @@ class FrameParser:
                 break
             self._discard(j - i)
             i = j
-            if n - i < FRAME_LEN:
+            size = _frame_len(buf, i)
+            if n - i < max(size, 3):
                 if final:
                     c["truncated"] += 1
                     self._discard(n - i)
                     i = n
                 break
-            frame, _ = _unpack(buf[i:i + FRAME_LEN])
+            frame, _ = _unpack(buf[i:i + size])
             if frame is not None:
                 out.append(self._accept(frame))
-                i += FRAME_LEN
+                i += size
                 continue
-            if crc16(buf[i + 2:i + FRAME_LEN]) == 0:  # good CRC, bad content
+            if crc16(buf[i + 2:i + size]) == 0:  # good CRC, bad content
                 c["invalid"] += 1
-                self._discard(FRAME_LEN)
-                i += FRAME_LEN
+                self._discard(size)
+                i += size
                 continue
             # Failed CRC: a truncated frame if a good frame starts inside the candidate.
             # Otherwise no good frame starts inside it: drop all of it (at flush, only up
             # to the first sync that cannot be checked, which then counts as truncated).
-            verdict, k, skip = "crc", i + 1, FRAME_LEN
+            verdict, k, skip = "crc", i + 1, size
             while True:
-                k = buf.find(SYNC, k, i + FRAME_LEN + 1)
+                k = buf.find(SYNC, k, i + size + 1)
                 if k < 0:
-                    if not final and n == i + FRAME_LEN and buf[-1] == SYNC[0]:
+                    if not final and n == i + size and buf[-1] == SYNC[0]:
                         verdict = "wait"  # a sync may start at the candidate's last byte
                     break
-                if k + FRAME_LEN > n:
+                ksize = _frame_len(buf, k)
+                if k + max(ksize, 3) > n:
                     if not final:
                         verdict = "wait"
                         break
                     skip = min(skip, k - i)
-                elif _unpack(buf[k:k + FRAME_LEN])[0] is not None:
+                elif _unpack(buf[k:k + ksize])[0] is not None:
                     verdict = "truncated"
                     break
                 k += 1
