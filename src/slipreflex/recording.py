@@ -25,7 +25,10 @@ started, on the PC's clock):
 /chain/windows     one message per complete window: spike count
 /hand/commands     reflex commands: target (the reflex's output), fingers, targets (the
                    position sent to each finger: its start plus the rise of the
-                   reflex's command, never below the start), sent (bool), latency (s)
+                   reflex's command, never below the start), sent (bool), note (why
+                   not sent: "at start", "stale", "rejected", "hand-port"), latency
+                   (s from reading the bytes) and frame_latency (s from the frame's
+                   own arrival)
 /faults            watchdog, device and recording faults, with the action taken
 /stats             periodic DAQ and loop counters
 =================  ===========================================================
@@ -76,7 +79,8 @@ TOPICS: dict[str, tuple[str, dict[str, Any]]] = {
     "/hand/commands": ("slipreflex.Command", {"seq": _I, "t": "number", "target": "number",
                                               "fingers": {"type": "array", "items": {"type": _S}},
                                               "targets": {"type": "object"},
-                                              "sent": _B, "latency": _N}),
+                                              "sent": _B, "note": _S, "latency": _N,
+                                              "frame_latency": _N}),
     "/faults": ("slipreflex.Fault", {"time": "number", "kind": _S, "message": _S, "action": _S}),
     "/stats": ("slipreflex.Stats", {"time": "number", "counters": {"type": "object"}}),
 }

@@ -4,21 +4,30 @@
 (the serial DAQ, the virtual DAQ on a pty, anything with ``read``), feeds each
 to the same reflex object used in simulation and replay, sends its commands to
 any :class:`~slipreflex.interfaces.Hand`, and records every stream with a
-:class:`~slipreflex.recording.Recorder`.
+:class:`~slipreflex.recording.Recorder`. One iteration is four named steps:
+*read* (wait for bytes, decode), *process* (every sample through the reflex,
+commands out at once; one :class:`SampleRecord` per sample), *record* (after
+the commands are out) and *watchdog* (faults, holds, counters).
 
 What it guarantees:
 
-- **Latency** from a sample's arrival (the moment its bytes were read from the
-  port, ``source.last_arrival`` when the source provides it) to its command
-  being written is measured for every command; :class:`RunResult` reports
-  p50, p99 and max.
-- **Watchdog**: when no valid sample arrives for ``watchdog`` seconds (100 ms
-  by default) the grasping fingers are told to hold where they are
-  (``hand.hold()`` if the hand has it, else its last target is re-sent); the
-  hand is never opened by a fault. The fault is reported and recorded, and
-  the reflex resumes, unchanged, when samples return.
+- **Safe start**: the fingers are first told to STOP where they are
+  (:func:`safe_start`); no command is ever below a finger's start position,
+  and nothing is sent until the reflex first asks for more grip.
+- **Latency** is measured for every command sent, twice: from the moment the
+  sample's bytes were read from the port (``source.last_arrival``) and from
+  the frame's own arrival as its board time places it (so a backlog shows).
+- **Watchdog**: when no valid sample arrives for ``watchdog`` seconds (20 to
+  500 ms; 100 ms by default), or a sample is older than that when it is
+  processed (a frozen or backlogged loop), the grasping fingers are told to
+  hold where they are, and the hold is re-sent every ``watchdog`` seconds
+  while the fault lasts (the i-Limb protocol has no acknowledgement). A guard
+  thread holds the fingers if the loop itself stops iterating. The hand is
+  never opened by a fault; the reflex resumes, unchanged, when fresh samples
+  return.
 - **Faults never stop the loop**: a DAQ or hand port that fails, a command
-  the hand driver rejects, a recording that cannot be written any more - each
+  the hand driver rejects, a recording that cannot be written any more, bursts
+  of CRC errors, garbage, lost, duplicated or late frames, a DAQ reset - each
   becomes a :class:`Fault` (recorded, reported) and the loop goes on.
 - **Stopping**: after ``duration`` seconds, when ``stop`` is set, or on
   Ctrl-C; the recording is always closed by the caller's ``with`` block.
@@ -38,12 +47,13 @@ Examples
 ...     def set_positions(self, t): self.targets.update(t)
 ...     def positions(self): return dict(self.targets)
 >>> res = run_loop(Source(), Hand(), SlipReflex(p0=200.0), duration=0.5)
->>> res.samples, res.commands, [f.kind for f in res.faults]
-(64, 4, ['watchdog'])
+>>> res.samples, res.commands, res.commands_sent, [f.kind for f in res.faults]
+(64, 4, 0, ['watchdog'])
 """
 
 from __future__ import annotations
 
+import collections
 import gc
 import json
 import math
@@ -59,16 +69,36 @@ import numpy as np
 
 from .errors import DeviceError, ParameterError
 from .hardware import FINGER_MAX, FINGER_MIN, SLIP_FINGER, THUMB_ROTATOR_MAX, TRIPOD, Finger
-from .interfaces import DaqSample, Hand
+from .interfaces import DaqSample, Hand, Reflex, SampleSource
 
-__all__ = ["Fault", "RunResult", "run_loop", "print_fault", "realtime_priority", "WATCHDOG_S",
-           "start_positions", "safe_start", "WATCHDOG_MIN_S", "WATCHDOG_MAX_S"]
+__all__ = ["Fault", "SampleRecord", "RunResult", "run_loop", "print_fault", "realtime_priority",
+           "WATCHDOG_S", "WATCHDOG_MIN_S", "WATCHDOG_MAX_S", "start_positions", "safe_start"]
 
 #: Seconds without a valid sample after which the watchdog holds the fingers.
 WATCHDOG_S: float = 0.1
 #: Bounds of the watchdog (s): shorter trips on the DAQ's normal jitter, longer is no watchdog.
 WATCHDOG_MIN_S: float = 0.02
 WATCHDOG_MAX_S: float = 0.5
+#: How fast (s per s) the estimate of a frame's arrival may follow the board's clock drifting
+#: behind the PC's; a crystal is within 1e-4, so a real stall is never absorbed quickly.
+_CLOCK_DRIFT = 1e-3
+#: A valid frame should arrive within this many seconds of the start (else a warning).
+_FIRST_FRAME_S = 1.0
+#: Shortest interval (s) between two fault events of the same DAQ counter.
+_COUNTER_EVENT_S = 1.0
+#: DAQ counters whose increase is a fault event: counter -> (fault kind, what one count is).
+_COUNTER_FAULTS: dict[str, tuple[str, str]] = {
+    "crc_errors": ("daq-crc", "frames failed their CRC"),
+    "truncated": ("daq-truncated", "frames cut short"),
+    "invalid": ("daq-invalid", "frames with a good CRC but bad content"),
+    "garbage_bytes": ("daq-garbage", "bytes of garbage between frames"),
+    "frames_lost": ("daq-gap", "frames lost (sequence gaps)"),
+    "duplicates": ("daq-duplicate", "duplicated frames dropped"),
+    "reordered": ("daq-reordered", "late (out-of-order) frames dropped"),
+    "resets": ("daq-reset", "DAQ sequence restarts (board reset): a new segment, time continues"),
+    "reconnects": ("daq-port-restored", "DAQ port reopened"),
+    "frames_discarded": ("daq-discarded", "frames discarded while the port reopened"),
+}
 
 
 @dataclass(frozen=True, slots=True)
@@ -80,9 +110,12 @@ class Fault:
     time : float
         Seconds since the run started.
     kind : str
-        ``"watchdog"``, ``"watchdog-clear"``, ``"daq-port"``, ``"hand-port"``,
-        ``"hand-port-restored"``, ``"command-rejected"``, ``"hold-failed"``
-        or ``"recording"``.
+        ``"watchdog"``, ``"watchdog-clear"``, ``"stale"``, ``"stale-clear"``,
+        ``"loop-stalled"``, ``"no-data"``, ``"daq-port"``, ``"daq-port-restored"``,
+        ``"daq-crc"``, ``"daq-truncated"``, ``"daq-invalid"``, ``"daq-garbage"``,
+        ``"daq-gap"``, ``"daq-duplicate"``, ``"daq-reordered"``, ``"daq-reset"``,
+        ``"daq-discarded"``, ``"hand-port"``, ``"hand-port-restored"``,
+        ``"command-rejected"``, ``"hold-failed"``, ``"mpi-saturated"`` or ``"recording"``.
     message : str
         What happened, naming the port or file.
     action : str
@@ -110,6 +143,66 @@ class Fault:
         return {"time": self.time, "kind": self.kind, "message": self.message, "action": self.action}
 
 
+@dataclass(slots=True)
+class SampleRecord:
+    """What the loop did with one sample (the typed record of the *process* step).
+
+    Attributes
+    ----------
+    sample : DaqSample
+    arrival : float
+        Clock time at which its bytes were read from the port.
+    age : float
+        Seconds since the frame arrived, as its board time places it, when the
+        reflex processed it (large for a backlog).
+    position : float or None
+        Slip-finger position given to the reflex (in the reflex's frame).
+    command : float or None
+        The reflex's command, when this sample completed a window.
+    targets : dict of Finger to float or None
+        The position for each finger that the command means.
+    filtered, threshold : float or None
+    event : bool
+    count : int or None
+        The window's spike count, when this sample completed a window.
+    sent : bool
+        Whether the targets were written to the hand.
+    note : str
+        Why a command was not sent: ``"at start"``, ``"stale"``, ``"rejected"``, ``"hand-port"``.
+    latency, frame_latency : float or None
+        Seconds from ``arrival`` (read) and from the frame's own arrival to the write.
+
+    Examples
+    --------
+    >>> r = SampleRecord(DaqSample(0, 0.0, 0.4, None, 0), arrival=1.0, age=0.001)
+    >>> r.sent, r.command
+    (False, None)
+    """
+
+    sample: DaqSample
+    arrival: float
+    age: float
+    position: float | None = None
+    command: float | None = None
+    targets: dict[Finger, float] | None = None
+    filtered: float | None = None
+    threshold: float | None = None
+    event: bool = False
+    count: int | None = None
+    sent: bool = False
+    note: str = ""
+    latency: float | None = None
+    frame_latency: float | None = None
+
+
+def _percentiles_ms(x: np.ndarray) -> dict[str, float]:
+    if x.size == 0:
+        return {"p50": math.nan, "p99": math.nan, "max": math.nan}
+    ms = x * 1e3
+    return {"p50": float(np.percentile(ms, 50)), "p99": float(np.percentile(ms, 99)),
+            "max": float(ms.max())}
+
+
 @dataclass
 class RunResult:
     """What a run did.
@@ -121,7 +214,10 @@ class RunResult:
     commands_sent : int
         Commands the hand driver accepted and wrote.
     latencies : numpy.ndarray
-        Seconds from sample arrival to command written, per sent command.
+        Seconds from reading the sample's bytes to the command written, per sent command.
+    frame_latencies : numpy.ndarray
+        Seconds from the frame's own arrival (its board time, anchored to the
+        earliest-arriving frames) to the command written, per sent command.
     faults : list of Fault
     daq_stats : dict
         The source's counters at the end (``seq_gaps``, ``crc_errors``, ...), if it has any.
@@ -136,6 +232,14 @@ class RunResult:
         safe start's STOP: no command the loop sent was below it.
     initial_command : str
         What the loop sent first (the STOP of the safe start).
+    holds_sent : int
+        Holds (STOP) sent by the watchdog, its re-sends and the stall guard.
+    stale_samples : int
+        Samples older than the watchdog when processed (their commands were held back).
+    saturated_at : float or None
+        Board time (s) at which the command first reached the finger maximum (500).
+    saturated_windows : int
+        Windows with spikes after that: slips the command could not answer.
 
     Examples
     --------
@@ -150,6 +254,7 @@ class RunResult:
     commands: int = 0
     commands_sent: int = 0
     latencies: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    frame_latencies: np.ndarray = field(default_factory=lambda: np.zeros(0))
     faults: list[Fault] = field(default_factory=list)
     daq_stats: dict[str, int] = field(default_factory=dict)
     duration: float = 0.0
@@ -157,20 +262,27 @@ class RunResult:
     recording_error: str | None = None
     start: dict[str, float] = field(default_factory=dict)
     initial_command: str = ""
+    holds_sent: int = 0
+    stale_samples: int = 0
+    saturated_at: float | None = None
+    saturated_windows: int = 0
 
-    def latency_ms(self) -> dict[str, float]:
+    def latency_ms(self, since: str = "read") -> dict[str, float]:
         """p50, p99 and max of the command latency in milliseconds (NaN if none).
+
+        Parameters
+        ----------
+        since : {"read", "frame"}
+            From reading the bytes, or from the frame's own arrival.
 
         Examples
         --------
         >>> RunResult().latency_ms()["p99"]
         nan
         """
-        if self.latencies.size == 0:
-            return {"p50": math.nan, "p99": math.nan, "max": math.nan}
-        ms = self.latencies * 1e3
-        return {"p50": float(np.percentile(ms, 50)), "p99": float(np.percentile(ms, 99)),
-                "max": float(ms.max())}
+        if since not in ("read", "frame"):
+            raise ParameterError(f"latency_ms: since must be 'read' or 'frame', got {since!r}")
+        return _percentiles_ms(self.latencies if since == "read" else self.frame_latencies)
 
     def summary(self) -> str:
         """A few human-readable lines for the end of a run.
@@ -180,24 +292,46 @@ class RunResult:
         >>> print(RunResult(samples=3).summary().splitlines()[0])
         samples 3, events 0, windows 0, commands 0 (0 sent) in 0.0 s
         """
-        lat = self.latency_ms()
         lines = [f"samples {self.samples}, events {self.events}, windows {self.windows}, "
-                 f"commands {self.commands} ({self.commands_sent} sent) in {self.duration:.1f} s",
-                 f"latency sample->command: p50 {lat['p50']:.3f} ms, p99 {lat['p99']:.3f} ms, "
-                 f"max {lat['max']:.3f} ms (n={self.latencies.size})"]
+                 f"commands {self.commands} ({self.commands_sent} sent) in {self.duration:.1f} s"]
+        for since, what in (("read", "sample read"), ("frame", "frame arrival")):
+            lat = self.latency_ms(since)
+            lines.append(f"latency {what}->command: p50 {lat['p50']:.3f} ms, p99 {lat['p99']:.3f} ms, "
+                         f"max {lat['max']:.3f} ms (n={self.latencies.size})")
         if self.daq_stats:
             d = self.daq_stats
-            lines.append("daq: " + ", ".join(f"{k} {d[k]}" for k in
-                                              ("frames", "seq_gaps", "frames_lost", "crc_errors",
-                                               "truncated", "resyncs", "garbage_bytes",
-                                               "disconnects", "reconnects") if k in d))
-        kinds: dict[str, int] = {}
-        for f in self.faults:
-            kinds[f.kind] = kinds.get(f.kind, 0) + 1
-        lines.append("faults: " + (", ".join(f"{k} x{n}" for k, n in kinds.items()) or "none"))
+            lines.append("daq: " + ", ".join(f"{k} {d[k]}" for k in (
+                "frames", "seq_gaps", "frames_lost", "crc_errors", "truncated", "resyncs",
+                "garbage_bytes", "duplicates", "reordered", "resets", "disconnects", "reconnects",
+                "frames_discarded") if k in d))
+        if self.saturated_at is not None:
+            lines.append(f"MPI saturated at {FINGER_MAX} (fingers fully closed) at t={self.saturated_at:.3f} s; "
+                         f"{self.saturated_windows} later windows with spikes could not raise the command")
+        kinds = collections.Counter(f.kind for f in self.faults)
+        lines.append("faults: " + (", ".join(f"{k} x{n}" for k, n in kinds.items()) or "none")
+                     + (f"; holds sent {self.holds_sent}" if self.holds_sent else ""))
         if self.recording_error:
             lines.append(f"recording stopped early: {self.recording_error}")
         return "\n".join(lines)
+
+    def summary_metadata(self) -> dict[str, str]:
+        """The summary as a metadata record (``run_summary`` in a recording).
+
+        Examples
+        --------
+        >>> RunResult(samples=2).summary_metadata()["samples"]
+        '2'
+        """
+        out = {"samples": self.samples, "commands": self.commands, "commands_sent": self.commands_sent,
+               "events": self.events, "duration_s": f"{self.duration:.3f}",
+               "faults": len(self.faults), "holds_sent": self.holds_sent,
+               "stale_samples": self.stale_samples,
+               "saturated_at": "" if self.saturated_at is None else f"{self.saturated_at:.6f}",
+               "saturated_windows": self.saturated_windows}
+        for since, key in (("read", "latency"), ("frame", "frame_latency")):
+            for q, v in self.latency_ms(since).items():
+                out[f"{key}_{q}_ms"] = f"{v:.4f}"
+        return {k: str(v) for k, v in out.items()}
 
 
 def _num(x: Any) -> float | None:
@@ -324,12 +458,12 @@ def safe_start(hand: Hand, p0: float | Mapping[Any, float],
     return start
 
 
-def run_loop(source: Any, hand: Any, reflex: Any, *, p0: float | Mapping[Any, float] | None = None,
-             recorder: Any = None,
+def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
+             p0: float | Mapping[Any, float] | None = None, recorder: Any = None,
              duration: float | None = None, watchdog: float = WATCHDOG_S, poll: float = 0.01,
              fingers: Sequence[Finger] = TRIPOD, stop: threading.Event | None = None,
              on_fault: Callable[[Fault], None] | None = None, stats_interval: float = 1.0,
-             clock: Callable[[], float] = time.perf_counter) -> RunResult:
+             clock: Callable[[], float] = time.perf_counter, guard: bool = True) -> RunResult:
     """Run the reflex in real time until ``duration``, ``stop`` or Ctrl-C.
 
     Parameters
@@ -339,7 +473,8 @@ def run_loop(source: Any, hand: Any, reflex: Any, *, p0: float | Mapping[Any, fl
         :class:`~slipreflex.errors.DeviceError` (recorded, the loop goes on).
         If it has ``last_arrival`` (a ``time.perf_counter()`` value) that is
         the arrival time of the samples just read; if it has ``stats`` (with
-        ``to_dict()``), the counters are recorded and returned.
+        ``to_dict()``), the counters are recorded, returned, and their
+        increases become fault events.
     hand : Hand
         ``set_positions(targets)``; optional ``hold(fingers)``.
     reflex : Reflex
@@ -355,9 +490,9 @@ def run_loop(source: Any, hand: Any, reflex: Any, *, p0: float | Mapping[Any, fl
     duration : float, optional
         Seconds to run (default: until stopped).
     watchdog : float
-        Seconds without a valid sample before the fingers are held.
+        Seconds (20 to 500 ms) without a fresh valid sample before the fingers are held.
     poll : float
-        Longest wait for input in one read (s); bounds the watchdog's reaction.
+        Longest wait for input in one read (s), at most half the watchdog.
     fingers : sequence of Finger
         Fingers that get the reflex's command (default: the tripod).
     stop : threading.Event, optional
@@ -369,6 +504,9 @@ def run_loop(source: Any, hand: Any, reflex: Any, *, p0: float | Mapping[Any, fl
     clock : callable
         Monotonic clock in seconds; must be ``time.perf_counter`` if the
         source's ``last_arrival`` is to be used.
+    guard : bool
+        Run the stall guard (a thread that holds the fingers when the loop
+        stops iterating for longer than the watchdog).
 
     Returns
     -------
@@ -377,7 +515,7 @@ def run_loop(source: Any, hand: Any, reflex: Any, *, p0: float | Mapping[Any, fl
     Raises
     ------
     ParameterError
-        For a reflex that does not read the slip sensor, or a bad watchdog/poll.
+        For a reflex that does not read the slip sensor, a bad p0, watchdog or poll.
 
     Examples
     --------
@@ -391,9 +529,9 @@ def run_loop(source: Any, hand: Any, reflex: Any, *, p0: float | Mapping[Any, fl
     ...     def positions(self): return {}
     ...     def hold(self, fingers): self.held += 1
     >>> h = Hand()
-    >>> r = run_loop(Silent(), h, SlipReflex(), duration=0.3, poll=0.01)
-    >>> [f.kind for f in r.faults], h.held      # the safe start's STOP, then the watchdog's
-    (['watchdog'], 2)
+    >>> r = run_loop(Silent(), h, SlipReflex(), duration=0.15, poll=0.01)
+    >>> [f.kind for f in r.faults], h.held >= 2      # the safe start's STOP, then the watchdog's
+    (['watchdog'], True)
     """
     if getattr(reflex, "input_kind", "slip") != "slip":
         raise ParameterError(f"run_loop: reflex {getattr(reflex, 'name', reflex)!r} reads "
@@ -401,216 +539,442 @@ def run_loop(source: Any, hand: Any, reflex: Any, *, p0: float | Mapping[Any, fl
     if not WATCHDOG_MIN_S <= watchdog <= WATCHDOG_MAX_S:
         raise ParameterError(f"run_loop: watchdog must be in {WATCHDOG_MIN_S:g}..{WATCHDOG_MAX_S:g} s, "
                              f"got {watchdog!r}")
-    if not 0 < poll <= watchdog:
-        raise ParameterError(f"run_loop: poll must be in (0, watchdog], got {poll!r}")
+    if not 0 < poll <= watchdog / 2:
+        raise ParameterError(f"run_loop: poll must be in (0, watchdog / 2], got {poll!r}")
+    if duration is not None and not (math.isfinite(duration) and duration > 0):
+        raise ParameterError(f"run_loop: duration must be > 0 s, got {duration!r}")
     fingers = tuple(Finger(f) for f in fingers)
-    finger_names = [f.name.lower() for f in fingers]
     ref0 = getattr(reflex, "command", None)  # the reflex's own start (SlipReflex: clip(p0))
-    if p0 is None:
-        if not isinstance(ref0, (int, float)) or not math.isfinite(ref0):
-            raise ParameterError("run_loop: give p0 (the reflex has no initial command)")
-        p0 = ref0
-    start = safe_start(hand, p0, fingers)  # STOP first: nothing moves before the reflex asks
-    if not isinstance(ref0, (int, float)) or not math.isfinite(ref0):
-        ref0 = start.get(SLIP_FINGER, next(iter(start.values())))
-    shift = {f: start[f] - ref0 for f in fingers}  # reflex frame -> each finger's own
-    slip_shift = start[SLIP_FINGER] - ref0 if SLIP_FINGER in start else 0.0
-    res = RunResult(start={f.name.lower(): v for f, v in start.items()},
-                    initial_command="STOP " + ",".join(finger_names))
-    latencies: list[float] = []
-    t0 = clock()
-    wall0 = time.time_ns()
-    rec_ok = recorder is not None
+    ref_ok = isinstance(ref0, (int, float)) and math.isfinite(ref0)
+    if p0 is None and not ref_ok:
+        raise ParameterError("run_loop: give p0 (the reflex has no initial command)")
+    start_positions(p0 if p0 is not None else ref0, fingers)  # check before anything is sent
+    start = safe_start(hand, p0 if p0 is not None else ref0, fingers)
+    loop = _Loop(source, hand, reflex, start=start,
+                 ref0=float(ref0) if ref_ok else start.get(SLIP_FINGER, next(iter(start.values()))),
+                 recorder=recorder, duration=duration, watchdog=watchdog, poll=poll, stop=stop,
+                 on_fault=on_fault, stats_interval=stats_interval, clock=clock)
+    return loop.run(guard)
 
-    def ns(t: float) -> int:
-        return wall0 + int((t - t0) * 1e9)
 
-    def targets_for(cmd: float) -> dict[Finger, float]:
-        # never below a finger's start; a NaN passes through for the driver to reject
-        return {f: (start[f] if cmd + shift[f] < start[f] else cmd + shift[f]) for f in fingers}
+class _Sink:
+    """The loop's side of the recorder: never raises; its failure is reported once."""
 
-    def record(topic: str, msg: dict[str, Any], t: float) -> None:
-        if rec_ok and not recorder.write(topic, msg, ns(t)):
-            check_recorder()
+    def __init__(self, recorder: Any, t0: float, on_fail: Callable[[str], None]) -> None:
+        self.recorder = recorder
+        self.ok = recorder is not None
+        self.t0 = t0
+        self.wall0 = time.time_ns()
+        self.on_fail = on_fail
+        self.error: str | None = None
 
-    def check_recorder() -> None:
-        nonlocal rec_ok
-        if rec_ok and recorder.error is not None:
-            rec_ok = False
-            res.recording_error = f"{getattr(recorder, 'path', 'recording')}: {recorder.error}"
-            fault("recording", f"recording failed, later data is not recorded: {res.recording_error}",
-                  "reflex kept running")
+    def write(self, topic: str, msg: dict[str, Any], t: float) -> None:
+        if self.ok and not self.recorder.write(topic, msg, self.wall0 + int((t - self.t0) * 1e9)):
+            self.check()
 
-    def fault(kind: str, message: str, action: str) -> None:
-        f = Fault(round(clock() - t0, 6), kind, message, action)
-        res.faults.append(f)
-        if on_fault is not None:
-            on_fault(f)
-        record("/faults", f.to_dict(), clock())
+    def check(self) -> None:
+        if self.ok and self.recorder.error is not None:
+            self.ok = False
+            self.error = f"{getattr(self.recorder, 'path', 'recording')}: {self.recorder.error}"
+            self.on_fail(self.error)
 
-    last_target: dict[Finger, float] | None = None
+    def samples(self, records: list[SampleRecord], finger_names: list[str], last_flow: int | None) -> int | None:
+        for r in records:
+            s, arr = r.sample, r.arrival
+            self.write("/daq/samples", {"seq": s.seq, "t": s.t, "slip_volts": s.slip_volts,
+                                        "flow_pulses": s.flow_pulses, "arrival": arr - self.t0,
+                                        "position": _num(r.position)}, arr)
+            if s.accel_g is not None:
+                ax, ay, az = s.accel_g
+                self.write("/daq/imu", {"seq": s.seq, "t": s.t, "ax": ax, "ay": ay, "az": az}, arr)
+            if s.flow_pulses != last_flow:
+                self.write("/daq/flow", {"seq": s.seq, "t": s.t, "pulses": s.flow_pulses}, arr)
+            last_flow = s.flow_pulses
+            self.write("/chain/state", {"seq": s.seq, "t": s.t, "filtered": _num(r.filtered),
+                                        "threshold": _num(r.threshold) or 0.0, "event": r.event}, arr)
+            if r.event:
+                self.write("/chain/events", {"seq": s.seq, "t": s.t}, arr)
+            if r.count is not None:
+                self.write("/chain/windows", {"seq": s.seq, "t": s.t, "count": int(r.count)}, arr)
+            if r.command is not None:
+                targets = {f.name.lower(): _num(v) for f, v in (r.targets or {}).items()}
+                self.write("/hand/commands", {"seq": s.seq, "t": s.t, "target": float(r.command),
+                                              "fingers": finger_names, "targets": targets,
+                                              "sent": r.sent, "note": r.note, "latency": r.latency,
+                                              "frame_latency": r.frame_latency}, arr)
+        return last_flow
 
-    def hold() -> None:
+
+class _Loop:
+    """One run: the state the four steps share."""
+
+    def __init__(self, source: Any, hand: Any, reflex: Any, *, start: dict[Finger, float],
+                 ref0: float, recorder: Any, duration: float | None, watchdog: float, poll: float,
+                 stop: threading.Event | None, on_fault: Callable[[Fault], None] | None,
+                 stats_interval: float, clock: Callable[[], float]) -> None:
+        self.source, self.hand, self.reflex = source, hand, reflex
+        self.fingers = tuple(start)
+        self.finger_names = [f.name.lower() for f in self.fingers]
+        self.start = start
+        self.shift = {f: start[f] - ref0 for f in self.fingers}  # reflex frame -> each finger's
+        self.top = {f: float(THUMB_ROTATOR_MAX if f == Finger.THUMB_ROTATOR else FINGER_MAX)
+                    for f in self.fingers}
+        self.slip_shift = self.shift.get(SLIP_FINGER, 0.0)
+        self.duration, self.watchdog_s, self.poll, self.stop = duration, watchdog, poll, stop
+        self.on_fault, self.stats_interval, self.clock = on_fault, stats_interval, clock
+        self.res = RunResult(start={f.name.lower(): v for f, v in start.items()},
+                             initial_command="STOP " + ",".join(self.finger_names))
+        self.t0 = clock()
+        self.sink = _Sink(recorder, self.t0, self._recording_failed)
+        self.lock = threading.Lock()  # hand writes: the loop and the stall guard
+        self.heartbeat = self.t0
+        self.guard_faults: collections.deque[Fault] = collections.deque()
+        self.latencies: list[float] = []
+        self.frame_latencies: list[float] = []
+        self.offset: float | None = None  # board time -> clock time of the earliest arrivals
+        self.last_arrival = self.t0
+        self.last_valid = self.t0
+        self.last_hold = -math.inf
+        self.no_data = self.stale = self.risen = self.hold_failed = self.warned = False
+        self.hand_ok = True
+        self.held_back = False  # a command came while stale: send the latest when fresh
+        self.last_target: dict[Finger, float] | None = None
+        self.latest_targets: dict[Finger, float] | None = None
+        self.processed = 0
+        self.last_flow: int | None = None
+        self.counters: dict[str, int] = {}
+        self.counter_pending: dict[str, int] = {}
+        self.counter_emitted: dict[str, float] = {}
+        self.next_stats = self.t0 + stats_interval
+        self.next_counters = self.t0
+        if recorder is not None and hasattr(recorder, "add_metadata"):
+            recorder.add_metadata("start", {"p0": json.dumps(self.res.start), "reflex_start": repr(ref0),
+                                            "initial_command": self.res.initial_command})
+
+    # -- the loop --------------------------------------------------------------------
+    def run(self, guard: bool) -> RunResult:
+        guard_thread = _Guard(self) if guard else None
+        if guard_thread is not None:
+            guard_thread.start()
+        # Objects that exist now (the package, numpy, the chain, the drivers) are never
+        # garbage; freezing them keeps the cyclic GC's occasional full passes short.
+        gc.freeze()
         try:
-            if hasattr(hand, "hold"):
-                hand.hold(fingers)
-            elif last_target is not None:
-                hand.set_positions(last_target)
-        except (DeviceError, ParameterError) as err:
-            fault("hold-failed", str(err), "hand keeps its last target")
+            while not self.done():
+                self.heartbeat = self.clock()
+                samples, arrival = self.read()
+                if samples:
+                    records = self.process(samples, arrival)  # commands out first
+                    self.record(records)
+                self.watchdog(bool(samples))
+        except KeyboardInterrupt:
+            self.res.interrupted = True
+        finally:
+            gc.unfreeze()
+            if guard_thread is not None:
+                guard_thread.close()
+        return self.finish()
 
-    def source_stats() -> dict[str, int]:
-        st = getattr(source, "stats", None)
+    def done(self) -> bool:
+        if self.duration is not None and self.clock() - self.t0 >= self.duration:
+            return True
+        return self.stop is not None and self.stop.is_set()
+
+    # -- step 1: read ----------------------------------------------------------------
+    def read(self) -> tuple[list[DaqSample], float]:
+        try:
+            samples = self.source.read(self.poll)
+        except DeviceError as err:
+            self.fault("daq-port", str(err), "fingers hold via the watchdog; reconnecting")
+            return [], math.nan
+        if not samples:
+            return samples, math.nan
+        arrival = getattr(self.source, "last_arrival", math.nan)
+        if not (isinstance(arrival, float) and math.isfinite(arrival)):
+            arrival = self.clock()
+        self.anchor(samples[-1].t, arrival)
+        return samples, arrival
+
+    def anchor(self, t_newest: float, arrival: float) -> None:
+        """Map board time to clock time by the earliest arrivals (the newest frame of a read
+        has just arrived). A newest frame that looks older than the watchdog means the board's
+        time was restarted (a reset continues at the next period), not a stall: re-anchor."""
+        cand = arrival - t_newest
+        if self.offset is None or cand - self.offset > self.watchdog_s:
+            self.offset = cand
+        else:
+            self.offset = min(self.offset + _CLOCK_DRIFT * (arrival - self.last_arrival), cand)
+        self.last_arrival = arrival
+
+    # -- step 2: process (the time-critical part) -------------------------------------
+    def process(self, samples: list[DaqSample], arrival: float) -> list[SampleRecord]:
+        reflex, hand, out = self.reflex, self.hand, []
+        for s in samples:
+            pos = None
+            try:
+                pos = hand.positions().get(SLIP_FINGER)
+            except DeviceError:
+                pass
+            if pos is not None:
+                pos -= self.slip_shift  # in the reflex's frame
+            cmd = reflex.step(s.slip_volts, pos)
+            r = SampleRecord(s, arrival, self.clock() - (s.t + self.offset), pos, cmd,
+                             filtered=getattr(reflex, "last_filtered", None),
+                             threshold=getattr(reflex, "last_threshold", None),
+                             event=bool(getattr(reflex, "last_event", False)),
+                             count=getattr(reflex, "last_count", None))
+            self.freshness(r)
+            if cmd is not None:
+                self.command(r, cmd)
+            out.append(r)
+        self.processed += len(samples)
+        return out
+
+    def freshness(self, r: SampleRecord) -> None:
+        if r.age > self.watchdog_s:
+            self.res.stale_samples += 1
+            if not self.stale:
+                self.stale = True
+                self.hold()
+                self.fault("stale", f"sample seq {r.sample.seq} was {r.age * 1e3:.0f} ms old when "
+                           f"processed: the loop was frozen or fell behind", "fingers held; commands "
+                           f"wait for fresh samples")
+        elif self.stale:
+            self.stale = False
+            self.fault("stale-clear", f"samples fresh again ({r.age * 1e3:.1f} ms old)", "reflex resumed")
+            if self.held_back and self.latest_targets is not None:
+                self.held_back = False
+                self.send(r, self.latest_targets, resend=True)
+
+    def targets_for(self, cmd: float) -> dict[Finger, float]:
+        out = {}
+        for f in self.fingers:
+            v = cmd + self.shift[f]
+            if v < self.start[f]:  # never below the start (a NaN passes on, to be rejected)
+                v = self.start[f]
+            elif v > self.top[f] and cmd <= FINGER_MAX:  # the MPI saturated; this finger started higher
+                v = self.top[f]
+            out[f] = v
+        return out
+
+    def command(self, r: SampleRecord, cmd: float) -> None:
+        targets = r.targets = self.targets_for(cmd)
+        if cmd >= FINGER_MAX and self.res.saturated_at is None:
+            self.res.saturated_at = r.sample.t
+            self.fault("mpi-saturated", f"the MPI command reached {FINGER_MAX} at t={r.sample.t:.3f} s",
+                       "fingers fully closed; later slips cannot raise the command")
+        if not self.risen:
+            if all(targets[f] <= self.start[f] for f in self.fingers):
+                r.note = "at start"  # nothing asked for yet: the fingers stay held where they are
+                return
+            self.risen = True
+        self.latest_targets = targets
+        if self.stale:
+            r.note, self.held_back = "stale", True
+            return
+        self.send(r, targets)
+
+    def send(self, r: SampleRecord, targets: dict[Finger, float], resend: bool = False) -> None:
+        try:
+            with self.lock:
+                self.hand.set_positions(targets)
+        except ParameterError as err:
+            r.note = "rejected"
+            self.fault("command-rejected", str(err), "not sent; fingers hold their last target")
+            return
+        except DeviceError as err:
+            r.note = "hand-port"
+            if self.hand_ok:
+                self.fault("hand-port", str(err), "hand keeps its last target; reconnecting")
+            self.hand_ok = False
+            return
+        self.last_target = targets
+        if resend:
+            return
+        now = self.clock()
+        r.sent, r.latency = True, now - r.arrival
+        r.frame_latency = now - (r.sample.t + self.offset)
+        self.latencies.append(r.latency)
+        self.frame_latencies.append(r.frame_latency)
+        if not self.hand_ok:
+            self.hand_ok = True
+            self.fault("hand-port-restored", "hand port is back", "commands resumed")
+
+    # -- step 3: record (after the commands are out) -----------------------------------
+    def record(self, records: list[SampleRecord]) -> None:
+        res = self.res
+        for r in records:
+            res.samples += 1
+            res.events += r.event
+            if r.count is not None:
+                res.windows += 1
+                if res.saturated_at is not None and r.count > 0 and r.sample.t > res.saturated_at:
+                    res.saturated_windows += 1
+            if r.command is not None:
+                res.commands += 1
+                res.commands_sent += r.sent
+        self.last_flow = self.sink.samples(records, self.finger_names, self.last_flow)
+
+    # -- step 4: watchdog, counters, housekeeping ---------------------------------------
+    def watchdog(self, got: bool) -> None:
+        now = self.clock()
+        if got:
+            if self.no_data:
+                self.no_data = False
+                self.fault("watchdog-clear", f"samples resumed after {now - self.last_valid:.3f} s",
+                           "reflex resumed")
+            self.last_valid = now
+        elif not self.no_data and now - self.last_valid > self.watchdog_s:
+            self.no_data = True
+            self.hold()
+            self.fault("watchdog", f"no valid DAQ sample for {(now - self.last_valid) * 1e3:.0f} ms",
+                       "fingers held where they are; the hold is re-sent while it lasts")
+        if (self.no_data or self.stale) and now - self.last_hold >= self.watchdog_s:
+            self.hold()  # the i-Limb protocol has no acknowledgement: say it again
+        if not self.warned and self.processed == 0 and now - self.t0 >= _FIRST_FRAME_S:
+            self.warned = True
+            self.fault("no-data", self.no_data_message(), "fingers held; still waiting")
+        while self.guard_faults:
+            self.emit(self.guard_faults.popleft())
+        self.housekeeping(now)
+
+    def no_data_message(self) -> str:
+        st = self.source_stats()
+        got = st.get("garbage_bytes", 0) + st.get("crc_errors", 0)
+        port = getattr(self.source, "port_name", "the DAQ port")
+        if got:
+            return (f"no valid DAQ frame within {_FIRST_FRAME_S:g} s of start, but {port} delivers bytes "
+                    f"({st.get('garbage_bytes', 0)} garbage, {st.get('crc_errors', 0)} CRC errors): "
+                    f"wrong baud rate, swapped ports (--daq/--hand) or not the slipreflex firmware?")
+        return (f"no valid DAQ frame within {_FIRST_FRAME_S:g} s of start and no bytes at all from {port}: "
+                f"wrong port, swapped ports (--daq/--hand), board not powered or not flashed?")
+
+    def hold(self) -> None:
+        self.last_hold = self.clock()
+        try:
+            with self.lock:
+                if hasattr(self.hand, "hold"):
+                    self.hand.hold(self.fingers)
+                elif self.last_target is not None:
+                    self.hand.set_positions(self.last_target)
+        except (DeviceError, ParameterError) as err:
+            if not self.hold_failed:
+                self.hold_failed = True
+                self.fault("hold-failed", str(err), "hand keeps its last target; the hold is retried")
+            return
+        self.hold_failed = False
+        self.res.holds_sent += 1
+
+    def source_stats(self) -> dict[str, int]:
+        st = getattr(self.source, "stats", None)
         if st is None:
             return {}
         return dict(st.to_dict()) if hasattr(st, "to_dict") else dict(vars(st))
 
-    # Objects that exist now (the package, numpy, the chain, the drivers) are never
-    # garbage; freezing them keeps the cyclic GC's occasional full passes short.
-    if recorder is not None and hasattr(recorder, "add_metadata"):
-        recorder.add_metadata("start", {"p0": json.dumps(res.start), "reflex_start": repr(ref0),
-                                        "initial_command": res.initial_command})
-    gc.freeze()
-    last_valid = t0
-    stalled = False
-    hand_ok = True
-    risen = False
-    last_flow: int | None = None
-    next_stats = t0 + stats_interval
-    pending: list[tuple[DaqSample, float, float | None, float | None, Any, bool, int | None,
-                        float | None, bool, float | None]] = []
-    try:
-        while True:
-            now = clock()
-            if duration is not None and now - t0 >= duration:
-                break
-            if stop is not None and stop.is_set():
-                break
+    def housekeeping(self, now: float) -> None:
+        if now >= self.next_counters:
+            self.next_counters = now + 0.05
+            self.counter_faults(now)
+        if now >= self.next_stats:
+            self.next_stats = now + self.stats_interval
+            self.sink.write("/stats", {"time": now - self.t0, "counters": self.stats_counters()}, now)
+        if self.sink.ok:
+            self.sink.recorder.maybe_flush()
+            self.sink.check()
+
+    def counter_faults(self, now: float, final: bool = False) -> None:
+        """Increases of the DAQ's counters become fault events: the first at once, then at
+        most one per counter per second, carrying what accumulated."""
+        st = self.source_stats()
+        for key, (kind, what) in _COUNTER_FAULTS.items():
+            if key not in st:
+                continue
+            delta = st[key] - self.counters.get(key, 0)
+            self.counters[key] = st[key]
+            pending = self.counter_pending.get(key, 0) + max(delta, 0)
+            if pending and (final or now - self.counter_emitted.get(key, -math.inf) >= _COUNTER_EVENT_S):
+                self.counter_emitted[key] = now
+                pending, n = 0, pending
+                self.fault(kind, f"{n} {what} (total {st[key]})", "recorded; the loop goes on")
+            self.counter_pending[key] = pending
+
+    def stats_counters(self) -> dict[str, Any]:
+        return {**self.source_stats(), "samples": self.res.samples, "commands": self.res.commands,
+                "faults": len(self.res.faults), "holds_sent": self.res.holds_sent}
+
+    # -- faults -----------------------------------------------------------------------
+    def fault(self, kind: str, message: str, action: str) -> None:
+        self.emit(Fault(round(self.clock() - self.t0, 6), kind, message, action))
+
+    def emit(self, f: Fault) -> None:
+        self.res.faults.append(f)
+        if self.on_fault is not None:
+            self.on_fault(f)
+        self.sink.write("/faults", f.to_dict(), self.t0 + f.time)
+
+    def _recording_failed(self, error: str) -> None:
+        self.res.recording_error = error
+        self.fault("recording", f"recording failed, later data is not recorded: {error}",
+                   "reflex kept running")
+
+    def finish(self) -> RunResult:
+        res = self.res
+        now = self.clock()
+        self.counter_faults(now, final=True)
+        while self.guard_faults:
+            self.emit(self.guard_faults.popleft())
+        res.duration = now - self.t0
+        res.latencies = np.asarray(self.latencies, dtype=float)
+        res.frame_latencies = np.asarray(self.frame_latencies, dtype=float)
+        res.daq_stats = self.source_stats()
+        if self.sink.ok:
+            self.sink.write("/stats", {"time": res.duration, "counters": self.stats_counters()}, now)
+            self.sink.recorder.add_metadata("run_summary", res.summary_metadata())
+        rec = self.sink.recorder
+        if rec is not None and rec.error is not None and res.recording_error is None:
+            res.recording_error = f"{getattr(rec, 'path', 'recording')}: {rec.error}"
+        return res
+
+
+class _Guard(threading.Thread):
+    """Outside the loop's thread: holds the fingers when the loop stops iterating (stuck in a
+    call, a long pause) for longer than the watchdog. A stopped process stops this too; the
+    loop's staleness check catches that when it resumes."""
+
+    def __init__(self, loop: _Loop) -> None:
+        super().__init__(name="slipreflex-stall-guard", daemon=True)
+        self.loop = loop
+        self.closing = threading.Event()
+        self.holding = False
+
+    def run(self) -> None:
+        loop = self.loop
+        while not self.closing.wait(loop.watchdog_s / 4):
+            stalled = loop.clock() - loop.heartbeat
+            if stalled <= loop.watchdog_s:
+                self.holding = False
+                continue
+            if self.holding:
+                continue
+            self.holding = True
+            ok = loop.lock.acquire(timeout=loop.watchdog_s)
             try:
-                samples = source.read(poll)
-            except DeviceError as err:
-                fault("daq-port", str(err), "fingers hold via the watchdog; reconnecting")
-                samples = []
-            if samples:
-                arrival = getattr(source, "last_arrival", math.nan)
-                if not (isinstance(arrival, float) and math.isfinite(arrival)):
-                    arrival = clock()
-                # 1. the time-critical part: every sample through the reflex, commands out.
-                for s in samples:
-                    pos = None
-                    try:
-                        pos = hand.positions().get(SLIP_FINGER)
-                    except DeviceError:
-                        pass
-                    if pos is not None:
-                        pos -= slip_shift  # in the reflex's frame
-                    cmd = reflex.step(s.slip_volts, pos)
-                    sent = False
-                    lat = None
-                    if cmd is not None:
-                        targets = targets_for(cmd)
-                        # Until the reflex first asks for more grip than at start, nothing is sent:
-                        # the fingers stay held (STOP) where they are.
-                        risen = risen or any(targets[f] > start[f] or not math.isfinite(targets[f])
-                                             for f in fingers)
-                    if cmd is not None and risen:
-                        try:
-                            hand.set_positions(targets)
-                        except ParameterError as err:
-                            fault("command-rejected", str(err), "not sent; fingers hold their last target")
-                        except DeviceError as err:
-                            if hand_ok:
-                                fault("hand-port", str(err), "hand keeps its last target; reconnecting")
-                            hand_ok = False
-                        else:
-                            lat = clock() - arrival
-                            latencies.append(lat)
-                            sent = True
-                            last_target = targets
-                            if not hand_ok:
-                                hand_ok = True
-                                fault("hand-port-restored", "hand port is back", "commands resumed")
-                    pending.append((s, arrival, pos, cmd, getattr(reflex, "last_filtered", None),
-                                    bool(getattr(reflex, "last_event", False)),
-                                    getattr(reflex, "last_count", None),
-                                    getattr(reflex, "last_threshold", None), sent, lat))
-                t_now = clock()
-                if stalled:
-                    stalled = False
-                    fault("watchdog-clear", f"samples resumed after {t_now - last_valid:.3f} s",
-                          "reflex resumed")
-                last_valid = t_now
-                # 2. bookkeeping and recording, after the commands are out.
-                for (s, arr, pos, cmd, filt, ev, count, thr, sent, lat) in pending:
-                    res.samples += 1
-                    res.events += ev
-                    if count is not None:
-                        res.windows += 1
-                    if cmd is not None:
-                        res.commands += 1
-                        res.commands_sent += sent
-                    if not rec_ok:
-                        continue
-                    ta = arr - t0
-                    record("/daq/samples", {"seq": s.seq, "t": s.t, "slip_volts": s.slip_volts,
-                                            "flow_pulses": s.flow_pulses, "arrival": ta,
-                                            "position": _num(pos)}, arr)
-                    if s.accel_g is not None:
-                        ax, ay, az = s.accel_g
-                        record("/daq/imu", {"seq": s.seq, "t": s.t, "ax": ax, "ay": ay, "az": az}, arr)
-                    if s.flow_pulses != last_flow:
-                        record("/daq/flow", {"seq": s.seq, "t": s.t, "pulses": s.flow_pulses}, arr)
-                    record("/chain/state", {"seq": s.seq, "t": s.t, "filtered": _num(filt),
-                                            "threshold": _num(thr) or 0.0, "event": ev}, arr)
-                    if ev:
-                        record("/chain/events", {"seq": s.seq, "t": s.t}, arr)
-                    if count is not None:
-                        record("/chain/windows", {"seq": s.seq, "t": s.t, "count": int(count)}, arr)
-                    if cmd is not None:
-                        record("/hand/commands", {"seq": s.seq, "t": s.t, "target": float(cmd),
-                                                  "fingers": finger_names, "targets": {
-                                                      f.name.lower(): _num(v)
-                                                      for f, v in targets_for(cmd).items()},
-                                                  "sent": sent, "latency": lat}, arr)
-                for item in pending:
-                    last_flow = item[0].flow_pulses
-                pending.clear()
-            else:
-                t_now = clock()
-                if not stalled and t_now - last_valid > watchdog:
-                    stalled = True
-                    hold()
-                    fault("watchdog", f"no valid DAQ sample for {(t_now - last_valid) * 1e3:.0f} ms",
-                          "fingers held where they are")
-            if rec_ok:
-                recorder.maybe_flush()
-                check_recorder()
-                t_now = clock()
-                if t_now >= next_stats:
-                    next_stats = t_now + stats_interval
-                    record("/stats", {"time": t_now - t0, "counters": {
-                        **source_stats(), "samples": res.samples, "commands": res.commands,
-                        "faults": len(res.faults)}}, t_now)
-    except KeyboardInterrupt:
-        res.interrupted = True
-    finally:
-        gc.unfreeze()
-    res.duration = clock() - t0
-    res.latencies = np.asarray(latencies, dtype=float)
-    res.daq_stats = source_stats()
-    if rec_ok:
-        record("/stats", {"time": res.duration, "counters": {
-            **res.daq_stats, "samples": res.samples, "commands": res.commands,
-            "faults": len(res.faults)}}, clock())
-        lat = res.latency_ms()
-        recorder.add_metadata("run_summary", {
-            "samples": res.samples, "commands": res.commands, "events": res.events,
-            "duration_s": f"{res.duration:.3f}", "latency_p50_ms": f"{lat['p50']:.4f}",
-            "latency_p99_ms": f"{lat['p99']:.4f}", "latency_max_ms": f"{lat['max']:.4f}",
-            "faults": len(res.faults)})
-    if recorder is not None and recorder.error is not None and res.recording_error is None:
-        res.recording_error = f"{getattr(recorder, 'path', 'recording')}: {recorder.error}"
-    return res
+                if ok and hasattr(loop.hand, "hold"):
+                    loop.hand.hold(loop.fingers)
+                    action = "fingers held by the guard"
+                else:
+                    action = "could not hold (the hand port is busy)"
+            except (DeviceError, ParameterError) as err:
+                action = f"hold failed: {err}"
+            finally:
+                if ok:
+                    loop.lock.release()
+            loop.guard_faults.append(Fault(round(loop.clock() - loop.t0, 6), "loop-stalled",
+                                           f"the loop has not iterated for {stalled * 1e3:.0f} ms", action))
+
+    def close(self) -> None:
+        self.closing.set()
+        self.join(timeout=1.0)
 
 
 def print_fault(fault: Fault, file: Any = None) -> None:
