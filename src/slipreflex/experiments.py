@@ -39,25 +39,25 @@ import sys
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .analysis.paper import BOTTLE_ORDER, paper_value
+from . import methods
+from .analysis.paper import BOTTLE_ORDER
 from .analysis.paper import EXPERIMENTS as PAPER_EXPERIMENTS
-from .analysis.trial import RESULT_COLUMNS
+from .analysis.trial import RESULT_COLUMNS, TrialRow
 from .baselines.calibration import REST_K
 from .baselines.swt import SWT_WINDOW
 from .errors import ParameterError
 from .validation import choices, integer, positive, set_field
-from . import methods
 
 __all__ = [
     "METHODS", "EXPERIMENTS", "BOTTLE_NAMES", "DEFAULT_SEED", "ReproduceConfig", "Cell",
     "trial_seed", "calibration_seed", "closing_speed", "calibrate", "make_reflex", "run_trial",
-    "ReproduceResult", "run_reproduce", "write_outputs", "setup_lines", "discussion_text",
+    "ReproduceResult", "run_reproduce", "write_outputs", "method_context",
     "RESULTS_CSV_COLUMNS", "LANDING_S",
 ]
 
@@ -70,9 +70,8 @@ EXPERIMENTS: tuple[str, ...] = PAPER_EXPERIMENTS
 BOTTLE_NAMES: tuple[str, ...] = BOTTLE_ORDER
 #: The master seed of the default reproduction (the paper's publication date).
 DEFAULT_SEED: int = 20191215
-#: Columns of results.csv: the analysis columns plus the trial's grasp and perturbation.
-RESULTS_CSV_COLUMNS: tuple[str, ...] = RESULT_COLUMNS + (
-    "grasp_position", "grasp_force_n", "perturbation_s", "true_slip_ms", "true_slip_mm")
+#: Columns of results.csv: the fields of :class:`slipreflex.analysis.TrialRow`.
+RESULTS_CSV_COLUMNS: tuple[str, ...] = RESULT_COLUMNS
 
 
 @dataclass(frozen=True)
@@ -354,7 +353,7 @@ def _plot_data(cell: Cell, spec: methods.MethodSpec, tr, reflex, rows, t_pert: f
     from .analysis.figures import TrialPlot
     from .analysis.onset import OnsetParams, accel_envelope
 
-    axis = int(rows[0]["axis"])
+    axis = rows[0].axis
     env = accel_envelope(tr.t, tr.accel[:, axis], OnsetParams())
     sensor_t, x = (tr.t, tr.volts) if spec.input_kind == "slip" else (tr.tactile_t, tr.tactile)
     det = spec.detections(reflex, x) if spec.detections is not None else None
@@ -370,8 +369,8 @@ def _plot_data(cell: Cell, spec: methods.MethodSpec, tr, reflex, rows, t_pert: f
         event_t=None if det is None else sensor_t[det.events],
         event_label="" if det is None else det.event_label, cmd_t=tr.cmd_t, cmd_v=tr.cmd_value,
         load_t=tr.t if pour else None, load=tr.water_ml if pour else None,
-        onsets=[r["onset_s"] for r in rows], responses=[r["onset_s"] + r["response_ms"] / 1e3 for r in rows],
-        lasts=[r["last_change_s"] for r in rows], true_onsets=[r["true_onset_s"] for r in rows],
+        onsets=[r.onset_s for r in rows], responses=[r.onset_s + r.response_ms / 1e3 for r in rows],
+        lasts=[r.last_change_s for r in rows], true_onsets=[r.true_onset_s for r in rows],
         xlim=xlim)
 
 
@@ -385,7 +384,7 @@ def run_trial(cell: Cell, config: ReproduceConfig, thresholds: dict[str, float],
 
     Returns
     -------
-    (list of dict, TrialPlot or None)
+    (list of TrialRow, TrialPlot or None)
         The trial's rows (one per slip event) and, if asked, its plot data.
 
     Examples
@@ -393,7 +392,7 @@ def run_trial(cell: Cell, config: ReproduceConfig, thresholds: dict[str, float],
     >>> cfg = ReproduceConfig(trials=1)
     >>> cell = Cell("drop", "TX", "dath", 0, trial_seed(cfg.seed, "drop", "TX", 0))
     >>> rows, _ = run_trial(cell, cfg, {})
-    >>> rows[0]["n_events"], rows[0]["success"]
+    >>> rows[0].n_events, rows[0].success
     (1, True)
     """
     from .analysis.trial import TrialStreams, analyse_trial
@@ -423,16 +422,15 @@ def run_trial(cell: Cell, config: ReproduceConfig, thresholds: dict[str, float],
         load_t=tr.t if pour else None, load=tr.water_ml if pour else None,
         threshold=thresholds.get(cell.method, float(getattr(getattr(reflex, "params", None),
                                                              "threshold", float("nan")))))
-    rows = analyse_trial(streams)
     truth = {round(e.onset, 9): e for e in tr.slip_events}
-    for r in rows:
-        r["grasp_position"] = p0
-        r["grasp_force_n"] = float(grasp.force_n)
-        r["perturbation_s"] = t_pert
-        ev = truth.get(round(r["true_onset_s"], 9)) if not math.isnan(r["true_onset_s"]) else None
+    rows = []
+    for r in analyse_trial(streams):
+        ev = truth.get(round(r.true_onset_s, 9)) if not math.isnan(r.true_onset_s) else None
         # the simulator's slip episode: how long it slid (NaN while open / fallen) and how far
-        r["true_slip_ms"] = float("nan") if ev is None or ev.end is None else 1e3 * (ev.end - ev.onset)
-        r["true_slip_mm"] = float("nan") if ev is None else 1e3 * ev.distance
+        rows.append(dataclasses.replace(
+            r, grasp_position=p0, grasp_force_n=float(grasp.force_n), perturbation_s=t_pert,
+            true_slip_ms=float("nan") if ev is None or ev.end is None else 1e3 * (ev.end - ev.onset),
+            true_slip_mm=float("nan") if ev is None else 1e3 * ev.distance))
     plot = _plot_data(cell, spec, tr, reflex, rows, t_pert) if keep_plot else None
     return rows, plot
 
@@ -460,18 +458,21 @@ class ReproduceResult:
     Attributes
     ----------
     config : ReproduceConfig
-    rows : list of dict
-        One per trial and slip event (columns of results.csv).
+    rows : list of TrialRow
+        One per trial and slip event (the rows of results.csv).
     summary : list of dict
         Per experiment, bottle and method (columns of summary.csv).
     thresholds : dict
-        The NMSD and SWT-SD thresholds from the calibration.
+        The calibrated methods' thresholds, by method name.
     plots : dict
         Plot data of the example trials, by cell key.
     wall_s : float
         Wall time of the whole run (s).
     jobs : int
         Worker processes used.
+    calibration_wall_s : float
+        Wall time of the threshold calibration (s); the length of each
+        calibration *recording* is ``config.calibration_s``.
 
     Examples
     --------
@@ -480,19 +481,18 @@ class ReproduceResult:
     """
 
     config: ReproduceConfig
-    rows: list[dict[str, Any]]
+    rows: list[TrialRow]
     summary: list[dict[str, Any]]
     thresholds: dict[str, float]
     plots: dict[tuple, Any]
     wall_s: float
     jobs: int
-    calibration_s: float = 0.0
-    extra: dict = field(default_factory=dict)
+    calibration_wall_s: float = 0.0
 
 
-def _order(row: dict[str, Any]) -> tuple:
-    return (EXPERIMENTS.index(row["experiment"]), BOTTLE_NAMES.index(row["bottle"]),
-            methods.names().index(row["method"]), int(row["trial"]), int(row["event"]))
+def _order(row: TrialRow) -> tuple:
+    return (EXPERIMENTS.index(row.experiment), BOTTLE_NAMES.index(row.bottle),
+            methods.names().index(row.method), row.trial, row.event)
 
 
 def run_reproduce(config: ReproduceConfig | None = None, *, jobs: int | None = None,
@@ -522,7 +522,7 @@ def run_reproduce(config: ReproduceConfig | None = None, *, jobs: int | None = N
     >>> cfg = ReproduceConfig(trials=1, bottles=("TR",), methods=("fixed", "dath"),
     ...                       experiments=("drop",))
     >>> res = run_reproduce(cfg, jobs=1, progress=False, plots=False)
-    >>> [(r["method"], r["n_events"]) for r in res.rows]
+    >>> [(r.method, r.n_events) for r in res.rows]
     [('dath', 1), ('fixed', 1)]
     """
     from tqdm import tqdm
@@ -566,71 +566,15 @@ def run_reproduce(config: ReproduceConfig | None = None, *, jobs: int | None = N
     rows = sorted((r for c in cells for r in done[c.key][0]), key=_order)
     plot_data = {c.key: done[c.key][1] for c in cells if done[c.key][1] is not None}
     return ReproduceResult(config, rows, summarize(rows), thresholds, plot_data,
-                           time.perf_counter() - t0, jobs, calibration_s=t_cal)
-
-
-def setup_lines(result: ReproduceResult, command: str | None = None) -> list[str]:
-    """Bullet lines describing a run, for report.md.
-
-    Examples
-    --------
-    >>> r = ReproduceResult(ReproduceConfig(trials=1), [], [], {"nmsd": 10.0, "swt": 0.02}, {}, 3.0, 2)
-    >>> any("NMSD threshold" in s for s in setup_lines(r))
-    True
-    """
-    from . import hardware as hw
-    from .analysis.onset import ONSET_K
-
-    from .chain import ReflexParams
-
-    rp = ReflexParams()
-    c = result.config
-    d, p = c.drop, c.pour
-    lines = []
-    if command:
-        lines.append(f"command: `{command}`")
-    lines += [
-        f"grid: {c.trials} trials x bottles {', '.join(c.bottles)} x experiments "
-        f"{', '.join(c.experiments)} x methods {', '.join(c.methods)} "
-        f"= {c.trials * len(c.bottles) * len(c.experiments) * len(c.methods)} trials, "
-        f"{len(result.rows)} result rows (slip events)",
-        f"master seed {c.seed}; trial seeds spawned per experiment, bottle and trial "
-        "(numpy SeedSequence), shared by the four methods (paired comparison)",
-        f"drop: {d.mass_kg * 1e3:g} g from {d.height_m * 1e2:g} cm above the opening; "
-        f"pour: {p.volume_ml:g} ml at {p.rate_l_min:g} L/min ({p.duration_s:.0f} s)",
-        f"protocol: grasp to {hw.CONTACT_FORCE_N} N, settle (simulator's grasp routine), "
-        f"{c.rest_s:g} s of rest recorded, perturbation, {c.after_s:g} s after it ends",
-        f"fixed / DATH: the paper's chain (theta0 = {rp.threshold:g} V, D = {rp.dath_samples}, "
-        f"N = {rp.n}, Kp = {rp.kp:g}, Ki = {rp.ki:g}, reset after {rp.reset_after} zero windows) "
-        f"at the DAQ's {hw.DAQ_FS:.2f} Hz",
-    ]
-    if result.thresholds:
-        lines.append(
-            "NMSD threshold {nmsd:.3g} N/s, SWT-SD threshold {swt:.3g} N: ".format(
-                nmsd=result.thresholds.get("nmsd", float("nan")),
-                swt=result.thresholds.get("swt", float("nan")))
-            + f"{c.rest_k:g} sd of each method's own statistic on {c.calibration_s:g} s rest "
-            "recordings of all three bottles (pooled), the same for every bottle; SWT-SD persistence "
-            f"{c.swt_persist} samples after the crossing")
-    from .sim import BOTTLES
-
-    travel = sorted({BOTTLES[b].grip_travel_m for b in c.bottles})
-    lines += [
-        f"onset: paper's recipe with k = {ONSET_K:g} sd over the first 200 ms; slip episodes must "
-        "peak at 3x the threshold; responses later than 1 s are not responses",
-        "success: the bottle had not slipped out completely by the end of the slip's window; "
-        "slipped out = the simulator's *fallen out*, the bottle has slid its grip travel ("
-        + ", ".join(f"{x * 1e2:g} cm" for x in travel)
-        + ") below where it was grasped, the fingertips reach the shoulder and lose contact",
-        f"wall time {result.wall_s:.1f} s on {result.jobs} worker process(es) "
-        f"({os.cpu_count()} cores), calibration {result.calibration_s:.1f} s",
-    ]
-    return lines
+                           time.perf_counter() - t0, jobs, calibration_wall_s=t_cal)
 
 
 def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str | None = None,
                   discussion: Sequence[str] | None = None) -> dict[str, Path]:
     """Write results.csv, summary.csv, the figures and report.md into ``out_dir``.
+
+    The report's prose (setup, captions, discussion) comes from
+    :mod:`slipreflex.analysis.report`.
 
     Returns
     -------
@@ -646,239 +590,45 @@ def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str 
     >>> sorted(p for p in paths if not p.endswith(".png"))
     ['report', 'results', 'summary']
     """
-    from .analysis import figures as F
-    from .analysis.report import SUMMARY_COLUMNS, report_markdown, write_csv
+    from .analysis import report as R
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    paths: dict[str, Path] = {}
-    paths["results"] = write_csv(out / "results.csv", result.rows, RESULTS_CSV_COLUMNS)
-    paths["summary"] = write_csv(out / "summary.csv", result.summary, SUMMARY_COLUMNS)
-    figs: list[tuple[str, str]] = []
-    fig_dir = out / "figures"
-    numbers = {("drop", "response"): 13, ("drop", "total"): 14, ("pour", "response"): 16,
-               ("pour", "total"): 17}
-    for key in sorted(result.plots, key=lambda k: (EXPERIMENTS.index(k[0]), BOTTLE_NAMES.index(k[1]))):
-        e, b, m, k = key
-        name = f"trial_{e}_{b}_{m}.png"
-        paths[name] = F.plot_trial(result.plots[key], fig_dir / name)
-        like = "Figs. 10-12" if e == "drop" else "Fig. 15"
-        figs.append((f"One {e} trial, bottle {b}, method {m} (like the paper's {like}): "
-                     "I onset, II first response, III last change", f"figures/{name}"))
-        ons = [x for x in result.plots[key].onsets if _finite(x)]
-        if e == "pour" and ons:
-            zname = f"trial_{e}_{b}_{m}_zoom.png"
-            zoom = dataclasses.replace(result.plots[key], xlim=(ons[0] - 0.3, ons[0] + 1.0),
-                                       title=result.plots[key].title + ", around the first slip")
-            paths[zname] = F.plot_trial(zoom, fig_dir / zname)
-            figs.append((f"The same pour trial around its first slip ({b}, {m})", f"figures/{zname}"))
-    for e in result.config.experiments:
-        for metric in ("response", "total"):
-            name = f"bars_{e}_{metric}.png"
-            paths[name] = F.bar_chart(result.summary, e, metric, fig_dir / name)
-            figs.append((f"{'Response' if metric == 'response' else 'Total controller'} time, {e} "
-                         f"(like the paper's Fig. {numbers[(e, metric)]}); diamonds: the paper",
-                         f"figures/{name}"))
-    paths["success.png"] = F.success_chart(result.summary, fig_dir / "success.png")
-    figs.append(("Success rates (slip suppressed before the bottle slipped out)", "figures/success.png"))
-    md = report_markdown(summary=result.summary, rows=result.rows, figures=figs,
-                         setup=setup_lines(result, command),
-                         discussion=list(discussion) if discussion is not None else discussion_text(result))
+    paths = {"results": R.write_csv(out / "results.csv", result.rows, RESULTS_CSV_COLUMNS),
+             "summary": R.write_csv(out / "summary.csv", result.summary, R.SUMMARY_COLUMNS)}
+    figs = _write_figures(result, out, paths)
+    md = R.report_markdown(summary=result.summary, rows=result.rows, figures=figs,
+                           setup=R.setup_lines(result, command),
+                           discussion=list(discussion) if discussion is not None else R.discussion_text(result))
     paths["report"] = out / "report.md"
     paths["report"].write_text(md)
     return paths
 
 
-def _contact_force() -> float:
-    """The grasp's contact force (N) from :mod:`slipreflex.hardware`.
+def _write_figures(result: ReproduceResult, out: Path, paths: dict[str, Path]) -> list[tuple[str, str]]:
+    """Draw the example trials, bar charts and success chart; (caption, relative path) of each."""
+    from .analysis import figures as F
+    from .analysis import report as R
 
-    Examples
-    --------
-    >>> _contact_force()
-    0.8
-    """
-    from . import hardware as hw
-
-    return float(hw.CONTACT_FORCE_N)
-
-
-def _finite(x: Any) -> bool:
-    return x is not None and not (isinstance(x, float) and math.isnan(x))
-
-
-def _median(values: Sequence[float]) -> float:
-    v = [float(x) for x in values if _finite(x)]
-    return float(np.median(v)) if v else float("nan")
-
-
-def discussion_text(result: ReproduceResult) -> list[str]:
-    """Why our numbers differ from the paper's, with the figures computed from this run.
-
-    Examples
-    --------
-    >>> discussion_text(ReproduceResult(ReproduceConfig(trials=1), [], [], {}, {}, 0.0, 1))[0][:2]
-    '**'
-    """
-    rows = result.rows
-
-    def sel(**kw):
-        return [r for r in rows if all(r.get(k) == v for k, v in kw.items())]
-
-    def pct(sub, pred) -> str:
-        return f"{100 * sum(1 for r in sub if pred(r)) / len(sub):.0f}% of {len(sub)}" if sub else "n/a"
-
-    out = [
-        "**Simulated rig, not the paper's rig.** Every number here comes from the simulator "
-        "(`slipreflex.sim`, docs/simulator.md): friction, pad compliance, hand speed and latency, "
-        "sensor noise and the bottles' surfaces are physical estimates, not fits to the paper's "
-        "results, and nothing in the simulator or in the methods was tuned to bring our numbers "
-        "closer to the paper's (the only thresholds derived from data are NMSD's and SWT-SD's, by "
-        "their one rule). Absolute times are therefore not expected to match; what can carry over "
-        "is the ordering of methods and bottles."]
-    err = [abs(r["onset_error_ms"]) for r in rows if _finite(r.get("onset_error_ms"))]
-    if err:
-        out.append(
-            f"**Onset estimate.** The paper's accelerometer recipe finds the simulator's true onsets "
-            f"closely (median absolute error {np.median(err):.1f} ms, largest {max(err):.1f} ms): "
-            "in the simulator the slip starts with the load step that also shakes the bottle. On "
-            "the real rig the IMU is taped to a flexible bottle and feels the mass or the water "
-            "before the grasp gives way, so the paper's onsets, and its response times, carry "
-            "more spread than ours.")
-    pairs = {}
-    for r in rows:
-        if r["method"] in ("fixed", "dath") and _finite(r["response_ms"]):
-            pairs.setdefault((r["experiment"], r["bottle"], r["trial"], r["event"]), {})[r["method"]] = \
-                r["response_ms"]
-    both = [v for v in pairs.values() if len(v) == 2]
-    if both:
-        same = sum(1 for v in both if abs(v["fixed"] - v["dath"]) < 1e-6)
-        out.append(
-            f"**Fixed threshold vs DATH response.** In {same} of {len(both)} paired slips "
-            "(same seed, same bottle) the two chains responded at exactly the same time. That "
-            "follows from the method (SPEC 1.2): DATH changes the threshold only after the first "
-            "spike, and the MPI raises the command at the end of the first window holding a spike, "
-            "so on the same input the first response cannot differ. The paper's fixed and DATH "
-            "trials were separate physical runs, so their response times differ by trial-to-trial "
-            "variation (and by how soon the first spike comes on each run). DATH differs from the "
-            "fixed threshold in what follows the first spike: more spikes, a larger and longer "
-            "command rise.")
-    by = {(x["experiment"], x["bottle"], x["method"]): x for x in result.summary}
-    parts = []
-    tx_first = False
-    for e in EXPERIMENTS:
-        vals = {b: by[(e, b, "dath")]["response_mean_ms"] for b in BOTTLE_NAMES if (e, b, "dath") in by}
-        vals = {b: v for b, v in vals.items() if _finite(v)}
-        if len(vals) >= 2:
-            order = sorted(vals, key=vals.get)
-            tx_first = tx_first or order[0] == "TX"
-            parts.append(f"{e}: " + ", ".join(f"{b} {vals[b]:.0f} ms" for b in order) + " (paper: "
-                         + ", ".join(f"{b} {p.mean:g} ms" for b in order
-                                     if (p := paper_value(e, "response_ms", b, "dath")) is not None
-                                     and p.mean is not None) + ")")
-    if parts:
-        para = "**Bottles.** DATH's mean response by bottle, fastest first: " + "; ".join(parts) + "."
-        if tx_first:
-            para += (" As in the paper, the textured TX bottle is answered fastest. In the simulator "
-                     "its surface makes the slip sensor fluctuate most; on the smooth transparent and "
-                     "dark surfaces the sensor moves by only a few ADC steps over several millimetres "
-                     "of sliding (see the zoomed DK pour figure), so the first spike, and with it the "
-                     "first MPI response, comes later, and DATH cannot act before that first spike.")
-        out.append(para)
-    drops = [r for r in sel(experiment="drop") if _finite(r.get("true_slip_ms"))]
-    chain = [r for r in rows if r["method"] in ("fixed", "dath") and r["n_increases"] > 0]
-    if drops and chain:
-        out.append(
-            f"**Total controller time.** In the simulator a drop makes the bottle slide "
-            f"{_median([r['true_slip_mm'] for r in drops]):.1f} mm in "
-            f"{_median([r['true_slip_ms'] for r in drops]):.0f} ms (medians) before the pads stick "
-            "again. The fixed and DATH chains see spikes for only a few 48 ms windows (median "
-            f"{_median([r['n_increases'] for r in chain]):.0f} command increases per slip), so the "
-            "first-to-last change of the MPI command is a small multiple of 48 ms, far below the "
-            "paper's 270-510 ms: the paper's bottles kept creeping and vibrating for hundreds of "
-            "milliseconds and its sensor kept seeing motion. For NMSD and SWT-SD the total is the "
-            "closing time generated, 45 ms per detection, and short slips give few detections.")
-    tac = [r for r in rows if r["method"] in ("nmsd", "swt") and int(r["n_events"]) > 0]
-    if tac:
-        missed = "; ".join(
-            f"{methods.label(m)} missed {pct(sub, lambda r: not _finite(r['response_ms']))} {e} slips"
-            for m in ("nmsd", "swt") for e in EXPERIMENTS
-            if (sub := [r for r in tac if r["method"] == m and r["experiment"] == e]))
-        out.append(
-            "**NMSD and SWT-SD.** Both read the index fingertip's 4 x 4 array with thresholds from "
-            "one rule (5 sd of the method's statistic at rest, the same for every bottle). "
-            f"{missed} (no command within 1 s of the onset). SWT-SD needs the level-3 detail to stay "
-            "over threshold for 21 ms after the crossing, so a slip that is over in about 20 ms, "
-            "like the simulated drops, cannot trigger it. The paper gives no thresholds, wavelet or "
-            "persistence rule for either method, so their absolute numbers depend on these choices "
-            "(documented in docs/reproduce.md) more than on anything else.")
-    pour_trials = {(r["bottle"], r["method"], r["trial"]): int(r["n_events"])
-                   for r in rows if r["experiment"] == "pour"}
-    if pour_trials:
-        two = sum(1 for n in pour_trials.values() if n >= 2)
-        kept = [r for r in sel(experiment="pour") if r["method"] in ("fixed", "dath")
-                and int(r["n_events"]) > 0 and r["success"] in (True, "True")]
-        vol = _median([r["load_at_onset"] for r in sel(experiment="pour", event=0)
-                       if int(r["n_events"]) > 0])
-        para = (f"**Slips per pour.** {two} of {len(pour_trials)} pour trials showed two or more "
-                f"slips (paper: two in most trials, near 200 and 400 ml); the first came at a median "
-                f"{vol:.0f} ml.")
-        if kept and 2 * two < len(pour_trials):
-            from .sim import BOTTLES, HandParams
-
-            hp = HandParams()
-            k_n = 1.0 / (1.0 / hp.pad_normal_stiffness_n_m + 1.0 / hp.finger_stiffness_n_m
-                         + 1.0 / BOTTLES["TR"].wall_stiffness_n_m)
-            per_unit = k_n * hp.travel_per_unit_m
-            para += (
-                " After the first slip the MPI raised the fingers by a median "
-                f"{_median([r['rise'] for r in kept]):.0f} position units in the trials that kept the "
-                f"bottle; in the simulator a unit adds about {per_unit:.2f} N per contact (pad, finger "
-                f"and wall springs in series over {hp.travel_per_unit_m * 1e3:.1f} mm per unit), a "
-                f"grip several times the {_contact_force():.1f} N of the grasp, which holds the rest of "
-                "the water without another slip. The paper's MPI added \"just enough force\" for the "
-                "first slip and the bottle slipped again as the water rose: the simulated grasp is "
-                "stiffer than the real one.")
-        out.append(para)
-    fell = [r for r in rows if r["fell_out"] in (True, "True")]
-
-    def ok(r):
-        return r["success"] in (True, "True")
-
-    drop_rows = sel(experiment="drop")
-    text = ["**Success.**"]
-    if drop_rows:
-        text.append(f"The bottle stayed in the grasp in {pct(drop_rows, ok)} drop rows (paper: about 80% "
-                    "with DATH, under 50% with the fixed threshold).")
-        if all(ok(r) for r in drop_rows):
-            text.append("The simulated 10 g drop is a small, short slip that stops by itself once the "
-                        "landing transient has passed, so no method loses a bottle to it and the "
-                        "drop cannot separate the methods by success.")
-    pour_rows = sel(experiment="pour")
-    if pour_rows:
-        per = ", ".join(f"{methods.label(m)} {pct(sel(experiment='pour', method=m), ok)}" for m in methods.names()
-                        if sel(experiment="pour", method=m))
-        text.append(f"In the pours: {per} (paper: 100% with DATH).")
-    falls = [1e3 * (r["fell_out_s"] - r["onset_s"]) for r in fell
-             if _finite(r["onset_s"]) and r["fell_out_s"] >= r["onset_s"]]
-    if falls:
-        text.append(
-            "A pour's slip starts at the friction limit and accelerates (kinetic friction is below "
-            f"static): a bottle that fell was gone a median {_median(falls):.0f} ms after the onset. "
-            "The paper's bottles slipped more gently.")
-    if pour_rows:
-        resp = ", ".join(
-            f"{methods.label(m)} {_median([r['response_ms'] for r in sel(experiment='pour', method=m)]):.0f} ms"
-            for m in methods.names() if sel(experiment="pour", method=m))
-        text.append(
-            f"Median pour response: {resp}. NMSD commands on the very sample that detects (260 Hz) "
-            "and keeps closing at the hand's full speed, while the MPI raises the command only at "
-            "the end of a 48 ms window, to P0 + Kp v + Ki h, so against a fast slip the paper's "
-            "controller is at a disadvantage in the simulator.")
-        pre = {m: sum(1 for r in sel(experiment="pour", method=m)
-                      if int(r["n_events"]) == 0 and r["n_increases"] > 0) for m in methods.names()}
-        if any(pre.values()):
-            text.append("Trials in which the command rose although the accelerometer never showed a "
-                        "slip (the grip was raised on small motions and no slip followed): "
-                        + ", ".join(f"{methods.label(m)} {n}" for m, n in pre.items() if n) + ".")
-    out.append(" ".join(text))
-    return out
+    figs: list[tuple[str, str]] = []
+    fig_dir = out / "figures"
+    for key in sorted(result.plots, key=lambda k: (EXPERIMENTS.index(k[0]), BOTTLE_NAMES.index(k[1]))):
+        e, b, m, _ = key
+        name = f"trial_{e}_{b}_{m}.png"
+        paths[name] = F.plot_trial(result.plots[key], fig_dir / name)
+        figs.append((R.trial_caption(e, b, m), f"figures/{name}"))
+        ons = [x for x in result.plots[key].onsets if x == x]
+        if e == "pour" and ons:
+            zname = f"trial_{e}_{b}_{m}_zoom.png"
+            zoom = dataclasses.replace(result.plots[key], xlim=(ons[0] - 0.3, ons[0] + 1.0),
+                                       title=result.plots[key].title + ", around the first slip")
+            paths[zname] = F.plot_trial(zoom, fig_dir / zname)
+            figs.append((R.zoom_caption(b, m), f"figures/{zname}"))
+    for e in result.config.experiments:
+        for metric in ("response", "total"):
+            name = f"bars_{e}_{metric}.png"
+            paths[name] = F.bar_chart(result.summary, e, metric, fig_dir / name)
+            figs.append((R.bars_caption(e, metric), f"figures/{name}"))
+    paths["success.png"] = F.success_chart(result.summary, fig_dir / "success.png")
+    figs.append((R.SUCCESS_CAPTION, "figures/success.png"))
+    return figs

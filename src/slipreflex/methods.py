@@ -203,6 +203,8 @@ class MethodSpec:
         Its colour in every figure (a matplotlib colour).
     paper : bool
         One of the paper's four methods (run by default).
+    threshold_unit : str
+        Unit of its calibrated threshold, for the report ("N/s").
 
     Examples
     --------
@@ -220,6 +222,7 @@ class MethodSpec:
     rest_statistic: Callable[[np.ndarray, float], np.ndarray] | None = None
     color: str = "0.5"
     paper: bool = False
+    threshold_unit: str = ""
 
     def __post_init__(self) -> None:
         text("MethodSpec.name", self.name)
@@ -474,10 +477,10 @@ register(chain_method(DATH, "DATH", dath=True, color="#1f77b4", paper=True))
 register(chain_method(FIXED, "fixed", dath=False, color="#ff7f0e", paper=True))
 register(MethodSpec(name=NMSD, label="NMSD", input_kind="tactile", fs=hw.NMSD_FS, build=_build_nmsd,
                     ramp=True, detections=_nmsd_detections, rest_statistic=_nmsd_rest,
-                    color="#2ca02c", paper=True))
+                    color="#2ca02c", paper=True, threshold_unit="N/s"))
 register(MethodSpec(name=SWT, label="SWT-SD", input_kind="tactile", fs=hw.SWT_FS, build=_build_swt,
                     ramp=True, detections=_swt_detections, rest_statistic=_swt_rest,
-                    color="#d62728", paper=True))
+                    color="#d62728", paper=True, threshold_unit="N"))
 
 
 # The paper's chain as the microcontroller runs it (fixed point, slipreflex.board): beside the

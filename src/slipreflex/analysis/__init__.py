@@ -20,7 +20,7 @@ from .metrics import Activity, controller_activity, increases, response_time, su
 from .onset import ONSET_K, Onset, OnsetParams, accel_envelope, detect_onset, select_axis
 from .paper import PAPER, PAPER_SUCCESS, Reported, paper_value
 from .report import SUMMARY_COLUMNS, comparison_markdown, summarize, terminal_table, write_csv
-from .trial import RESULT_COLUMNS, TrialStreams, analyse_trial
+from .trial import RESULT_COLUMNS, TrialRow, TrialStreams, analyse_trial
 
 __all__ = [
     "SlipEvent", "segment_events",
@@ -28,5 +28,5 @@ __all__ = [
     "ONSET_K", "Onset", "OnsetParams", "accel_envelope", "detect_onset", "select_axis",
     "PAPER", "PAPER_SUCCESS", "Reported", "paper_value",
     "SUMMARY_COLUMNS", "comparison_markdown", "summarize", "terminal_table", "write_csv",
-    "RESULT_COLUMNS", "TrialStreams", "analyse_trial",
+    "RESULT_COLUMNS", "TrialRow", "TrialStreams", "analyse_trial",
 ]

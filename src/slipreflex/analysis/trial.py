@@ -35,8 +35,10 @@ Examples
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -47,19 +49,160 @@ from .events import LEAD_S, MERGE_S, segment_events
 from .metrics import ACTIVITY_GAP_S, controller_activity, response_time, suppressed
 from .onset import OnsetParams, accel_envelope, detect_onset, rest_threshold_of, select_axis
 
-__all__ = ["TrialStreams", "analyse_trial", "RESULT_COLUMNS", "MAX_RESPONSE_S"]
+__all__ = ["TrialRow", "TrialStreams", "analyse_trial", "RESULT_COLUMNS", "MAX_RESPONSE_S"]
 
 #: A command increase later than this after the onset (s) is not a response to that slip.
 MAX_RESPONSE_S: float = 1.0
 
-#: Columns of results.csv, in order (one definition; the writer and the tests use it).
-RESULT_COLUMNS: tuple[str, ...] = (
-    "experiment", "bottle", "method", "trial", "seed", "event", "n_events", "n_true_slips",
-    "onset_s", "true_onset_s", "onset_error_ms", "axis", "response_ms", "total_ms",
-    "span_ms", "closing_ms", "n_increases", "rise", "first_change_s", "last_change_s",
-    "success", "fell_out", "fell_out_s", "window_start_s", "window_end_s", "load_at_onset",
-    "threshold",
-)
+_NAN = float("nan")
+
+
+@dataclass(frozen=True)
+class TrialRow(Mapping):
+    """One slip event of one trial: a row of results.csv, typed, one meaning per field.
+
+    :func:`analyse_trial` fills the analysis fields; the experiment runner adds
+    the trial's grasp and the simulator's truth (NaN when unknown, e.g. on
+    hardware). Rows read back from a CSV file (:meth:`from_dict`) have the
+    same types as rows just computed. A row is also a read-only mapping of its
+    fields (``row["name"]``, ``dict(row)``), so code written for the CSV's dicts reads it.
+
+    Attributes
+    ----------
+    experiment, bottle, method : str
+    trial, seed, event : int
+        Trial index, the trial's seed, and the event's index within the trial.
+    n_events, n_true_slips : int
+        Slips the accelerometer found in the trial, and slips the simulator had.
+    onset_s, true_onset_s, onset_error_ms : float
+        Accelerometer onset, the simulator's true onset, estimate minus truth.
+    axis : int
+        Accelerometer axis used (0, 1, 2).
+    response_ms, total_ms : float
+        The paper's response time and total controller time (NaN: no response).
+    span_ms, closing_ms : float
+        First-to-last command change, and the closing time generated (ramp methods).
+    n_increases : int
+        Command increases in the event's window.
+    rise : float
+        How far the command rose in the window (finger units).
+    first_change_s, last_change_s : float
+        First and last command change in the window.
+    success, fell_out : bool
+        Slip suppressed before the object slipped out; the object fell out at all.
+    fell_out_s : float
+        When it fell out (NaN if it never did).
+    window_start_s, window_end_s : float
+        The event's analysis window.
+    load_at_onset : float
+        The load signal at the onset (poured ml), NaN without one.
+    threshold : float
+        The method's detection threshold (reported only).
+    grasp_position, grasp_force_n, perturbation_s : float
+        The trial's grasp (slip-finger position, force) and when the load was applied.
+    true_slip_ms, true_slip_mm : float
+        How long and how far the simulator's slip episode slid.
+
+    Examples
+    --------
+    >>> r = TrialRow(experiment="drop", bottle="TR", method="dath", trial=0, seed=1, event=0,
+    ...              n_events=1, success=True)
+    >>> r.success, r["method"], math.isnan(r.response_ms)
+    (True, 'dath', True)
+    >>> TrialRow.from_dict({**r.as_dict(), "success": "False", "trial": "3"}).trial
+    3
+    """
+
+    experiment: str
+    bottle: str
+    method: str
+    trial: int
+    seed: int
+    event: int
+    n_events: int
+    n_true_slips: int = 0
+    onset_s: float = _NAN
+    true_onset_s: float = _NAN
+    onset_error_ms: float = _NAN
+    axis: int = 0
+    response_ms: float = _NAN
+    total_ms: float = _NAN
+    span_ms: float = _NAN
+    closing_ms: float = _NAN
+    n_increases: int = 0
+    rise: float = 0.0
+    first_change_s: float = _NAN
+    last_change_s: float = _NAN
+    success: bool = False
+    fell_out: bool = False
+    fell_out_s: float = _NAN
+    window_start_s: float = _NAN
+    window_end_s: float = _NAN
+    load_at_onset: float = _NAN
+    threshold: float = _NAN
+    grasp_position: float = _NAN
+    grasp_force_n: float = _NAN
+    perturbation_s: float = _NAN
+    true_slip_ms: float = _NAN
+    true_slip_mm: float = _NAN
+
+    def __getitem__(self, name: str) -> Any:
+        if not isinstance(name, str) or name not in _FIELDS:
+            raise KeyError(name)
+        return getattr(self, name)
+
+    def __iter__(self):
+        return (f.name for f in dataclasses.fields(self))
+
+    def __len__(self) -> int:
+        return len(dataclasses.fields(self))
+
+    def as_dict(self) -> dict[str, Any]:
+        """The row as a dict in column order.
+
+        Examples
+        --------
+        >>> list(TrialRow("drop", "TR", "dath", 0, 1, 0, 1).as_dict())[:3]
+        ['experiment', 'bottle', 'method']
+        """
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> "TrialRow":
+        """A row from a dict, e.g. a results.csv line (strings parsed; "" is NaN; unknown keys ignored).
+
+        Examples
+        --------
+        >>> TrialRow.from_dict({"experiment": "pour", "bottle": "DK", "method": "nmsd", "trial": "2",
+        ...                     "seed": "9", "event": "0", "n_events": "1", "success": "True",
+        ...                     "response_ms": ""}).success
+        True
+        """
+        kw = {}
+        for f in dataclasses.fields(cls):
+            if f.name in data:
+                kw[f.name] = _parse(f.name, f.type, data[f.name])
+        return cls(**kw)
+
+
+def _parse(name: str, kind: str, value: Any) -> Any:
+    if not isinstance(value, str):
+        return value
+    text = value.strip()
+    if kind == "bool":
+        if text not in ("True", "False"):
+            raise ParameterError(f"{name}: expected True or False, got {value!r}")
+        return text == "True"
+    if kind == "int":
+        return int(text)
+    if kind == "float":
+        return float(text) if text else _NAN
+    return value
+
+
+#: Columns of results.csv, in order (one definition: the fields of :class:`TrialRow`).
+RESULT_COLUMNS: tuple[str, ...] = tuple(f.name for f in dataclasses.fields(TrialRow))
+_FIELDS = frozenset(RESULT_COLUMNS)
 
 
 @dataclass(frozen=True)
@@ -158,7 +301,7 @@ def _load_at(s: TrialStreams, t: float) -> float:
 def analyse_trial(s: TrialStreams, onset_params: OnsetParams | None = None, *,
                   merge_s: float = MERGE_S, lead_s: float = LEAD_S,
                   gap: float = ACTIVITY_GAP_S,
-                  max_response_s: float = MAX_RESPONSE_S) -> list[dict[str, Any]]:
+                  max_response_s: float = MAX_RESPONSE_S) -> list[TrialRow]:
     """The paper's metrics for every slip event of one trial.
 
     The controller's response to a slip is its first command increase in the
@@ -168,8 +311,8 @@ def analyse_trial(s: TrialStreams, onset_params: OnsetParams | None = None, *,
 
     Returns
     -------
-    list of dict
-        One dict per slip event with the keys of :data:`RESULT_COLUMNS`; a trial
+    list of TrialRow
+        One row per slip event; a trial
         in which the accelerometer found no slip gives one row with
         ``event = 0``, ``n_events = 0`` and NaN timings (success still says
         whether the object stayed in the grasp).
@@ -225,19 +368,16 @@ def analyse_trial(s: TrialStreams, onset_params: OnsetParams | None = None, *,
         if math.isnan(onset):  # no slip found: activity is reported, but it is no slip's total
             total = float("nan")
         true_on = _nearest(truth, onset, window[0], window[1])
-        rows.append({
-            "experiment": s.experiment, "bottle": s.bottle, "method": s.method,
-            "trial": int(s.trial), "seed": int(s.seed), "event": i, "n_events": n_events,
-            "n_true_slips": int(((truth >= lo) & (truth <= float(s.t_end))).sum()),
-            "onset_s": onset, "true_onset_s": true_on,
-            "onset_error_ms": (onset - true_on) * 1e3,
-            "axis": int(axis), "response_ms": resp * 1e3, "total_ms": total * 1e3,
-            "span_ms": act.span * 1e3, "closing_ms": closing * 1e3,
-            "n_increases": act.n_increases, "rise": act.rise,
-            "first_change_s": act.first, "last_change_s": act.last,
-            "success": suppressed(fell, window[1]),
-            "fell_out": not math.isnan(fell), "fell_out_s": fell,
-            "window_start_s": float(window[0]), "window_end_s": float(window[1]),
-            "load_at_onset": _load_at(s, onset), "threshold": float(s.threshold),
-        })
+        rows.append(TrialRow(
+            experiment=s.experiment, bottle=s.bottle, method=s.method,
+            trial=int(s.trial), seed=int(s.seed), event=i, n_events=n_events,
+            n_true_slips=int(((truth >= lo) & (truth <= float(s.t_end))).sum()),
+            onset_s=onset, true_onset_s=true_on, onset_error_ms=(onset - true_on) * 1e3,
+            axis=int(axis), response_ms=resp * 1e3, total_ms=total * 1e3,
+            span_ms=act.span * 1e3, closing_ms=closing * 1e3,
+            n_increases=int(act.n_increases), rise=float(act.rise),
+            first_change_s=act.first, last_change_s=act.last,
+            success=bool(suppressed(fell, window[1])), fell_out=not math.isnan(fell), fell_out_s=fell,
+            window_start_s=float(window[0]), window_end_s=float(window[1]),
+            load_at_onset=_load_at(s, onset), threshold=float(s.threshold)))
     return rows

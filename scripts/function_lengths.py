@@ -1,0 +1,59 @@
+"""Print the longest functions of the package (lines from ``def`` to the last line, docstring excluded).
+
+Numba kernels (functions decorated with ``njit`` / ``jit``) are listed apart: they are
+written as flat loops on purpose. Used for the issue-12 measure "no function outside the
+numba kernels longer than about 80 lines"; ``tests/test_package.py`` checks the limit.
+
+Usage: python scripts/function_lengths.py [N] [--root src/slipreflex]
+"""
+
+from __future__ import annotations
+
+import argparse
+import ast
+from pathlib import Path
+
+
+def _is_kernel(node: ast.AST) -> bool:
+    for d in getattr(node, "decorator_list", []):
+        target = d.func if isinstance(d, ast.Call) else d
+        name = target.attr if isinstance(target, ast.Attribute) else getattr(target, "id", "")
+        if name in ("njit", "jit", "vectorize", "guvectorize"):
+            return True
+    return False
+
+
+def function_lengths(root: Path) -> list[tuple[int, str, bool]]:
+    """(lines without the docstring, "file:line name", is a numba kernel) for every function."""
+    out = []
+    for path in sorted(root.rglob("*.py")):
+        tree = ast.parse(path.read_text(), filename=str(path))
+        for node in ast.walk(tree):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                n = node.end_lineno - node.lineno + 1
+                body = node.body
+                if body and isinstance(body[0], ast.Expr) and isinstance(getattr(body[0], "value", None),
+                                                                        ast.Constant) \
+                        and isinstance(body[0].value.value, str):
+                    n -= body[0].end_lineno - body[0].lineno + 1
+                rel = path.relative_to(root.parent)
+                out.append((n, f"{rel}:{node.lineno} {node.name}", _is_kernel(node)))
+    return sorted(out, reverse=True)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("n", nargs="?", type=int, default=10)
+    ap.add_argument("--root", type=Path, default=Path(__file__).resolve().parents[1] / "src" / "slipreflex")
+    args = ap.parse_args()
+    rows = function_lengths(args.root)
+    print("longest functions outside numba kernels (lines, docstring excluded):")
+    for n, where, _ in [r for r in rows if not r[2]][: args.n]:
+        print(f"{n:5d}  {where}")
+    kernels = [r for r in rows if r[2]]
+    if kernels:
+        print(f"longest numba kernel: {kernels[0][0]} lines ({kernels[0][1]})")
+
+
+if __name__ == "__main__":
+    main()

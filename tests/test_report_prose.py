@@ -1,0 +1,46 @@
+"""report.md's prose reads every number from its definition, so it follows the run's options."""
+
+from __future__ import annotations
+
+from slipreflex.analysis.report import discussion_text, setup_lines, summarize
+from slipreflex.analysis.trial import TrialRow
+from slipreflex.experiments import ReproduceConfig, ReproduceResult
+
+
+def _rows():
+    rows = []
+    for e in ("drop", "pour"):
+        for m in ("dath", "fixed", "nmsd", "swt"):
+            for b in ("TR", "TX"):
+                rows.append(TrialRow(
+                    experiment=e, bottle=b, method=m, trial=0, seed=1, event=0, n_events=1,
+                    onset_s=1.0, true_onset_s=0.998, onset_error_ms=2.0, response_ms=60.0 if b == "TX" else 80.0,
+                    total_ms=100.0, n_increases=2, rise=30.0, success=True, load_at_onset=190.0,
+                    true_slip_ms=20.0, true_slip_mm=4.0, fell_out_s=float("nan")))
+    return rows
+
+
+def _result(**config):
+    rows = _rows()
+    return ReproduceResult(ReproduceConfig(**config), rows, summarize(rows), {"nmsd": 12.0, "swt": 0.02},
+                           {}, 1.0, 1)
+
+
+def test_prose_follows_the_options():
+    text = " ".join(setup_lines(_result(rest_k=3.5, swt_persist=4, drop_mass_kg=0.02, pour_volume_ml=100.0))
+                    + discussion_text(_result(rest_k=3.5, swt_persist=4, drop_mass_kg=0.02,
+                                              pour_volume_ml=100.0)))
+    assert "(3.5 sd of the method's statistic" in text and ": 3.5 sd of each method's own statistic" in text
+    assert " 5 sd of" not in text
+    assert "persistence 4 samples (11 ms)" in text and "for 11 ms after the crossing" in text
+    assert "drop: 20 g" in text and "simulated 20 g drop" in text and "10 g" not in text
+    assert "pour: 100 ml" in text
+    default = " ".join(setup_lines(_result()) + discussion_text(_result()))
+    assert "(5 sd of the method's statistic" in default and "(21 ms)" in default and "simulated 10 g drop" in default
+    assert "45 ms per detection" in default and "48 ms window" in default
+
+
+def test_prose_uses_the_method_labels_and_typed_rows():
+    text = " ".join(discussion_text(_result()))
+    assert "In the pours: DATH 100% of 2, fixed 100% of 2, NMSD 100% of 2, SWT-SD 100% of 2" in text
+    assert "**Bottles.** DATH's mean response by bottle, fastest first: drop: TX 60 ms, TR 80 ms" in text
