@@ -158,17 +158,15 @@ static void tx_frame(const uint8_t *frame)
 #ifndef REFLEX_P0
 #define REFLEX_P0 0
 #endif
-/* The fault rules of the board: readings within 8 counts (39 mV) of the rails mean
- * a disconnected or shorted sensor (the OPR5005 gives 0.3..3.35 V, i.e. 61..686 counts);
- * 1000 identical readings in a row (3 s) mean a stuck converter or a dead sensor. */
-#define REFLEX_ADC_MIN 8u
-#define REFLEX_ADC_MAX_OK 1015u
-#define REFLEX_STUCK_AFTER 1000u
+/* Fault rules (reflex_config.h, from slipreflex.board.FIRMWARE_*): readings near the
+ * rails mean a disconnected or shorted sensor, a long run of identical readings a stuck
+ * converter or a dead sensor; the chain skips them and the hand holds. */
 static const struct reflex_params chain_params = {
     .g = REFLEX_CFG_G, .a1 = REFLEX_CFG_A1, .a2 = REFLEX_CFG_A2,
     .theta0 = REFLEX_CFG_THETA0, .dath_floor = 0, .x0 = 0,
     .p0 = REFLEX_P0, .lo = REFLEX_CFG_LO, .hi = REFLEX_CFG_HI,
-    .adc_min = REFLEX_ADC_MIN, .adc_max = REFLEX_ADC_MAX_OK, .stuck_after = REFLEX_STUCK_AFTER,
+    .adc_min = REFLEX_CFG_ADC_MIN, .adc_max = REFLEX_CFG_ADC_MAX,
+    .stuck_after = REFLEX_CFG_STUCK_AFTER,
     .filter = 1, .dath = REFLEX_DATH, .dath_samples = REFLEX_CFG_DATH_SAMPLES, .x0_given = 0,
     .n = REFLEX_CFG_N, .kp = REFLEX_CFG_KP, .ki = REFLEX_CFG_KI,
     .reset_after = REFLEX_CFG_RESET_AFTER,

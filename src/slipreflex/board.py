@@ -42,6 +42,8 @@ from .errors import DataError, ParameterError
 __all__ = [
     "COEF_Q", "SIG_Q", "H_MAX", "BoardParams", "BoardChain", "BoardReflex", "BoardResult",
     "run_board_chain", "adc_counts", "quantize_lowpass", "volts_to_q16", "board_detections",
+    "FIRMWARE_ADC_MIN", "FIRMWARE_ADC_MAX", "FIRMWARE_STUCK_AFTER", "read_adc_csv",
+    "write_board_outputs",
 ]
 
 #: Fractional bits of the filter coefficients.
@@ -53,6 +55,14 @@ H_MAX: int = 65535
 #: Largest ADC reading.
 ADC_MAX: int = (1 << hw.ADC_BITS) - 1
 _ROUND = 1 << (COEF_Q - 1)
+
+#: The firmware's fault rules (written into firmware/reflex/reflex_config.h): a reading
+#: within 8 counts (39 mV) of either rail means a disconnected or shorted sensor (the
+#: OPR5005 gives 0.3..3.35 V, 61..686 counts), and 1000 identical readings in a row
+#: (3 s) a stuck converter or a dead sensor; the chain skips such readings.
+FIRMWARE_ADC_MIN: int = 8
+FIRMWARE_ADC_MAX: int = ADC_MAX - 8
+FIRMWARE_STUCK_AFTER: int = 1000
 
 
 def adc_counts(volts: float) -> int:
@@ -226,6 +236,21 @@ class BoardParams:
                    x0=None if p.x0 is None else volts_to_q16(p.x0), n=p.n,
                    reset_after=p.reset_after, adc_min=adc_min, adc_max=adc_max,
                    stuck_after=stuck_after, **whole)
+
+    @classmethod
+    def firmware(cls, *, dath: bool = True, p0: int = 0) -> "BoardParams":
+        """What the firmware built with ``REFLEX_DATH=dath REFLEX_P0=p0`` runs.
+
+        The paper's chain at the board's 333.33 Hz with the firmware's fault rules
+        (:data:`FIRMWARE_ADC_MIN`, :data:`FIRMWARE_ADC_MAX`, :data:`FIRMWARE_STUCK_AFTER`).
+
+        Examples
+        --------
+        >>> BoardParams.firmware(p0=100).adc_min, BoardParams.firmware().stuck_after
+        (8, 1000)
+        """
+        return cls.from_chain(dath=dath, p0=p0, adc_min=FIRMWARE_ADC_MIN, adc_max=FIRMWARE_ADC_MAX,
+                              stuck_after=FIRMWARE_STUCK_AFTER)
 
     def to_dict(self) -> dict[str, Any]:
         """Plain dict of every field.
@@ -570,3 +595,77 @@ def board_detections(reflex: BoardReflex, volts) -> tuple[np.ndarray, np.ndarray
         chain.step(adc_counts(volt) if math.isfinite(volt) else 0xFFFF)
         x[i], events[i] = chain.x * hw.ADC_LSB / (1 << SIG_Q), chain.event
     return x, events
+
+
+def read_adc_csv(path) -> np.ndarray:
+    """Read a CSV of ADC counts: a header with a column ``adc``, integers 0..1023.
+
+    Other columns are ignored; ``#`` lines before the header are skipped.
+
+    Raises
+    ------
+    DataError
+        Unreadable file, no ``adc`` column, or a cell that is not a count; the
+        message names the file and the line.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "adc.csv"
+    >>> _ = p.write_text("adc\\n300\\n301\\n")
+    >>> read_adc_csv(p).tolist()
+    [300, 301]
+    """
+    import csv
+    from pathlib import Path
+
+    path = Path(path)
+    try:
+        with path.open(newline="") as fh:
+            rows = [(i + 1, [c.strip() for c in row]) for i, row in enumerate(csv.reader(fh))
+                    if any(c.strip() for c in row) and not row[0].lstrip().startswith("#")]
+    except (OSError, UnicodeDecodeError) as err:
+        raise DataError(f"{path}: cannot read: {getattr(err, 'strerror', None) or err}") from None
+    if not rows or "adc" not in rows[0][1]:
+        raise DataError(f"{path}, line {rows[0][0] if rows else 1}: no column 'adc' "
+                        "(need a header naming adc, one ADC count 0..1023 per row)")
+    col = rows[0][1].index("adc")
+    out = np.empty(len(rows) - 1, dtype=np.int64)
+    for k, (line, row) in enumerate(rows[1:]):
+        cell = row[col] if col < len(row) else ""
+        if not cell.isdigit() or int(cell) > ADC_MAX:
+            raise DataError(f"{path}, line {line}: column 'adc' is not a count 0..{ADC_MAX}: {cell!r}")
+        out[k] = int(cell)
+    return out
+
+
+def write_board_outputs(prefix, events, counts, commands) -> tuple[Any, Any]:
+    """Write PREFIX.samples.csv (``sample, event``) and PREFIX.windows.csv
+    (``window, v, command``): the board's outputs, as the simavr runner and
+    ``slipreflex detect --board`` write them.
+
+    Returns
+    -------
+    (Path, Path)
+        The two files written.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> prefix = pathlib.Path(tempfile.mkdtemp()) / "run"
+    >>> res = run_board_chain([300] * 16)
+    >>> s, w = write_board_outputs(prefix, res.events, res.counts, res.commands)
+    >>> w.read_text().splitlines()
+    ['window,v,command', '0,0,0']
+    """
+    from pathlib import Path
+
+    from .csvfiles import write_columns
+
+    events = np.asarray(events, dtype=np.int64)
+    counts = np.asarray(counts, dtype=np.int64)
+    samples_path, windows_path = Path(f"{prefix}.samples.csv"), Path(f"{prefix}.windows.csv")
+    write_columns(samples_path, {"sample": np.arange(events.size), "event": events})
+    write_columns(windows_path, {"window": np.arange(counts.size), "v": counts,
+                                 "command": np.asarray(commands, dtype=np.int64)})
+    return samples_path, windows_path

@@ -45,6 +45,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--reset-after", type=int, default=_DEFAULTS.reset_after, help="zero windows to reset (10)")
     p.add_argument("--lo", type=float, default=_DEFAULTS.lo, help="lowest command (0)")
     p.add_argument("--hi", type=float, default=_DEFAULTS.hi, help="highest command (500)")
+    p.add_argument("--board", action="store_true",
+                   help="the recording is ADC counts (a column adc): run the board's fixed-point chain "
+                        "(slipreflex.board, as the firmware is built, with --method and --p0 only) and "
+                        "write sample,event and window,v,command as firmware/test/board_sim.py does")
     p.add_argument("--out", type=Path, default=None,
                    help="output prefix (default: next to the recording, NAME.samples.csv and NAME.windows.csv)")
 
@@ -59,6 +63,8 @@ def _sampling_rate(t: np.ndarray, given: float | None, path: Path) -> float:
 
 def run(args: argparse.Namespace) -> int:
     """Run the chain and write the two CSVs; print a summary."""
+    if args.board:
+        return _run_board(args)
     t, raw = read_slip_csv(args.recording, fs=args.fs)
     params = ReflexParams(
         fs=_sampling_rate(t, args.fs, args.recording), cutoff=args.cutoff, filter=not args.no_filter,
@@ -78,4 +84,22 @@ def run(args: argparse.Namespace) -> int:
     print(f"  windows with slip: {int((res.counts > 0).sum())} of {res.counts.size}")
     print(f"  final command: {final}")
     print(f"  wrote {samples_path} and {windows_path}")
+    return 0
+
+
+def _run_board(args: argparse.Namespace) -> int:
+    """``detect --board``: the Python twin of the firmware over a CSV of ADC counts."""
+    from ..board import BoardParams, read_adc_csv, run_board_chain, write_board_outputs
+    from ..errors import ParameterError
+
+    if args.p0 != int(args.p0):
+        raise ParameterError(f"--p0 must be a whole position with --board, got {args.p0!r}")
+    adc = read_adc_csv(args.recording)
+    res = run_board_chain(adc, BoardParams.firmware(dath=args.method == "dath", p0=int(args.p0)))
+    prefix = args.out if args.out is not None else args.recording.with_suffix("")
+    prefix.parent.mkdir(parents=True, exist_ok=True)
+    paths = write_board_outputs(prefix, res.events, res.counts, res.commands)
+    print(f"{args.recording}: {adc.size} ADC counts through the board's chain, method {args.method}")
+    print(f"  events: {int(res.events.sum())}, faulty readings: {int(res.faults.sum())}")
+    print(f"  wrote {paths[0]} and {paths[1]}")
     return 0
