@@ -33,9 +33,12 @@ def test_slip_reflex_catches_the_slow_pour(dath):
     assert not tr.fallen
     assert tr.slip_events, "the pour must make the bottle slip at least once"
     first = tr.slip_events[0]
-    # the controller answered that slip by closing the fingers
+    # the controller answered that slip by closing the fingers within its first 2 mm (a slowly
+    # loaded rate-state contact creeps for a while before it runs, so time from onset is not the test)
     up = tr.cmd_t[(tr.cmd_t >= first.onset) & (tr.cmd_value > g.positions[hw.SLIP_FINGER])]
-    assert up.size and up[0] - first.onset < 0.3
+    assert up.size
+    x = tr.daq.displacement
+    assert x[np.searchsorted(tr.t, up[0])] - x[np.searchsorted(tr.t, first.onset)] < 2e-3
     assert np.all(np.diff(tr.cmd_value) >= 0)              # MPI: monotonic
     assert tr.daq.fingers[-1, 2] > g.positions[hw.SLIP_FINGER]
     assert tr.daq.load_mass[-1] == pytest.approx(rig.bottle.mass_kg + 0.3)

@@ -1,5 +1,6 @@
 """Grasp physics of the simulated rig against closed forms."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -15,6 +16,11 @@ G = hw.GRAVITY
 def _capacity(rig, mu):
     """Friction capacity mu * 3 N_c (N) of the current grasp."""
     return mu * 3.0 * rig.normal_force
+
+
+#: Coulomb-Stribeck contacts, the cuff with the pads' friction, so the closed forms are the textbook ones.
+COULOMB = Bottle("C", mu_s=0.6, mu_k=0.45, cuff_mu_s=0.6, cuff_mu_k=0.6, friction_law="coulomb",
+                 cuff_friction_law="coulomb")
 
 
 def test_grasp_stops_near_contact_force_and_holds_the_empty_bottle():
@@ -33,7 +39,7 @@ def test_grasp_stops_near_contact_force_and_holds_the_empty_bottle():
 
 
 def test_slip_starts_at_mu_s_times_normal_force():
-    rig = Rig("TR", seed=0)
+    rig = Rig(COULOMB, seed=0)
     rig.grasp()
     pour = Pour(rate_l_min=0.3, volume_ml=400, fall_height_m=0.0)   # slow, no jet force
     t_start = rig.t + 0.1
@@ -47,7 +53,7 @@ def test_slip_starts_at_mu_s_times_normal_force():
 
 
 def test_sliding_acceleration_matches_kinetic_friction():
-    heavy = Bottle("heavy", mass_kg=0.3, surface="TR", grip_travel_m=0.08)
+    heavy = dataclasses.replace(COULOMB, name="heavy", mass_kg=0.3, grip_travel_m=0.08, cuff_mu_k=0.45)
     rig = Rig(heavy, seed=0)
     g = rig.grasp()
     assert not g.stable      # 0.3 kg is far above what 3 x ~1 N at mu_s 0.6 holds

@@ -13,6 +13,8 @@ def _field(plant, target, bottle="TR"):
     from slipreflex.sim.uncertain import _parse_target
 
     head, sel, fld, ratio_of = _parse_target(target)
+    if head == "calibration":
+        return getattr(plant, fld)
     if head == "bottle":
         b = plant.bottles[(sel or (bottle,))[0]]
         return getattr(b, fld) / getattr(b, ratio_of) if ratio_of else getattr(b, fld)
@@ -48,10 +50,22 @@ def test_each_constant_moves_its_targets(name):
 
 
 def test_bottle_selectors_and_ratio_targets():
-    p = plant_from_values({"pad_mu_s_pet": 0.9, "pad_mu_k_ratio": 0.5})
-    assert p.bottles["TR"].mu_s == p.bottles["DK"].mu_s == 0.9
-    assert p.bottles["TX"].mu_s == BOTTLES["TX"].mu_s
-    assert p.bottles["TR"].mu_k == pytest.approx(0.45) and p.bottles["TX"].mu_k == pytest.approx(0.35)
+    from slipreflex.sim.uncertain import UncertainConstant
+
+    table = {**UNCERTAIN, "tx_only": UncertainConstant("tx_only", "1", 1.0, 0.5, 1.5, "uniform", "test",
+                                                       ("bottle[TX].mu_s",))}
+    p = plant_from_values({"tx_only": 1.2, "pad_mu_k_ratio": 0.5}, table=table)
+    assert p.bottles["TX"].mu_s == 1.2 and p.bottles["TR"].mu_s == BOTTLES["TR"].mu_s
+    assert p.bottles["TX"].mu_k == pytest.approx(0.6) and p.bottles["TR"].mu_k == pytest.approx(0.5 * 1.047)
+
+
+def test_first_slip_target_recalibrates_the_pads():
+    p = plant_from_values({"first_slip_ml": 230.0, "hand_latency": 0.02})
+    assert p.first_slip_ml == 230.0
+    c = p.calibrated(seeds=(0,))
+    from slipreflex.sim.calibration import first_slip_ml
+
+    assert first_slip_ml(c.bottles["DK"], rig_kwargs=c.rig_kwargs(), seeds=(0,)) == pytest.approx(230.0, abs=1.0)
 
 
 def test_plant_builds_rigs_with_its_parameters():
@@ -97,7 +111,7 @@ def test_load_ranges_narrows_widens_and_fixes(tmp_path):
     assert t["hand_latency"].nominal == 0.012          # moved into the narrowed range
     assert t["wall_stiffness"].low == 100.0 and t["wall_stiffness"].nominal == UNCERTAIN["wall_stiffness"].nominal
     assert t["pad_mu_k_ratio"].fixed and t["pad_mu_k_ratio"].value_at(0.3) == 0.8
-    assert plant_from_values(nominal_values(t), table=t).bottles["TR"].mu_k == pytest.approx(0.8 * 0.6)
+    assert plant_from_values(nominal_values(t), table=t).bottles["TR"].mu_k == pytest.approx(0.8 * 1.047)
     assert UNCERTAIN["hand_latency"].low != 0.012      # the package table is untouched
 
 

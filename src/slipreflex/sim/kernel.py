@@ -11,20 +11,26 @@ Model (one physics step of ``dt``, semi-implicit Euler):
   ``dq/dt = clip(K (target - q), -speed, speed)``; a finger does not advance
   while its contact force exceeds the stall force.
 * **Normal force**: the three fingertips sit 120 degrees apart around the
-  bottle, which is free to shift sideways; with linear contact springs the
-  lateral equilibrium gives every contact the same normal force
-  ``N_c = k_n * travel * max(0, mean(q) - q_contact)`` (the bottle moves so
-  that all three stay loaded). ``k_n`` is pad, finger and bottle wall in
-  series. Friction acts on ``N = 3 N_c``.
-* **Friction** (elasto-plastic Coulomb with an explicit stick state and a
-  Stribeck curve): the pads' tangential compliance ``k_t`` (with damping
-  ``c_t``) connects the bottle to an anchor ``s`` on its surface. While
-  stuck, ``s`` is fixed and the pad force is ``k_t (x - s) + c_t v``; when
-  that exceeds ``mu_s N`` the contact slips and the force becomes
-  ``mu(w) N`` with ``mu(w) = mu_k + (mu_s - mu_k) exp(-(w / v_s)^2)``, ``w``
-  the sliding speed; the massless pad relaxes exactly toward ``F / k_t``;
-  when ``w`` reaches zero the contact sticks again. No creep while stuck:
-  ``s`` does not move at all.
+  bottle, which is free to shift sideways; three radial forces at 120 degrees
+  balance only when equal, so every contact carries the same normal force
+  ``N_c = k_n * travel * max(0, mean(q) - q_contact)`` with ``k_n`` three
+  over the sum of the contacts' compliances (each: pad or cuff, finger and
+  bottle wall in series).
+* **Friction, per contact** (thumb and index through their silicone pads,
+  the middle finger through the rigid cuff of the slip sensor), each with
+  its own law and constants. A contact's tangential compliance ``k_t``
+  (damping ``c_t``) ties the bottle to an anchor ``s`` on its surface; the
+  bottle slips grossly only when all three slide. Two laws:
+
+  - *rate-state* (default): slip weakening over a distance ``D_c``, healing
+    over ``t_heal`` and a logarithmic rate term,
+    ``mu = mu_k + (mu_s - mu_k) phi + a ln(1 + w / v0)`` (``PC_A`` holds
+    ``a`` in absolute units); see
+    :func:`_contact` (implicit return mapping, :func:`rs_slide_speed`);
+  - *Coulomb-Stribeck*: ``mu(w) = mu_k + (mu_s - mu_k) exp(-(w / v_s)^2)``,
+    explicit, with the massless pad relaxing exactly toward ``F / k_t``.
+
+  No creep while stuck: ``s`` does not move at all.
 * **Loads**: gravity on bottle + water (+ landed masses, through their
   contact springs); a dropped mass is a second body with a compliant,
   damped contact on the bottom; a pour adds water at a constant rate after
@@ -34,6 +40,8 @@ Model (one physics step of ``dt``, semi-implicit Euler):
   falls freely.
 * **Sensors** sampled inside the loop on their own clocks: the OPR5005 slip
   sensor (track interpolation at the surface position under the sensor,
+  which moves with the bottle and with the middle fingertip's own rolling as
+  it flexes past contact, ``P_SPOT_K`` metres per position unit,
   transfer curve, electrical noise, 10-bit ADC) and flow pulses at the DAQ's
   333.33 Hz; the MPU6050 at its own ODR through its DLPF. Tactile snapshots
   (normal and tangential force, slip distance) at each requested tactile
@@ -51,22 +59,36 @@ from numba import njit
 __all__: list[str] = []
 
 # ---- state vector S -------------------------------------------------------
+# Bottle-level: S_S mean slid distance of the contacts, S_W smallest sliding speed,
+# S_STUCK 1 unless every contact slides (gross slip), S_FT total friction force.
 S_X, S_V, S_S, S_W, S_STUCK, S_DIR = 0, 1, 2, 3, 4, 5
 S_Q0, S_TGT0, S_SPD0 = 6, 9, 12
 S_NC, S_FT, S_AF, S_SUPPORTED, S_FALLEN, S_TFALL = 15, 16, 17, 18, 19, 20
 S_AX, S_AY, S_AZ, S_AFRESH, S_MASS, S_A = 21, 22, 23, 24, 25, 26
-S_SIZE = 27
+# per contact (thumb, index, middle): block of SC_SIZE starting at S_C0 + i * SC_SIZE
+S_C0 = 27
+SC_S, SC_W, SC_STUCK, SC_DIR, SC_PHI, SC_FT = range(6)
+SC_SIZE = 6
+S_SIZE = S_C0 + 3 * SC_SIZE
 
 # ---- counters C (int64) ---------------------------------------------------
-C_N, C_DAQ, C_ACC = 0, 1, 2
-C_SIZE = 3
+# C_NFAIL: implicit friction solves that did not converge; C_NITER: most iterations one took.
+C_N, C_DAQ, C_ACC, C_NFAIL, C_NITER = 0, 1, 2, 3, 4
+C_SIZE = 5
 
 # ---- parameters P ---------------------------------------------------------
-(P_DT, P_G, P_MB, P_MUS, P_MUK, P_VS, P_KT, P_CT, P_KN, P_LAM, P_QC, P_KSERVO, P_STALL, P_GRIP,
+(P_DT, P_G, P_MB, P_KN, P_LAM, P_QC, P_KSERVO, P_STALL, P_GRIP,
  P_DAQ_T, P_ACC_T, P_ACC_ALPHA, P_ACC_NOISE, P_ACC_LSB, P_ACC_RANGE, P_TILT_X, P_TILT_Z, P_TILT_Y,
  P_VCC, P_VSAT, P_KNEE, P_VNOISE, P_GAP, P_ADC_LSB, P_ADC_MAX, P_TRACK_DX, P_TRACK_OFF,
- P_FLOW_K, P_FLOW_PHASE, P_DECAY) = range(35)
-P_SIZE = 35
+ P_FLOW_K, P_FLOW_PHASE, P_SPOT_K) = range(30)
+# per contact friction: block of PC_SIZE starting at P_C0 + i * PC_SIZE
+P_C0 = 30
+(PC_LAW, PC_MUS, PC_MUK, PC_VS, PC_A, PC_V0, PC_DC, PC_HEAL, PC_KT, PC_CT, PC_DECAY) = range(11)
+PC_SIZE = 11
+P_SIZE = P_C0 + 3 * PC_SIZE
+#: Friction laws (PC_LAW): Coulomb with a Stribeck curve; slip weakening + healing + log rate.
+LAW_COULOMB, LAW_RATE_STATE = 0.0, 1.0
+_NEWTON_MAX = 60
 
 # ---- drops D (one row per drop) -------------------------------------------
 D_REL, D_M, D_H0, D_KC, D_CC, D_ACT, D_Z, D_VZ, D_LANDED = range(9)
@@ -83,7 +105,7 @@ O_SIZE = 18
 
 # ---- tactile snapshot rows --------------------------------------------------
 T_ID, T_IDX, T_T, T_NC, T_FT, T_S, T_FALLEN, T_W = range(8)
-T_SIZE = 8
+T_SIZE = 8  # T_FT, T_S, T_W: the sampler's own contact
 
 # ---- events -----------------------------------------------------------------
 E_ONSET, E_STICK, E_FALLEN, E_LANDED = 1.0, 2.0, 3.0, 4.0
@@ -192,7 +214,123 @@ def _water(W, t):
 
 
 @njit(cache=True)
-def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, n_end, daq_out, tac_out, ev_out, counts):
+def rs_slide_speed(R, K, N, mu_st, a, v0, C):
+    """Sliding speed ``w >= 0`` of a rate-state contact: ``R - K w = N (mu_st + a ln(1 + w / v0))``.
+
+    ``R`` is the trial (stuck) force magnitude, ``R > N mu_st``; ``K = k_t dt + c_t``.
+    Newton's method in ``z = ln(1 + w / v0)``, where the residual is concave and
+    decreasing, started at an upper bound of the root, so the iterates fall
+    monotonically onto it. ``C[C_NITER]`` keeps the most iterations one solve
+    took and ``C[C_NFAIL]`` counts solves that did not converge.
+    """
+    rp = R - N * mu_st
+    na = N * a
+    if na <= 0.0:
+        return rp / K
+    z = min(rp / na, np.log1p(rp / (K * v0)))
+    it = 0
+    converged = False
+    while it < _NEWTON_MAX:
+        ez = np.exp(z)
+        h = rp - K * v0 * (ez - 1.0) - na * z
+        dz = h / (-K * v0 * ez - na)
+        z -= dz
+        it += 1
+        if abs(dz) <= 1e-12 * (1.0 + abs(z)):
+            converged = True
+            break
+    if it > C[C_NITER]:
+        C[C_NITER] = it
+    if not converged:
+        C[C_NFAIL] += 1
+    if z < 0.0:
+        z = 0.0
+    return v0 * np.expm1(z)
+
+
+@njit(cache=True)
+def _contact(S, P, C, i, x, v, nc, dt):
+    """Friction force (N, up on the bottle when positive) of contact ``i``; updates its state.
+
+    Rate-state law (implicit, return mapping): the contact sticks while the
+    trial force ``k_t (x - s + v dt) + c_t v`` stays within the static
+    threshold ``N (mu_k + (mu_s - mu_k) phi)``; beyond it the sliding speed
+    solves the force balance of pad and interface with the friction
+    ``N (mu_k + (mu_s - mu_k) phi + a ln(1 + w / v0))``. The state ``phi``
+    (1 = fully healed) decays over the slip distance ``D_c`` and heals over
+    ``t_heal``: ``dphi/dt = -phi w / D_c + (1 - phi) / t_heal``, integrated
+    exactly over the step. Coulomb-Stribeck law: explicit, finished by
+    :func:`_contact_post` after the bottle has moved.
+    """
+    bs = S_C0 + i * SC_SIZE
+    bp = P_C0 + i * PC_SIZE
+    kt = P[bp + PC_KT]
+    ct = P[bp + PC_CT]
+    s = S[bs + SC_S]
+    mus = P[bp + PC_MUS]
+    muk = P[bp + PC_MUK]
+    if P[bp + PC_LAW] == LAW_RATE_STATE:
+        phi = S[bs + SC_PHI]
+        mu_st = muk + (mus - muk) * phi
+        A = kt * (x - s + v * dt) + ct * v
+        R = abs(A)
+        w = 0.0
+        if R <= mu_st * nc:
+            F = A
+            S[bs + SC_STUCK] = 1.0
+        else:
+            d = 1.0 if A > 0.0 else -1.0
+            K = kt * dt + ct
+            w = rs_slide_speed(R, K, nc, mu_st, P[bp + PC_A], P[bp + PC_V0], C)
+            F = d * (R - K * w)
+            S[bs + SC_S] = s + d * w * dt
+            S[bs + SC_DIR] = d
+            S[bs + SC_STUCK] = 0.0
+        heal = 1.0 / P[bp + PC_HEAL]
+        rate = w / P[bp + PC_DC] + heal
+        phi_ss = heal / rate
+        S[bs + SC_PHI] = phi_ss + (phi - phi_ss) * np.exp(-rate * dt)
+        S[bs + SC_W] = w
+        S[bs + SC_FT] = F
+        return F
+    fp = kt * (x - s) + ct * v
+    if S[bs + SC_STUCK] > 0.0 and abs(fp) > mus * nc:
+        S[bs + SC_STUCK] = 0.0
+        S[bs + SC_DIR] = 1.0 if fp > 0.0 else -1.0
+        S[bs + SC_W] = 0.0
+    if S[bs + SC_STUCK] > 0.0:
+        F = fp
+    else:
+        wr = S[bs + SC_W] / P[bp + PC_VS]
+        F = S[bs + SC_DIR] * (muk + (mus - muk) * np.exp(-wr * wr)) * nc
+    S[bs + SC_FT] = F
+    return F
+
+
+@njit(cache=True)
+def _contact_post(S, P, i, x_old, x_new, dt):
+    """Coulomb-Stribeck contact after the bottle moved: the massless pad relaxes toward
+    ``F / k_t`` exactly, the anchor follows, and the contact sticks when it stops."""
+    bs = S_C0 + i * SC_SIZE
+    bp = P_C0 + i * PC_SIZE
+    if P[bp + PC_LAW] == LAW_RATE_STATE or S[bs + SC_STUCK] > 0.0:
+        return
+    s = S[bs + SC_S]
+    ueq = S[bs + SC_FT] / P[bp + PC_KT]
+    u = ueq + (x_old - s - ueq) * P[bp + PC_DECAY]
+    sn = x_new - u
+    wn = (sn - s) / dt
+    if wn * S[bs + SC_DIR] <= 0.0:
+        S[bs + SC_STUCK] = 1.0
+        S[bs + SC_W] = 0.0
+    else:
+        S[bs + SC_S] = sn
+        S[bs + SC_W] = abs(wn)
+
+
+@njit(cache=True)
+def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_end, daq_out, tac_out, ev_out,
+               counts):
     """Advance the physics to step ``n_end``; write DAQ rows, tactile snapshots and events.
 
     ``counts`` receives the number of rows written to each output. Stops
@@ -282,48 +420,44 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, n_end, daq_out, 
             x += v * dt
             S[S_FT] = 0.0
         else:
-            s = S[S_S]
-            u = x - s
-            fp = P[P_KT] * u + P[P_CT] * v
-            if S[S_STUCK] > 0.0 and abs(fp) > P[P_MUS] * ntot:
-                S[S_STUCK] = 0.0
-                S[S_DIR] = 1.0 if fp > 0.0 else -1.0
-                S[S_W] = 0.0
+            ftot = 0.0
+            for i in range(3):
+                ftot += _contact(S, P, C, i, x, v, nc, dt)
+            a = (wload - ftot) / m
+            v += a * dt
+            x += v * dt
+            sliding = True
+            s_mean = 0.0
+            w_min = np.inf
+            for i in range(3):
+                _contact_post(S, P, i, x_old, x, dt)
+                bs = S_C0 + i * SC_SIZE
+                if S[bs + SC_STUCK] > 0.0:
+                    sliding = False
+                s_mean += S[bs + SC_S] / 3.0
+                if S[bs + SC_W] < w_min:
+                    w_min = S[bs + SC_W]
+            if sliding and S[S_STUCK] > 0.0:
                 ev_out[nev, 0] = t0
                 ev_out[nev, 1] = E_ONSET
+                ev_out[nev, 2] = x_old
+                nev += 1
+            elif not sliding and S[S_STUCK] == 0.0:
+                ev_out[nev, 0] = t1
+                ev_out[nev, 1] = E_STICK
                 ev_out[nev, 2] = x
                 nev += 1
-            if S[S_STUCK] > 0.0:
-                a = (wload - fp) / m
-                v += a * dt
-                x += v * dt
-                S[S_FT] = fp
-            else:
-                w = S[S_W] / P[P_VS]
-                mu = P[P_MUK] + (P[P_MUS] - P[P_MUK]) * np.exp(-w * w)
-                fr = S[S_DIR] * mu * ntot
-                a = (wload - fr) / m
-                v += a * dt
-                x += v * dt
-                ueq = fr / P[P_KT]
-                u = ueq + (u - ueq) * P[P_DECAY]
-                sn = x - u
-                wn = (sn - s) / dt
-                if wn * S[S_DIR] <= 0.0:
-                    S[S_STUCK] = 1.0
-                    S[S_W] = 0.0
-                    ev_out[nev, 0] = t1
-                    ev_out[nev, 1] = E_STICK
-                    ev_out[nev, 2] = x
-                    nev += 1
-                else:
-                    S[S_S] = sn
-                    S[S_W] = abs(wn)
-                S[S_FT] = fr
+            S[S_STUCK] = 0.0 if sliding else 1.0
+            S[S_S] = s_mean
+            S[S_W] = w_min if sliding else 0.0
+            S[S_FT] = ftot
             if x > P[P_GRIP]:
                 S[S_FALLEN] = 1.0
                 S[S_TFALL] = t1
                 S[S_STUCK] = 0.0
+                for i in range(3):
+                    S[S_C0 + i * SC_SIZE + SC_STUCK] = 0.0
+                    S[S_C0 + i * SC_SIZE + SC_FT] = 0.0
                 ev_out[nev, 0] = t1
                 ev_out[nev, 1] = E_FALLEN
                 ev_out[nev, 2] = x
@@ -349,9 +483,12 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, n_end, daq_out, 
             if frac < 0.0:
                 frac = 0.0
             xk = x_old + frac * (x - x_old)
+            # the fingertip rolls and slides a little over the surface as it flexes past contact
+            flex = S[S_Q0 + 2] - P[P_QC]
+            spot = xk + (P[P_SPOT_K] * flex if flex > 0.0 else 0.0)
             row = daq_out[nd]
             row[O_T] = tk
-            row[O_VOLTS] = _volts(P, track, keys, k, xk, S[S_FALLEN] > 0.0, S[S_Q0 + 2])
+            row[O_VOLTS] = _volts(P, track, keys, k, spot, S[S_FALLEN] > 0.0, S[S_Q0 + 2])
             row[O_AX] = S[S_AX]
             row[O_AY] = S[S_AY]
             row[O_AZ] = S[S_AZ]
@@ -379,11 +516,12 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, n_end, daq_out, 
                 row[T_ID] = si
                 row[T_IDX] = tac_next[si]
                 row[T_T] = tac_next[si] / tac_rates[si]
+                bc = S_C0 + tac_contact[si] * SC_SIZE
                 row[T_NC] = nc
-                row[T_FT] = S[S_FT] / 3.0
-                row[T_S] = S[S_S]
+                row[T_FT] = S[bc + SC_FT]
+                row[T_S] = S[bc + SC_S]
                 row[T_FALLEN] = S[S_FALLEN]
-                row[T_W] = S[S_W] if S[S_STUCK] == 0.0 else 0.0
+                row[T_W] = S[bc + SC_W] if S[bc + SC_STUCK] == 0.0 else 0.0
                 ntac += 1
                 tac_next[si] += 1
         n += 1

@@ -61,11 +61,13 @@ from ..errors import ParameterError
 
 __all__ = [
     "Surface", "Bottle", "Drop", "Pour", "Objects", "SURFACES", "BOTTLES",
-    "PAPER_DROP", "PAPER_POUR", "WATER_DENSITY", "load_objects", "resolve_surface",
+    "PAPER_DROP", "PAPER_POUR", "WATER_DENSITY", "FRICTION_LAWS", "load_objects", "resolve_surface",
 ]
 
 #: Density of water (kg/m^3) used for poured volume -> mass.
 WATER_DENSITY: float = 1000.0
+#: Friction laws a contact can have (see :class:`Bottle`).
+FRICTION_LAWS: tuple[str, ...] = ("rate-state", "coulomb")
 
 
 def _check(cls: str, name: str, value: Any, *, lo: float | None = None, hi: float | None = None,
@@ -223,15 +225,42 @@ class Bottle:
         Diameter (m) where the fingers hold it; sets where the fingertips
         touch it. 6.5 cm (see module notes).
     mu_s, mu_k : float
-        Static and kinetic friction coefficients of the fingertip pads on
-        this bottle (``mu_k <= mu_s``).
+        Static and kinetic friction coefficients of the thumb's and index
+        finger's silicone pads on this bottle (``mu_k <= mu_s``).
     surface : Surface or str
         The surface under the slip sensor and the tactile pad (a name is
         resolved against :data:`SURFACES`).
     stribeck_velocity_m_s : float
-        Sliding speed (m/s) over which friction falls from ``mu_s`` to
-        ``mu_k`` (Stribeck curve ``mu_k + (mu_s - mu_k) exp(-(w/vs)^2)``).
+        Coulomb law only: sliding speed (m/s) over which friction falls from
+        ``mu_s`` to ``mu_k`` (``mu_k + (mu_s - mu_k) exp(-(w/vs)^2)``).
         1 mm/s, typical for soft polymer contacts.
+    friction_law, cuff_friction_law : {"rate-state", "coulomb"}
+        The law of the pads' contacts and of the middle finger's cuff
+        contact: ``"rate-state"`` (slip weakening over ``slip_distance_m``,
+        healing over ``heal_s`` and a log-rate term,
+        ``mu = mu_k (1 + a ln(1 + w / v0)) + (mu_s - mu_k) phi``) or
+        ``"coulomb"`` (Coulomb with a Stribeck curve).
+    rate_a, cuff_rate_a : float
+        Log-rate coefficient ``a`` relative to ``mu_k`` (friction rises by
+        ``a mu_k`` per e-fold of sliding speed) of the pads (silicone rubber:
+        friction rises with log sliding speed, Grosch 1963, Vorvolakos &
+        Chaudhury 2003; estimate 0.04) and of the cuff (glassy polymer on
+        polymer: direct effect A ~ 0.01 at mu ~ 0.5, Baumberger & Caroli
+        2006, so 0.02).
+    rate_v0_m_s : float
+        Reference speed ``v0`` of the log-rate term (m/s): 1 um/s.
+    slip_distance_m, cuff_slip_distance_m : float
+        Slip-weakening distance ``D_c`` (m) over which static friction falls
+        to kinetic: 50 um for a soft pad (of the order of its micro-contacts;
+        estimate), 1 um for the rigid cuff (multicontact glassy polymers,
+        D_c ~ 0.5-1 um, Baumberger & Caroli 2006).
+    heal_s : float
+        Healing time (s) in which a stuck contact regains its static friction
+        (contact ageing, Dieterich 1972; estimate 1 s).
+    cuff_mu_s, cuff_mu_k : float
+        Static and kinetic friction of the middle finger's rigid 3D-printed
+        cuff (PLA) on this bottle: 0.3 / 0.25 (polymer-on-polymer tables give
+        0.2-0.4).
     wall_stiffness_n_m : float
         Lateral stiffness (N/m) of the bottle wall under one fingertip, in
         series with the pad and the finger.
@@ -256,6 +285,16 @@ class Bottle:
     stribeck_velocity_m_s: float = 1e-3
     wall_stiffness_n_m: float = 600.0
     grip_travel_m: float = 0.03
+    friction_law: str = "rate-state"
+    rate_a: float = 0.04
+    rate_v0_m_s: float = 1e-6
+    slip_distance_m: float = 50e-6
+    heal_s: float = 1.0
+    cuff_mu_s: float = 0.3
+    cuff_mu_k: float = 0.25
+    cuff_friction_law: str = "rate-state"
+    cuff_rate_a: float = 0.02
+    cuff_slip_distance_m: float = 1e-6
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
@@ -270,14 +309,31 @@ class Bottle:
         _check("Bottle", "stribeck_velocity_m_s", self.stribeck_velocity_m_s, lo=0.0, lo_open=True)
         _check("Bottle", "wall_stiffness_n_m", self.wall_stiffness_n_m, lo=0.0, lo_open=True)
         _check("Bottle", "grip_travel_m", self.grip_travel_m, lo=0.0, lo_open=True, hi=0.09)
+        for f in ("friction_law", "cuff_friction_law"):
+            if getattr(self, f) not in FRICTION_LAWS:
+                raise ParameterError(f"Bottle.{f} must be one of {', '.join(FRICTION_LAWS)}, got {getattr(self, f)!r}")
+        _check("Bottle", "rate_a", self.rate_a, lo=0.0, hi=1.0)
+        _check("Bottle", "cuff_rate_a", self.cuff_rate_a, lo=0.0, hi=1.0)
+        _check("Bottle", "rate_v0_m_s", self.rate_v0_m_s, lo=0.0, lo_open=True, hi=1.0)
+        _check("Bottle", "slip_distance_m", self.slip_distance_m, lo=0.0, lo_open=True, hi=0.01)
+        _check("Bottle", "cuff_slip_distance_m", self.cuff_slip_distance_m, lo=0.0, lo_open=True, hi=0.01)
+        _check("Bottle", "heal_s", self.heal_s, lo=0.0, lo_open=True, hi=1e4)
+        _check("Bottle", "cuff_mu_s", self.cuff_mu_s, lo=0.0, lo_open=True, hi=5.0)
+        _check("Bottle", "cuff_mu_k", self.cuff_mu_k, lo=0.0, lo_open=True, hi=5.0)
+        if self.cuff_mu_k > self.cuff_mu_s:
+            raise ParameterError(f"Bottle.cuff_mu_k must be <= cuff_mu_s, got cuff_mu_k={self.cuff_mu_k!r} > "
+                                 f"cuff_mu_s={self.cuff_mu_s!r}")
         object.__setattr__(self, "surface", resolve_surface(self.surface, where="Bottle.surface"))
 
 
 #: The paper's three bottles (section II-D): same body, different surfaces.
+#: The pads' mu_s is calibrated (``slipreflex calibrate``, :mod:`slipreflex.sim.calibration`) so that
+#: the open-loop first pour slip comes at the paper's 200 ml; mu_k keeps its estimated ratio to mu_s
+#: (0.75 on smooth PET, 0.714 on tape). ``tests/test_sim_calibration.py`` recomputes these values.
 BOTTLES: Mapping[str, Bottle] = MappingProxyType({
-    "TR": Bottle("TR", surface="TR", mu_s=0.6, mu_k=0.45),
-    "DK": Bottle("DK", surface="DK", mu_s=0.6, mu_k=0.45),
-    "TX": Bottle("TX", surface="TX", mu_s=0.7, mu_k=0.5),
+    "TR": Bottle("TR", surface="TR", mu_s=1.047, mu_k=0.785),
+    "DK": Bottle("DK", surface="DK", mu_s=1.047, mu_k=0.785),
+    "TX": Bottle("TX", surface="TX", mu_s=1.047, mu_k=0.748),
 })
 
 

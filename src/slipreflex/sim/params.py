@@ -18,7 +18,7 @@ Examples
 --------
 >>> from slipreflex.sim.params import HandParams
 >>> HandParams().speed_units_s
-500.0
+625.0
 >>> HandParams(latency_s=-1)
 Traceback (most recent call last):
 ...
@@ -55,9 +55,9 @@ class HandParams:
     Parameters
     ----------
     speed_units_s : float
-        Servo speed limit (position units/s). Estimate: an i-Limb digit closes
-        fully (0 -> 500) in about 0.8-1.2 s (manufacturer videos, clinical
-        reports), so 500 units/s.
+        Servo speed limit (position units/s): an i-Limb digit closes fully
+        (0 -> 500) in about 0.8 s (manufacturer; Belter et al. 2013, J
+        Rehabil Res Dev 50(5)), so 625 units/s.
     latency_s : float
         Command latency (s): a 15-byte packet at 115200 baud takes 1.3 ms,
         the prosthesis control unit and the digit controller add a few ms;
@@ -86,6 +86,21 @@ class HandParams:
     pad_shear_damping_n_s_m : float
         Tangential damping (N s/m) of one pad: estimate 1.0, a loss factor of
         about 0.2 at the grasp's ~60 Hz stick resonance.
+    cuff_normal_stiffness_n_m : float
+        Normal stiffness (N/m) of the middle finger's rigid 3D-printed cuff,
+        which touches the bottle instead of a pad: estimate 20000 N/m (a
+        1-2 mm PLA shell); in series with the finger and the bottle wall.
+    cuff_shear_stiffness_n_m, cuff_shear_damping_n_s_m : float
+        Tangential stiffness (N/m) and damping (N s/m) of the cuff contact:
+        the digit's own bending along the bottle axis, estimate 10000 N/m
+        and 1 N s/m.
+    spot_travel_per_unit_m : float
+        How far (m) the slip sensor's spot moves over the bottle surface per
+        position unit the middle finger flexes past contact (the fingertip
+        rolls and slides as the finger closes). Estimate from the finger's
+        geometry: the distal segment turns ~180 degrees over 0..500
+        (0.0063 rad per unit), and the spot sits ~3 mm (the sensor's gap)
+        from the cuff's contact, so ~19 um per unit.
     stall_force_n : float
         Normal force (N) at which a digit's motor stalls and stops advancing:
         estimate 25 N per digit (i-Limb hands reach ~100 N+ power grip with
@@ -107,7 +122,7 @@ class HandParams:
     0.1
     """
 
-    speed_units_s: float = 500.0
+    speed_units_s: float = 625.0
     latency_s: float = 0.010
     servo_gain: float = 40.0
     travel_per_unit_m: float = 0.2e-3
@@ -116,13 +131,17 @@ class HandParams:
     finger_stiffness_n_m: float = 20000.0
     pad_shear_stiffness_n_m: float = 2000.0
     pad_shear_damping_n_s_m: float = 1.0
+    cuff_normal_stiffness_n_m: float = 20000.0
+    cuff_shear_stiffness_n_m: float = 10000.0
+    cuff_shear_damping_n_s_m: float = 1.0
+    spot_travel_per_unit_m: float = 19e-6
     stall_force_n: float = 25.0
     grasp_speed_units_s: float = 150.0
     grasp_poll_fs: float = 100.0
     settle_s: float = 0.5
 
     def __post_init__(self) -> None:
-        _validate(self, zero_ok=("latency_s", "settle_s"))
+        _validate(self, zero_ok=("latency_s", "settle_s", "spot_travel_per_unit_m"))
 
 
 @dataclass(frozen=True, slots=True)

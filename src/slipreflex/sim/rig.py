@@ -53,6 +53,7 @@ from ..errors import ParameterError
 from ..hardware import Finger, HandCommand
 from ..interfaces import DaqSample
 from . import kernel as K
+from .contacts import fill_contact_params
 from .objects import BOTTLES, WATER_DENSITY, Bottle, Drop, Pour, Surface
 from .params import FlowParams, HandParams, ImuParams, PhysicsParams, SlipSensorParams, TactileParams
 from .sensors import Track
@@ -409,7 +410,7 @@ class SimHand:
         >>> rig = Rig("TR")
         >>> rig.hand.command(HandCommand.CLOSE, [Finger.INDEX], 297)
         >>> _ = rig.advance(0.2)
-        >>> 80 < rig.hand.positions()[Finger.INDEX] < 100
+        >>> 110 < rig.hand.positions()[Finger.INDEX] < 125
         True
         """
         kind = HandCommand(kind)
@@ -566,6 +567,10 @@ class Rig:
         self._S = np.zeros(K.S_SIZE)
         self._S[K.S_STUCK] = 1.0
         self._S[K.S_DIR] = 1.0
+        for i in range(3):
+            self._S[K.S_C0 + i * K.SC_SIZE + K.SC_STUCK] = 1.0
+            self._S[K.S_C0 + i * K.SC_SIZE + K.SC_DIR] = 1.0
+            self._S[K.S_C0 + i * K.SC_SIZE + K.SC_PHI] = 1.0
         self._S[K.S_SUPPORTED] = 1.0
         self._S[K.S_MASS] = bottle.mass_kg
         self._S[K.S_SPD0:K.S_SPD0 + 3] = self.hand_params.speed_units_s
@@ -577,6 +582,7 @@ class Rig:
         self._samplers: list[TactileSampler] = []
         self._tac_rates = np.zeros(0)
         self._tac_next = np.zeros(0, dtype=np.int64)
+        self._tac_contact = np.zeros(0, dtype=np.int64)
         self._n_samplers_made = 0
         self._oneoff = 0
         self._daq_chunks: list[np.ndarray] = []
@@ -597,13 +603,8 @@ class Rig:
         P[K.P_DT] = ph.dt
         P[K.P_G] = hw.GRAVITY
         P[K.P_MB] = b.mass_kg
-        P[K.P_MUS] = b.mu_s
-        P[K.P_MUK] = b.mu_k
-        P[K.P_VS] = b.stribeck_velocity_m_s
-        P[K.P_KT] = 3.0 * h.pad_shear_stiffness_n_m
-        P[K.P_CT] = 3.0 * h.pad_shear_damping_n_s_m
-        P[K.P_KN] = 1.0 / (1.0 / h.pad_normal_stiffness_n_m + 1.0 / h.finger_stiffness_n_m
-                           + 1.0 / b.wall_stiffness_n_m)
+        fill_contact_params(P, h, b, ph.dt)
+        P[K.P_SPOT_K] = h.spot_travel_per_unit_m
         P[K.P_LAM] = h.travel_per_unit_m
         P[K.P_QC] = (h.aperture_radius_m - b.diameter_m / 2.0) / h.travel_per_unit_m
         P[K.P_KSERVO] = h.servo_gain
@@ -622,7 +623,6 @@ class Rig:
         fill_slip_sensor_params(P, s, self.track)
         P[K.P_FLOW_K] = flow_k
         P[K.P_FLOW_PHASE] = flow_phase
-        P[K.P_DECAY] = math.exp(-ph.dt * h.pad_shear_stiffness_n_m / h.pad_shear_damping_n_s_m)
         return P
 
     # ------------------------------------------------------------------ time
@@ -721,7 +721,8 @@ class Rig:
         counts = self._counts
         while C[K.C_N] < stop:
             K.step_until(self._S, C, self._P, self._keys, self._D, self._W, self.track.rho,
-                         self._tac_rates, self._tac_next, stop, self._daq_buf, tac, self._ev_buf, counts)
+                         self._tac_rates, self._tac_next, self._tac_contact, stop, self._daq_buf, tac,
+                         self._ev_buf, counts)
             nd, nt, ne = int(counts[0]), int(counts[1]), int(counts[2])
             out.append(self._daq_buf[:nd].copy())
             if nt:
@@ -736,6 +737,7 @@ class Rig:
     def _sync_samplers(self) -> None:
         self._tac_rates = np.array([s.fs for s in self._samplers], dtype=float)
         self._tac_next = np.array([s.next_index for s in self._samplers], dtype=np.int64)
+        self._tac_contact = np.array([hw.TRIPOD.index(s.finger) for s in self._samplers], dtype=np.int64)
 
     def _frames(self, snap: np.ndarray, key: np.uint64) -> np.ndarray:
         tp = self.tactile_params
@@ -797,8 +799,9 @@ class Rig:
         (4, 4)
         """
         S = self._S
-        w = S[K.S_W] if S[K.S_STUCK] == 0.0 else 0.0
-        snap = np.array([[0, self._oneoff, self.t, S[K.S_NC], S[K.S_FT] / 3.0, S[K.S_S], S[K.S_FALLEN], w]])
+        c = K.S_C0 + hw.TRIPOD.index(Finger(finger)) * K.SC_SIZE
+        w = S[c + K.SC_W] if S[c + K.SC_STUCK] == 0.0 else 0.0
+        snap = np.array([[0, self._oneoff, self.t, S[K.S_NC], S[c + K.SC_FT], S[c + K.SC_S], S[K.S_FALLEN], w]])
         self._oneoff += 1
         return self._frames(snap, np.uint64(K.derive_key(self._keys[3], int(finger))))[0]
 
@@ -1016,6 +1019,17 @@ class Rig:
         True
         """
         return float(self._S[K.S_TFALL]) if self.fallen else None
+
+    @property
+    def solver_stats(self) -> tuple[int, int]:
+        """(failed, most iterations) of the implicit friction solves so far (rate-state contacts).
+
+        Examples
+        --------
+        >>> Rig("TR").solver_stats
+        (0, 0)
+        """
+        return int(self._C[K.C_NFAIL]), int(self._C[K.C_NITER])
 
     def events(self) -> np.ndarray:
         """All physics events so far: rows (time, kind, displacement).

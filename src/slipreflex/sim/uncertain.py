@@ -21,7 +21,8 @@ field of a parameter object (``hand``, ``slip_sensor``, ``imu``,
 ``tactile``, ``flow``, ``physics``); ``"bottle.wall_stiffness_n_m"`` sets a
 field of every paper bottle; ``"bottle[TR,DK].mu_s"`` only of those;
 ``"bottle.mu_k/mu_s"`` sets ``mu_k`` to the value times the bottle's
-(new) ``mu_s``.
+(new) ``mu_s``; ``"calibration.first_slip_ml"`` is the open-loop target of
+:meth:`Plant.calibrated` (the pads' ``mu_s`` is calibrated, not drawn).
 
 Examples
 --------
@@ -151,24 +152,45 @@ _S = SlipSensorParams()
 #: The table: every uncertain plant constant, by name. Nominal values are read from the
 #: parameter defaults (one definition); ranges and sources are documented in docs/simulator.md.
 UNCERTAIN: Mapping[str, UncertainConstant] = MappingProxyType({c.name: c for c in (
-    _c("pad_mu_s_pet", "1", _B["TR"].mu_s, 0.4, 1.2, "uniform",
-       "estimate: silicone rubber on smooth polymers, static coefficients 0.5-1.0 and higher on clean "
-       "smooth surfaces (engineering tables; soft fingertip studies 0.6-1.0)", "bottle[TR,DK].mu_s"),
-    _c("pad_mu_s_tape", "1", _B["TX"].mu_s, 0.5, 1.3, "uniform",
-       "estimate: as pad_mu_s_pet; matte vinyl tape grips a soft pad a little better", "bottle[TX].mu_s"),
+    _c("first_slip_ml", "ml", 200.0, 170.0, 230.0, "uniform",
+       "paper Fig. 15 and III-B: the first pour slip 'at about 200 ml' (read as +-30 ml); the pads' mu_s "
+       "is calibrated to it (Plant.calibrated)", "calibration.first_slip_ml"),
     _c("pad_mu_k_ratio", "1", round(_B["TR"].mu_k / _B["TR"].mu_s, 6), 0.6, 1.0, "uniform",
        "estimate: kinetic friction of rubber on polymers 0-40 % below static", "bottle.mu_k/mu_s"),
     _c("stribeck_velocity", "m/s", _B["TR"].stribeck_velocity_m_s, 1e-4, 1e-2, "loguniform",
        "estimate: soft polymer contacts lose their static friction over 0.1-10 mm/s",
        "bottle.stribeck_velocity_m_s"),
+    _c("cuff_mu_s", "1", _B["TR"].cuff_mu_s, 0.2, 0.45, "uniform",
+       "estimate: polymer on polymer (PLA cuff on PET), tables give 0.2-0.4", "bottle.cuff_mu_s"),
+    _c("cuff_mu_k_ratio", "1", round(_B["TR"].cuff_mu_k / _B["TR"].cuff_mu_s, 6), 0.6, 1.0, "uniform",
+       "estimate: glassy polymers lose 0-40 % from static to kinetic", "bottle.cuff_mu_k/cuff_mu_s"),
+    _c("rate_a", "1", _B["TR"].rate_a, 0.01, 0.12, "loguniform",
+       "rubber friction rises with log sliding speed (Grosch 1963; PDMS: Vorvolakos & Chaudhury 2003); "
+       "slope per e-fold relative to mu_k, estimate", "bottle.rate_a"),
+    _c("cuff_rate_a", "1", _B["TR"].cuff_rate_a, 0.005, 0.05, "loguniform",
+       "direct effect of glassy polymer multicontacts, A ~ 0.01 at mu ~ 0.5 (Baumberger & Caroli 2006)",
+       "bottle.cuff_rate_a"),
+    _c("rate_v0", "m/s", _B["TR"].rate_v0_m_s, 1e-7, 1e-5, "loguniform",
+       "estimate: reference speed of the log-rate term, 0.1-10 um/s (rate-state laws, Baumberger & Caroli 2006)",
+       "bottle.rate_v0_m_s"),
+    _c("slip_distance", "m", _B["TR"].slip_distance_m, 10e-6, 300e-6, "loguniform",
+       "estimate: slip-weakening distance of a soft pad, of the order of its micro-contacts",
+       "bottle.slip_distance_m"),
+    _c("cuff_slip_distance", "m", _B["TR"].cuff_slip_distance_m, 0.3e-6, 5e-6, "loguniform",
+       "memory length D_0 ~ 0.5-1 um of glassy polymer multicontacts (Baumberger & Caroli 2006)",
+       "bottle.cuff_slip_distance_m"),
+    _c("heal_time", "s", _B["TR"].heal_s, 0.1, 10.0, "loguniform",
+       "estimate: a stuck contact regains its static friction by ageing (Dieterich 1972: log growth with "
+       "hold time)", "bottle.heal_s"),
     _c("wall_stiffness", "N/m", _B["TR"].wall_stiffness_n_m, 300.0, 1500.0, "loguniform",
        "estimate: a thin 500 ml PET bottle dents 0.7-3 mm under a 1 N fingertip push",
        "bottle.wall_stiffness_n_m"),
     _c("hand_latency", "s", _H.latency_s, 0.005, 0.030, "uniform",
        "estimate: 15-byte packet at 115200 baud (1.3 ms) plus control unit and digit controller",
        "hand.latency_s"),
-    _c("finger_speed", "units/s", _H.speed_units_s, 400.0, 650.0, "uniform",
-       "i-Limb closes fully (0..500) in about 0.8-1.2 s (manufacturer; Belter et al. 2013 review)",
+    _c("finger_speed", "units/s", _H.speed_units_s, 415.0, 625.0, "uniform",
+       "i-Limb digits close fully (0..500) in about 0.8 s (manufacturer; Belter et al. 2013 review); "
+       "up to 1.2 s reported", 
        "hand.speed_units_s"),
     _c("servo_gain", "1/s", _H.servo_gain, 20.0, 80.0, "loguniform",
        "estimate: geared DC digit under position control settles small steps in 0.05-0.2 s",
@@ -177,6 +199,11 @@ UNCERTAIN: Mapping[str, UncertainConstant] = MappingProxyType({c.name: c for c i
        "estimate: the distal pad of a 9 cm digit sweeps 6-15 cm over 0..500", "hand.travel_per_unit_m"),
     _c("pad_normal_stiffness", "N/m", _H.pad_normal_stiffness_n_m, 1500.0, 6000.0, "loguniform",
        "estimate: 2-3 mm silicone pad, Shore 20-40 A", "hand.pad_normal_stiffness_n_m"),
+    _c("cuff_shear_stiffness", "N/m", _H.cuff_shear_stiffness_n_m, 4000.0, 30000.0, "loguniform",
+       "estimate: bending of the middle digit along the bottle axis", "hand.cuff_shear_stiffness_n_m"),
+    _c("spot_travel_per_unit", "m", _H.spot_travel_per_unit_m, 5e-6, 40e-6, "uniform",
+       "estimate: the distal segment turns ~0.0063 rad per unit; the spot sits 1-6 mm from the cuff's contact",
+       "hand.spot_travel_per_unit_m"),
     _c("pad_shear_stiffness", "N/m", _H.pad_shear_stiffness_n_m, 1000.0, 4000.0, "loguniform",
        "estimate: G A / h with G 0.1-0.4 MPa, 20 mm^2, 2 mm", "hand.pad_shear_stiffness_n_m"),
     _c("tactile_noise", "N", _T.noise_n, 2e-3, 10e-3, "loguniform",
@@ -239,6 +266,25 @@ class Plant:
     physics: PhysicsParams = field(default_factory=PhysicsParams)
     bottles: Mapping[str, Bottle] = field(default_factory=lambda: dict(BOTTLES))
     values: Mapping[str, float] = field(default_factory=nominal_values)
+    first_slip_ml: float = 200.0
+
+    def calibrated(self, seeds: tuple[int, ...] | None = None) -> "Plant":
+        """This plant with every bottle's pad friction calibrated to :attr:`first_slip_ml`.
+
+        See :func:`slipreflex.sim.calibration.calibrate_bottle` (open loop only).
+
+        Examples
+        --------
+        >>> p = plant_from_values({"first_slip_ml": 180.0}).calibrated(seeds=(0,))
+        >>> p.bottles["TR"].mu_s < Plant().bottles["TR"].mu_s
+        True
+        """
+        from .calibration import CALIBRATION_SEEDS, calibrate_bottle
+
+        kw = self.rig_kwargs()
+        bottles = {n: calibrate_bottle(b, self.first_slip_ml, rig_kwargs=kw,
+                                       seeds=seeds or CALIBRATION_SEEDS).bottle for n, b in self.bottles.items()}
+        return replace(self, bottles=MappingProxyType(bottles))
 
     def rig_kwargs(self) -> dict[str, Any]:
         """Keyword arguments for :class:`~slipreflex.sim.Rig` (all but the bottle and seed).
@@ -301,9 +347,9 @@ def plant_from_values(values: Mapping[str, float] | None = None, *,
 
     Examples
     --------
-    >>> p = plant_from_values({"pad_mu_s_pet": 0.8, "pad_mu_k_ratio": 0.5})
-    >>> p.bottles["TR"].mu_s, p.bottles["TR"].mu_k, p.bottles["TX"].mu_s
-    (0.8, 0.4, 0.7)
+    >>> p = plant_from_values({"cuff_mu_s": 0.4, "cuff_mu_k_ratio": 0.5, "first_slip_ml": 190.0})
+    >>> p.bottles["TR"].cuff_mu_s, p.bottles["TR"].cuff_mu_k, p.first_slip_ml
+    (0.4, 0.2, 190.0)
     """
     table = UNCERTAIN if table is None else table
     values = dict(values or {})
@@ -311,7 +357,7 @@ def plant_from_values(values: Mapping[str, float] | None = None, *,
     if unknown:
         raise ParameterError(f"unknown uncertain constant {unknown[0]!r} (known: {', '.join(table)})")
     full = {k: float(values.get(k, c.nominal)) for k, c in table.items()}
-    sections: dict[str, dict[str, float]] = {s: {} for s in _SECTIONS}
+    sections: dict[str, dict[str, float]] = {s: {} for s in (*_SECTIONS, "calibration")}
     bottle_set: dict[str, dict[str, float]] = {b: {} for b in BOTTLES}
     ratios: list[tuple[str, str, float, str]] = []
     for name, val in full.items():
@@ -332,7 +378,7 @@ def plant_from_values(values: Mapping[str, float] | None = None, *,
         bottle_set[b][fld] = val * base
     defaults = {"hand": HandParams, "slip_sensor": SlipSensorParams, "imu": ImuParams,
                 "tactile": TactileParams, "flow": FlowParams, "physics": PhysicsParams}
-    built: dict[str, Any] = {}
+    built: dict[str, Any] = dict(sections.pop("calibration"))
     for s, kw in sections.items():
         try:
             built[s] = defaults[s](**kw)
