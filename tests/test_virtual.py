@@ -138,8 +138,9 @@ def _readline(proc, want, deadline_s=120.0):
 
 
 def test_virtual_rig_command_keys_signals_schedule_and_run(tmp_path, capsys):
+    # the textured bottle: its drop slip fires spikes under the rate-state contacts
     proc = subprocess.Popen([sys.executable, "-m", "slipreflex", "virtual-rig", "--link-dir", str(tmp_path),
-                             "--schedule", "drop@0.2", "--duration", "60"],
+                             "--bottle", "TX", "--schedule", "drop@0.2", "--duration", "60"],
                             stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
     killer = threading.Timer(90, proc.kill)  # bounds the test if the child hangs
     killer.start()
