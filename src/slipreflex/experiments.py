@@ -37,10 +37,9 @@ import math
 import os
 import sys
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -48,10 +47,12 @@ import numpy as np
 from . import methods
 from .analysis.paper import BOTTLE_ORDER
 from .analysis.paper import EXPERIMENTS as PAPER_EXPERIMENTS
+from .analysis.outputs import trial_plot, write_outputs
 from .analysis.trial import RESULT_COLUMNS, TrialRow
 from .baselines.calibration import REST_K
 from .baselines.swt import SWT_WINDOW
 from .errors import ParameterError
+from .thresholds import calibrate, calibration_seed
 from .validation import choices, integer, positive, set_field
 
 __all__ = [
@@ -72,6 +73,11 @@ BOTTLE_NAMES: tuple[str, ...] = BOTTLE_ORDER
 DEFAULT_SEED: int = 20191215
 #: Columns of results.csv: the fields of :class:`slipreflex.analysis.TrialRow`.
 RESULTS_CSV_COLUMNS: tuple[str, ...] = RESULT_COLUMNS
+
+
+def _override(base: Any, **values: Any) -> Any:
+    """``base`` with the fields given a value (not None) replaced."""
+    return dataclasses.replace(base, **{k: v for k, v in values.items() if v is not None})
 
 
 @dataclass(frozen=True)
@@ -139,9 +145,12 @@ class ReproduceConfig:
         for name in ("rest_s", "after_s", "calibration_s", "rest_k"):
             set_field(self, name, positive(name, getattr(self, name)))
         set_field(self, "swt_persist", integer("swt_persist", self.swt_persist, lo=0))
-        if self.rest_s < 0.25:
-            raise ParameterError(f"rest_s must be >= 0.25 s (200 ms of rest set the onset threshold), "
-                                 f"got {self.rest_s!r}")
+        from .analysis.onset import OnsetParams
+
+        need = OnsetParams().baseline_s + 0.05
+        if self.rest_s < need:
+            raise ParameterError(f"rest_s must be >= {need:g} s (the first {OnsetParams().baseline_s * 1e3:g} "
+                                 f"ms of rest set the onset threshold), got {self.rest_s!r}")
         self.drop  # validates the drop and pour through the simulator's own classes
         self.pour
 
@@ -156,10 +165,7 @@ class ReproduceConfig:
         """
         from .sim import PAPER_DROP
 
-        return dataclasses.replace(
-            PAPER_DROP,
-            mass_kg=PAPER_DROP.mass_kg if self.drop_mass_kg is None else self.drop_mass_kg,
-            height_m=PAPER_DROP.height_m if self.drop_height_m is None else self.drop_height_m)
+        return _override(PAPER_DROP, mass_kg=self.drop_mass_kg, height_m=self.drop_height_m)
 
     @property
     def pour(self):
@@ -172,10 +178,7 @@ class ReproduceConfig:
         """
         from .sim import PAPER_POUR
 
-        return dataclasses.replace(
-            PAPER_POUR,
-            rate_l_min=PAPER_POUR.rate_l_min if self.pour_rate_l_min is None else self.pour_rate_l_min,
-            volume_ml=PAPER_POUR.volume_ml if self.pour_volume_ml is None else self.pour_volume_ml)
+        return _override(PAPER_POUR, rate_l_min=self.pour_rate_l_min, volume_ml=self.pour_volume_ml)
 
     def duration(self, experiment: str) -> float:
         """Closed-loop recording length (s) of one trial of ``experiment``.
@@ -248,24 +251,14 @@ def trial_seed(master: int, experiment: str, bottle: str, trial: int) -> int:
     >>> trial_seed(1, "pour", "TX", 2) == trial_seed(1, "pour", "TX", 2)
     True
     """
-    e = EXPERIMENTS.index(experiment)
-    b = BOTTLE_NAMES.index(bottle)
+    e, b = EXPERIMENTS.index(experiment), BOTTLE_NAMES.index(bottle)
     ss = np.random.SeedSequence(master).spawn(len(EXPERIMENTS))[e].spawn(len(BOTTLE_NAMES))[b]
-    child = ss.spawn(trial + 1)[trial]
-    return int(child.generate_state(2, dtype=np.uint64)[0] >> np.uint64(1))
+    return _seed63(ss.spawn(trial + 1)[trial])
 
 
-def calibration_seed(master: int, bottle: str) -> int:
-    """Seed of the at-rest calibration recording of ``bottle`` (its own branch of the master).
-
-    Examples
-    --------
-    >>> calibration_seed(1, "TR") != trial_seed(1, "drop", "TR", 0)
-    True
-    """
-    ss = np.random.SeedSequence(master).spawn(len(EXPERIMENTS) + 1)[len(EXPERIMENTS)]
-    child = ss.spawn(len(BOTTLE_NAMES))[BOTTLE_NAMES.index(bottle)]
-    return int(child.generate_state(2, dtype=np.uint64)[0] >> np.uint64(1))
+def _seed63(ss: np.random.SeedSequence) -> int:
+    """A seed sequence as the 63-bit integer results.csv records."""
+    return int(ss.generate_state(2, dtype=np.uint64)[0] >> np.uint64(1))
 
 
 def closing_speed() -> float:
@@ -277,48 +270,6 @@ def closing_speed() -> float:
     True
     """
     return methods.MethodContext().closing_speed()
-
-
-def calibrate(config: ReproduceConfig) -> dict[str, float]:
-    """Thresholds of the calibrated methods by the one rule (k sd of the statistic at rest).
-
-    For every built-in bottle (always all three, whatever ``config.bottles``
-    says), grasp with the bottle's calibration seed and record the index
-    tactile array at rest for ``calibration_s`` at the rate of every method
-    with a rest statistic (:func:`slipreflex.methods.calibrated`, in the
-    method order: NMSD's 260 Hz, then SWT-SD's 380 Hz); pool the recordings of
-    each method and apply :func:`slipreflex.baselines.rest_threshold`'s rule.
-
-    Returns
-    -------
-    dict
-        Threshold by method name, e.g. ``{"nmsd": N/s, "swt": N}``.
-
-    Examples
-    --------
-    >>> th = calibrate(ReproduceConfig(calibration_s=0.5))
-    >>> sorted(th), th["nmsd"] > 0 and th["swt"] > 0
-    (['nmsd', 'swt'], True)
-    """
-    from .baselines import rest_statistic
-    from .sim import Rig, simulate_open_loop
-
-    specs = [methods.get(m) for m in methods.calibrated()]
-    stats: dict[str, list[np.ndarray]] = {s.name: [] for s in specs}
-    for b in BOTTLE_NAMES:
-        rig = Rig(b, seed=calibration_seed(config.seed, b))
-        rig.grasp()
-        for spec in specs:
-            tr = simulate_open_loop(rig, config.calibration_s, tactile_fs=spec.fs)
-            stats[spec.name].append(rest_statistic(tr.tactile, spec.rest_statistic, spec.fs))
-    out = {}
-    for method, parts in stats.items():
-        sd = float(np.std(np.concatenate(parts)))
-        if not sd > 0:
-            raise ParameterError(f"calibration: the simulated tactile array has no noise at rest; "
-                                 f"cannot derive a {method} threshold")
-        out[method] = float(config.rest_k) * sd
-    return out
 
 
 def method_context(config: ReproduceConfig, thresholds: dict[str, float]) -> methods.MethodContext:
@@ -343,35 +294,8 @@ def make_reflex(method: str, *, p0: float, thresholds: dict[str, float], swt_per
     >>> make_reflex("swt", p0=200.0, thresholds={"swt": 0.02}).fs
     380.0
     """
-    ctx = methods.MethodContext(thresholds=dict(thresholds), speed=closing_speed(),
-                                options={"swt_persist": swt_persist})
-    return methods.make(method, p0=p0, context=ctx)
-
-
-def _plot_data(cell: Cell, spec: methods.MethodSpec, tr, reflex, rows, t_pert: float):
-    """The streams of one trial for :func:`slipreflex.analysis.figures.plot_trial`."""
-    from .analysis.figures import TrialPlot
-    from .analysis.onset import OnsetParams, accel_envelope
-
-    axis = rows[0].axis
-    env = accel_envelope(tr.t, tr.accel[:, axis], OnsetParams())
-    sensor_t, x = (tr.t, tr.volts) if spec.input_kind == "slip" else (tr.tactile_t, tr.tactile)
-    det = spec.detections(reflex, x) if spec.detections is not None else None
-    pour = cell.experiment == "pour"
-    xlim = None if pour else (t_pert - 0.3, min(tr.t_end, t_pert + 1.5))
-    axes = "xyz"
-    return TrialPlot(
-        title=f"{cell.experiment} {cell.bottle} {cell.method} (trial {cell.trial}, seed {cell.seed})",
-        accel_t=tr.t, accel=tr.accel[:, axis], accel_label=f"accelerometer ({axes[axis]} axis)",
-        envelope=env, threshold=float("nan"), sensor_t=None if det is None else sensor_t,
-        sensor=None if det is None else det.sensor,
-        sensor_label="" if det is None else det.sensor_label,
-        event_t=None if det is None else sensor_t[det.events],
-        event_label="" if det is None else det.event_label, cmd_t=tr.cmd_t, cmd_v=tr.cmd_value,
-        load_t=tr.t if pour else None, load=tr.water_ml if pour else None,
-        onsets=[r.onset_s for r in rows], responses=[r.onset_s + r.response_ms / 1e3 for r in rows],
-        lasts=[r.last_change_s for r in rows], true_onsets=[r.true_onset_s for r in rows],
-        xlim=xlim)
+    return methods.make(method, p0=p0, context=methods.MethodContext(
+        thresholds=dict(thresholds), speed=closing_speed(), options={"swt_persist": swt_persist}))
 
 
 def run_trial(cell: Cell, config: ReproduceConfig, thresholds: dict[str, float], *,
@@ -404,35 +328,34 @@ def run_trial(cell: Cell, config: ReproduceConfig, thresholds: dict[str, float],
     p0 = float(round(grasp.positions[SLIP_FINGER]))
     spec = spec or methods.get(cell.method)
     reflex = spec.build(p0, dataclasses.replace(method_context(config, thresholds), method=spec.name))
+    threshold = reflex.last_threshold          # the threshold it starts with, for results.csv
     t_pert = rig.t + config.rest_s
-    load = config.drop if cell.experiment == "drop" else config.pour
-    rig.perturb(load, at=t_pert)
-    tr = run_closed_loop(rig, reflex, config.duration(cell.experiment))
-    load_s = 0.0 if cell.experiment == "drop" else config.pour.duration_s
-    fall = float("nan") if tr.fall_time is None else float(tr.fall_time)
     pour = cell.experiment == "pour"
+    rig.perturb(config.pour if pour else config.drop, at=t_pert)
+    tr = run_closed_loop(rig, reflex, config.duration(cell.experiment))
     # a pour induces slip once the water has landed; the jet's landing knock is not a slip
     start = t_pert + (_jet_fall_s(config.pour) + LANDING_S if pour else 0.0)
+    end = t_pert + (config.pour.duration_s if pour else 0.0) + config.after_s
     streams = TrialStreams(
         experiment=cell.experiment, method=cell.method, bottle=cell.bottle, seed=cell.seed,
         trial=cell.trial, accel_t=tr.t, accel=tr.accel, cmd_t=tr.cmd_t, cmd_v=tr.cmd_value,
-        base_command=p0, induction=(start, t_pert + load_s + config.after_s), t_end=tr.t_end,
-        fell_out_time=fall, true_onsets=[e.onset for e in tr.slip_events], method_fs=float(reflex.fs),
-        ramp=spec.ramp,
+        base_command=p0, induction=(start, end), t_end=tr.t_end,
+        fell_out_time=float("nan") if tr.fall_time is None else float(tr.fall_time),
+        true_onsets=[e.onset for e in tr.slip_events], method_fs=float(reflex.fs), ramp=spec.ramp,
         load_t=tr.t if pour else None, load=tr.water_ml if pour else None,
-        threshold=thresholds.get(cell.method, float(getattr(getattr(reflex, "params", None),
-                                                             "threshold", float("nan")))))
+        threshold=float("nan") if threshold is None else float(threshold))
     truth = {round(e.onset, 9): e for e in tr.slip_events}
-    rows = []
-    for r in analyse_trial(streams):
-        ev = truth.get(round(r.true_onset_s, 9)) if not math.isnan(r.true_onset_s) else None
-        # the simulator's slip episode: how long it slid (NaN while open / fallen) and how far
-        rows.append(dataclasses.replace(
-            r, grasp_position=p0, grasp_force_n=float(grasp.force_n), perturbation_s=t_pert,
-            true_slip_ms=float("nan") if ev is None or ev.end is None else 1e3 * (ev.end - ev.onset),
-            true_slip_mm=float("nan") if ev is None else 1e3 * ev.distance))
-    plot = _plot_data(cell, spec, tr, reflex, rows, t_pert) if keep_plot else None
+    rows = [dataclasses.replace(r, grasp_position=p0, grasp_force_n=float(grasp.force_n),
+                                perturbation_s=t_pert, **_true_slip(truth.get(round(r.true_onset_s, 9))))
+            for r in analyse_trial(streams)]
+    plot = trial_plot(cell, spec, tr, reflex, rows, t_pert) if keep_plot else None
     return rows, plot
+
+
+def _true_slip(ev: Any) -> dict[str, float]:
+    """The simulator's slip episode: how long it slid (NaN while open / fallen) and how far."""
+    return {"true_slip_ms": float("nan") if ev is None or ev.end is None else 1e3 * (ev.end - ev.onset),
+            "true_slip_mm": float("nan") if ev is None else 1e3 * ev.distance}
 
 
 #: After the poured water lands, its knock (~30 ms in the simulator) is over by this time (s).
@@ -495,6 +418,23 @@ def _order(row: TrialRow) -> tuple:
             methods.names().index(row.method), row.trial, row.event)
 
 
+def _run_cells(cells: list[Cell], args: list[tuple], jobs: int,
+               finished: Callable[[Cell], Any]) -> dict[tuple, tuple]:
+    """Run every cell (in this process for ``jobs == 1``); results by cell key."""
+    done: dict[tuple, tuple] = {}
+    if jobs == 1:
+        for c, a in zip(cells, args):
+            done[c.key] = _run_cell(c, *a)[1]
+            finished(c)
+        return done
+    with ProcessPoolExecutor(max_workers=jobs) as ex:
+        for f in as_completed([ex.submit(_run_cell, c, *a) for c, a in zip(cells, args)]):
+            c, res = f.result()
+            done[c.key] = res
+            finished(c)
+    return done
+
+
 def run_reproduce(config: ReproduceConfig | None = None, *, jobs: int | None = None,
                   progress: bool = True, plots: bool = True,
                   on_done: Callable[[Cell], None] | None = None) -> ReproduceResult:
@@ -540,95 +480,14 @@ def run_reproduce(config: ReproduceConfig | None = None, *, jobs: int | None = N
     cells = config.cells()
     plot_method = methods.DATH if methods.DATH in config.methods else config.methods[0]
     want = {c.key for c in cells if plots and c.trial == 0 and c.method == plot_method}
-    done: dict[tuple, tuple] = {}
     bar = tqdm(total=len(cells), file=sys.stderr, disable=not progress, desc="trials", unit="trial",
                dynamic_ncols=True)
     try:
-        if jobs == 1:
-            for c in cells:
-                _, res = _run_cell(c, config, thresholds, c.key in want, specs[c.method])
-                done[c.key] = res
-                bar.update()
-                if on_done:
-                    on_done(c)
-        else:
-            with ProcessPoolExecutor(max_workers=jobs) as ex:
-                futs = [ex.submit(_run_cell, c, config, thresholds, c.key in want, specs[c.method])
-                        for c in cells]
-                for f in as_completed(futs):
-                    c, res = f.result()
-                    done[c.key] = res
-                    bar.update()
-                    if on_done:
-                        on_done(c)
+        done = _run_cells(cells, [(config, thresholds, c.key in want, specs[c.method]) for c in cells],
+                          jobs, lambda c: (bar.update(), on_done and on_done(c)))
     finally:
         bar.close()
     rows = sorted((r for c in cells for r in done[c.key][0]), key=_order)
     plot_data = {c.key: done[c.key][1] for c in cells if done[c.key][1] is not None}
     return ReproduceResult(config, rows, summarize(rows), thresholds, plot_data,
                            time.perf_counter() - t0, jobs, calibration_wall_s=t_cal)
-
-
-def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str | None = None,
-                  discussion: Sequence[str] | None = None) -> dict[str, Path]:
-    """Write results.csv, summary.csv, the figures and report.md into ``out_dir``.
-
-    The report's prose (setup, captions, discussion) comes from
-    :mod:`slipreflex.analysis.report`.
-
-    Returns
-    -------
-    dict
-        Paths by name ("results", "summary", "report", and one per figure).
-
-    Examples
-    --------
-    >>> import tempfile
-    >>> cfg = ReproduceConfig(trials=1, bottles=("TX",), methods=("dath",), experiments=("drop",))
-    >>> res = run_reproduce(cfg, jobs=1, progress=False)
-    >>> paths = write_outputs(res, tempfile.mkdtemp())
-    >>> sorted(p for p in paths if not p.endswith(".png"))
-    ['report', 'results', 'summary']
-    """
-    from .analysis import report as R
-
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    paths = {"results": R.write_csv(out / "results.csv", result.rows, RESULTS_CSV_COLUMNS),
-             "summary": R.write_csv(out / "summary.csv", result.summary, R.SUMMARY_COLUMNS)}
-    figs = _write_figures(result, out, paths)
-    md = R.report_markdown(summary=result.summary, rows=result.rows, figures=figs,
-                           setup=R.setup_lines(result, command),
-                           discussion=list(discussion) if discussion is not None else R.discussion_text(result))
-    paths["report"] = out / "report.md"
-    paths["report"].write_text(md)
-    return paths
-
-
-def _write_figures(result: ReproduceResult, out: Path, paths: dict[str, Path]) -> list[tuple[str, str]]:
-    """Draw the example trials, bar charts and success chart; (caption, relative path) of each."""
-    from .analysis import figures as F
-    from .analysis import report as R
-
-    figs: list[tuple[str, str]] = []
-    fig_dir = out / "figures"
-    for key in sorted(result.plots, key=lambda k: (EXPERIMENTS.index(k[0]), BOTTLE_NAMES.index(k[1]))):
-        e, b, m, _ = key
-        name = f"trial_{e}_{b}_{m}.png"
-        paths[name] = F.plot_trial(result.plots[key], fig_dir / name)
-        figs.append((R.trial_caption(e, b, m), f"figures/{name}"))
-        ons = [x for x in result.plots[key].onsets if x == x]
-        if e == "pour" and ons:
-            zname = f"trial_{e}_{b}_{m}_zoom.png"
-            zoom = dataclasses.replace(result.plots[key], xlim=(ons[0] - 0.3, ons[0] + 1.0),
-                                       title=result.plots[key].title + ", around the first slip")
-            paths[zname] = F.plot_trial(zoom, fig_dir / zname)
-            figs.append((R.zoom_caption(b, m), f"figures/{zname}"))
-    for e in result.config.experiments:
-        for metric in ("response", "total"):
-            name = f"bars_{e}_{metric}.png"
-            paths[name] = F.bar_chart(result.summary, e, metric, fig_dir / name)
-            figs.append((R.bars_caption(e, metric), f"figures/{name}"))
-    paths["success.png"] = F.success_chart(result.summary, fig_dir / "success.png")
-    figs.append((R.SUCCESS_CAPTION, "figures/success.png"))
-    return figs

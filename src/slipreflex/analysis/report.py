@@ -1,7 +1,9 @@
 """results.csv, summary.csv, the terminal table and report.md (one definition of each).
 
-Rows are plain dicts with the keys of :data:`~slipreflex.analysis.trial.RESULT_COLUMNS`;
-no data-frame library is needed.
+Rows are :class:`~slipreflex.analysis.trial.TrialRow` objects or dicts with the same keys
+(a results.csv read back); no data-frame library is needed. The prose of report.md (the
+run's setup, the figure captions, the discussion) is here too, every number in it read from
+its one definition.
 
 Examples
 --------
@@ -32,7 +34,8 @@ from .trial import RESULT_COLUMNS
 __all__ = ["SUMMARY_COLUMNS", "summarize", "write_csv", "read_csv", "terminal_table",
            "comparison_markdown", "success_markdown", "onset_markdown", "pour_slips_markdown",
            "differences",
-           "report_markdown", "fmt_mean_sd", "group_key_order"]
+           "report_markdown", "fmt_mean_sd", "group_key_order", "setup_lines", "discussion_text",
+           "trial_caption", "zoom_caption", "bars_caption", "SUCCESS_CAPTION", "PAPER_FIGURES"]
 
 #: Columns of summary.csv, in order.
 SUMMARY_COLUMNS: tuple[str, ...] = (

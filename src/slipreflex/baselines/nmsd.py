@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..hardware import FINGER_MAX, FINGER_MIN, NMSD_FS, TACTILE_SHAPE
-from ..validation import number, resolve_params, set_field
+from ..validation import number, set_field
 from ._validate import as_frames, frame_shape
 from .closing import CLOSE_S, ClosingParams, closing_commands
 from .shell import TactileReflex

@@ -1,0 +1,143 @@
+"""The files a reproduction writes: results.csv, summary.csv, report.md and the figures.
+
+:func:`write_outputs` writes a run (a :class:`slipreflex.experiments.ReproduceResult`);
+:func:`trial_plot` turns one simulated trial into the data of its figure, drawing the
+method's detections the way its :class:`~slipreflex.methods.MethodSpec` says. The text
+comes from :mod:`slipreflex.analysis.report`, the drawing from :mod:`slipreflex.analysis.figures`.
+
+Examples
+--------
+>>> import tempfile
+>>> from slipreflex.experiments import ReproduceConfig, run_reproduce
+>>> res = run_reproduce(ReproduceConfig(trials=1, bottles=("TX",), methods=("fixed",),
+...                                     experiments=("drop",)), jobs=1, progress=False, plots=False)
+>>> sorted(write_outputs(res, tempfile.mkdtemp()))[:3]
+['bars_drop_response.png', 'bars_drop_total.png', 'report']
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from .paper import BOTTLE_ORDER, EXPERIMENTS
+from .report import (SUCCESS_CAPTION, SUMMARY_COLUMNS, bars_caption, discussion_text, report_markdown,
+                     setup_lines, trial_caption, write_csv, zoom_caption)
+from .trial import RESULT_COLUMNS
+
+__all__ = ["write_outputs", "trial_plot"]
+
+
+def write_outputs(result: Any, out_dir: str | Path, *, command: str | None = None,
+                  discussion: Sequence[str] | None = None) -> dict[str, Path]:
+    """Write results.csv, summary.csv, the figures and report.md of a run into ``out_dir``.
+
+    ``result`` is a :class:`slipreflex.experiments.ReproduceResult`.
+
+    Returns
+    -------
+    dict
+        Paths by name ("results", "summary", "report", and one per figure).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from slipreflex.experiments import ReproduceConfig, run_reproduce
+    >>> cfg = ReproduceConfig(trials=1, bottles=("TX",), methods=("dath",), experiments=("drop",))
+    >>> res = run_reproduce(cfg, jobs=1, progress=False)
+    >>> paths = write_outputs(res, tempfile.mkdtemp())
+    >>> sorted(p for p in paths if not p.endswith(".png"))
+    ['report', 'results', 'summary']
+    """
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    paths = {"results": write_csv(out / "results.csv", result.rows, RESULT_COLUMNS),
+             "summary": write_csv(out / "summary.csv", result.summary, SUMMARY_COLUMNS)}
+    figs = _write_figures(result, out, paths)
+    md = report_markdown(summary=result.summary, rows=result.rows, figures=figs,
+                         setup=setup_lines(result, command),
+                         discussion=list(discussion) if discussion is not None else discussion_text(result))
+    paths["report"] = out / "report.md"
+    paths["report"].write_text(md)
+    return paths
+
+
+def _write_figures(result: Any, out: Path, paths: dict[str, Path]) -> list[tuple[str, str]]:
+    """Draw the example trials, bar charts and success chart; (caption, relative path) of each."""
+    from . import figures as F
+
+    figs: list[tuple[str, str]] = []
+    fig_dir = out / "figures"
+    for key in sorted(result.plots, key=lambda k: (EXPERIMENTS.index(k[0]), BOTTLE_ORDER.index(k[1]))):
+        e, b, m, _ = key
+        name = f"trial_{e}_{b}_{m}.png"
+        paths[name] = F.plot_trial(result.plots[key], fig_dir / name)
+        figs.append((trial_caption(e, b, m), f"figures/{name}"))
+        ons = [x for x in result.plots[key].onsets if x == x]
+        if e == "pour" and ons:
+            zname = f"trial_{e}_{b}_{m}_zoom.png"
+            zoom = dataclasses.replace(result.plots[key], xlim=(ons[0] - 0.3, ons[0] + 1.0),
+                                       title=result.plots[key].title + ", around the first slip")
+            paths[zname] = F.plot_trial(zoom, fig_dir / zname)
+            figs.append((zoom_caption(b, m), f"figures/{zname}"))
+    for e in result.config.experiments:
+        for metric in ("response", "total"):
+            name = f"bars_{e}_{metric}.png"
+            paths[name] = F.bar_chart(result.summary, e, metric, fig_dir / name)
+            figs.append((bars_caption(e, metric), f"figures/{name}"))
+    paths["success.png"] = F.success_chart(result.summary, fig_dir / "success.png")
+    figs.append((SUCCESS_CAPTION, "figures/success.png"))
+    return figs
+
+
+def trial_plot(cell: Any, spec: Any, tr: Any, reflex: Any, rows: Sequence[Any], t_pert: float):
+    """What :func:`slipreflex.analysis.figures.plot_trial` draws of one simulated trial.
+
+    Parameters
+    ----------
+    cell : slipreflex.experiments.Cell
+        The trial (experiment, bottle, method, index, seed).
+    spec : slipreflex.methods.MethodSpec
+        The method's specification: its input stream and how its detections are drawn.
+    tr : slipreflex.sim.loop.SimTrace
+        The closed-loop recording.
+    reflex : Reflex
+        The reflex that ran (its parameters draw the detections).
+    rows : sequence of TrialRow
+        The trial's analysed rows (onsets, responses, last changes).
+    t_pert : float
+        When the load was applied (s).
+
+    Examples
+    --------
+    >>> from slipreflex.experiments import ReproduceConfig, Cell, run_trial, trial_seed
+    >>> cfg = ReproduceConfig(trials=1, after_s=0.5)
+    >>> cell = Cell("drop", "TX", "nmsd", 0, trial_seed(cfg.seed, "drop", "TX", 0))
+    >>> _, plot = run_trial(cell, cfg, {"nmsd": 15.0}, keep_plot=True)
+    >>> plot.event_label, plot.sensor.shape == plot.sensor_t.shape
+    ('NMSD detections', True)
+    """
+    from .figures import TrialPlot
+    from .onset import OnsetParams, accel_envelope
+
+    axis = rows[0].axis
+    env = accel_envelope(tr.t, tr.accel[:, axis], OnsetParams())
+    sensor_t, x = (tr.t, tr.volts) if spec.input_kind == "slip" else (tr.tactile_t, tr.tactile)
+    det = spec.detections(reflex, x) if spec.detections is not None else None
+    pour = cell.experiment == "pour"
+    xlim = None if pour else (t_pert - 0.3, min(tr.t_end, t_pert + 1.5))
+    axes = "xyz"
+    return TrialPlot(
+        title=f"{cell.experiment} {cell.bottle} {cell.method} (trial {cell.trial}, seed {cell.seed})",
+        accel_t=tr.t, accel=tr.accel[:, axis], accel_label=f"accelerometer ({axes[axis]} axis)",
+        envelope=env, threshold=float("nan"), sensor_t=None if det is None else sensor_t,
+        sensor=None if det is None else det.sensor,
+        sensor_label="" if det is None else det.sensor_label,
+        event_t=None if det is None else sensor_t[det.events],
+        event_label="" if det is None else det.event_label, cmd_t=tr.cmd_t, cmd_v=tr.cmd_value,
+        load_t=tr.t if pour else None, load=tr.water_ml if pour else None,
+        onsets=[r.onset_s for r in rows], responses=[r.onset_s + r.response_ms / 1e3 for r in rows],
+        lasts=[r.last_change_s for r in rows], true_onsets=[r.true_onset_s for r in rows],
+        xlim=xlim)
