@@ -32,14 +32,19 @@ def test_example_toml_loads_and_runs():
     assert rig.grasp().stable
 
 
+_REST = 'diameter_m = 0.06\nmu_s = 1.0\nmu_k = 0.8\nsurface = "DK"\n'
+
+
 @pytest.mark.parametrize("text, field", [
-    ('[bottles.B]\nmass_kg = -0.1\n', "bottles.B.mass_kg"),
-    ('[bottles.B]\nsurface = "chrome"\n', "bottles.B.surface"),
+    ('[bottles.B]\nmass_kg = -0.1\n' + _REST, "bottles.B.mass_kg"),
+    ('[bottles.B]\nmass_kg = 0.1\ndiameter_m = 0.06\nmu_s = 1.0\nmu_k = 0.8\nsurface = "chrome"\n',
+     "bottles.B.surface"),
     ('[surfaces.S]\ntexture = 0.1\n', "surfaces.S.reflectance"),
     ('[bottles.B]\nmass = 0.1\n', "bottles.B.mass"),
     ('[drops.D]\nheight_m = "high"\n', "drops.D.height_m"),
     ('[pours.P]\nrate_l_min = 0\n', "pours.P.rate_l_min"),
-    ('[bottles.B]\nmu_s = 0.3\nmu_k = 0.5\n', "bottles.B.mu_k"),
+    ('[bottles.B]\nmass_kg = 0.1\ndiameter_m = 0.06\nmu_s = 0.3\nmu_k = 0.5\nsurface = "DK"\n',
+     "bottles.B.mu_k"),
     ('[cups.C]\nx = 1\n', "[cups]"),
 ])
 def test_invalid_toml_names_the_file_and_field(tmp_path, text, field):
@@ -137,3 +142,23 @@ def test_history_off_streams_the_same_samples():
     assert b.daq_history().t.size == 0 and a.daq_history().t.size == len(sa)
     with pytest.raises(ParameterError, match="history"):
         simulate_open_loop(b, 0.1)
+
+
+@pytest.mark.parametrize("missing", ["mass_kg", "diameter_m", "mu_s", "mu_k", "surface"])
+def test_a_bottle_without_a_required_field_is_an_error_naming_it(tmp_path, missing):
+    from slipreflex.sim import load_objects
+
+    fields = {"mass_kg": "0.05", "diameter_m": "0.06", "mu_s": "1.0", "mu_k": "0.8", "surface": '"DK"'}
+    del fields[missing]
+    f = tmp_path / "b.toml"
+    f.write_text("[bottles.B]\n" + "".join(f"{k} = {v}\n" for k, v in fields.items()))
+    with pytest.raises(ParameterError, match=f"bottles.B.{missing}: missing field") as err:
+        load_objects(f)
+    assert str(err.value).count(str(f)) == 1
+
+
+def test_load_objects_on_a_directory_is_one_line(tmp_path):
+    from slipreflex.sim import load_objects
+
+    with pytest.raises(ParameterError, match="is a directory"):
+        load_objects(tmp_path)

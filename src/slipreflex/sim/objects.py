@@ -66,6 +66,8 @@ __all__ = [
 
 #: Density of water (kg/m^3) used for poured volume -> mass.
 WATER_DENSITY: float = 1000.0
+#: Fields a bottle from a TOML file must give (mass, size, friction, surface).
+BOTTLE_REQUIRED: tuple[str, ...] = ("mass_kg", "diameter_m", "mu_s", "mu_k", "surface")
 #: Friction laws a contact can have (see :class:`Bottle`).
 FRICTION_LAWS: tuple[str, ...] = ("rate-state", "coulomb")
 
@@ -279,8 +281,8 @@ class Bottle:
     mass_kg: float = 0.040
     height_m: float = 0.16
     diameter_m: float = 0.065
-    mu_s: float = 0.6
-    mu_k: float = 0.45
+    mu_s: float = 1.047
+    mu_k: float = 0.785
     surface: Surface | str = "TR"
     stribeck_velocity_m_s: float = 1e-3
     wall_stiffness_n_m: float = 600.0
@@ -462,15 +464,21 @@ def _build(cls: type, table: Any, where: str, extra_surfaces: Mapping[str, Surfa
     for req in required:
         if req not in kwargs:
             raise ParameterError(f"{where}.{req}: missing field")
+    if cls is Bottle:
+        # a user's bottle must say what it weighs, how wide it is, how it grips and what it looks like
+        for req in BOTTLE_REQUIRED:
+            if req not in kwargs:
+                raise ParameterError(f"{where}.{req}: missing field (a bottle needs {', '.join(BOTTLE_REQUIRED)})")
     if cls is Bottle and "surface" in kwargs:
         kwargs["surface"] = resolve_surface(kwargs["surface"], extra_surfaces, where=f"{where}.surface")
     try:
-        return cls(**kwargs)
+        obj = cls(**kwargs)
     except ParameterError as err:
         msg = str(err)
         # "Bottle.mass_kg must be ..." -> "<file>: bottles.X.mass_kg must be ..."
         head = f"{cls.__name__}."
         raise ParameterError(f"{where}.{msg[len(head):]}" if msg.startswith(head) else f"{where}: {msg}") from None
+    return obj
 
 
 def load_objects(path: str | Path) -> Objects:
@@ -517,7 +525,8 @@ def load_objects(path: str | Path) -> Objects:
     --------
     >>> import tempfile, pathlib
     >>> p = pathlib.Path(tempfile.mkdtemp()) / "o.toml"
-    >>> _ = p.write_text('[bottles.B]\\nmass_kg = 0.05\\nsurface = "DK"\\n')
+    >>> _ = p.write_text('[bottles.B]\\nmass_kg = 0.05\\ndiameter_m = 0.06\\nmu_s = 1.0\\nmu_k = 0.8\\n'
+    ...                  'surface = "DK"\\n')
     >>> load_objects(p).bottles["B"].surface.name
     'DK'
     """
@@ -527,6 +536,10 @@ def load_objects(path: str | Path) -> Objects:
             doc = tomllib.load(fh)
     except FileNotFoundError:
         raise ParameterError(f"{path}: no such file") from None
+    except IsADirectoryError:
+        raise ParameterError(f"{path}: is a directory, not a TOML file") from None
+    except OSError as err:
+        raise ParameterError(f"{path}: cannot read: {err.strerror}") from None
     except tomllib.TOMLDecodeError as err:
         raise ParameterError(f"{path}: invalid TOML: {err}") from None
     unknown = sorted(set(doc) - {"surfaces", "bottles", "drops", "pours"})
