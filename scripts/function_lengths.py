@@ -2,9 +2,9 @@
 
 Numba kernels (functions decorated with ``njit`` / ``jit``) are listed apart: they are
 written as flat loops on purpose. Used for the issue-12 measure "no function outside the
-numba kernels longer than about 80 lines"; ``tests/test_package.py`` checks the limit.
+numba kernels longer than about 80 lines"; ``tests/test_house.py`` checks the limit.
 
-Usage: python scripts/function_lengths.py [N] [--root src/slipreflex]
+Usage: python scripts/function_lengths.py [N] [--root src/slipreflex] [--with-docstrings]
 """
 
 from __future__ import annotations
@@ -23,8 +23,9 @@ def _is_kernel(node: ast.AST) -> bool:
     return False
 
 
-def function_lengths(root: Path) -> list[tuple[int, str, bool]]:
-    """(lines without the docstring, "file:line name", is a numba kernel) for every function."""
+def function_lengths(root: Path, *, docstrings: bool = False) -> list[tuple[int, str, bool]]:
+    """(lines, "file:line name", is a numba kernel) for every function; docstrings not counted
+    unless ``docstrings``."""
     out = []
     for path in sorted(root.rglob("*.py")):
         tree = ast.parse(path.read_text(), filename=str(path))
@@ -32,7 +33,7 @@ def function_lengths(root: Path) -> list[tuple[int, str, bool]]:
             if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
                 n = node.end_lineno - node.lineno + 1
                 body = node.body
-                if body and isinstance(body[0], ast.Expr) and isinstance(getattr(body[0], "value", None),
+                if not docstrings and body and isinstance(body[0], ast.Expr) and isinstance(getattr(body[0], "value", None),
                                                                         ast.Constant) \
                         and isinstance(body[0].value.value, str):
                     n -= body[0].end_lineno - body[0].lineno + 1
@@ -45,9 +46,11 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("n", nargs="?", type=int, default=10)
     ap.add_argument("--root", type=Path, default=Path(__file__).resolve().parents[1] / "src" / "slipreflex")
+    ap.add_argument("--with-docstrings", action="store_true", help="count docstring lines too")
     args = ap.parse_args()
-    rows = function_lengths(args.root)
-    print("longest functions outside numba kernels (lines, docstring excluded):")
+    rows = function_lengths(args.root, docstrings=args.with_docstrings)
+    what = "docstring included" if args.with_docstrings else "docstring excluded"
+    print(f"longest functions outside numba kernels (lines, {what}):")
     for n, where, _ in [r for r in rows if not r[2]][: args.n]:
         print(f"{n:5d}  {where}")
     kernels = [r for r in rows if r[2]]

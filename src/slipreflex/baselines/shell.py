@@ -20,6 +20,7 @@ Examples
 from __future__ import annotations
 
 import math
+from abc import ABC, abstractmethod
 from typing import Any, ClassVar, Protocol
 
 import numpy as np
@@ -51,7 +52,7 @@ class Detector(Protocol):
     def update(self, frame: np.ndarray) -> tuple[float, bool, bool]: ...
 
 
-class TactileReflex:
+class TactileReflex(ABC):
     """Streaming tactile reflex: frames in, closing-ramp targets out (a Reflex).
 
     Subclasses set :attr:`name`, :attr:`params_class` (a frozen dataclass with
@@ -96,8 +97,9 @@ class TactileReflex:
         self._closer = Closer(self.params.closing)
         self.reset()
 
+    @abstractmethod
     def _detector(self) -> Detector:
-        raise NotImplementedError
+        """A fresh detector for this method's parameters."""
 
     def reset(self) -> None:
         """Restore the initial state.

@@ -1,0 +1,68 @@
+"""The package's own house rules (issue 12): checked over every public name, so new code is covered."""
+
+from __future__ import annotations
+
+import enum
+import importlib
+import inspect
+import sys
+from pathlib import Path
+
+import pytest
+
+from slipreflex.errors import ParameterError
+from test_package import MODULES
+
+ROOT = Path(__file__).resolve().parents[1]
+UNKNOWN = "no_such_option_xyz"
+
+
+def _public_classes():
+    out = []
+    for name in MODULES:
+        mod = importlib.import_module(name)
+        for attr in getattr(mod, "__all__", ()):
+            obj = getattr(mod, attr)
+            if (inspect.isclass(obj) and obj.__module__ == name and not inspect.isabstract(obj)
+                    and not issubclass(obj, (BaseException, enum.Enum))
+                    and not getattr(obj, "_is_protocol", False)):
+                out.append(obj)
+    return out
+
+
+CLASSES = _public_classes()
+
+
+def test_the_constructor_list_is_found_automatically():
+    names = {c.__qualname__ for c in CLASSES}
+    assert {"NMSD", "SWTSD", "SlipReflex", "MethodSpec", "ReproduceConfig", "TrialRow"} <= names
+    assert len(CLASSES) > 50
+
+
+@pytest.mark.parametrize("cls", CLASSES, ids=lambda c: f"{c.__module__}.{c.__qualname__}")
+def test_every_public_constructor_rejects_an_unknown_keyword(cls):
+    """Like python-control's kwargs_test: a misspelt option is an error naming it, never ignored."""
+    with pytest.raises((TypeError, ParameterError)) as err:
+        cls(**{UNKNOWN: 1})
+    assert UNKNOWN in str(err.value), f"{cls.__qualname__}: {err.value}"
+
+
+def test_the_params_and_overrides_contract_names_the_unknown_keyword():
+    from slipreflex.baselines import NMSD, SWTSD, NMSDParams, SWTParams
+
+    for cls, params in ((NMSD, NMSDParams(threshold=1.0, speed=2.0)), (SWTSD, SWTParams(threshold=1.0, speed=2.0))):
+        with pytest.raises(ParameterError, match=UNKNOWN):
+            cls(params, **{UNKNOWN: 1})
+        assert cls(params, threshold=3.0).params.threshold == 3.0
+
+
+def test_no_function_outside_the_numba_kernels_is_longer_than_80_lines():
+    sys.path.insert(0, str(ROOT / "scripts"))
+    try:
+        from function_lengths import function_lengths
+    finally:
+        sys.path.pop(0)
+    rows = function_lengths(ROOT / "src" / "slipreflex")
+    assert any(kernel for _, _, kernel in rows), "the numba kernels were not recognised"
+    long = [(n, where) for n, where, kernel in rows if not kernel and n > 80]
+    assert not long, f"functions over 80 lines (docstring excluded): {long}"
