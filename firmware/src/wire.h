@@ -47,7 +47,10 @@ struct wire_reflex {
     int32_t x;          /* filtered sample, Q16 ADC counts */
 };
 
-/* CRC-16/CCITT-FALSE: poly 0x1021, init 0xFFFF, not reflected, no final xor. */
+/* CRC-16/CCITT-FALSE: poly 0x1021, init 0xFFFF, not reflected, no final xor.
+ * (avr-libc's _crc_xmodem_update started from 0xFFFF computes the same; its
+ * _crc_ccitt_update is the reflected variant. wire.c uses a 256-entry table.) */
+extern const uint16_t wire_crc_table[256];
 uint16_t wire_crc16(uint16_t crc, const uint8_t *data, uint8_t len);
 
 /* Write the 20-byte frame of `s` into `out`. */

@@ -66,6 +66,15 @@ int main(int argc, char **argv)
         return 2;
     }
     int fails = 0, nf = 0, nb = 0, ns = 0, lineno = 0;
+    for (unsigned i = 0; i < 256; i++) {      /* the table against the bitwise definition */
+        uint16_t c = (uint16_t)(i << 8);
+        for (int b = 0; b < 8; b++)
+            c = (c & 0x8000u) ? (uint16_t)((c << 1) ^ 0x1021u) : (uint16_t)(c << 1);
+        if (wire_crc_table[i] != c) {
+            printf("FAIL wire_crc_table[%u] = %04x, expected %04x\n", i, wire_crc_table[i], c);
+            fails++;
+        }
+    }
     static const uint8_t check[] = "123456789";
     if (wire_crc16(0xFFFFu, check, 9) != 0x29B1u) {
         printf("FAIL crc check value %04x != 29b1\n", wire_crc16(0xFFFFu, check, 9));
