@@ -66,3 +66,19 @@ def test_no_function_outside_the_numba_kernels_is_longer_than_80_lines():
     assert any(kernel for _, _, kernel in rows), "the numba kernels were not recognised"
     long = [(n, where) for n, where, kernel in rows if not kernel and n > 80]
     assert not long, f"functions over 80 lines (docstring excluded): {long}"
+
+
+def test_the_default_sampling_rate_is_the_daq_s_everywhere():
+    import slipreflex as sr
+    from slipreflex import hardware as hw
+    from slipreflex import methods
+    from slipreflex.board import BoardReflex
+    from slipreflex.chain import FilterParams, ReflexParams
+
+    assert hw.DAQ_FS == pytest.approx(333.333, abs=1e-3)
+    rates = {"ReflexParams": ReflexParams().fs, "FilterParams": FilterParams().fs,
+             "SlipReflex": sr.SlipReflex().fs, "BoardReflex": BoardReflex().fs,
+             "dath": methods.make("dath").fs, "fixed": methods.get("fixed").fs,
+             "LowPass": inspect.signature(sr.LowPass).parameters["fs"].default,
+             "lowpass": inspect.signature(sr.lowpass).parameters["fs"].default}
+    assert rates == dict.fromkeys(rates, hw.DAQ_FS)

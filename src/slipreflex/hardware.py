@@ -24,7 +24,8 @@ __all__ = [
     "NMSD_FS", "SWT_FS", "GRAVITY", "IMU_RANGE_G", "IMU_LSB_PER_G", "SLIP_SENSOR_GAP_M",
 ]
 
-#: Nominal slip-sensor sampling rate the paper quotes (Hz); the chain's default ``fs``.
+#: Nominal slip-sensor sampling rate the paper quotes (Hz); the DAQ really samples at DAQ_FS,
+#: every default ``fs`` of the package.
 FS_NOMINAL: float = 333.0
 #: AVR clock (Hz) of the ATmega328P DAQ board.
 F_CPU: int = 16_000_000

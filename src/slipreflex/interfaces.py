@@ -142,7 +142,7 @@ class Reflex(Protocol):
     Examples
     --------
     >>> class Never:
-    ...     name, input_kind, fs = "never", "slip", 333.0
+    ...     name, input_kind, fs = "never", "slip", 333.33
     ...     last_event, last_filtered, last_threshold, last_count = False, float("nan"), None, None
     ...     def step(self, sample, position=None): return None
     ...     def reset(self): pass

@@ -40,9 +40,9 @@ function, or a :func:`functools.partial` of one.
 
 >>> from slipreflex.chain import SlipReflex
 >>> def build_slow(p0, context, **params):
-...     return SlipReflex(fs=333.0, n=32, p0=p0, **params)
+...     return SlipReflex(n=32, p0=p0, **params)
 >>> methods.register(methods.MethodSpec(name="slow", label="slow MPI", input_kind="slip",
-...                                     fs=333.0, build=build_slow))
+...                                     fs=1 / 0.003, build=build_slow))
 >>> methods.make("slow", p0=100.0).params.n
 32
 >>> methods.unregister("slow")

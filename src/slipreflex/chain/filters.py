@@ -20,7 +20,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..hardware import FS_NOMINAL
+from ..hardware import DAQ_FS
 from ._checks import as_samples
 from .params import FilterParams
 
@@ -40,7 +40,7 @@ def _design(fs: float, cutoff: float) -> tuple[np.ndarray, np.ndarray]:
     return sos, zi
 
 
-def design_lowpass(fs: float = FS_NOMINAL, cutoff: float = 10.0) -> np.ndarray:
+def design_lowpass(fs: float = DAQ_FS, cutoff: float = 10.0) -> np.ndarray:
     """Second-order sections of the chain's low-pass filter.
 
     Parameters
@@ -64,7 +64,7 @@ def design_lowpass(fs: float = FS_NOMINAL, cutoff: float = 10.0) -> np.ndarray:
     return _design(p.fs, p.cutoff)[0].copy()
 
 
-def lowpass(raw, fs: float = FS_NOMINAL, cutoff: float = 10.0) -> np.ndarray:
+def lowpass(raw, fs: float = DAQ_FS, cutoff: float = 10.0) -> np.ndarray:
     """Filter a whole recording of raw slip-sensor volts.
 
     Parameters
@@ -122,7 +122,7 @@ class LowPass:
 
     __slots__ = ("params", "_sections", "_zi0", "_zi", "_started")
 
-    def __init__(self, fs: float = FS_NOMINAL, cutoff: float = 10.0, enabled: bool = True) -> None:
+    def __init__(self, fs: float = DAQ_FS, cutoff: float = 10.0, enabled: bool = True) -> None:
         self.params = FilterParams(fs=fs, cutoff=cutoff, enabled=enabled)
         sos, zi = _design(self.params.fs, self.params.cutoff)
         self._sections = [tuple(float(c) for c in row) for row in sos]

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..errors import ParameterError
-from ..hardware import FINGER_MAX, FINGER_MIN, FS_NOMINAL, PAPER_LSB, WINDOW_N
+from ..hardware import DAQ_FS, FINGER_MAX, FINGER_MIN, PAPER_LSB, WINDOW_N
 
 __all__ = ["FilterParams", "EncoderParams", "WindowParams", "MPIParams", "ReflexParams"]
 
@@ -81,7 +81,7 @@ class FilterParams:
     slipreflex.errors.ParameterError: cutoff must be below fs/2 = 10 Hz, got 10.0
     """
 
-    fs: float = FS_NOMINAL
+    fs: float = DAQ_FS
     cutoff: float = 10.0
     enabled: bool = True
 
@@ -208,7 +208,7 @@ class ReflexParams:
     True
     """
 
-    fs: float = FS_NOMINAL
+    fs: float = DAQ_FS
     cutoff: float = 10.0
     filter: bool = True
     threshold: float = DEFAULT_THRESHOLD
