@@ -295,16 +295,14 @@ def build(cls: type[T], kwargs: dict[str, Any]) -> T:
 
     Examples
     --------
-    >>> from dataclasses import dataclass
-    >>> @dataclass(frozen=True)
-    ... class P:
-    ...     n: int = 1
-    >>> build(P, {"n": 2}).n
+    >>> import dataclasses
+    >>> Window = dataclasses.make_dataclass("Window", [("n", int, 1)], frozen=True)
+    >>> build(Window, {"n": 2}).n
     2
-    >>> build(P, {"m": 2})
+    >>> build(Window, {"m": 2})
     Traceback (most recent call last):
     ...
-    slipreflex.errors.ParameterError: unknown parameter(s) for P: m (known: n)
+    slipreflex.errors.ParameterError: unknown parameter(s) for Window: m (known: n)
     """
     known = {f.name for f in dataclasses.fields(cls)}
     unknown = sorted(set(kwargs) - known)
@@ -336,17 +334,14 @@ def resolve_params(cls: type[T], params: Any, overrides: dict[str, Any]) -> T:
 
     Examples
     --------
-    >>> from dataclasses import dataclass
-    >>> @dataclass(frozen=True)
-    ... class P:
-    ...     n: int = 1
-    ...     m: int = 2
-    >>> resolve_params(P, P(n=5), {"m": 7})
-    P(n=5, m=7)
-    >>> resolve_params(P, {"n": 5}, {})
+    >>> import dataclasses
+    >>> Grid = dataclasses.make_dataclass("Grid", [("rows", int, 4), ("cols", int, 4)], frozen=True)
+    >>> resolve_params(Grid, Grid(rows=5), {"cols": 7})
+    Grid(rows=5, cols=7)
+    >>> resolve_params(Grid, {"rows": 5}, {})
     Traceback (most recent call last):
     ...
-    slipreflex.errors.ParameterError: params must be a P, got dict
+    slipreflex.errors.ParameterError: params must be a Grid, got dict
     """
     if params is None:
         return build(cls, dict(overrides))

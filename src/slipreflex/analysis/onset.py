@@ -50,7 +50,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import DataError, ParameterError
-from ..validation import number, set_field
+from ..validation import flag, number, set_field
 
 __all__ = ["ONSET_K", "OnsetParams", "Onset", "select_axis", "accel_envelope", "rest_threshold_of",
            "episodes", "detect_onset"]
@@ -98,8 +98,7 @@ class OnsetParams:
         set_field(self, "k", number("k", self.k, lo=0.0))
         set_field(self, "peak_factor", number("peak_factor", self.peak_factor, lo=0.0))
         set_field(self, "join_s", number("join_s", self.join_s, lo=0.0))
-        if not isinstance(self.zero_phase, bool):
-            raise ParameterError(f"zero_phase must be True or False, got {self.zero_phase!r}")
+        set_field(self, "zero_phase", flag("zero_phase", self.zero_phase))
 
 
 @dataclass(frozen=True, slots=True)

@@ -19,11 +19,12 @@ Examples
 from .calibration import REST_K, rest_statistic, rest_threshold
 from .closing import CLOSE_S, Closer, ClosingParams, closing_commands
 from .nmsd import NMSD, NMSDParams, nmsd_commands, nmsd_detections, nmsd_rest_statistic, nmsd_statistic
+from .shell import TactileParams, TactileReflex
 from .swt import SWTSD, SWTParams, swt_commands, swt_kernel, swt_on, swt_rest_statistic, swt_statistic
 
 __all__ = [
     "NMSD", "NMSDParams", "nmsd_statistic", "nmsd_detections", "nmsd_commands", "nmsd_rest_statistic",
     "SWTSD", "SWTParams", "swt_statistic", "swt_on", "swt_commands", "swt_kernel", "swt_rest_statistic",
     "CLOSE_S", "ClosingParams", "Closer", "closing_commands",
-    "REST_K", "rest_statistic", "rest_threshold",
+    "REST_K", "rest_statistic", "rest_threshold", "TactileParams", "TactileReflex",
 ]

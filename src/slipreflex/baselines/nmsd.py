@@ -32,69 +32,31 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..hardware import FINGER_MAX, FINGER_MIN, NMSD_FS, TACTILE_SHAPE
-from ..validation import number, set_field
-from ._validate import as_frames, frame_shape
-from .closing import CLOSE_S, ClosingParams, closing_commands
-from .shell import TactileReflex
+from ..hardware import NMSD_FS
+from ..validation import number
+from ._validate import as_frames
+from .closing import closing_commands
+from .shell import TactileParams, TactileReflex
 
 __all__ = ["NMSDParams", "NMSD", "NMSDDetector", "nmsd_statistic", "nmsd_detections", "nmsd_commands",
            "nmsd_rest_statistic"]
 
 
 @dataclass(frozen=True, slots=True)
-class NMSDParams:
-    """Parameters of the NMSD reflex.
+class NMSDParams(TactileParams):
+    """Parameters of the NMSD reflex (the fields of :class:`~slipreflex.baselines.shell.TactileParams`).
 
-    Parameters
-    ----------
-    threshold : float
-        Threshold on ``|d_k - d_(k-1)|`` in N/s (> 0); derive it with
-        :func:`slipreflex.baselines.rest_threshold`.
-    speed : float
-        Hand closing speed in finger units per second (> 0).
-    fs : float
-        Tactile sampling rate (Hz); 260 Hz in the paper.
-    close_s : float
-        Closing time per detection (s); 45 ms in the paper.
-    p0, lo, hi : float
-        Initial target and target saturation (finger units).
-    shape : tuple of int
-        Shape of one tactile frame: (rows, cols) or (channels,); the 4 x 4
-        array by default.
+    ``threshold`` is on ``|d_k - d_(k-1)|`` in N/s; ``fs`` is 260 Hz in the
+    paper; ``close_s`` is the closing time per detection.
 
     Examples
     --------
-    >>> NMSDParams(threshold=40.0, speed=500.0).fs
-    260.0
+    >>> p = NMSDParams(threshold=40.0, speed=520.0)
+    >>> p.fs, p.closing.samples_per_close
+    (260.0, 12)
     """
 
-    threshold: float
-    speed: float
     fs: float = NMSD_FS
-    close_s: float = CLOSE_S
-    p0: float = 0.0
-    lo: float = float(FINGER_MIN)
-    hi: float = float(FINGER_MAX)
-    shape: tuple[int, ...] = TACTILE_SHAPE
-
-    def __post_init__(self) -> None:
-        set_field(self, "threshold", number("threshold", self.threshold, lo=0.0, lo_open=True))
-        set_field(self, "fs", number("fs", self.fs, lo=0.0, lo_open=True))
-        set_field(self, "shape", frame_shape("shape", self.shape))
-        self.closing  # validates speed, close_s, p0, lo, hi
-
-    @property
-    def closing(self) -> ClosingParams:
-        """The closing-rule parameters at this method's rate.
-
-        Examples
-        --------
-        >>> NMSDParams(threshold=1.0, speed=520.0).closing.samples_per_close
-        12
-        """
-        return ClosingParams(fs=self.fs, speed=self.speed, close_s=self.close_s,
-                             p0=self.p0, lo=self.lo, hi=self.hi)
 
 
 def nmsd_statistic(frames, fs: float = NMSD_FS) -> np.ndarray:
@@ -209,7 +171,7 @@ class NMSDDetector:
     --------
     >>> import numpy as np
     >>> d = NMSDDetector(fs=260.0, threshold=50.0)
-    >>> [d.update(np.full(16, v))[2] for v in (0.0, 0.0, 0.0, -1.0)]
+    >>> [d.update(np.full(16, v))[1] for v in (0.0, 0.0, 0.0, -1.0)]
     [False, False, False, True]
     """
 
@@ -217,16 +179,15 @@ class NMSDDetector:
         self.fs, self.threshold = fs, threshold
         self._prev: np.ndarray | None = None
         self._prev_d: np.ndarray | None = None
-        self._over = False
 
-    def update(self, f: np.ndarray) -> tuple[float, bool, bool]:
-        """One flat frame in; (largest ``|s_k|``, detection, detection).
+    def update(self, f: np.ndarray) -> tuple[float, bool]:
+        """One flat frame in; (largest ``|s_k|``, any taxel over threshold).
 
         Examples
         --------
         >>> import numpy as np
         >>> NMSDDetector(fs=1.0, threshold=1.0).update(np.zeros(2))
-        (0.0, False, False)
+        (0.0, False)
         """
         s = 0.0
         if self._prev is not None:
@@ -235,39 +196,17 @@ class NMSDDetector:
                 s = float(np.max(np.abs(d - self._prev_d)))
             self._prev_d = d
         self._prev = f
-        over = s > self.threshold
-        event = over and not self._over
-        self._over = over
-        return s, event, event
+        return s, s > self.threshold
 
 
 class NMSD(TactileReflex):
     """Streaming NMSD reflex (implements :class:`slipreflex.interfaces.Reflex`).
 
-    The shared :class:`~slipreflex.baselines.shell.TactileReflex` shell with
-    :class:`NMSDDetector`; every detection adds ``close_s`` of closing.
-
-    Parameters
-    ----------
-    params : NMSDParams, optional
-        Parameters; or give them as keywords (unknown keywords are an error).
-
-    Attributes
-    ----------
-    name : str
-        ``"nmsd"``.
-    input_kind : str
-        ``"tactile"``.
-    fs : float
-        Rate at which :meth:`step` must be called (260 Hz by default).
-    last_statistic : float
-        Largest ``|s_k|`` over the taxels at the last step.
-    last_event : bool
-        Whether the last step was a detection.
-    detections : int
-        Detections since the last reset.
-    closing_s : float
-        Total closing time generated since the last reset (s).
+    The shared :class:`~slipreflex.baselines.shell.TactileReflex` shell (its
+    parameters, attributes and diagnostics) with :class:`NMSDDetector`: a
+    detection is a rising edge of "any taxel over threshold", and every
+    detection adds ``close_s`` of closing. ``name`` is ``"nmsd"``, ``fs`` 260 Hz
+    by default, and ``last_statistic`` the largest ``|s_k|`` over the taxels.
 
     Examples
     --------

@@ -21,43 +21,103 @@ from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
+from dataclasses import dataclass
 from typing import Any, ClassVar, Protocol
 
 import numpy as np
 
-from ..validation import resolve_params
-from ._validate import as_frame
-from .closing import Closer, TriggerMode
+from ..hardware import FINGER_MAX, FINGER_MIN, NMSD_FS, TACTILE_SHAPE
+from ..validation import number, resolve_params, set_field
+from ._validate import as_frame, frame_shape
+from .closing import CLOSE_S, Closer, ClosingParams, TriggerMode
 
-__all__ = ["Detector", "TactileReflex"]
+__all__ = ["TactileParams", "Detector", "TactileReflex"]
+
+
+@dataclass(frozen=True, slots=True)
+class TactileParams:
+    """Parameters every tactile method has: its threshold, rate, frame shape and closing rule.
+
+    A method's parameter class derives from this one, sets its own default
+    ``fs`` and adds its own fields (checked in its ``__post_init__`` after
+    calling this one's).
+
+    Parameters
+    ----------
+    threshold : float
+        Threshold on the method's statistic (> 0); derive it with
+        :func:`slipreflex.baselines.rest_threshold`.
+    speed : float
+        Hand closing speed in finger units per second (> 0).
+    fs : float
+        Tactile sampling rate (Hz).
+    close_s : float
+        Closing time per detection (s); 45 ms in the paper.
+    p0, lo, hi : float
+        Initial target and target saturation (finger units).
+    shape : tuple of int
+        Shape of one tactile frame: (rows, cols) or (channels,); the 4 x 4
+        array by default.
+
+    Examples
+    --------
+    >>> TactileParams(threshold=1.0, speed=260.0, fs=260.0, shape=(8,)).closing.step_size
+    1.0
+    """
+
+    threshold: float
+    speed: float
+    fs: float = NMSD_FS
+    close_s: float = CLOSE_S
+    p0: float = 0.0
+    lo: float = float(FINGER_MIN)
+    hi: float = float(FINGER_MAX)
+    shape: tuple[int, ...] = TACTILE_SHAPE
+
+    def __post_init__(self) -> None:
+        set_field(self, "threshold", number("threshold", self.threshold, lo=0.0, lo_open=True))
+        set_field(self, "fs", number("fs", self.fs, lo=0.0, lo_open=True))
+        set_field(self, "shape", frame_shape("shape", self.shape))
+        self.closing  # validates speed, close_s, p0, lo, hi
+
+    @property
+    def closing(self) -> ClosingParams:
+        """The closing-rule parameters at this method's rate.
+
+        Examples
+        --------
+        >>> TactileParams(threshold=1.0, speed=520.0).closing.samples_per_close
+        12
+        """
+        return ClosingParams(fs=self.fs, speed=self.speed, close_s=self.close_s,
+                             p0=self.p0, lo=self.lo, hi=self.hi)
 
 
 class Detector(Protocol):
     """What a tactile method computes on each frame.
 
     ``update(frame)`` takes one finite flat frame (float64, one value per taxel)
-    and returns ``(statistic, trigger, event)``: the largest statistic over the
-    taxels, the detector output the closing rule reads (a detection for
-    ``"events"`` mode, the ON/OFF signal for ``"hold"``), and whether a new
-    detection started.
+    and returns ``(statistic, level)``: the largest statistic over the taxels,
+    and whether the method sees slip on this frame. The shell makes a
+    detection of every rising edge of ``level``; the closing rule reads the
+    detections (``"events"`` mode) or ``level`` itself (``"hold"`` mode).
 
     Examples
     --------
     >>> from slipreflex.baselines.nmsd import NMSDDetector
     >>> d = NMSDDetector(fs=10.0, threshold=1.0)
-    >>> [d.update(np.array([x]))[2] for x in (0.0, 0.0, 1.0)]
+    >>> [d.update(np.array([x]))[1] for x in (0.0, 0.0, 1.0)]
     [False, False, True]
     """
 
-    def update(self, frame: np.ndarray) -> tuple[float, bool, bool]: ...
+    def update(self, frame: np.ndarray) -> tuple[float, bool]: ...
 
 
 class TactileReflex(ABC):
     """Streaming tactile reflex: frames in, closing-ramp targets out (a Reflex).
 
-    Subclasses set :attr:`name`, :attr:`params_class` (a frozen dataclass with
-    ``threshold``, ``fs``, ``shape`` and a ``closing`` property), :attr:`mode`,
-    and :meth:`_detector`.
+    Subclasses set :attr:`name`, :attr:`params_class` (a :class:`TactileParams`),
+    :attr:`mode`, and :meth:`_detector`.
 
     Parameters
     ----------
@@ -72,7 +132,9 @@ class TactileReflex(ABC):
     last_statistic : float
         Largest statistic over the taxels at the last step.
     last_event : bool
-        The last step started a detection.
+        The last step started a detection (a rising edge of the detector's level).
+    last_level : bool
+        The detector's level at the last step (slip seen on this frame).
     last_filtered, last_threshold, last_count
         The :class:`~slipreflex.interfaces.Reflex` diagnostics: NaN (no
         filtered scalar), the threshold, None (no windows).
@@ -114,7 +176,7 @@ class TactileReflex(ABC):
         self._closer.reset()
         self.last_statistic = 0.0
         self.last_event = False
-        self.last_trigger = False
+        self.last_level = False
         self.last_filtered = math.nan
         self.last_threshold = float(self.params.threshold)
         self.last_count: int | None = None
@@ -160,7 +222,9 @@ class TactileReflex(ABC):
         (2.0, True)
         """
         f = as_frame("frame", frame, self.params.shape)
-        self.last_statistic, self.last_trigger, self.last_event = self._det.update(f)
+        self.last_statistic, level = self._det.update(f)
+        self.last_event = level and not self.last_level
+        self.last_level = level
         self.detections += self.last_event
-        self._closer.feed(self.last_trigger, self.mode)
+        self._closer.feed(self.last_event if self.mode == "events" else level, self.mode)
         return self._closer.step(position)

@@ -40,11 +40,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..hardware import FINGER_MAX, FINGER_MIN, SWT_FS, TACTILE_SHAPE
+from ..hardware import SWT_FS
 from ..validation import integer, number, set_field
-from ._validate import as_frames, frame_shape
-from .closing import CLOSE_S, ClosingParams, closing_commands
-from .shell import TactileReflex
+from ._validate import as_frames
+from .closing import closing_commands
+from .shell import TactileParams, TactileReflex
 
 __all__ = ["SWTParams", "SWTSD", "SWTDetector", "swt_statistic", "swt_on", "swt_commands", "swt_kernel",
            "swt_rest_statistic",
@@ -59,63 +59,32 @@ SWT_WAVELET: str = "haar"
 
 
 @dataclass(frozen=True, slots=True)
-class SWTParams:
-    """Parameters of the SWT-SD reflex.
+class SWTParams(TactileParams):
+    """Parameters of the SWT-SD reflex: :class:`~slipreflex.baselines.shell.TactileParams` and ``persist``.
+
+    ``threshold`` is on ``|cD3|`` in N; ``fs`` is 380 Hz in the paper;
+    ``close_s`` is the closing quantum of the NMSD rule used while ON.
 
     Parameters
     ----------
-    threshold : float
-        Threshold on ``|cD3|`` (N, > 0); derive it with
-        :func:`slipreflex.baselines.rest_threshold`.
-    speed : float
-        Hand closing speed in finger units per second (> 0).
-    fs : float
-        Tactile sampling rate (Hz); 380 Hz in the paper.
     persist : int
         Samples the crossing must persist after the crossing sample (>= 0);
         8 samples = 21 ms at 380 Hz.
-    close_s : float
-        Closing quantum of the NMSD rule used while ON (s).
-    p0, lo, hi : float
-        Initial target and target saturation (finger units).
-    shape : tuple of int
-        Shape of one tactile frame: (rows, cols) or (channels,); the 4 x 4
-        array by default.
 
     Examples
     --------
     >>> SWTParams(threshold=0.1, speed=500.0).fs
     380.0
+    >>> SWTParams(threshold=1.0, speed=500.0).closing.samples_per_close
+    17
     """
 
-    threshold: float
-    speed: float
     fs: float = SWT_FS
     persist: int = SWT_WINDOW
-    close_s: float = CLOSE_S
-    p0: float = 0.0
-    lo: float = float(FINGER_MIN)
-    hi: float = float(FINGER_MAX)
-    shape: tuple[int, ...] = TACTILE_SHAPE
 
     def __post_init__(self) -> None:
-        set_field(self, "threshold", number("threshold", self.threshold, lo=0.0, lo_open=True))
-        set_field(self, "fs", number("fs", self.fs, lo=0.0, lo_open=True))
+        TactileParams.__post_init__(self)
         set_field(self, "persist", integer("persist", self.persist, lo=0))
-        set_field(self, "shape", frame_shape("shape", self.shape))
-        self.closing  # validates speed, close_s, p0, lo, hi
-
-    @property
-    def closing(self) -> ClosingParams:
-        """The closing-rule parameters at this method's rate.
-
-        Examples
-        --------
-        >>> SWTParams(threshold=1.0, speed=500.0).closing.samples_per_close
-        17
-        """
-        return ClosingParams(fs=self.fs, speed=self.speed, close_s=self.close_s,
-                             p0=self.p0, lo=self.lo, hi=self.hi)
 
 
 @functools.lru_cache(maxsize=8)
@@ -236,20 +205,9 @@ def swt_on(frames, *, threshold: float, persist: int = SWT_WINDOW) -> np.ndarray
 def swt_commands(frames, params: SWTParams, positions=None) -> np.ndarray:
     """Batch SWT-SD reflex: frames in, finger targets out (NaN where unchanged).
 
-    Gives exactly what :class:`SWTSD` returns sample by sample.
-
-    Parameters
-    ----------
-    frames : array_like, shape (K, rows, cols) or (K, channels)
-        Tactile forces (N) at ``params.fs``.
-    params : SWTParams
-        The reflex parameters.
-    positions : array_like, shape (K,), optional
-        Measured hand positions (NaN where unknown).
-
-    Returns
-    -------
-    numpy.ndarray of float, shape (K,)
+    Gives exactly what :class:`SWTSD` returns sample by sample; the arguments
+    and the result are those of :func:`slipreflex.baselines.nmsd_commands`
+    with an :class:`SWTParams`.
 
     Examples
     --------
@@ -280,16 +238,15 @@ class SWTDetector:
         self._win = np.zeros((SWT_WINDOW, taxels))
         self._n = 0
         self._run = np.zeros(taxels, dtype=np.int64)
-        self._on = False
 
-    def update(self, f: np.ndarray) -> tuple[float, bool, bool]:
-        """One flat frame in; (largest ``|c_k|``, ON, ON started).
+    def update(self, f: np.ndarray) -> tuple[float, bool]:
+        """One flat frame in; (largest ``|c_k|``, the ON/OFF signal).
 
         Examples
         --------
         >>> import numpy as np
         >>> SWTDetector(threshold=1.0, persist=0, taxels=2).update(np.zeros(2))
-        (0.0, False, False)
+        (0.0, False)
         """
         self._win[:-1] = self._win[1:]
         self._win[-1] = f
@@ -302,41 +259,17 @@ class SWTDetector:
             over = np.zeros(self._win.shape[1], dtype=bool)
             stat = 0.0
         self._run = np.where(over, self._run + 1, 0)
-        on = bool((self._run > self.persist).any())
-        started = on and not self._on
-        self._on = on
-        return stat, on, started
+        return stat, bool((self._run > self.persist).any())
 
 
 class SWTSD(TactileReflex):
     """Streaming SWT-SD reflex (implements :class:`slipreflex.interfaces.Reflex`).
 
-    The shared :class:`~slipreflex.baselines.shell.TactileReflex` shell with
-    :class:`SWTDetector`; the fingers close while the ON/OFF signal is ON.
-
-    Parameters
-    ----------
-    params : SWTParams, optional
-        Parameters; or give them as keywords (unknown keywords are an error).
-
-    Attributes
-    ----------
-    name : str
-        ``"swt"``.
-    input_kind : str
-        ``"tactile"``.
-    fs : float
-        Rate at which :meth:`step` must be called (380 Hz by default).
-    last_statistic : float
-        Largest ``|c_k|`` over the taxels at the last step.
-    last_on : bool
-        The ON/OFF slip signal at the last step.
-    last_event : bool
-        True on the first ON sample of an ON period.
-    detections : int
-        ON periods started since the last reset.
-    closing_s : float
-        Total closing time generated since the last reset (s).
+    The shared :class:`~slipreflex.baselines.shell.TactileReflex` shell (its
+    parameters, attributes and diagnostics) with :class:`SWTDetector`: the
+    fingers close while the ON/OFF signal is ON. ``name`` is ``"swt"``, ``fs``
+    380 Hz by default, ``last_statistic`` the largest ``|c_k|`` over the taxels,
+    ``last_on`` the ON/OFF signal and ``last_event`` the start of an ON period.
 
     Examples
     --------
@@ -367,4 +300,4 @@ class SWTSD(TactileReflex):
         >>> SWTSD(threshold=1.0, speed=100.0).last_on
         False
         """
-        return self.last_trigger
+        return self.last_level
