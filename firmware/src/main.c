@@ -3,10 +3,11 @@
  *
  * Every 3 ms (Timer1 CTC, 333.33 Hz) the Timer1 interrupt starts an ADC conversion of
  * the slip sensor on ADC0 and one MPU6050 transaction on the TWI bus. The ADC interrupt
- * takes a snapshot (ADC value, latest accelerometer reading, flow-pulse count); the
- * main loop turns it into a 20-byte frame (docs/wire-protocol.md) and appends it to a
- * ring buffer that the UART data-register-empty interrupt drains at 250000 baud.
- * INT0 counts the YF-S201 flow-sensor pulses. No interrupt waits for anything.
+ * does the rest of the sample at once: it takes the ADC value, the latest accelerometer
+ * reading and the flow-pulse count, runs the reflex chain (reflex builds), encodes the
+ * 20-byte frame (28 with the reflex; docs/wire-protocol.md) and starts sending it; the
+ * UART data-register-empty interrupt sends the rest at 250000 baud. INT0 counts the
+ * YF-S201 flow-sensor pulses. The main loop only sleeps; nothing waits for anything.
  *
  * Pins: A0/PC0 slip sensor (0..5 V), A4/PC4 SDA and A5/PC5 SCL to the MPU6050,
  * D2/PD2 (INT0) YF-S201 signal, D1/PD1 (TXD) to the USB-serial bridge. See
