@@ -34,7 +34,9 @@ def _steady_speed(b, n):
 
 
 def test_steady_sliding_speed_under_a_constant_excess_load_is_the_laws():
-    heavy = dataclasses.replace(BOTTLES["TR"], name="heavy", mass_kg=0.25, grip_travel_m=0.09)
+    n_grasp = Rig("TR", seed=0).grasp().force_n        # the grasp stops on the arrays, whatever the mass
+    mass = 1.04 * static_capacity(BOTTLES["TR"], n_grasp) / G   # just above what the grasp holds
+    heavy = dataclasses.replace(BOTTLES["TR"], name="heavy", mass_kg=mass, grip_travel_m=0.09)
     rig = Rig(heavy, seed=0)
     rig.grasp()
     h = rig.daq_history()
@@ -42,7 +44,7 @@ def test_steady_sliding_speed_under_a_constant_excess_load_is_the_laws():
     n = h.normal_force[-1]
     expected = _steady_speed(heavy, n)(heavy.mass_kg * G)
     assert 1e-3 < expected < 5e-2
-    tr = simulate_open_loop(rig, 0.3)
+    tr = simulate_open_loop(rig, 0.5)
     assert not tr.daq.stuck[-50:].any()
     assert tr.daq.velocity[-1] == pytest.approx(expected, rel=0.01)
 
@@ -142,7 +144,7 @@ def test_calibrate_command_on_paper_and_user_bottles(tmp_path, capsys):
 
     assert main(["calibrate", "--bottles", "TR"]) == 0
     out = capsys.readouterr().out
-    assert "TR" in out and "200.0 ml" in out and "1.047/0.785" in out
+    assert "TR" in out and "200.0 ml" in out and "0.972/0.729" in out
     f = tmp_path / "jar.toml"
     f.write_text('[bottles.JAR]\nmass_kg = 0.25\ndiameter_m = 0.07\nmu_s = 0.4\nmu_k = 0.3\nsurface = "TX"\n')
     assert main(["calibrate", "--objects", str(f), "--bottles", "JAR"]) == 0

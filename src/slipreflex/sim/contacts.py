@@ -18,7 +18,7 @@ Examples
 >>> round(grip_gain(HandParams(), BOTTLES["TR"]), 3)       # N per position unit, per contact
 0.102
 >>> round(static_capacity(BOTTLES["TR"], 1.0), 2)          # N, at 1 N per contact
-2.34
+2.19
 """
 
 from __future__ import annotations

@@ -532,42 +532,24 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
 
 
 @njit(cache=True)
-def tactile_frames(snap, vib, vib_dx, vib_off, key, patch_sigma, shear_shift, noise, resolution, roughness,
-                   chatter_speed, out):
-    """Build ``(4, 4)`` frames (N per taxel) from tactile snapshots.
+def tactile_frames(snap, key, patch_sigma, shear_shift, noise, resolution, alpha, hyst, drift, state, out):
+    """Build ``(4, 4)`` frames (N per taxel) from tactile snapshots of one contact.
 
-    ``snap`` rows are (id, index, t, N_c, F_t, s, fallen). The pressure
-    patch is a Gaussian of ``patch_sigma`` taxels centred on the array and
-    shifted along the bottle axis by ``shear_shift * F_t / N_c``; the total
-    is ``N_c * (1 + vib(s) - vib(0))``, the undulation felt at the slip
-    distance ``s`` relative to the grasp point (so it changes only while
-    sliding); then per-taxel noise (stream
-    ``key``, counter = sample index), quantization, and clipping at 0.
+    ``snap`` rows are (id, index, t, N_c, F_t, s, fallen, w). The pressure
+    patch is a Gaussian of ``patch_sigma`` taxels carrying ``N_c``, centred
+    on the array and shifted along the bottle axis by ``shear_shift * F_t /
+    N_c`` (the pad's shear). Each taxel then goes through the sensor: a
+    first-order low-pass (``alpha`` per frame), a play of half-width
+    ``hyst`` (hysteresis), a creep gain ``1 + drift log10(1 + t)``, noise
+    (stream ``key``, counter = frame index), quantization and clipping at 0.
+    ``state`` (2, 4, 4) holds the low-pass and play outputs between calls
+    (NaN: start from the first frame).
     """
-    nv = vib.shape[0]
-    i0 = int(np.floor(vib_off / vib_dx))
-    f0 = vib_off / vib_dx - i0
-    vib0 = vib[i0] + f0 * (vib[i0 + 1] - vib[i0])   # undulation where the bottle was grasped
     for r in range(snap.shape[0]):
         nc = snap[r, T_NC]
         idx = np.int64(snap[r, T_IDX])
         if nc > 0.0 and snap[r, T_FALLEN] == 0.0:
-            fi = (snap[r, T_S] + vib_off) / vib_dx
-            i = int(np.floor(fi))
-            if i < 0:
-                i = 0
-                fi = 0.0
-            elif i > nv - 2:
-                i = nv - 2
-                fi = float(nv - 1)
-            fr = fi - i
-            tot = nc * (1.0 + vib[i] + fr * (vib[i + 1] - vib[i]) - vib0)
-            w = snap[r, T_W]
-            if w > 0.0:
-                amp = w / chatter_speed
-                if amp > 1.0:
-                    amp = 1.0
-                tot += nc * roughness * amp * normal(key + np.uint64(1), idx)
+            tot = nc
             cy = 1.5 + shear_shift * snap[r, T_FT] / nc
         else:
             tot = 0.0
@@ -580,14 +562,27 @@ def tactile_frames(snap, vib, vib_dx, vib_off, key, patch_sigma, shear_shift, no
                 wgt = np.exp(-(dxa * dxa + dyb * dyb) / (2.0 * patch_sigma * patch_sigma))
                 out[r, b, a] = wgt
                 wsum += wgt
+        gain = 1.0 + drift * np.log10(1.0 + snap[r, T_T])
         for a in range(4):
             for b in range(4):
-                f = tot * out[r, b, a] / wsum + noise * normal(key, idx * 16 + b * 4 + a)
+                f = tot * out[r, b, a] / wsum
+                if np.isnan(state[0, b, a]):
+                    state[0, b, a] = f
+                    state[1, b, a] = f
+                lp = state[0, b, a] + alpha * (f - state[0, b, a])
+                hy = state[1, b, a]
+                if hy < lp - hyst:
+                    hy = lp - hyst
+                elif hy > lp + hyst:
+                    hy = lp + hyst
+                state[0, b, a] = lp
+                state[1, b, a] = hy
+                y = hy * gain + noise * normal(key, idx * 16 + b * 4 + a)
                 if resolution > 0.0:
-                    f = np.floor(f / resolution + 0.5) * resolution
-                if f < 0.0:
-                    f = 0.0
-                out[r, b, a] = f
+                    y = np.floor(y / resolution + 0.5) * resolution
+                if y < 0.0:
+                    y = 0.0
+                out[r, b, a] = y
 
 
 @njit(cache=True)

@@ -105,11 +105,6 @@ class Surface:
         Band of the texture spectrum (m). A broad band makes both slow slips
         (fine features pass the 10 Hz filter) and fast ones (coarse features)
         visible.
-    roughness : float
-        Relative rms normal-force fluctuation a sliding contact on this
-        surface produces at the tactile pad (stick-slip micro-vibration of a
-        soft pad: estimates of 8 % on smooth PET, where silicone chatters,
-        and 15 % on rough tape).
 
     Examples
     --------
@@ -124,7 +119,6 @@ class Surface:
     texture_exponent: float = 1.0
     texture_min_wavelength_m: float = 40e-6
     texture_max_wavelength_m: float = 20e-3
-    roughness: float = 0.02
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
@@ -138,7 +132,6 @@ class Surface:
         if self.texture_max_wavelength_m <= self.texture_min_wavelength_m:
             raise ParameterError("Surface.texture_max_wavelength_m must be > texture_min_wavelength_m, "
                                  f"got {self.texture_max_wavelength_m!r} <= {self.texture_min_wavelength_m!r}")
-        _check("Surface", "roughness", self.roughness, lo=0.0, hi=1.0)
 
 
 #: Built-in surfaces. "white" and "black" are the test surface of the
@@ -150,24 +143,24 @@ SURFACES: Mapping[str, Surface] = MappingProxyType({
     # 0.34-0.46 V on white and 3.315-3.35 V on black, smallest fixed-threshold spike
     # spacing on white 0.07-0.10 mm (5 seeds).
     "white": Surface("white", reflectance=0.930, texture=0.020, texture_exponent=2.5,
-                     texture_max_wavelength_m=8e-3, roughness=0.01),
+                     texture_max_wavelength_m=8e-3),
     "black": Surface("black", reflectance=0.333, texture=0.005, texture_exponent=2.5,
-                     texture_max_wavelength_m=8e-3, roughness=0.01),
+                     texture_max_wavelength_m=8e-3),
     # Grey PLA stand around the test surface (estimate; only seen at the scan's ends).
     "stand": Surface("stand", reflectance=0.60, texture=0.010, texture_exponent=2.5,
-                     texture_max_wavelength_m=8e-3, roughness=0.02),
+                     texture_max_wavelength_m=8e-3),
     # Bottles (estimates): a broad texture band (40 um .. 40 mm, flat slope per octave,
     # exponent 1.5) so that slow slips (fine features pass the 10 Hz filter) and fast
     # ones (coarse features) both move the signal.
     # Transparent PET: little light comes back (V ~3.5 V), smooth, weak texture.
     "TR": Surface("TR", reflectance=0.30, texture=0.012, texture_exponent=1.5,
-                  texture_max_wavelength_m=0.04, roughness=0.08),
+                  texture_max_wavelength_m=0.04),
     # Dark PET: the least reflective (V ~3.9 V), smooth, the weakest texture.
     "DK": Surface("DK", reflectance=0.22, texture=0.010, texture_exponent=1.5,
-                  texture_max_wavelength_m=0.04, roughness=0.08),
+                  texture_max_wavelength_m=0.04),
     # Blue vinyl tape over the bottle: matte (V ~2.2 V), rough, strong texture.
     "TX": Surface("TX", reflectance=0.55, texture=0.025, texture_exponent=1.5,
-                  texture_max_wavelength_m=0.04, roughness=0.15),
+                  texture_max_wavelength_m=0.04),
 })
 
 
@@ -281,8 +274,8 @@ class Bottle:
     mass_kg: float = 0.040
     height_m: float = 0.16
     diameter_m: float = 0.065
-    mu_s: float = 1.047
-    mu_k: float = 0.785
+    mu_s: float = 0.972
+    mu_k: float = 0.729
     surface: Surface | str = "TR"
     stribeck_velocity_m_s: float = 1e-3
     wall_stiffness_n_m: float = 600.0
@@ -333,9 +326,9 @@ class Bottle:
 #: the open-loop first pour slip comes at the paper's 200 ml; mu_k keeps its estimated ratio to mu_s
 #: (0.75 on smooth PET, 0.714 on tape). ``tests/test_sim_calibration.py`` recomputes these values.
 BOTTLES: Mapping[str, Bottle] = MappingProxyType({
-    "TR": Bottle("TR", surface="TR", mu_s=1.047, mu_k=0.785),
-    "DK": Bottle("DK", surface="DK", mu_s=1.047, mu_k=0.785),
-    "TX": Bottle("TX", surface="TX", mu_s=1.047, mu_k=0.748),
+    "TR": Bottle("TR", surface="TR", mu_s=0.972, mu_k=0.729),
+    "DK": Bottle("DK", surface="DK", mu_s=0.972, mu_k=0.729),
+    "TX": Bottle("TX", surface="TX", mu_s=0.972, mu_k=0.694),
 })
 
 

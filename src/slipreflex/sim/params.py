@@ -253,14 +253,23 @@ class TactileParams:
         Shift of the pressure centre along the slip direction per unit of
         tangential/normal force ratio (taxel pitches): a 2-3 mm pad sheared
         at ratio 0.6 moves the centre ~1 mm, ~0.4 pitch; 0.7.
-    vibration_min_wavelength_m : float
-        Finest wavelength (m) of the surface undulation the sliding pad
-        feels: 0.1 mm (estimate; finer features are averaged by the pad).
-    chatter_speed_m_s : float
-        Sliding speed (m/s) above which the broadband chatter of the sliding
-        pad (stick-slip micro-events, relative rms = the surface's
-        ``roughness``) reaches full amplitude; below it grows linearly.
-        Estimate: 10 mm/s.
+    bandwidth_hz : float
+        -3 dB bandwidth (Hz) of a taxel's response to force (first order): the
+        pad's viscoelastic relaxation and the piezoresistive layer. Estimate
+        100 Hz (range 50-500 Hz for elastomer-covered resistive arrays).
+    hysteresis_n : float
+        Half-width (N per taxel) of the play between loading and unloading:
+        the Interlink FSR datasheet gives about +10 % (R_F+ - R_F-)/R_F+;
+        at the ~0.1-0.3 N per taxel of this grasp, estimate 5 mN.
+    drift_per_decade : float
+        Creep of the reading under a held load, relative, per decade of time
+        since the rig started: the Interlink FSR datasheet gives < 5 % per
+        log10(time); estimate 2 %.
+
+    There is no added vibration: what the arrays see while the bottle slips
+    follows from the contact's own forces (normal force, and the shear that
+    shifts the pressure centre), so a smoothly sliding pad gives a steady
+    frame and stick-slip of the friction law gives jumps.
 
     Examples
     --------
@@ -272,11 +281,13 @@ class TactileParams:
     resolution_n: float = 2e-3
     patch_sigma_taxels: float = 0.9
     shear_shift_taxels: float = 0.7
-    vibration_min_wavelength_m: float = 0.1e-3
-    chatter_speed_m_s: float = 0.01
+    bandwidth_hz: float = 100.0
+    hysteresis_n: float = 5e-3
+    drift_per_decade: float = 0.02
 
     def __post_init__(self) -> None:
-        _validate(self, zero_ok=("noise_n", "resolution_n", "shear_shift_taxels"))
+        _validate(self, zero_ok=("noise_n", "resolution_n", "shear_shift_taxels", "hysteresis_n",
+                                 "drift_per_decade"))
 
 
 @dataclass(frozen=True, slots=True)

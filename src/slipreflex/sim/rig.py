@@ -279,8 +279,9 @@ class TactileSampler:
         self._f: list[np.ndarray] = []
         self._hist_t: list[np.ndarray] = []
         self._hist_f: list[np.ndarray] = []
+        self._state = np.full((2,) + hw.TACTILE_SHAPE, np.nan)   # the taxels' low-pass and play
         # the first frame strictly after now (a frame at the current instant was due in the past)
-        self.next_index = 0 if rig._n == 0 else int(math.floor(rig.t * self.fs + 1e-9)) + 1
+        self.next_index = 0 if rig.t == 0.0 else int(math.floor(rig.t * self.fs + 1e-9)) + 1
 
     @property
     def next_time(self) -> float:
@@ -293,6 +294,25 @@ class TactileSampler:
         0.0
         """
         return self.next_index / self.fs
+
+    def feed(self, snapshots: np.ndarray, params: TactileParams) -> None:
+        """Turn the rig's contact snapshots (kernel rows) into frames and queue them (called by the rig).
+
+        Examples
+        --------
+        >>> from slipreflex.sim import Rig
+        >>> s = Rig("TR").tactile_sampler(100.0)
+        >>> s.feed(np.zeros((0, 8)), TactileParams()); s.read()[0].size
+        0
+        """
+        if not snapshots.shape[0]:
+            return
+        out = np.empty((snapshots.shape[0],) + hw.TACTILE_SHAPE)
+        alpha = 1.0 - math.exp(-2.0 * math.pi * params.bandwidth_hz / self.fs)
+        K.tactile_frames(snapshots, self._key, params.patch_sigma_taxels, params.shear_shift_taxels,
+                         params.noise_n, params.resolution_n, alpha, params.hysteresis_n,
+                         params.drift_per_decade, self._state, out)
+        self._push(snapshots[:, K.T_T].copy(), out)
 
     def _push(self, t: np.ndarray, frames: np.ndarray) -> None:
         self._t.append(t)
@@ -495,7 +515,7 @@ def fill_slip_sensor_params(P: np.ndarray, sensor: SlipSensorParams, track: Trac
     >>> from slipreflex.sim.sensors import Track
     >>> import numpy as np
     >>> P = fill_slip_sensor_params(np.zeros(K.P_SIZE), SlipSensorParams(),
-    ...                             Track(np.zeros(4), 5e-6, 0.0, np.zeros(4)))
+    ...                             Track(np.zeros(4), 5e-6, 0.0))
     >>> float(P[K.P_VCC])
     5.0
     """
@@ -561,8 +581,7 @@ class Rig:
         flow_phase = frng.random()
         surf: Surface = bottle.surface  # type: ignore[assignment]
         self.track = Track.build([(surf, self.physics.track_length_m)], np.random.default_rng(tex_ss),
-                                 lead=0.01, sensor=self.slip_sensor,
-                                 vibration_min_wavelength=self.tactile_params.vibration_min_wavelength_m)
+                                 lead=0.01, sensor=self.slip_sensor)
         self._P = self._params(flow_k, flow_phase)
         self._S = np.zeros(K.S_SIZE)
         self._S[K.S_STUCK] = 1.0
@@ -739,20 +758,11 @@ class Rig:
         self._tac_next = np.array([s.next_index for s in self._samplers], dtype=np.int64)
         self._tac_contact = np.array([hw.TRIPOD.index(s.finger) for s in self._samplers], dtype=np.int64)
 
-    def _frames(self, snap: np.ndarray, key: np.uint64) -> np.ndarray:
-        tp = self.tactile_params
-        out = np.empty((snap.shape[0],) + hw.TACTILE_SHAPE)
-        K.tactile_frames(snap, self.track.vibration, self.track.dx, self.track.origin, key,
-                         tp.patch_sigma_taxels, tp.shear_shift_taxels, tp.noise_n, tp.resolution_n,
-                         self.bottle.surface.roughness, tp.chatter_speed_m_s, out)
-        return out
-
     def _emit_tactile(self, snap: np.ndarray) -> None:
         for i, s in enumerate(self._samplers):
             rows = snap[snap[:, K.T_ID] == i]
             s.next_index = int(self._tac_next[i])
-            if rows.shape[0]:
-                s._push(rows[:, K.T_T].copy(), self._frames(rows, s._key))
+            s.feed(rows, self.tactile_params)
 
     def tactile_sampler(self, fs: float, finger: Finger = Finger.INDEX, *, keep: bool = False) -> TactileSampler:
         """Start sampling a finger's 4 x 4 tactile array at ``fs`` Hz from now on.
@@ -803,7 +813,12 @@ class Rig:
         w = S[c + K.SC_W] if S[c + K.SC_STUCK] == 0.0 else 0.0
         snap = np.array([[0, self._oneoff, self.t, S[K.S_NC], S[c + K.SC_FT], S[c + K.SC_S], S[K.S_FALLEN], w]])
         self._oneoff += 1
-        return self._frames(snap, np.uint64(K.derive_key(self._keys[3], int(finger))))[0]
+        tp = self.tactile_params
+        out = np.empty((1,) + hw.TACTILE_SHAPE)
+        K.tactile_frames(snap, np.uint64(K.derive_key(self._keys[3], int(finger))), tp.patch_sigma_taxels,
+                         tp.shear_shift_taxels, tp.noise_n, tp.resolution_n, 1.0, 0.0, tp.drift_per_decade,
+                         np.full((2,) + hw.TACTILE_SHAPE, np.nan), out)
+        return out[0]
 
     # ------------------------------------------------------------------ grasp & perturbations
     def grasp(self, force: float = hw.CONTACT_FORCE_N, *, speed: float | None = None,

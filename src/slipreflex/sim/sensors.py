@@ -113,9 +113,6 @@ class Track:
         Spacing (m).
     origin : float
         Index offset: surface position ``p`` (m) maps to sample ``(p + origin) / dx``.
-    vibration : numpy.ndarray
-        Unit-rms undulation felt by a pad sliding along the same path (drives
-        the tactile vibration), same grid.
 
     Examples
     --------
@@ -129,12 +126,10 @@ class Track:
     rho: np.ndarray
     dx: float
     origin: float
-    vibration: np.ndarray
 
     @classmethod
     def build(cls, layout: Sequence[tuple[Surface, float]], rng: np.random.Generator, *,
-              lead: float = 0.0, sensor: SlipSensorParams | None = None, dx: float = TRACK_DX,
-              vibration_min_wavelength: float = 0.1e-3) -> "Track":
+              lead: float = 0.0, sensor: SlipSensorParams | None = None, dx: float = TRACK_DX) -> "Track":
         """Lay surfaces end to end and sample what the sensor sees.
 
         Parameters
@@ -150,8 +145,6 @@ class Track:
             For the spot size that blurs edges between surfaces.
         dx : float
             Grid spacing (m).
-        vibration_min_wavelength : float
-            Finest wavelength of the tactile undulation (m).
 
         Returns
         -------
@@ -165,14 +158,14 @@ class Track:
         seg = np.clip(np.searchsorted(edges, pos, side="right") - 1, 0, len(layout) - 1)
         base = np.array([s.reflectance for s, _ in layout])[seg]
         tex = np.zeros(n)
-        vib = np.zeros(n)
         for i, (surf, _) in enumerate(layout):
             mask = seg == i
             t = texture(n, dx, surf.texture_exponent, surf.texture_min_wavelength_m,
                         surf.texture_max_wavelength_m, rng)
             tex[mask] = (surf.reflectance * surf.texture * t)[mask]
-            v = texture(n, dx, 1.0, vibration_min_wavelength, surf.texture_max_wavelength_m, rng)
-            vib[mask] = (surf.roughness * v)[mask]
+            # the second draw per segment was the tactile undulation (removed); it is still drawn so
+            # that every later segment's texture, and the scan calibrated on them, stay bit for bit
+            texture(n, dx, 1.0, 0.1e-3, surf.texture_max_wavelength_m, rng)
         if len(layout) > 1 and sensor.spot_sigma_m > 0:
             half = int(np.ceil(4 * sensor.spot_sigma_m / dx))
             xs = np.arange(-half, half + 1) * dx
@@ -181,4 +174,4 @@ class Track:
             padded = np.concatenate([np.full(half, base[0]), base, np.full(half, base[-1])])
             base = np.convolve(padded, ker, mode="valid")
         rho = np.clip(base + tex, 0.0, 1.0)
-        return cls(rho=np.ascontiguousarray(rho), dx=dx, origin=lead, vibration=np.ascontiguousarray(vib))
+        return cls(rho=np.ascontiguousarray(rho), dx=dx, origin=lead)
