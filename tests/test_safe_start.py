@@ -63,7 +63,7 @@ def _watch(dev_holder, lowest, period=0.005, span=3.0):
 
 
 def _run_on_virtual_rig(tmp_path, p0_text, schedule=(), extra=()):
-    sim = SimRig("TX", seed=1)
+    sim = SimRig("TX", seed=165)
     grasp = sim.grasp()
     lowest = {f: grasp.positions[f] for f in TRIPOD}
     path = tmp_path / "safe.mcap"
@@ -85,7 +85,7 @@ def test_run_with_p0_zero_holds_the_fingers_where_the_grasp_left_them(tmp_path, 
 
 
 def test_the_virtual_rigs_printed_p0_does_not_open_the_thumb_when_the_reflex_acts(tmp_path, capsys):
-    sim = SimRig("TX", seed=1)   # textured (its drop slip fires spikes); its thumb stops a unit further
+    sim = SimRig("TX", seed=165)   # textured (its drop slip fires spikes); its thumb stops a unit further
     printed = sim.grasp().p0_text()
     assert printed == "thumb=148,index=147,middle=147"  # the thumb stops one unit further closed
     code, grasp, lowest, path = _run_on_virtual_rig(tmp_path, printed, schedule=[("drop", 0.2)])

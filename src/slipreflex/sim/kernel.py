@@ -532,13 +532,15 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
 
 
 @njit(cache=True)
-def tactile_frames(snap, key, patch_sigma, shear_shift, noise, resolution, alpha, hyst, drift, state, out):
+def tactile_frames(snap, key, gain0, patch_sigma, shear_shift, noise, resolution, alpha, hyst, drift, state,
+                   out):
     """Build ``(4, 4)`` frames (N per taxel) from tactile snapshots of one contact.
 
     ``snap`` rows are (id, index, t, N_c, F_t, s, fallen, w). The pressure
     patch is a Gaussian of ``patch_sigma`` taxels carrying ``N_c``, centred
     on the array and shifted along the bottle axis by ``shear_shift * F_t /
-    N_c`` (the pad's shear). Each taxel then goes through the sensor: a
+    N_c`` (the pad's shear). Each taxel then goes through the sensor (the
+    array's sensitivity ``gain0``): a
     first-order low-pass (``alpha`` per frame), a play of half-width
     ``hyst`` (hysteresis), a creep gain ``1 + drift log10(1 + t)``, noise
     (stream ``key``, counter = frame index), quantization and clipping at 0.
@@ -562,7 +564,7 @@ def tactile_frames(snap, key, patch_sigma, shear_shift, noise, resolution, alpha
                 wgt = np.exp(-(dxa * dxa + dyb * dyb) / (2.0 * patch_sigma * patch_sigma))
                 out[r, b, a] = wgt
                 wsum += wgt
-        gain = 1.0 + drift * np.log10(1.0 + snap[r, T_T])
+        gain = gain0 * (1.0 + drift * np.log10(1.0 + snap[r, T_T]))
         for a in range(4):
             for b in range(4):
                 f = tot * out[r, b, a] / wsum

@@ -265,6 +265,11 @@ class TactileParams:
         Creep of the reading under a held load, relative, per decade of time
         since the rig started: the Interlink FSR datasheet gives < 5 % per
         log10(time); estimate 2 %.
+    gain_sd : float
+        Part-to-part spread of an array's sensitivity (relative sd): each
+        array (thumb, index) draws its gain from the rig's seed. The
+        Interlink FSR datasheet gives +-6 % part-to-part repeatability
+        within a batch; 0.06.
 
     There is no added vibration: what the arrays see while the bottle slips
     follows from the contact's own forces (normal force, and the shear that
@@ -284,10 +289,11 @@ class TactileParams:
     bandwidth_hz: float = 100.0
     hysteresis_n: float = 5e-3
     drift_per_decade: float = 0.02
+    gain_sd: float = 0.06
 
     def __post_init__(self) -> None:
         _validate(self, zero_ok=("noise_n", "resolution_n", "shear_shift_taxels", "hysteresis_n",
-                                 "drift_per_decade"))
+                                 "drift_per_decade", "gain_sd"))
 
 
 @dataclass(frozen=True, slots=True)

@@ -272,6 +272,7 @@ class TactileSampler:
     def __init__(self, rig: "Rig", fs: float, finger: Finger, key: np.uint64, keep: bool) -> None:
         self.fs = float(fs)
         self.finger = Finger(finger)
+        self.gain = rig.tactile_gain(self.finger)
         self._rig = rig
         self._key = key
         self._keep = keep
@@ -309,7 +310,7 @@ class TactileSampler:
             return
         out = np.empty((snapshots.shape[0],) + hw.TACTILE_SHAPE)
         alpha = 1.0 - math.exp(-2.0 * math.pi * params.bandwidth_hz / self.fs)
-        K.tactile_frames(snapshots, self._key, params.patch_sigma_taxels, params.shear_shift_taxels,
+        K.tactile_frames(snapshots, self._key, self.gain, params.patch_sigma_taxels, params.shear_shift_taxels,
                          params.noise_n, params.resolution_n, alpha, params.hysteresis_n,
                          params.drift_per_decade, self._state, out)
         self._push(snapshots[:, K.T_T].copy(), out)
@@ -800,6 +801,17 @@ class Rig:
         self._sync_samplers()
         return s
 
+    def tactile_gain(self, finger: Finger) -> float:
+        """Sensitivity of ``finger``'s tactile array (part-to-part spread drawn from the seed).
+
+        Examples
+        --------
+        >>> g = Rig("TR", seed=1).tactile_gain(Finger.THUMB)
+        >>> 0.7 < g < 1.3
+        True
+        """
+        return 1.0 + self.tactile_params.gain_sd * float(K.normal(self._keys[4], int(Finger(finger))))
+
     def tactile(self, finger: Finger = Finger.INDEX) -> np.ndarray:
         """One tactile frame ``(4, 4)`` (N) of ``finger`` at the current time.
 
@@ -815,7 +827,8 @@ class Rig:
         self._oneoff += 1
         tp = self.tactile_params
         out = np.empty((1,) + hw.TACTILE_SHAPE)
-        K.tactile_frames(snap, np.uint64(K.derive_key(self._keys[3], int(finger))), tp.patch_sigma_taxels,
+        K.tactile_frames(snap, np.uint64(K.derive_key(self._keys[3], int(finger))), self.tactile_gain(finger),
+                         tp.patch_sigma_taxels,
                          tp.shear_shift_taxels, tp.noise_n, tp.resolution_n, 1.0, 0.0, tp.drift_per_decade,
                          np.full((2,) + hw.TACTILE_SHAPE, np.nan), out)
         return out[0]
