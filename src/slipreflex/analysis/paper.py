@@ -9,17 +9,19 @@ rates the text states.
 
 Examples
 --------
->>> PAPER[("drop", "response_ms", "TR", "dath")].mean
+>>> PAPER[("drop", "response_ms", "TR", DATH)].mean
 50.0
->>> paper_value("pour", "total_ms", "TX", "nmsd").text()
+>>> paper_value("pour", "total_ms", "TX", NMSD).text()
 '630 ± 29'
->>> paper_value("drop", "response_ms", "TR", "swt") is None
+>>> paper_value("drop", "response_ms", "TR", SWT) is None
 True
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+
+from ..methods import DATH, FIXED, NMSD, SWT
 
 __all__ = ["Reported", "PAPER", "PAPER_SUCCESS", "PAPER_NOTES", "paper_value",
            "EXPERIMENTS", "METRICS", "BOTTLE_ORDER"]
@@ -65,46 +67,46 @@ def _r(mean: float, sd: float, note: str = "") -> Reported:
 
 #: The paper's table (SPEC 4), ms.
 PAPER: dict[tuple[str, str, str, str], Reported] = {
-    ("drop", "response_ms", "TR", "dath"): _r(50, 6.48),
-    ("drop", "response_ms", "TR", "fixed"): _r(55, 9.16),
-    ("drop", "response_ms", "DK", "dath"): _r(88.2, 24),
-    ("drop", "response_ms", "DK", "fixed"): _r(93.75, 66),
-    ("drop", "response_ms", "DK", "swt"): Reported(None, None, "faster than DATH"),
-    ("drop", "response_ms", "TX", "dath"): _r(31.3, 4.16),
-    ("drop", "response_ms", "TX", "fixed"): _r(45, 4.24),
-    ("drop", "total_ms", "TR", "dath"): _r(298.5, 77.41),
-    ("drop", "total_ms", "TR", "nmsd"): _r(661, 283),
-    ("drop", "total_ms", "DK", "dath"): _r(322.5, 48.15),
-    ("drop", "total_ms", "DK", "nmsd"): _r(743, 396.5),
-    ("drop", "total_ms", "TX", "dath"): _r(273, 22.51, "also 274.4"),
-    ("drop", "total_ms", "TX", "nmsd"): _r(769, 191),
-    ("pour", "response_ms", "TR", "dath"): _r(88, 30),
-    ("pour", "response_ms", "TR", "fixed"): _r(147.75, 48.45),
-    ("pour", "response_ms", "TR", "nmsd"): _r(103, 59),
-    ("pour", "response_ms", "TR", "swt"): _r(86, 9),
-    ("pour", "response_ms", "DK", "dath"): _r(70, 29.4),
-    ("pour", "response_ms", "DK", "fixed"): _r(155, 101.52),
-    ("pour", "response_ms", "DK", "nmsd"): _r(100, 17),
-    ("pour", "response_ms", "DK", "swt"): _r(73, 22),
-    ("pour", "response_ms", "TX", "dath"): _r(43, 30.34),
-    ("pour", "response_ms", "TX", "fixed"): _r(60, 30.9),
-    ("pour", "total_ms", "TR", "dath"): _r(509, 102),
-    ("pour", "total_ms", "TR", "fixed"): _r(509, 102.45),
-    ("pour", "total_ms", "TR", "nmsd"): _r(792, 192),
-    ("pour", "total_ms", "DK", "dath"): _r(460, 168),
-    ("pour", "total_ms", "DK", "fixed"): _r(460, 168.47),
-    ("pour", "total_ms", "DK", "nmsd"): _r(749, 281),
-    ("pour", "total_ms", "TX", "dath"): _r(411, 282),
-    ("pour", "total_ms", "TX", "fixed"): _r(411.66, 282.68),
-    ("pour", "total_ms", "TX", "nmsd"): _r(630, 29),
+    ("drop", "response_ms", "TR", DATH): _r(50, 6.48),
+    ("drop", "response_ms", "TR", FIXED): _r(55, 9.16),
+    ("drop", "response_ms", "DK", DATH): _r(88.2, 24),
+    ("drop", "response_ms", "DK", FIXED): _r(93.75, 66),
+    ("drop", "response_ms", "DK", SWT): Reported(None, None, "faster than DATH"),
+    ("drop", "response_ms", "TX", DATH): _r(31.3, 4.16),
+    ("drop", "response_ms", "TX", FIXED): _r(45, 4.24),
+    ("drop", "total_ms", "TR", DATH): _r(298.5, 77.41),
+    ("drop", "total_ms", "TR", NMSD): _r(661, 283),
+    ("drop", "total_ms", "DK", DATH): _r(322.5, 48.15),
+    ("drop", "total_ms", "DK", NMSD): _r(743, 396.5),
+    ("drop", "total_ms", "TX", DATH): _r(273, 22.51, "also 274.4"),
+    ("drop", "total_ms", "TX", NMSD): _r(769, 191),
+    ("pour", "response_ms", "TR", DATH): _r(88, 30),
+    ("pour", "response_ms", "TR", FIXED): _r(147.75, 48.45),
+    ("pour", "response_ms", "TR", NMSD): _r(103, 59),
+    ("pour", "response_ms", "TR", SWT): _r(86, 9),
+    ("pour", "response_ms", "DK", DATH): _r(70, 29.4),
+    ("pour", "response_ms", "DK", FIXED): _r(155, 101.52),
+    ("pour", "response_ms", "DK", NMSD): _r(100, 17),
+    ("pour", "response_ms", "DK", SWT): _r(73, 22),
+    ("pour", "response_ms", "TX", DATH): _r(43, 30.34),
+    ("pour", "response_ms", "TX", FIXED): _r(60, 30.9),
+    ("pour", "total_ms", "TR", DATH): _r(509, 102),
+    ("pour", "total_ms", "TR", FIXED): _r(509, 102.45),
+    ("pour", "total_ms", "TR", NMSD): _r(792, 192),
+    ("pour", "total_ms", "DK", DATH): _r(460, 168),
+    ("pour", "total_ms", "DK", FIXED): _r(460, 168.47),
+    ("pour", "total_ms", "DK", NMSD): _r(749, 281),
+    ("pour", "total_ms", "TX", DATH): _r(411, 282),
+    ("pour", "total_ms", "TX", FIXED): _r(411.66, 282.68),
+    ("pour", "total_ms", "TX", NMSD): _r(630, 29),
 }
 
 #: Success rates stated in the text: (experiment, bottle or "all", method) -> text.
 PAPER_SUCCESS: dict[tuple[str, str, str], str] = {
-    ("drop", "all", "dath"): "about 80 %",
-    ("drop", "TX", "dath"): "90 %",
-    ("drop", "all", "fixed"): "under 50 %",
-    ("pour", "all", "dath"): "100 %",
+    ("drop", "all", DATH): "about 80 %",
+    ("drop", "TX", DATH): "90 %",
+    ("drop", "all", FIXED): "under 50 %",
+    ("pour", "all", DATH): "100 %",
 }
 
 #: Other claims of the paper a reader may check against our run.
@@ -121,7 +123,7 @@ def paper_value(experiment: str, metric: str, bottle: str, method: str) -> Repor
 
     Examples
     --------
-    >>> paper_value("drop", "total_ms", "DK", "nmsd").mean
+    >>> paper_value("drop", "total_ms", "DK", NMSD).mean
     743.0
     """
     return PAPER.get((experiment, metric, bottle, method))

@@ -472,9 +472,6 @@ class SimHand:
         out.update({f: float(round(v)) for f, v in self._others.items()})
         return dict(sorted(out.items()))
 
-    def _next_step(self) -> int | None:
-        return self._pending[0][0] if self._pending else None
-
     def _apply_due(self, n: int) -> None:
         S = self._rig._S
         p = self.params
