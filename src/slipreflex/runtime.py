@@ -719,10 +719,8 @@ class _Loop:
                 pos -= self.slip_shift  # in the reflex's frame
             cmd = reflex.step(s.slip_volts, pos)
             r = SampleRecord(s, arrival, self.clock() - (s.t + self.offset), pos, cmd,
-                             filtered=getattr(reflex, "last_filtered", None),
-                             threshold=getattr(reflex, "last_threshold", None),
-                             event=bool(getattr(reflex, "last_event", False)),
-                             count=getattr(reflex, "last_count", None))
+                             filtered=reflex.last_filtered, threshold=reflex.last_threshold,
+                             event=bool(reflex.last_event), count=reflex.last_count)
             self.freshness(r)
             if cmd is not None:
                 self.command(r, cmd)
