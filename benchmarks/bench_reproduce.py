@@ -44,7 +44,7 @@ def main() -> None:
             t_run = time.perf_counter() - t0
             write_outputs(result, out)
             t_all = time.perf_counter() - t0
-        print(f"run {i + 1}: trials + analysis {t_run:.1f} s (calibration {result.calibration_s:.1f} s), "
+        print(f"run {i + 1}: trials + analysis {t_run:.1f} s (calibration {result.calibration_wall_s:.1f} s), "
               f"with CSV/figures/report {t_all:.1f} s wall")
 
 
