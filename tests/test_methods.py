@@ -113,3 +113,28 @@ def test_unknown_method_on_the_command_line_is_one_line(capsys):
         main(["reproduce", "--methods", "dath,bogus"])
     err = capsys.readouterr().err
     assert "bogus" in err and "known: dath, fixed, nmsd, swt" in err
+
+
+def test_installed_packages_add_methods_through_entry_points(tmp_path, monkeypatch):
+    import importlib.metadata as md
+
+    (tmp_path / "my_reflexes.py").write_text(
+        "from slipreflex import methods\n"
+        "SPECS = [methods.chain_method('dath-d2', 'DATH, D = 2', dath=True, dath_samples=2)]\n"
+        "def broken():\n    return ['not a spec']\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    good = md.EntryPoint(name="mine", value="my_reflexes:SPECS", group=methods.ENTRY_POINT_GROUP)
+    monkeypatch.setattr(md, "entry_points", lambda group: [good] if group == methods.ENTRY_POINT_GROUP else [])
+    monkeypatch.setattr(methods, "_plugins_loaded", False)
+    try:
+        assert "dath-d2" in methods.names()                  # loaded on first use
+        assert methods.load_plugins() == ()                   # once per process
+        assert methods.make("DATH-D2").params.dath_samples == 2
+        assert ReproduceConfig(methods=("dath-d2",)).methods == ("dath-d2",)
+    finally:
+        methods.unregister("dath-d2")
+    bad = md.EntryPoint(name="oops", value="my_reflexes:broken", group=methods.ENTRY_POINT_GROUP)
+    monkeypatch.setattr(md, "entry_points", lambda group: [bad])
+    monkeypatch.setattr(methods, "_plugins_loaded", False)
+    with pytest.raises(ParameterError, match=r"method plugin 'oops' \(my_reflexes:broken\): gave 'not a spec'"):
+        methods.load_plugins()

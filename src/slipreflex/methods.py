@@ -15,7 +15,9 @@ In the spirit of Gymnasium's ``register`` / ``make``:
 * :func:`names` lists the registered methods in their one order
   (registration order: the paper's DATH, fixed, NMSD, SWT-SD first, as in its table);
 * :func:`make` builds a fresh reflex by name (any case: ``"DATH"`` is ``"dath"``);
-* :func:`register` adds a method; :func:`get` returns its specification.
+* :func:`register` adds a method; :func:`get` returns its specification;
+* an installed package adds methods to every command (``reproduce --methods``)
+  through the ``slipreflex.methods`` entry-point group (:func:`load_plugins`).
 
 Adding a method
 ---------------
@@ -74,7 +76,8 @@ from .interfaces import InputKind, Reflex
 from .validation import choice, flag, positive, text
 
 __all__ = ["MethodSpec", "MethodContext", "Detections", "register", "unregister", "get", "names",
-           "make", "label", "canonical", "chain_method", "calibrated", "FIXED", "DATH", "NMSD", "SWT"]
+           "make", "label", "canonical", "chain_method", "calibrated", "load_plugins", "ENTRY_POINT_GROUP",
+           "FIXED", "DATH", "NMSD", "SWT"]
 
 #: Names of the paper's four methods (the one place they are spelled).
 FIXED, DATH, NMSD, SWT = "fixed", "dath", "nmsd", "swt"
@@ -242,6 +245,68 @@ class MethodSpec:
 
 _REGISTRY: dict[str, MethodSpec] = {}
 
+#: Entry-point group through which installed packages add methods (see :func:`load_plugins`).
+ENTRY_POINT_GROUP: str = "slipreflex.methods"
+_plugins_loaded = False
+
+
+def load_plugins() -> tuple[str, ...]:
+    """Register the methods that installed packages declare as entry points (once per process).
+
+    A package adds methods to every ``slipreflex`` command by declaring, in its
+    ``pyproject.toml``::
+
+        [project.entry-points."slipreflex.methods"]
+        my-method = "my_package.methods:SPEC"
+
+    where the object is a :class:`MethodSpec`, a sequence of them, or a
+    function returning either. Entry points are read in name order the first
+    time the registry is asked for a method; a method already registered under
+    the same name is kept.
+
+    Returns
+    -------
+    tuple of str
+        The names added by this call.
+
+    Raises
+    ------
+    ParameterError
+        When an entry point cannot be loaded or does not give MethodSpecs (naming it).
+
+    Examples
+    --------
+    >>> load_plugins()          # nothing installed declares one here, and it runs once
+    ()
+    """
+    global _plugins_loaded
+    if _plugins_loaded:
+        return ()
+    _plugins_loaded = True
+    from importlib.metadata import entry_points
+
+    added = []
+    for ep in sorted(entry_points(group=ENTRY_POINT_GROUP), key=lambda e: e.name):
+        try:
+            obj = ep.load()
+            got = obj() if callable(obj) and not isinstance(obj, MethodSpec) else obj
+            specs = [got] if isinstance(got, MethodSpec) else list(got)
+        except Exception as err:  # a broken plugin is the user's to fix: say which one
+            raise ParameterError(f"method plugin {ep.name!r} ({ep.value}): cannot load: {err}") from err
+        for spec in specs:
+            if not isinstance(spec, MethodSpec):
+                raise ParameterError(f"method plugin {ep.name!r} ({ep.value}): gave {spec!r}, "
+                                     "not a MethodSpec")
+            if spec.name not in _REGISTRY:
+                _REGISTRY[spec.name] = spec
+                added.append(spec.name)
+    return tuple(added)
+
+
+def _registry() -> dict[str, MethodSpec]:
+    load_plugins()
+    return _REGISTRY
+
 
 def register(spec: MethodSpec, *, replace: bool = False) -> None:
     """Add ``spec`` to the registry (at the end of the method order).
@@ -290,7 +355,7 @@ def canonical(name: str) -> str:
     >>> canonical("SWT")
     'swt'
     """
-    return choice("method", name.strip() if isinstance(name, str) else name, _REGISTRY, any_case=True)
+    return choice("method", name.strip() if isinstance(name, str) else name, _registry(), any_case=True)
 
 
 def get(name: str) -> MethodSpec:
@@ -301,7 +366,7 @@ def get(name: str) -> MethodSpec:
     >>> get("Nmsd").fs
     260.0
     """
-    return _REGISTRY[canonical(name)]
+    return _registry()[canonical(name)]
 
 
 def names(*, paper: bool = False) -> tuple[str, ...]:
@@ -312,7 +377,7 @@ def names(*, paper: bool = False) -> tuple[str, ...]:
     >>> names(paper=True)
     ('dath', 'fixed', 'nmsd', 'swt')
     """
-    return tuple(n for n, s in _REGISTRY.items() if s.paper or not paper)
+    return tuple(n for n, s in _registry().items() if s.paper or not paper)
 
 
 def calibrated() -> tuple[str, ...]:
@@ -323,7 +388,7 @@ def calibrated() -> tuple[str, ...]:
     >>> calibrated()[:2]
     ('nmsd', 'swt')
     """
-    return tuple(n for n, s in _REGISTRY.items() if s.rest_statistic is not None)
+    return tuple(n for n, s in _registry().items() if s.rest_statistic is not None)
 
 
 def label(name: str) -> str:
@@ -334,7 +399,7 @@ def label(name: str) -> str:
     >>> label("swt"), label("not-a-method")
     ('SWT-SD', 'not-a-method')
     """
-    spec = _REGISTRY.get(name.casefold()) if isinstance(name, str) else None
+    spec = _registry().get(name.casefold()) if isinstance(name, str) else None
     return spec.label if spec else str(name)
 
 
