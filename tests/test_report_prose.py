@@ -44,3 +44,13 @@ def test_prose_uses_the_method_labels_and_typed_rows():
     text = " ".join(discussion_text(_result()))
     assert "In the pours: DATH 100% of 2, fixed 100% of 2, NMSD 100% of 2, SWT-SD 100% of 2" in text
     assert "**Bottles.** DATH's mean response by bottle, fastest first: drop: TX 60 ms, TR 80 ms" in text
+
+
+def test_prose_from_rows_read_back_from_csv_is_the_same(tmp_path):
+    from slipreflex.analysis.report import read_csv, write_csv
+    from slipreflex.analysis.trial import RESULT_COLUMNS
+
+    res = _result()
+    back = ReproduceResult(res.config, read_csv(write_csv(tmp_path / "r.csv", res.rows, RESULT_COLUMNS)),
+                           res.summary, res.thresholds, {}, 1.0, 1)
+    assert discussion_text(back) == discussion_text(res)

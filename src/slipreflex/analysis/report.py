@@ -571,7 +571,11 @@ class _Rows:
     """The rows of a run with the selections the discussion needs."""
 
     def __init__(self, result: Any) -> None:
-        self.rows, self.summary, self.config = list(result.rows), result.summary, result.config
+        from .trial import TrialRow
+
+        # rows read back from results.csv are dicts of strings: type them once
+        self.rows = [r if isinstance(r, TrialRow) else TrialRow.from_dict(r) for r in result.rows]
+        self.summary, self.config = result.summary, result.config
 
     def sel(self, **kw: Any) -> list[Any]:
         return [r for r in self.rows if all(r[k] == v for k, v in kw.items())]
