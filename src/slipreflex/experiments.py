@@ -53,7 +53,7 @@ from .baselines.calibration import REST_K
 from .baselines.swt import SWT_WINDOW
 from .errors import ParameterError
 from .thresholds import calibrate, calibration_seed
-from .validation import choices, integer, positive, set_field
+from .validation import choices, flag, integer, positive, set_field
 
 __all__ = [
     "METHODS", "EXPERIMENTS", "BOTTLE_NAMES", "DEFAULT_SEED", "ReproduceConfig", "Cell",
@@ -110,6 +110,12 @@ class ReproduceConfig:
     swt_persist : int
         SWT-SD persistence after the crossing (samples, default ``SWT_WINDOW``,
         8 samples = 21 ms at 380 Hz).
+    variations : bool
+        Each trial's plant varies from its seed as real repeats do
+        (:mod:`slipreflex.sim.variations`); False: every repeat is the nominal plant.
+    independent_seeds : bool
+        Give each method its own trial seeds (default False: the paired design,
+        every method faces the same trials).
 
     Examples
     --------
@@ -135,8 +141,12 @@ class ReproduceConfig:
     calibration_s: float = 2.0
     rest_k: float = REST_K
     swt_persist: int = SWT_WINDOW
+    variations: bool = True
+    independent_seeds: bool = False
 
     def __post_init__(self) -> None:
+        for name in ("variations", "independent_seeds"):
+            set_field(self, name, flag(name, getattr(self, name)))
         set_field(self, "trials", integer("trials", self.trials, lo=1))
         set_field(self, "seed", integer("seed", self.seed, lo=0))
         for name, known in (("bottles", BOTTLE_NAMES), ("experiments", EXPERIMENTS)):
@@ -205,7 +215,8 @@ class ReproduceConfig:
                 for k in range(self.trials):
                     seed = trial_seed(self.seed, e, b, k)
                     for m in self.methods:
-                        out.append(Cell(e, b, m, k, seed))
+                        own = trial_seed(self.seed, e, b, k, method=m) if self.independent_seeds else seed
+                        out.append(Cell(e, b, m, k, own))
         return out
 
 
@@ -237,12 +248,14 @@ class Cell:
         return (self.experiment, self.bottle, self.method, self.trial)
 
 
-def trial_seed(master: int, experiment: str, bottle: str, trial: int) -> int:
+def trial_seed(master: int, experiment: str, bottle: str, trial: int, method: str | None = None) -> int:
     """The rig seed of one trial, spawned from the master seed (shared by all methods).
 
     ``SeedSequence(master).spawn(2)[e].spawn(3)[b].spawn(trial + 1)[trial]``,
     with ``e`` and ``b`` the canonical positions of the experiment and bottle;
-    returned as a 63-bit integer (what results.csv records).
+    returned as a 63-bit integer (what results.csv records). With ``method``
+    (the independent-seeds option) the trial's sequence is keyed further by
+    the method's name, so each method gets its own trials.
 
     Examples
     --------
@@ -253,7 +266,11 @@ def trial_seed(master: int, experiment: str, bottle: str, trial: int) -> int:
     """
     e, b = EXPERIMENTS.index(experiment), BOTTLE_NAMES.index(bottle)
     ss = np.random.SeedSequence(master).spawn(len(EXPERIMENTS))[e].spawn(len(BOTTLE_NAMES))[b]
-    return _seed63(ss.spawn(trial + 1)[trial])
+    child = ss.spawn(trial + 1)[trial]
+    if method is not None:
+        key = [int(c) for c in method.lower().encode()]
+        child = np.random.SeedSequence([*child.generate_state(2), *key])
+    return _seed63(child)
 
 
 def _seed63(ss: np.random.SeedSequence) -> int:
@@ -321,9 +338,10 @@ def run_trial(cell: Cell, config: ReproduceConfig, thresholds: dict[str, float],
     """
     from .analysis.trial import TrialStreams, analyse_trial
     from .hardware import SLIP_FINGER
-    from .sim import Rig, run_closed_loop
+    from .sim import run_closed_loop
+    from .sim.variations import VariationSpread, trial_rig
 
-    rig = Rig(cell.bottle, seed=cell.seed)
+    rig = trial_rig(cell.bottle, cell.seed, spread=None if config.variations else VariationSpread.none())
     grasp = rig.grasp()
     p0 = float(round(grasp.positions[SLIP_FINGER]))
     spec = spec or methods.get(cell.method)

@@ -77,6 +77,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         f"studies (default {d['rest_k']:g}, the same for every bottle)")
     p.add_argument("--swt-persist", type=int, default=d["swt_persist"], metavar="N",
                    help=f"SWT-SD persistence after the crossing, samples (default {d['swt_persist']})")
+    p.add_argument("--independent-seeds", action="store_true",
+                   help="each method gets its own trials (default: paired, every method faces the same trials)")
+    p.add_argument("--no-variations", action="store_true",
+                   help="every repeat is the nominal plant (default: placement, grip height and friction vary "
+                        "from each trial's seed as real repeats do)")
     p.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--no-figures", action="store_true", help="skip the example-trial figures")
@@ -95,7 +100,8 @@ def run(args: argparse.Namespace) -> int:
         experiments=tuple(args.experiments), seed=args.seed, drop_mass_kg=args.drop_mass,
         drop_height_m=args.drop_height, pour_rate_l_min=args.pour_rate, pour_volume_ml=args.pour_volume,
         rest_s=args.rest, after_s=args.after, calibration_s=args.calibration, rest_k=args.rest_k,
-        swt_persist=args.swt_persist)
+        swt_persist=args.swt_persist, variations=not args.no_variations,
+        independent_seeds=args.independent_seeds)
     result = run_reproduce(config, jobs=args.jobs, progress=not args.no_progress,
                            plots=not args.no_figures)
     command = "slipreflex " + " ".join(shlex.quote(a) for a in sys.argv[1:]) if sys.argv[1:] else None
