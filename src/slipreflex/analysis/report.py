@@ -194,11 +194,12 @@ def terminal_table(summary: Sequence[dict[str, Any]]) -> str:
     >>> print(terminal_table([]))
     exp   bottle method  response ms (n)   total ms (n)      success
     """
-    head = f"{'exp':5} {'bottle':6} {'method':7} {'response ms (n)':17} {'total ms (n)':17} success"
+    w = max([7] + [len(_label(s["method"])) for s in summary])
+    head = f"{'exp':5} {'bottle':6} {'method':{w}} {'response ms (n)':17} {'total ms (n)':17} success"
     lines = [head]
     for s in summary:
         lines.append(
-            f"{s['experiment']:5} {s['bottle']:6} {_label(s['method']):7} "
+            f"{s['experiment']:5} {s['bottle']:6} {_label(s['method']):{w}} "
             f"{fmt_mean_sd(s['response_mean_ms'], s['response_sd_ms'], s['response_n']):17} "
             f"{fmt_mean_sd(s['total_mean_ms'], s['total_sd_ms'], s['total_n']):17} "
             f"{100 * s['success_rate']:.0f}% of {s['success_n']}")
