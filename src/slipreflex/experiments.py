@@ -116,6 +116,9 @@ class ReproduceConfig:
     independent_seeds : bool
         Give each method its own trial seeds (default False: the paired design,
         every method faces the same trials).
+    plant : slipreflex.sim.uncertain.Plant, optional
+        The simulated plant (parameter objects and bottles); None: the
+        default plant. ``slipreflex study`` runs the grid on many plants.
 
     Examples
     --------
@@ -143,6 +146,7 @@ class ReproduceConfig:
     swt_persist: int = SWT_WINDOW
     variations: bool = True
     independent_seeds: bool = False
+    plant: Any = None
 
     def __post_init__(self) -> None:
         for name in ("variations", "independent_seeds"):
@@ -297,7 +301,8 @@ def method_context(config: ReproduceConfig, thresholds: dict[str, float]) -> met
     >>> method_context(ReproduceConfig(swt_persist=4), {}).options["swt_persist"]
     4
     """
-    return methods.MethodContext(thresholds=dict(thresholds), speed=closing_speed(),
+    speed = closing_speed() if config.plant is None else float(config.plant.hand.speed_units_s)
+    return methods.MethodContext(thresholds=dict(thresholds), speed=speed,
                                  options={"swt_persist": config.swt_persist})
 
 
@@ -341,7 +346,10 @@ def run_trial(cell: Cell, config: ReproduceConfig, thresholds: dict[str, float],
     from .sim import run_closed_loop
     from .sim.variations import VariationSpread, trial_rig
 
-    rig = trial_rig(cell.bottle, cell.seed, spread=None if config.variations else VariationSpread.none())
+    plant = {} if config.plant is None else {"rig_kwargs": config.plant.rig_kwargs(),
+                                             "bottles": dict(config.plant.bottles)}
+    rig = trial_rig(cell.bottle, cell.seed, spread=None if config.variations else VariationSpread.none(),
+                    **plant)
     grasp = rig.grasp()
     p0 = float(round(grasp.positions[SLIP_FINGER]))
     spec = spec or methods.get(cell.method)

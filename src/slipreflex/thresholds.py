@@ -60,7 +60,7 @@ def calibrate(config: Any) -> dict[str, float]:
         Threshold by method name, e.g. ``{"nmsd": N/s, "swt": N}``.
 
     ``config`` is a :class:`slipreflex.experiments.ReproduceConfig` (its
-    ``seed``, ``calibration_s`` and ``rest_k`` are used).
+    ``seed``, ``calibration_s``, ``rest_k`` and ``plant`` are used).
 
     Examples
     --------
@@ -75,7 +75,9 @@ def calibrate(config: Any) -> dict[str, float]:
     specs = [methods.get(m) for m in methods.calibrated()]
     stats: dict[str, list[np.ndarray]] = {s.name: [] for s in specs}
     for b in BOTTLE_ORDER:
-        rig = Rig(b, seed=calibration_seed(config.seed, b))
+        plant = getattr(config, "plant", None)
+        seed = calibration_seed(config.seed, b)
+        rig = Rig(b, seed=seed) if plant is None else plant.rig(b, seed=seed)
         rig.grasp()
         for spec in specs:
             tr = simulate_open_loop(rig, config.calibration_s, tactile_fs=spec.fs)
