@@ -1,4 +1,4 @@
-"""Every registered method keeps the Reflex contract (slipreflex.testing.check_reflex)."""
+"""Every registered method keeps the Reflex contract and its spec (slipreflex.testing.check_method)."""
 
 from __future__ import annotations
 
@@ -9,16 +9,26 @@ from slipreflex import methods
 from slipreflex.baselines import NMSD, SWTSD
 from slipreflex.chain import SlipReflex
 from slipreflex.interfaces import Reflex
-from slipreflex.testing import ContractError, check_reflex, reflex_for_check
+from slipreflex.testing import ContractError, check_method, check_reflex, reflex_for_check
 
 
 @pytest.mark.parametrize("name", methods.names())
 def test_every_registered_method_keeps_the_reflex_contract(name):
-    reflex = reflex_for_check(name)
-    assert isinstance(reflex, Reflex)
-    report = check_reflex(reflex)
+    assert isinstance(reflex_for_check(name), Reflex)
+    report = check_method(name)
     # the synthetic slip must make every method act, or the check proved little
     assert report.commands > 0 and report.events > 0, report
+
+
+def test_a_specification_that_disagrees_with_its_reflex_is_caught():
+    wrong = methods.MethodSpec(name="dath-wrong", label="x", input_kind="slip", fs=100.0,
+                               build=methods.get("dath").build)
+    methods.register(wrong)
+    try:
+        with pytest.raises(ContractError, match="at 100 Hz, the reflex reads 'slip' at 333.333"):
+            check_method("dath-wrong")
+    finally:
+        methods.unregister("dath-wrong")
 
 
 @pytest.mark.parametrize("shape", [(4, 4), (3, 5), (7,)])

@@ -45,7 +45,8 @@ from . import hardware as hw
 from .errors import DataError
 from .interfaces import Reflex
 
-__all__ = ["ContractError", "CheckReport", "check_reflex", "synthetic_input", "reflex_for_check"]
+__all__ = ["ContractError", "CheckReport", "check_reflex", "check_method", "synthetic_input",
+           "reflex_for_check"]
 
 #: Synthetic trial: seconds of rest, then seconds of slip.
 REST_S, SLIP_S = 1.0, 1.0
@@ -320,3 +321,40 @@ def check_reflex(reflex: Any, *, shape: tuple[int, ...] | None = None, seed: int
     reflex.reset()
     return CheckReport(samples=len(x), commands=sum(c is not None for c, _ in first),
                        events=sum(d[0] for _, d in first))
+
+
+def check_method(name: str, *, shape: tuple[int, ...] | None = None) -> CheckReport:
+    """Check a registered method: its reflex keeps the contract and agrees with its specification.
+
+    Runs :func:`check_reflex` on :func:`reflex_for_check` and checks that the
+    reflex reads the stream and runs at the rate its
+    :class:`~slipreflex.methods.MethodSpec` says, and that the specification's
+    ``detections`` (when given) draws one value and one detection flag per
+    input sample, and its ``rest_statistic`` (when given) returns finite values.
+
+    Examples
+    --------
+    >>> check_method("swt").commands > 0
+    True
+    """
+    from . import methods
+
+    spec = methods.get(name)
+    reflex = reflex_for_check(name, shape=shape)
+    if reflex.input_kind != spec.input_kind or not math.isclose(reflex.fs, spec.fs):
+        _fail(reflex, f"the specification says {spec.input_kind!r} at {spec.fs:g} Hz, the reflex reads "
+                      f"{reflex.input_kind!r} at {reflex.fs:g} Hz")
+    report = check_reflex(reflex, shape=shape)
+    x, k_rest = synthetic_input(spec.input_kind, spec.fs, shape=shape or hw.TACTILE_SHAPE)
+    if spec.detections is not None:
+        d = spec.detections(reflex, x)
+        if np.shape(d.sensor) != (len(x),) or np.shape(d.events) != (len(x),) \
+                or np.asarray(d.events).dtype != bool:
+            _fail(reflex, f"detections() must give a trace and a bool flag per sample ({len(x)}), got "
+                          f"{np.shape(d.sensor)} and {np.shape(d.events)} {np.asarray(d.events).dtype}")
+    if spec.rest_statistic is not None:
+        stat = np.asarray(spec.rest_statistic(x[:k_rest], spec.fs), dtype=float)
+        if stat.ndim != 1 or not stat.size or not np.isfinite(stat).all():
+            _fail(reflex, "rest_statistic() must give a non-empty 1-D array of finite values")
+    return report
+
