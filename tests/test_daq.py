@@ -42,7 +42,7 @@ def test_clean_stream_decodes_to_samples():
     assert got[4].accel_g == (0.0, 0.0, 1.0) and got[5].accel_g is None
     assert got[3].slip_volts == pytest.approx((300 + 3) * hw.ADC_LSB)
     assert got[9].t == pytest.approx(9 * hw.DAQ_PERIOD_S)
-    assert daq.stats == DaqStats(frames=10)
+    assert daq.stats == DaqStats(wire.ParserStats(bytes_fed=10 * wire.FRAME_LEN, frames=10))
     daq.close()
     loop.close()
 

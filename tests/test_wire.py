@@ -141,7 +141,7 @@ def test_stream_vectors(row):
         assert stats.bytes_fed == len(data)
         assert stats.pending == 0
         assert stats.bytes_fed == sum(wire.FRAME_LEN_REFLEX if f.reflex else wire.FRAME_LEN
-                                      for f in frames) + stats.garbage_bytes
+                                      for f in frames) + stats.garbage_bytes + stats.dropped_bytes
 
 
 def test_unwrapping_and_time_across_wrap():

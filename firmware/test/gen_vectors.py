@@ -140,6 +140,7 @@ def main(out=sys.stdout) -> None:
         ("gap_across_wrap", w[1] + seqs(3)[0]),
         ("duplicate", a0 + a0),
         ("restart", a2 + seqs(0)[0]),
+        ("late", a0 + a2 + a1 + a3),
         ("sync_in_payload", b"".join(sp)),
         ("sync_in_payload_bad_crc", sp[0] + flip(sp[1], 18) + sp[2]),
         ("sync_in_payload_truncated", sp[0] + sp[1][:10] + sp[2]),
@@ -159,7 +160,7 @@ def main(out=sys.stdout) -> None:
         got = parser.feed(data) + parser.flush()
         s = parser.stats
         assert s.bytes_fed == sum(wire.FRAME_LEN_REFLEX if f.reflex else wire.FRAME_LEN
-                                  for f in got) + s.garbage_bytes + s.pending
+                                  for f in got) + s.garbage_bytes + s.dropped_bytes + s.pending
         seq_list = ",".join(str(f.seq) for f in got) or "-"
         p(f"S {name} {data.hex() or '-'} {s.frames} {s.crc_errors} {s.truncated} {s.invalid} "
           f"{s.garbage_bytes} {s.resyncs} {s.seq_gaps} {s.frames_lost} {seq_list}\n")

@@ -26,24 +26,29 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field, fields
 from typing import Any
 
 from ..errors import DeviceError
 from ..interfaces import DaqSample
 from . import wire
+from .port import ReconnectingPort
 
 __all__ = ["SerialDaq", "DaqStats"]
 
 
 @dataclass(frozen=True, slots=True)
 class DaqStats:
-    """Counters of a :class:`SerialDaq`: the parser's plus the port's.
+    """Counters of a :class:`SerialDaq`: the parser's (one :class:`~slipreflex.devices.wire.ParserStats`)
+    plus the port's.
+
+    The parser's counters read as attributes too (``stats.seq_gaps``).
 
     Attributes
     ----------
-    frames, crc_errors, truncated, invalid, garbage_bytes, resyncs, seq_gaps, frames_lost : int
-        As in :class:`slipreflex.devices.wire.ParserStats`.
+    parser : ParserStats
+        Frames, CRC errors, truncated and invalid frames, garbage, resyncs,
+        sequence gaps, lost frames, duplicates, late frames and sequence restarts.
     disconnects : int
         Times the port failed and was closed.
     reconnects : int
@@ -51,30 +56,30 @@ class DaqStats:
 
     Examples
     --------
-    >>> DaqStats().seq_gaps
-    0
+    >>> DaqStats().seq_gaps, DaqStats(reconnects=2).to_dict()["reconnects"]
+    (0, 2)
     """
 
-    frames: int = 0
-    crc_errors: int = 0
-    truncated: int = 0
-    invalid: int = 0
-    garbage_bytes: int = 0
-    resyncs: int = 0
-    seq_gaps: int = 0
-    frames_lost: int = 0
+    parser: wire.ParserStats = field(default_factory=wire.ParserStats)
     disconnects: int = 0
     reconnects: int = 0
 
+    def __getattr__(self, name: str) -> Any:
+        if name.startswith("_"):
+            raise AttributeError(name)
+        return getattr(self.parser, name)
+
     def to_dict(self) -> dict[str, int]:
-        """The counters as a plain dict.
+        """All counters as one flat dict (the parser's, then the port's).
 
         Examples
         --------
-        >>> DaqStats(frames=3).to_dict()["frames"]
-        3
+        >>> DaqStats().to_dict()["frames"]
+        0
         """
-        return {name: getattr(self, name) for name in self.__slots__}  # type: ignore[attr-defined]
+        out = {f.name: getattr(self.parser, f.name) for f in fields(self.parser)}
+        out.update(disconnects=self.disconnects, reconnects=self.reconnects)
+        return out
 
 
 class SerialDaq:
@@ -93,6 +98,7 @@ class SerialDaq:
     last_arrival : float
         ``time.perf_counter()`` just after the bytes of the latest samples were
         read from the port (the samples' arrival time), or NaN.
+    port_name : str
 
     Raises
     ------
@@ -108,27 +114,12 @@ class SerialDaq:
     """
 
     def __init__(self, port: Any, *, reconnect_interval: float = 0.2) -> None:
-        self._owns = isinstance(port, str)
-        self.port_name: str = port if isinstance(port, str) else str(getattr(port, "port", None) or port)
-        self.reconnect_interval = reconnect_interval
+        self._port = ReconnectingPort(port, what="DAQ", baudrate=wire.BAUD,
+                                      reconnect_interval=reconnect_interval)
+        self.port_name = self._port.port_name
         self._parser = wire.FrameParser()
-        self._timeout: float | None = None
-        self._last_attempt = -math.inf
-        self._disconnects = 0
-        self._reconnects = 0
+        self._timeout: float | None = None  # set on the first read (a port given open may block)
         self.last_arrival = math.nan
-        self._ser: Any = self._open() if self._owns else port
-
-    def _open(self) -> Any:
-        import serial
-
-        try:
-            ser = serial.serial_for_url(self.port_name, baudrate=wire.BAUD, timeout=0,
-                                        exclusive="://" not in self.port_name)
-        except (serial.SerialException, OSError, ValueError) as err:
-            raise DeviceError(f"{self.port_name}: cannot open DAQ port: {err}") from None
-        self._timeout = 0.0
-        return ser
 
     @property
     def connected(self) -> bool:
@@ -141,7 +132,7 @@ class SerialDaq:
         >>> d.close(); d.connected
         False
         """
-        return self._ser is not None
+        return self._port.connected
 
     @property
     def stats(self) -> DaqStats:
@@ -152,41 +143,19 @@ class SerialDaq:
         >>> SerialDaq("loop://").stats.frames
         0
         """
-        p = self._parser.stats
-        return DaqStats(frames=p.frames, crc_errors=p.crc_errors, truncated=p.truncated,
-                        invalid=p.invalid, garbage_bytes=p.garbage_bytes, resyncs=p.resyncs,
-                        seq_gaps=p.seq_gaps, frames_lost=p.frames_lost,
-                        disconnects=self._disconnects, reconnects=self._reconnects)
+        return DaqStats(self._parser.stats, self._port.disconnects, self._port.reconnects)
 
     def _reopen(self, timeout: float) -> bool:
-        if not self._owns:
-            time.sleep(timeout)
-            return False
-        now = time.monotonic()
-        wait = self._last_attempt + self.reconnect_interval - now
+        """Reopen a lost port; while it is gone, wait out ``timeout`` (read never spins)."""
+        wait = self._port.wait_before_retry() if self._port.owns else timeout
         if wait > 0:
             time.sleep(min(wait, timeout))
             return False
-        self._last_attempt = now
-        try:
-            self._ser = self._open()
-        except DeviceError:
-            time.sleep(timeout)
-            return False
-        self._reconnects += 1
-        return True
-
-    def _fail(self, err: BaseException) -> DeviceError:
-        ser, self._ser = self._ser, None
-        self._disconnects += 1
-        self._last_attempt = time.monotonic()
-        self._parser.flush()  # a frame cut by the loss counts as truncated
-        if self._owns and ser is not None:
-            try:
-                ser.close()
-            except Exception:  # noqa: BLE001 - the port is already gone
-                pass
-        return DeviceError(f"{self.port_name}: DAQ port lost: {err}")
+        if self._port.ensure_open():
+            self._timeout = 0.0
+            return True
+        time.sleep(timeout)
+        return False
 
     def read(self, timeout: float) -> list[DaqSample]:
         """Return the samples that arrived, waiting at most ``timeout`` seconds for the first byte.
@@ -221,9 +190,11 @@ class SerialDaq:
         """
         import serial
 
-        if self._ser is None and not self._reopen(timeout):
-            return []
-        ser = self._ser
+        ser = self._port.serial
+        if ser is None:
+            if not self._reopen(timeout):
+                return []
+            ser = self._port.serial
         try:
             if timeout != self._timeout:
                 ser.timeout = timeout
@@ -234,7 +205,8 @@ class SerialDaq:
                 if more:
                     data += ser.read(more)
         except (serial.SerialException, OSError) as err:
-            raise self._fail(err) from None
+            self._parser.flush()  # a frame cut by the loss counts as truncated
+            raise self._port.fail(err) from None
         if not data:
             return []
         self.last_arrival = time.perf_counter()
@@ -247,9 +219,7 @@ class SerialDaq:
         --------
         >>> d = SerialDaq("loop://"); d.close(); d.close()
         """
-        ser, self._ser = self._ser, None
-        if ser is not None and self._owns:
-            ser.close()
+        self._port.close()
 
     def __enter__(self) -> "SerialDaq":
         return self

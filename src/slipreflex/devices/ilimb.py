@@ -26,7 +26,6 @@ Examples
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -36,6 +35,7 @@ from ..hardware import (
     CONTACT_FORCE_N, FINGER_MAX, FINGER_MIN, ILIMB_BAUD, ILIMB_END, ILIMB_START, PWM_MAX,
     THUMB_ROTATOR_MAX, TRIPOD, Finger, HandCommand,
 )
+from .port import ReconnectingPort
 
 __all__ = [
     "FingerCommand", "value_range", "encode_packet", "PacketParser", "ILimb",
@@ -318,33 +318,28 @@ class ILimb:
 
     def __init__(self, port: Any, *, write_timeout: float = 0.01,
                  reconnect_interval: float = 0.2) -> None:
-        self._owns = isinstance(port, str)
-        self.port_name: str = port if isinstance(port, str) else str(getattr(port, "port", None) or port)
+        self._port = ReconnectingPort(port, what="i-Limb", baudrate=ILIMB_BAUD,
+                                      write_timeout=write_timeout,
+                                      reconnect_interval=reconnect_interval)
+        self.port_name = self._port.port_name
         self.write_timeout = write_timeout
         self.reconnect_interval = reconnect_interval
-        self._ser: Any = None
-        self._last_attempt = -math.inf
         self._targets: dict[Finger, float] = {}
-        self._pending_resend = False
-        #: Packets written, write failures, and successful reconnections.
+        #: Packets written and write failures.
         self.packets_sent = 0
         self.write_failures = 0
-        self.reconnects = 0
-        if self._owns:
-            self._ser = self._open()
-        else:
-            self._ser = port
 
-    # -- port handling -------------------------------------------------------
-    def _open(self) -> Any:
-        import serial
+    @property
+    def reconnects(self) -> int:
+        """Successful reopens of the port after a failure.
 
-        try:
-            return serial.serial_for_url(self.port_name, baudrate=ILIMB_BAUD, timeout=0,
-                                         write_timeout=self.write_timeout,
-                                         exclusive="://" not in self.port_name)
-        except (serial.SerialException, OSError, ValueError) as err:
-            raise DeviceError(f"{self.port_name}: cannot open i-Limb port: {err}") from None
+        Examples
+        --------
+        >>> import serial
+        >>> ILimb(serial.serial_for_url("loop://")).reconnects
+        0
+        """
+        return self._port.reconnects
 
     @property
     def connected(self) -> bool:
@@ -356,52 +351,21 @@ class ILimb:
         >>> h = ILimb(serial.serial_for_url("loop://")); h.connected
         True
         """
-        return self._ser is not None
-
-    def _ensure_open(self) -> bool:
-        if self._ser is not None:
-            return True
-        if not self._owns:
-            return False
-        now = time.monotonic()
-        if now - self._last_attempt < self.reconnect_interval:
-            return False
-        self._last_attempt = now
-        try:
-            self._ser = self._open()
-        except DeviceError:
-            return False
-        self.reconnects += 1
-        self._pending_resend = bool(self._targets)
-        return True
-
-    def _drop(self) -> None:
-        ser, self._ser = self._ser, None
-        self._last_attempt = time.monotonic()
-        if ser is not None and self._owns:
-            try:
-                ser.close()
-            except Exception:  # noqa: BLE001 - the port is already gone
-                pass
+        return self._port.connected
 
     def _write(self, packet: bytes) -> None:
         import serial
 
-        if self._ser is None:
-            if not self._ensure_open():
+        if self._port.serial is None:
+            if not self._port.ensure_open():
                 raise DeviceError(f"{self.port_name}: i-Limb port is not connected")
-            if self._pending_resend:  # back after a loss: restore the whole grip first
-                self._pending_resend = False
+            if self._targets:  # back after a loss: restore the whole grip first
                 self._write(self._targets_packet(self._targets))
         try:
-            self._ser.write(packet)
+            self._port.serial.write(packet)
         except (serial.SerialException, OSError) as err:
             self.write_failures += 1
-            if self._owns:
-                self._drop()
-            else:
-                self._ser = None
-            raise DeviceError(f"{self.port_name}: i-Limb write failed: {err}") from None
+            raise self._port.fail(err, "write failed") from None
         self.packets_sent += 1
 
     # -- commands ------------------------------------------------------------
@@ -495,10 +459,7 @@ class ILimb:
         >>> h = ILimb(serial.serial_for_url("loop://")); h.close(); h.connected
         False
         """
-        if self._owns:
-            self._drop()
-        else:
-            self._ser = None
+        self._port.close()
 
     def __enter__(self) -> "ILimb":
         return self

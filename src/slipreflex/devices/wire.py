@@ -81,6 +81,9 @@ PAYLOAD_LEN: int = FRAME_LEN - len(SYNC) - 2
 BAUD: int = 250_000
 #: The sequence number counts modulo this.
 SEQ_MODULO: int = 1 << 16
+#: A frame at most this many behind the last one is late (reordered) and dropped; further
+#: behind (or more than half the modulo ahead), the board restarted its sequence.
+LATE_WINDOW: int = 2
 #: The cumulative flow-pulse counter counts modulo this.
 FLOW_MODULO: int = 1 << 32
 #: Largest ADC reading (10-bit ADC).
@@ -510,8 +513,8 @@ class ParserStats:
     """Counters of a :class:`FrameParser` (a snapshot).
 
     Every byte fed is eventually either part of a good frame, counted in
-    ``garbage_bytes``, or still pending: ``bytes_fed == FRAME_LEN * frames +
-    garbage_bytes + pending``.
+    ``garbage_bytes`` or ``dropped_bytes``, or still pending: ``bytes_fed ==
+    FRAME_LEN * frames + garbage_bytes + dropped_bytes + pending`` (for version-1 frames).
 
     Attributes
     ----------
@@ -535,6 +538,15 @@ class ParserStats:
         Good frames whose seq is not the previous seq + 1 (mod 65536).
     frames_lost : int
         Sum over gaps of the frames skipped, ``(seq - expected) mod 65536``.
+    duplicates : int
+        Good frames with the same seq as the one before: dropped.
+    reordered : int
+        Good frames up to :data:`LATE_WINDOW` behind the last one: dropped.
+    resets : int
+        Sequence restarts (a board reset): the frame starts a new segment and
+        its time continues one period after the last frame's.
+    dropped_bytes : int
+        Bytes of the duplicated and late frames.
     pending : int
         Bytes held back waiting for the rest of a frame.
 
@@ -553,6 +565,10 @@ class ParserStats:
     resyncs: int = 0
     seq_gaps: int = 0
     frames_lost: int = 0
+    duplicates: int = 0
+    reordered: int = 0
+    resets: int = 0
+    dropped_bytes: int = 0
     pending: int = 0
 
 
@@ -563,7 +579,9 @@ class FrameParser:
     sync pattern and counts what it skipped (see :class:`ParserStats`). Good
     frames get an unwrapped sequence number ``index`` (the first good frame
     keeps its seq; later ones add ``(seq - previous) mod 65536``), so a
-    sample's time stays monotonic across wraparound and gaps.
+    sample's time stays monotonic across wraparound and gaps. A repeated or
+    late frame is dropped and a sequence restart (board reset) continues the
+    time at the next period, so time never jumps back or by minutes.
 
     A candidate whose CRC fails is reported as truncated (not as a CRC error)
     when a good frame starts inside it; to decide that, the parser may hold up
@@ -665,13 +683,20 @@ class FrameParser:
             self._c["garbage_bytes"] += n
             self._lost_lock = True
 
-    def _accept(self, frame: Frame) -> Frame:
+    def _accept(self, frame: Frame, size: int) -> Frame | None:
         c = self._c
         if self._last_seq is None:
             self._index = frame.seq
         else:
-            step = (frame.seq - self._last_seq) % SEQ_MODULO or SEQ_MODULO
-            if step != 1:
+            step = (frame.seq - self._last_seq) % SEQ_MODULO
+            if step == 0 or step >= SEQ_MODULO - LATE_WINDOW:  # a repeat or a late frame: drop
+                c["duplicates" if step == 0 else "reordered"] += 1
+                c["dropped_bytes"] += size
+                return None
+            if step >= SEQ_MODULO // 2:  # far behind: the board restarted; time goes on
+                c["resets"] += 1
+                step = 1
+            elif step != 1:
                 c["seq_gaps"] += 1
                 c["frames_lost"] += step - 1
             self._index += step
@@ -704,7 +729,9 @@ class FrameParser:
                 break
             frame, _ = _unpack(buf[i:i + size])
             if frame is not None:
-                out.append(self._accept(frame))
+                accepted = self._accept(frame, size)
+                if accepted is not None:
+                    out.append(accepted)
                 i += size
                 continue
             if crc16(buf[i + 2:i + size]) == 0:  # good CRC, bad content
