@@ -548,12 +548,18 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
     ref_ok = isinstance(ref0, (int, float)) and math.isfinite(ref0)
     if p0 is None and not ref_ok:
         raise ParameterError("run_loop: give p0 (the reflex has no initial command)")
-    start_positions(p0 if p0 is not None else ref0, fingers)  # check before anything is sent
-    start = safe_start(hand, p0 if p0 is not None else ref0, fingers)
+    given = start_positions(p0 if p0 is not None else ref0, fingers)  # checked before anything is sent
+    try:
+        start, start_error = safe_start(hand, given, fingers), None
+    except DeviceError as err:  # the STOP did not go out: the fingers stay as the grasp left them
+        start, start_error = given, err
     loop = _Loop(source, hand, reflex, start=start,
                  ref0=float(ref0) if ref_ok else start.get(SLIP_FINGER, next(iter(start.values()))),
                  recorder=recorder, duration=duration, watchdog=watchdog, poll=poll, stop=stop,
                  on_fault=on_fault, stats_interval=stats_interval, clock=clock)
+    if start_error is not None:
+        loop.fault("hold-failed", f"safe start: {start_error}", "fingers stay where the grasp left them; "
+                   "the watchdog holds again if samples stop")
     return loop.run(guard)
 
 
