@@ -70,6 +70,7 @@ import numpy as np
 from .errors import DeviceError, ParameterError
 from .hardware import FINGER_MAX, FINGER_MIN, SLIP_FINGER, THUMB_ROTATOR_MAX, TRIPOD, Finger
 from .interfaces import DaqSample, Hand, Reflex, SampleSource
+from .validation import number
 
 __all__ = ["Fault", "SampleRecord", "RunResult", "run_loop", "print_fault", "realtime_priority",
            "WATCHDOG_S", "WATCHDOG_MIN_S", "WATCHDOG_MAX_S", "start_positions", "safe_start"]
@@ -397,12 +398,14 @@ def start_positions(p0: float | Mapping[Any, float], fingers: Sequence[Finger] =
     for f in fingers:
         v = given[f]
         hi = THUMB_ROTATOR_MAX if f == Finger.THUMB_ROTATOR else FINGER_MAX
-        ok = (not isinstance(v, bool) and isinstance(v, (int, float, np.integer, np.floating))
-              and math.isfinite(v) and float(v).is_integer() and FINGER_MIN <= v <= hi)
-        if not ok:
+        try:
+            v = number(f"{where}: {f.name}", v, lo=FINGER_MIN, hi=hi)
+        except ParameterError:
+            v = math.nan
+        if not v.is_integer():  # the i-Limb takes whole units
             raise ParameterError(f"{where}: {f.name} must be a whole position in {FINGER_MIN}..{hi}, "
-                                 f"got {v!r}")
-        out[f] = float(v)
+                                 f"got {given[f]!r}")
+        out[f] = v
     return out
 
 

@@ -51,13 +51,13 @@ from __future__ import annotations
 
 import binascii
 import math
-import operator
 import struct
 from collections.abc import Sequence
 from dataclasses import dataclass, field, fields
 
 from .. import hardware
 from ..errors import DataError, ParameterError
+from ..validation import integer
 from ..interfaces import DaqSample
 
 __all__ = [
@@ -291,18 +291,6 @@ class Frame:
                          flow_pulses=self.flow_pulses)
 
 
-def _check_int(name: str, value: object, lo: int, hi: int) -> int:
-    try:
-        if isinstance(value, bool):
-            raise TypeError
-        number = operator.index(value)  # int, numpy integer; not float or str
-    except TypeError:
-        raise ParameterError(f"{name} must be an integer, got {value!r}") from None
-    if not lo <= number <= hi:
-        raise ParameterError(f"{name} must be in {lo}..{hi}, got {number}")
-    return number
-
-
 def encode_frame(seq: int, adc: int, accel: Sequence[int] | None = None,
                  flow_pulses: int = 0, flags: int = 0, reflex: ReflexFields | None = None) -> bytes:
     """Build one frame from raw board values.
@@ -339,10 +327,10 @@ def encode_frame(seq: int, adc: int, accel: Sequence[int] | None = None,
     >>> encode_frame(seq=1, adc=512).hex()
     'a55a01010000000200000000000000000000cc61'
     """
-    seq = _check_int("seq", seq, 0, 2**63) % SEQ_MODULO
-    adc = _check_int("adc", adc, 0, ADC_MAX)
-    flow = _check_int("flow_pulses", flow_pulses, 0, 2**63) % FLOW_MODULO
-    flags = _check_int("flags", flags, 0, 255)
+    seq = integer("seq", seq, lo=0, hi=2**63) % SEQ_MODULO
+    adc = integer("adc", adc, lo=0, hi=ADC_MAX)
+    flow = integer("flow_pulses", flow_pulses, lo=0, hi=2**63) % FLOW_MODULO
+    flags = integer("flags", flags, lo=0, hi=255)
     if flags & FLAG_ACCEL_FRESH:
         raise ParameterError("flags must not contain FLAG_ACCEL_FRESH: pass accel instead")
     if accel is None:
@@ -350,16 +338,16 @@ def encode_frame(seq: int, adc: int, accel: Sequence[int] | None = None,
     else:
         if len(accel) != 3:
             raise ParameterError(f"accel must have 3 values (x, y, z), got {len(accel)}")
-        ax, ay, az = (_check_int(f"accel[{i}]", a, -32768, 32767) for i, a in enumerate(accel))
+        ax, ay, az = (integer(f"accel[{i}]", a, lo=-32768, hi=32767) for i, a in enumerate(accel))
         flags |= FLAG_ACCEL_FRESH
     if reflex is None:
         body = _BODY.pack(VERSION, seq, flags, adc, ax, ay, az, flow)
     else:
         r = reflex
         body = _BODY.pack(VERSION_REFLEX, seq, flags, adc, ax, ay, az, flow) + _REFLEX.pack(
-            _check_int("reflex.bits", r.bits, 0, _KNOWN_REFLEX), _check_int("reflex.v", r.v, 0, 255),
-            _check_int("reflex.command", r.command, -32768, 32767),
-            _check_int("reflex.x", r.x, -2**31, 2**31 - 1))
+            integer("reflex.bits", r.bits, lo=0, hi=_KNOWN_REFLEX), integer("reflex.v", r.v, lo=0, hi=255),
+            integer("reflex.command", r.command, lo=-32768, hi=32767),
+            integer("reflex.x", r.x, lo=-2**31, hi=2**31 - 1))
     return SYNC + body + _CRC.pack(crc16(body))
 
 
