@@ -63,3 +63,26 @@ def test_paired_by_default_and_independent_seeds_on_request():
     assert trial_seed(1, "drop", "TR", 0, method="dath") != trial_seed(1, "drop", "TR", 0)
     with pytest.raises(ParameterError, match="variations"):
         ReproduceConfig(variations="yes")
+
+
+def test_a_grasp_that_cannot_hold_is_an_error_before_any_trial(monkeypatch):
+    import dataclasses
+
+    from slipreflex import experiments
+    from slipreflex.sim import calibration
+    from slipreflex.sim.calibration import GraspFailed, check_grasp
+
+    jar = dataclasses.replace(BOTTLES["TR"], name="JAR", mass_kg=0.25, mu_s=0.4, mu_k=0.3)
+    with pytest.raises(GraspFailed) as err:
+        check_grasp(jar)
+    msg = str(err.value)
+    assert "--grasp-force" in msg and "mu_s 0.4 -> about" in msg
+    advised = float(msg.split("grasp force of about ")[1].split(" N")[0])
+    check_grasp(jar, advised)                                     # the advice holds it
+    # reproduce checks every bottle before the first trial
+    ran = []
+    monkeypatch.setattr(experiments, "run_trial", lambda *a, **k: ran.append(1))
+    with pytest.raises(GraspFailed, match="0.05 N grasp cannot hold"):
+        experiments.run_reproduce(ReproduceConfig(trials=1, bottles=("TR",), grasp_force_n=0.05,
+                                                  methods=("dath",)), jobs=1, progress=False, plots=False)
+    assert not ran

@@ -52,6 +52,7 @@ from .analysis.trial import RESULT_COLUMNS, TrialRow
 from .baselines.calibration import REST_K
 from .baselines.swt import SWT_WINDOW
 from .errors import ParameterError
+from .hardware import CONTACT_FORCE_N
 from .thresholds import calibrate, calibration_seed
 from .validation import choices, flag, integer, positive, set_field
 
@@ -116,6 +117,9 @@ class ReproduceConfig:
     independent_seeds : bool
         Give each method its own trial seeds (default False: the paired design,
         every method faces the same trials).
+    grasp_force_n : float
+        Force (N) at which the grasp routine stops closing (paper: 0.8 N). A
+        force that cannot hold a bottle is an error before the first trial.
     plant : slipreflex.sim.uncertain.Plant, optional
         The simulated plant (parameter objects and bottles); None: the
         default plant. ``slipreflex study`` runs the grid on many plants.
@@ -146,6 +150,7 @@ class ReproduceConfig:
     swt_persist: int = SWT_WINDOW
     variations: bool = True
     independent_seeds: bool = False
+    grasp_force_n: float = CONTACT_FORCE_N
     plant: Any = None
 
     def __post_init__(self) -> None:
@@ -156,7 +161,7 @@ class ReproduceConfig:
         for name, known in (("bottles", BOTTLE_NAMES), ("experiments", EXPERIMENTS)):
             set_field(self, name, choices(name, getattr(self, name), known))
         set_field(self, "methods", choices("methods", self.methods, methods.names(), any_case=True))
-        for name in ("rest_s", "after_s", "calibration_s", "rest_k"):
+        for name in ("rest_s", "after_s", "calibration_s", "rest_k", "grasp_force_n"):
             set_field(self, name, positive(name, getattr(self, name)))
         set_field(self, "swt_persist", integer("swt_persist", self.swt_persist, lo=0))
         from .analysis.onset import OnsetParams
@@ -350,7 +355,7 @@ def run_trial(cell: Cell, config: ReproduceConfig, thresholds: dict[str, float],
                                              "bottles": dict(config.plant.bottles)}
     rig = trial_rig(cell.bottle, cell.seed, spread=None if config.variations else VariationSpread.none(),
                     **plant)
-    grasp = rig.grasp()
+    grasp = rig.grasp(config.grasp_force_n)
     p0 = float(round(grasp.positions[SLIP_FINGER]))
     spec = spec or methods.get(cell.method)
     reflex = spec.build(p0, dataclasses.replace(method_context(config, thresholds), method=spec.name))
@@ -500,6 +505,11 @@ def run_reproduce(config: ReproduceConfig | None = None, *, jobs: int | None = N
     if jobs < 1:
         raise ParameterError(f"jobs must be >= 1, got {jobs}")
     t0 = time.perf_counter()
+    from .sim import BOTTLES
+    from .sim.calibration import check_grasp
+
+    for b in config.bottles:                    # a grasp that cannot hold a bottle fails here, at once
+        check_grasp(BOTTLES[b], config.grasp_force_n)
     thresholds = calibrate(config) if set(config.methods) & set(methods.calibrated()) else {}
     specs = {m: methods.get(m) for m in config.methods}
     t_cal = time.perf_counter() - t0

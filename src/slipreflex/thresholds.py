@@ -78,7 +78,7 @@ def calibrate(config: Any) -> dict[str, float]:
         plant = getattr(config, "plant", None)
         seed = calibration_seed(config.seed, b)
         rig = Rig(b, seed=seed) if plant is None else plant.rig(b, seed=seed)
-        rig.grasp()
+        rig.grasp(config.grasp_force_n)
         for spec in specs:
             tr = simulate_open_loop(rig, config.calibration_s, tactile_fs=spec.fs)
             stats[spec.name].append(rest_statistic(tr.tactile, spec.rest_statistic, spec.fs))

@@ -37,7 +37,7 @@ from .contacts import static_capacity
 from .objects import PAPER_DROP, PAPER_POUR, WATER_DENSITY, Bottle, Drop, Pour
 
 __all__ = ["PAPER_FIRST_SLIP_ML", "CALIBRATION_SEEDS", "first_slip_ml", "calibrate_bottle", "Calibration",
-           "drop_falls", "drop_fall_capacity", "GraspFailed"]
+           "drop_falls", "drop_fall_capacity", "GraspFailed", "check_grasp"]
 
 #: The paper's open-loop first pour slip (ml): "the first slip occurred at about 200 ml" (Fig. 15).
 PAPER_FIRST_SLIP_ML: float = 200.0
@@ -54,6 +54,57 @@ class GraspFailed(ParameterError):
     >>> issubclass(GraspFailed, ParameterError)
     True
     """
+
+
+def _holds(bottle: Bottle, force: float, rig_kwargs: dict[str, Any] | None, seed: int):
+    from .rig import Rig
+
+    rig = Rig(bottle, seed=seed, **(rig_kwargs or {}))
+    return rig, rig.grasp(force)
+
+
+def check_grasp(bottle: Bottle, force: float = hw.CONTACT_FORCE_N, *, rig_kwargs: dict[str, Any] | None = None,
+                seed: int = 0) -> None:
+    """Raise :class:`GraspFailed` at once if a ``force`` grasp cannot hold the empty ``bottle``.
+
+    One grasp on the simulated rig (about 0.1 s of computing). If it fails,
+    a few more grasps find what would hold the bottle (the support is taken
+    away at once, so the grasp must hold more than the static weight), and
+    the message says what to change: the grasp force or the pads' friction.
+
+    Examples
+    --------
+    >>> from slipreflex.sim import BOTTLES
+    >>> check_grasp(BOTTLES["TR"])
+    >>> from dataclasses import replace
+    >>> check_grasp(replace(BOTTLES["TR"], name="JAR", mass_kg=0.25, mu_s=0.4, mu_k=0.3))
+    Traceback (most recent call last):
+    ...
+    slipreflex.sim.calibration.GraspFailed: bottle JAR: the 0.8 N grasp cannot hold it (250 g ...
+    """
+    rig, g = _holds(bottle, force, rig_kwargs, seed)
+    if g.stable:
+        return
+    h = rig.daq_history()
+    reached = float(h.normal_force[h.t <= g.t_release][-1])   # per contact, when the support went
+    weight = bottle.mass_kg * hw.GRAVITY
+    need_force = next((force * 1.25 ** k for k in range(1, 13)
+                       if _holds(bottle, force * 1.25 ** k, rig_kwargs, seed)[1].stable), None)
+    ratio = bottle.mu_k / bottle.mu_s
+
+    def gripping(k: int) -> Bottle:
+        m = bottle.mu_s * 1.15 ** k
+        return replace(bottle, mu_s=m, mu_k=m * ratio)
+
+    need_mu = next((gripping(k).mu_s for k in range(1, 13)
+                    if bottle.mu_s * 1.15 ** k <= 5.0 and _holds(gripping(k), force, rig_kwargs, seed)[1].stable),
+                   None)
+    force_txt = f"a grasp force of about {need_force:.1f} N" if need_force else "a much stronger grasp"
+    mu_txt = f"mu_s {bottle.mu_s:g} -> about {need_mu:.2f}" if need_mu else "far more friction"
+    raise GraspFailed(
+        f"bottle {bottle.name}: the {force:g} N grasp cannot hold it ({bottle.mass_kg * 1e3:.0f} g weighs "
+        f"{weight:.2f} N; the grasp's static capacity is {static_capacity(bottle, reached):.2f} N and the "
+        f"support is taken away at once): use {force_txt} (--grasp-force), or pads that grip better ({mu_txt})")
 
 
 def _rig(bottle: Bottle, seed: int, rig_kwargs: dict[str, Any] | None, grasp_force: float):
