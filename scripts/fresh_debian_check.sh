@@ -42,4 +42,4 @@ echo "== bash scripts/bootstrap.sh $job   (in the chroot, clean environment)"
 inchroot "cd /src && time bash scripts/bootstrap.sh $job"
 
 echo "== make -C firmware flash, against a stand-in bootloader on a pseudo-terminal"
-inchroot "cd /src && .venv/bin/python scripts/stk500_standin.py --check firmware/build/daq.hex -- make -C firmware flash"
+inchroot "cd /src && .venv/bin/python tests/stk500_standin.py --check firmware/build/daq.hex -- make -C firmware flash"

@@ -44,13 +44,17 @@ def test_detect_options_reach_the_chain(tmp_path):
     np.testing.assert_array_equal(b["command"], expected.commands)
 
 
-def test_single_column_needs_fs(tmp_path, capsys):
-    p = tmp_path / "one.csv"
+def test_single_column_needs_fs(tmp_path, capsys, monkeypatch):
+    p = tmp_path / "in" / "one.csv"
+    p.parent.mkdir()
     p.write_text("0.4\n0.41\n0.4\n" * 20)
+    monkeypatch.chdir(tmp_path)
     assert main(["detect", str(p)]) == 2
     assert "--fs" in capsys.readouterr().err
     assert main(["detect", str(p), "--fs", "333.33"]) == 0
-    assert (tmp_path / "one.windows.csv").exists()
+    # Outputs go to out/detect/NAME under the working directory, never beside the input.
+    assert (tmp_path / "out" / "detect" / "one.windows.csv").exists()
+    assert sorted(x.name for x in p.parent.iterdir()) == ["one.csv"]
 
 
 @pytest.mark.parametrize("content,needle", [
@@ -82,3 +86,93 @@ def test_unreadable_file(tmp_path, capsys):
 def test_bad_parameter_on_command_line_is_a_one_line_error(capsys):
     assert main(["detect", str(EXAMPLE), "--threshold", "-1"]) == 2
     assert "threshold" in capsys.readouterr().err
+
+
+def _write(path, t, x):
+    path.write_text("t,x\n" + "".join(f"{a!r},{b!r}\n" for a, b in zip(np.asarray(t).tolist(), np.asarray(x).tolist())))
+    return path
+
+
+def test_detect_on_an_export_reruns_the_run_with_its_p0_and_chain(tmp_path, capsys, monkeypatch):
+    """Issue 11 item 16: the export's header carries p0 and the chain; detect uses them."""
+    from test_export import _recorded_run
+
+    from slipreflex.recording import read_recording as read_mcap
+    mcap = _recorded_run(tmp_path)
+    assert main(["export", str(mcap)]) == 0
+    monkeypatch.chdir(tmp_path)
+    capsys.readouterr()
+    assert main(["detect", "run.csv"]) == 0
+    out = capsys.readouterr().out
+    assert "chain and p0 from the file's header" in out and "(p0 147)" in out
+    windows = np.genfromtxt(tmp_path / "out" / "detect" / "run.windows.csv", delimiter=",", names=True)
+    recorded = [m["target"] for m in read_mcap(mcap).topic("/hand/commands")]
+    assert windows["command"].tolist() == recorded and max(recorded) > 147
+    # An option given on the command line still wins over the header.
+    assert main(["detect", "run.csv", "--p0", "0", "--out", "zero/run"]) == 0
+    zero = np.genfromtxt(tmp_path / "zero" / "run.windows.csv", delimiter=",", names=True)
+    assert zero["command"][0] < 147
+
+
+def test_detect_warns_on_gaps_and_jitter_naming_the_first_bad_line(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    t = np.arange(200) * 0.003
+    t[50:] += 0.003                       # one missing sample: the step ending at sample 50
+    t[120] += 0.0008                      # jitter
+    p = _write(tmp_path / "gap.csv", t, 0.4 + 0.001 * np.sin(np.arange(200)))
+    assert main(["detect", str(p)]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1
+    assert f"{p}, line 52: time step 6 ms where the median is 3 ms (3 such step(s))" in err[0]
+    assert "uniform sampling" in err[0]
+    _write(tmp_path / "ok.csv", np.arange(200) * 0.003, np.full(200, 0.4))
+    assert main(["detect", "ok.csv"]) == 0
+    assert capsys.readouterr().err == ""
+
+
+def test_detect_fs_that_disagrees_with_the_t_column_is_an_error(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    p = _write(tmp_path / "k.csv", np.arange(100) * 0.001, np.full(100, 0.4))
+    assert main(["detect", str(p), "--fs", "333.33"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--fs 333.33 disagrees with the t column" in err and "1000.00 Hz" in err
+    assert not (tmp_path / "out").exists()
+    assert main(["detect", str(p), "--fs", "1000"]) == 0
+
+
+def test_detect_prints_window_and_dath_lengths_in_ms(tmp_path, capsys, monkeypatch):
+    """A 1 kHz file run with the paper's 16 samples: its windows are 16 ms, not 48."""
+    monkeypatch.chdir(tmp_path)
+    p = _write(tmp_path / "k.csv", np.arange(100) * 0.001, np.full(100, 0.4))
+    assert main(["detect", str(p)]) == 0
+    assert "windows: 16 samples = 16.0 ms; DATH: 16 samples = 16.0 ms" in capsys.readouterr().out
+    assert main(["detect", str(p), "--method", "fixed", "--n", "48"]) == 0
+    out = capsys.readouterr().out
+    assert "windows: 48 samples = 48.0 ms" in out and "DATH" not in out
+
+
+def test_detect_reports_the_mpi_saturating_at_500(tmp_path, capsys, monkeypatch):
+    """Issue 11 item 17: when the command hit 500 and how many slip windows came after."""
+    monkeypatch.chdir(tmp_path)
+    n = 16 * 40
+    x = 0.4 + np.where(np.arange(n) >= 160, 0.05 * np.sin(np.arange(n) * 0.9), 0.0)
+    p = _write(tmp_path / "s.csv", np.arange(n) * 0.003, x)
+    assert main(["detect", str(p), "--p0", "450", "--no-filter"]) == 0
+    out = capsys.readouterr().out
+    res = sr.run_chain(x, fs=1 / 0.003, dath=True, p0=450, filter=False)
+    z = int(np.argmax(res.commands >= 500))
+    assert res.commands[z] == 500 and z > 0
+    later = int((res.counts[z + 1:] > 0).sum())
+    assert later > 0
+    assert (f"saturated: the command reached 500 (fully closed) at t = {(z + 1) * 16 * 0.003 - 0.003:.3f} s, "
+            f"window {z}; {later} later window(s) with slip could not raise it") in out
+    assert main(["detect", str(p), "--p0", "0", "--no-filter", "--ki", "0", "--kp", "0.1"]) == 0
+    assert "saturated" not in capsys.readouterr().out
+
+
+def test_detect_header_with_broken_reflex_params_is_one_line(tmp_path, capsys):
+    p = tmp_path / "h.csv"
+    p.write_text('# reflex_params: {"thresh": 1}\nt,x\n0,0.4\n0.003,0.4\n')
+    assert main(["detect", str(p)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"{p}: header line 'reflex_params': unknown reflex parameter(s): thresh" in err

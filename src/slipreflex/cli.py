@@ -83,6 +83,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SlipreflexError as err:
         print(f"slipreflex {args.command}: error: {err}", file=sys.stderr)
         return 2
+    except OSError as err:      # the machine, not the code (disk full, file gone): one line
+        where = f"{err.filename}: " if err.filename else ""
+        print(f"slipreflex {args.command}: error: {where}{err.strerror or err}", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         return 130
 

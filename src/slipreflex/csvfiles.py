@@ -25,6 +25,7 @@ import math
 import os
 import tempfile
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -32,7 +33,12 @@ import numpy as np
 from .errors import DataError
 
 __all__ = ["INPUT_COLUMNS", "SAMPLE_COLUMNS", "WINDOW_COLUMNS", "read_slip_csv", "write_columns",
-           "read_preamble", "PREAMBLE_PREFIX"]
+           "read_preamble", "PREAMBLE_PREFIX", "Recording", "read_recording", "irregular_steps",
+           "JITTER_TOLERANCE"]
+
+#: A time step further than this fraction from the median step is a gap or jitter
+#: (the chain assumes uniform sampling; a missing 3 ms sample is a 100 % step).
+JITTER_TOLERANCE: float = 0.1
 
 #: Lines before the column header that start with this are ``# key: value`` facts about the
 #: file (``slipreflex export`` writes the run's p0 and chain parameters there; docs/runtime.md).
@@ -53,8 +59,85 @@ def _number(path: Path, line: int, column: str, cell: str) -> float:
     return value
 
 
+@dataclass(frozen=True)
+class Recording:
+    """A slip-sensor recording read from a CSV file.
+
+    Attributes
+    ----------
+    path : pathlib.Path
+        The file.
+    t, x : numpy.ndarray
+        Times (s, strictly increasing) and volts.
+    lines : numpy.ndarray
+        The file's line number (1-based) of each sample, for messages.
+    has_time : bool
+        True if ``t`` came from a ``t`` column, False if from a given rate.
+    preamble : dict of str to str
+        The ``# key: value`` lines before the header (:func:`read_preamble`).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "rec.csv"
+    >>> _ = p.write_text("# p0: 147\\nt,x\\n0.0,0.41\\n0.003,0.42\\n")
+    >>> rec = read_recording(p)
+    >>> rec.lines.tolist(), rec.preamble, rec.has_time
+    ([3, 4], {'p0': '147'}, True)
+    """
+
+    path: Path
+    t: np.ndarray
+    x: np.ndarray
+    lines: np.ndarray
+    has_time: bool
+    preamble: dict[str, str] = field(default_factory=dict)
+
+    def step_rate(self) -> float:
+        """The sampling rate implied by the median time step (Hz).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> rec = Recording(None, np.array([0.0, 0.001, 0.002]), np.zeros(3), np.arange(3), True)
+        >>> round(rec.step_rate(), 6)
+        1000.0
+        """
+        if self.t.size < 2:
+            raise DataError(f"{self.path}: one sample gives no sampling rate; pass --fs")
+        return float(1.0 / np.median(np.diff(self.t)))
+
+
+def irregular_steps(t: np.ndarray, tolerance: float = JITTER_TOLERANCE) -> np.ndarray:
+    """Indices ``k`` where ``t[k] - t[k-1]`` is more than ``tolerance`` from the median step.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        Strictly increasing times.
+    tolerance : float
+        Allowed deviation, as a fraction of the median step.
+
+    Returns
+    -------
+    numpy.ndarray of int
+        Sample indices (into ``t``) that end an irregular step: gaps and jitter.
+
+    Examples
+    --------
+    >>> irregular_steps(np.array([0.0, 0.003, 0.006, 0.012, 0.015, 0.0181])).tolist()
+    [3]
+    """
+    t = np.asarray(t, dtype=float)
+    if t.size < 3:
+        return np.zeros(0, dtype=int)
+    dt = np.diff(t)
+    med = np.median(dt)
+    return np.flatnonzero(np.abs(dt - med) > tolerance * med) + 1
+
+
 def read_slip_csv(path: str | os.PathLike, fs: float | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Read a slip-sensor recording.
+    """Read a slip-sensor recording's times and volts (:func:`read_recording` has the rest).
 
     Parameters
     ----------
@@ -82,6 +165,36 @@ def read_slip_csv(path: str | os.PathLike, fs: float | None = None) -> tuple[np.
     >>> _ = p.write_text("x\\n0.4\\n0.5\\n")
     >>> read_slip_csv(p, fs=100.0)[0].tolist()
     [0.0, 0.01]
+    """
+    rec = read_recording(path, fs=fs)
+    return rec.t, rec.x
+
+
+def read_recording(path: str | os.PathLike, fs: float | None = None) -> Recording:
+    """Read a slip-sensor recording with its line numbers and preamble.
+
+    Parameters
+    ----------
+    path : path-like
+        CSV file with a header naming ``t`` and ``x``, or a single column of volts,
+        after optional ``# key: value`` preamble lines.
+    fs : float, optional
+        Sampling rate (Hz) for a single-column file; ignored with a ``t`` column
+        (the caller compares it with :meth:`Recording.step_rate`).
+
+    Returns
+    -------
+    Recording
+
+    Raises
+    ------
+    DataError
+        As :func:`read_slip_csv`.
+
+    Examples
+    --------
+    >>> read_recording("examples/slip_example.csv").x.size > 0
+    True
     """
     path = Path(path)
     try:
@@ -121,7 +234,8 @@ def read_slip_csv(path: str | os.PathLike, fs: float | None = None) -> tuple[np.
                 raise DataError(f"{path}, line {line}: time not increasing ({t[k]!r} after {t[k - 1]!r})")
     if it is None:
         t = np.arange(len(body)) / float(fs)
-    return t, x
+    lines = np.array([line for line, _ in body], dtype=int)
+    return Recording(path, t, x, lines, it is not None, read_preamble(path))
 
 
 def _is_text(cell: str) -> bool:

@@ -18,6 +18,7 @@ import numpy as np
 
 from ..errors import DataError
 from ..hardware import FINGER_MAX, FINGER_MIN
+from ._checks import as_vector
 from .params import MPIParams
 
 __all__ = ["mpi", "MPIController"]
@@ -55,9 +56,7 @@ def mpi(v, p0: float = 0.0, kp: float = 5.0, ki: float = 5.0, reset_after: int =
     [500.0, 500.0]
     """
     p = MPIParams(p0=p0, kp=kp, ki=ki, reset_after=reset_after, lo=lo, hi=hi)
-    counts = np.ascontiguousarray(v, dtype=np.float64)
-    if counts.ndim != 1:
-        raise DataError(f"v must be one-dimensional, got shape {counts.shape}")
+    counts = as_vector("v", v, np.float64)
     bad = ~(np.isfinite(counts) & (counts >= 0))
     if bad.any():
         i = int(np.argmax(bad))

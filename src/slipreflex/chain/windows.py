@@ -16,6 +16,7 @@ import numpy as np
 
 from ..errors import DataError
 from ..hardware import WINDOW_N
+from ._checks import as_vector
 from .params import WindowParams
 
 __all__ = ["count_windows", "WindowCounter"]
@@ -42,9 +43,7 @@ def count_windows(events, n: int = WINDOW_N) -> np.ndarray:
     [16, 16]
     """
     p = WindowParams(n=n)
-    y = np.asarray(events)
-    if y.ndim != 1:
-        raise DataError(f"events must be one-dimensional, got shape {y.shape}")
+    y = as_vector("events", events)
     if y.dtype != np.bool_:
         bad = ~np.isin(y, (0, 1))
         if bad.any():

@@ -9,13 +9,16 @@ Examples
 from __future__ import annotations
 
 import argparse
+import json
+import sys
 from pathlib import Path
 
 import numpy as np
 
 from ..chain import ReflexParams, run_chain
-from ..csvfiles import read_slip_csv, write_columns
-from ..errors import DataError
+from ..csvfiles import Recording, irregular_steps, read_recording, write_columns
+from ..errors import DataError, ParameterError
+from ..paths import output_dir
 
 NAME = "detect"
 HELP = "run the slip-detection chain over a CSV recording of slip-sensor samples"
@@ -24,82 +27,164 @@ ORDER = 10
 _DEFAULTS = ReflexParams()
 
 
+_FIELDS = ("cutoff", "threshold", "dath_samples", "dath_floor", "x0", "n", "p0", "kp", "ki",
+           "reset_after", "lo", "hi")
+#: --fs and a t column may differ by this fraction (rounding of written times).
+FS_TOLERANCE = 0.01
+
+
 def add_arguments(p: argparse.ArgumentParser) -> None:
-    """Options of ``slipreflex detect``, one per chain parameter."""
+    """Options of ``slipreflex detect``, one per chain parameter.
+
+    Options left out take the file's own values when its header has them (an export of
+    a run: ``# reflex_params: {...}``, docs/runtime.md), else the paper's defaults.
+    """
+    d = _DEFAULTS
     p.add_argument("recording", type=Path, help="CSV with columns t (s) and x (V), or one column of volts")
-    p.add_argument("--method", choices=("fixed", "dath"), default="dath",
-                   help="fixed threshold or Dynamic Adaptive Threshold (default: dath)")
+    p.add_argument("--method", choices=("fixed", "dath"), default=None,
+                   help="fixed threshold or Dynamic Adaptive Threshold (default: the file's, else dath)")
     p.add_argument("--fs", type=float, default=None,
-                   help="sampling rate in Hz (required for a single-column file; default: from t)")
-    p.add_argument("--cutoff", type=float, default=_DEFAULTS.cutoff, help="low-pass cutoff, Hz (default 10)")
+                   help="sampling rate in Hz (required for a single-column file; with a t column it must agree)")
+    p.add_argument("--cutoff", type=float, default=None, help=f"low-pass cutoff, Hz ({d.cutoff:g})")
     p.add_argument("--no-filter", action="store_true", help="input is already filtered")
-    p.add_argument("--threshold", type=float, default=_DEFAULTS.threshold, help="theta0 in V (default 0.008)")
-    p.add_argument("--dath-samples", type=int, default=_DEFAULTS.dath_samples, help="DATH duration D (16)")
-    p.add_argument("--dath-floor", type=float, default=_DEFAULTS.dath_floor, help="DATH floor in V (0)")
+    p.add_argument("--threshold", type=float, default=None, help=f"theta0 in V ({d.threshold:g})")
+    p.add_argument("--dath-samples", type=int, default=None, help=f"DATH duration D in samples ({d.dath_samples})")
+    p.add_argument("--dath-floor", type=float, default=None, help=f"DATH floor in V ({d.dath_floor:g})")
     p.add_argument("--x0", type=float, default=None,
                    help="initial reference; default the first sample, 0 is the paper's literal start")
-    p.add_argument("--n", type=int, default=_DEFAULTS.n, help="samples per window (16)")
-    p.add_argument("--p0", type=float, default=_DEFAULTS.p0, help="initial finger position P0 (0)")
-    p.add_argument("--kp", type=float, default=_DEFAULTS.kp, help="proportional gain (5)")
-    p.add_argument("--ki", type=float, default=_DEFAULTS.ki, help="integral gain (5)")
-    p.add_argument("--reset-after", type=int, default=_DEFAULTS.reset_after, help="zero windows to reset (10)")
-    p.add_argument("--lo", type=float, default=_DEFAULTS.lo, help="lowest command (0)")
-    p.add_argument("--hi", type=float, default=_DEFAULTS.hi, help="highest command (500)")
+    p.add_argument("--n", type=int, default=None, help=f"samples per window ({d.n})")
+    p.add_argument("--p0", type=float, default=None, help=f"initial finger position P0 ({d.p0:g})")
+    p.add_argument("--kp", type=float, default=None, help=f"proportional gain ({d.kp:g})")
+    p.add_argument("--ki", type=float, default=None, help=f"integral gain ({d.ki:g})")
+    p.add_argument("--reset-after", type=int, default=None, help=f"zero windows to reset ({d.reset_after})")
+    p.add_argument("--lo", type=float, default=None, help=f"lowest command ({d.lo:g})")
+    p.add_argument("--hi", type=float, default=None, help=f"highest command ({d.hi:g})")
     p.add_argument("--board", action="store_true",
                    help="the recording is ADC counts (a column adc): run the board's fixed-point chain "
                         "(slipreflex.board, as the firmware is built, with --method and --p0 only) and "
                         "write sample,event and window,v,command as firmware/test/board_sim.py does")
     p.add_argument("--out", type=Path, default=None,
-                   help="output prefix (default: next to the recording, NAME.samples.csv and NAME.windows.csv)")
+                   help="output prefix (default: out/detect/NAME, giving NAME.samples.csv and NAME.windows.csv)")
 
 
-def _sampling_rate(t: np.ndarray, given: float | None, path: Path) -> float:
+def _file_params(rec: Recording) -> ReflexParams | None:
+    """The run's chain from an export's header, or None for a plain CSV."""
+    text = rec.preamble.get("reflex_params")
+    if text is None:
+        return None
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as err:
+        raise DataError(f"{rec.path}: header line 'reflex_params' is not JSON ({err.msg})") from None
+    try:
+        return ReflexParams.from_dict(data)
+    except (ParameterError, TypeError) as err:
+        raise DataError(f"{rec.path}: header line 'reflex_params': {err}") from None
+
+
+def _sampling_rate(rec: Recording, given: float | None, base: ReflexParams | None) -> float:
+    if not rec.has_time:
+        return float(given)
+    from_t = rec.step_rate()
+    if given is not None and abs(given - from_t) > FS_TOLERANCE * from_t:
+        raise ParameterError(f"--fs {given:g} disagrees with the t column of {rec.path} "
+                             f"({from_t:.2f} Hz from its median step); leave out --fs or fix the file")
     if given is not None:
-        return given
-    if t.size < 2:
-        raise DataError(f"{path}: one sample gives no sampling rate; pass --fs")
-    return float(1.0 / np.median(np.diff(t)))
+        return float(given)
+    if base is not None and abs(base.fs - from_t) <= FS_TOLERANCE * from_t:
+        return base.fs          # the run's exact rate, not the rounded times' estimate
+    return from_t
+
+
+def chain_params(args: argparse.Namespace, rec: Recording) -> ReflexParams:
+    """The chain to run: explicit options, else the file's header, else the defaults."""
+    base = _file_params(rec)
+    values = (base or _DEFAULTS).to_dict()
+    values.update({k: getattr(args, k) for k in _FIELDS if getattr(args, k) is not None})
+    if args.method is not None:
+        values["dath"] = args.method == "dath"
+    elif base is None:
+        values["dath"] = True
+    if args.no_filter:
+        values["filter"] = False
+    values["fs"] = _sampling_rate(rec, args.fs, base)
+    return ReflexParams.from_dict(values)
+
+
+def _warn_irregular(rec: Recording) -> None:
+    bad = irregular_steps(rec.t) if rec.has_time else []
+    if len(bad):
+        k = int(bad[0])
+        med = float(np.median(np.diff(rec.t)))
+        print(f"slipreflex detect: warning: {rec.path}, line {rec.lines[k]}: time step "
+              f"{1e3 * (rec.t[k] - rec.t[k - 1]):.3g} ms where the median is {1e3 * med:.3g} ms "
+              f"({len(bad)} such step(s)); the chain assumes uniform sampling", file=sys.stderr)
+
+
+def _ms(samples: int, fs: float) -> str:
+    return f"{samples} samples = {1e3 * samples / fs:.1f} ms"
+
+
+def _saturation(res, t: np.ndarray, params: ReflexParams) -> str | None:
+    """When the command reached the top of its range, and how many slip windows came after."""
+    top = np.flatnonzero(res.commands >= params.hi)
+    if not top.size:
+        return None
+    z = int(top[0])
+    later = int((res.counts[z + 1:] > 0).sum())
+    t_z = t[(z + 1) * params.n - 1]
+    return (f"  saturated: the command reached {params.hi:g} (fully closed) at t = {t_z:.3f} s, window {z};"
+            f" {later} later window(s) with slip could not raise it")
 
 
 def run(args: argparse.Namespace) -> int:
     """Run the chain and write the two CSVs; print a summary."""
     if args.board:
         return _run_board(args)
-    t, raw = read_slip_csv(args.recording, fs=args.fs)
-    params = ReflexParams(
-        fs=_sampling_rate(t, args.fs, args.recording), cutoff=args.cutoff, filter=not args.no_filter,
-        threshold=args.threshold, dath=args.method == "dath", dath_samples=args.dath_samples,
-        x0=args.x0, dath_floor=args.dath_floor, n=args.n, p0=args.p0, kp=args.kp, ki=args.ki,
-        reset_after=args.reset_after, lo=args.lo, hi=args.hi)
-    res = run_chain(raw, params)
-    prefix = args.out if args.out is not None else args.recording.with_suffix("")
-    prefix.parent.mkdir(parents=True, exist_ok=True)
+    rec = read_recording(args.recording, fs=args.fs)
+    params = chain_params(args, rec)
+    prefix = _prefix(args)
+    _warn_irregular(rec)
+    res = run_chain(rec.x, params)
     samples_path = Path(f"{prefix}.samples.csv")
     windows_path = Path(f"{prefix}.windows.csv")
-    write_columns(samples_path, res.sample_columns(t))
-    write_columns(windows_path, res.window_columns(t))
+    write_columns(samples_path, res.sample_columns(rec.t))
+    write_columns(windows_path, res.window_columns(rec.t))
     final = f"{res.commands[-1]:g}" if res.commands.size else "none (shorter than one window)"
-    print(f"{args.recording}: {raw.size} samples at {params.fs:.2f} Hz, method {params.name}")
+    source = " (chain and p0 from the file's header)" if "reflex_params" in rec.preamble else ""
+    print(f"{args.recording}: {rec.x.size} samples at {params.fs:.2f} Hz, method {params.name}{source}")
+    print(f"  windows: {_ms(params.n, params.fs)}" + (f"; DATH: {_ms(params.dath_samples, params.fs)}"
+                                                     if params.dath else ""))
     print(f"  events: {int(res.events.sum())}")
     print(f"  windows with slip: {int((res.counts > 0).sum())} of {res.counts.size}")
-    print(f"  final command: {final}")
+    print(f"  final command: {final} (p0 {params.p0:g})")
+    saturated = _saturation(res, rec.t, params)
+    if saturated:
+        print(saturated)
     print(f"  wrote {samples_path} and {windows_path}")
     return 0
+
+
+def _prefix(args: argparse.Namespace) -> Path:
+    """The output prefix, its folder checked before any work: out/detect/NAME by default."""
+    prefix = args.out if args.out is not None else Path("out") / "detect" / args.recording.stem
+    output_dir(prefix.parent, "--out")
+    return prefix
 
 
 def _run_board(args: argparse.Namespace) -> int:
     """``detect --board``: the Python twin of the firmware over a CSV of ADC counts."""
     from ..board import BoardParams, read_adc_csv, run_board_chain, write_board_outputs
-    from ..errors import ParameterError
 
-    if args.p0 != int(args.p0):
-        raise ParameterError(f"--p0 must be a whole position with --board, got {args.p0!r}")
+    p0 = 0.0 if args.p0 is None else args.p0
+    method = args.method or "dath"
+    if p0 != int(p0):
+        raise ParameterError(f"--p0 must be a whole position with --board, got {p0!r}")
+    prefix = _prefix(args)
     adc = read_adc_csv(args.recording)
-    res = run_board_chain(adc, BoardParams.firmware(dath=args.method == "dath", p0=int(args.p0)))
-    prefix = args.out if args.out is not None else args.recording.with_suffix("")
-    prefix.parent.mkdir(parents=True, exist_ok=True)
+    res = run_board_chain(adc, BoardParams.firmware(dath=method == "dath", p0=int(p0)))
     paths = write_board_outputs(prefix, res.events, res.counts, res.commands)
-    print(f"{args.recording}: {adc.size} ADC counts through the board's chain, method {args.method}")
+    print(f"{args.recording}: {adc.size} ADC counts through the board's chain, method {method}")
     print(f"  events: {int(res.events.sum())}, faulty readings: {int(res.faults.sum())}")
     print(f"  wrote {paths[0]} and {paths[1]}")
     return 0

@@ -34,7 +34,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--seed", type=int, default=0, help="random seed of the simulation (0)")
     p.add_argument("--schedule", default="", help='perturbations, e.g. "drop@2.0,pour@5.0" (s after start)')
     p.add_argument("--link-dir", default=None,
-                   help="also create DIR/daq and DIR/hand symlinks to the ports (stable paths)")
+                   help="also create DIR/daq and DIR/hand symlinks to the ports (stable paths; DIR is created)")
     p.add_argument("--duration", type=float, default=None, help="exit after this many seconds")
 
 
@@ -43,7 +43,11 @@ def run(args: argparse.Namespace) -> int:
     from ..devices.simrig import SimRig
     from ..devices.virtual import VirtualDevices, parse_schedule
 
+    from ..paths import output_dir
+
     schedule = parse_schedule(args.schedule)
+    if args.link_dir is not None:
+        output_dir(args.link_dir, "--link-dir")      # before the grasp: a bad DIR costs one line
     rig = SimRig(bottle=args.bottle, seed=args.seed)
     grasp = rig.grasp()
     stop = threading.Event()
