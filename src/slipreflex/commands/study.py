@@ -1,0 +1,110 @@
+"""``slipreflex study``: which of the paper's claims hold across every plausible plant (on Dask).
+
+Draws ``--plants`` plants from the uncertain constants, runs the reproduce
+grid on each (a local Dask cluster by default, ``--scheduler`` for a running
+one, ``--workers 0`` in this process) and writes, to ``--out``: one Parquet
+part per plant as it finishes, results.parquet / results.csv, plants.csv,
+claims.csv, sensitivity.csv, figures/ and study.md. Started again with the
+same arguments it resumes; Ctrl-C keeps every finished plant (exit 130).
+See docs/study.md.
+
+Examples
+--------
+>>> from slipreflex.cli import main
+>>> main(["study", "--plants", "2", "--trials", "1", "--out", "/tmp/s"])  # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import argparse
+import shlex
+import sys
+from pathlib import Path
+
+NAME = "study"
+HELP = "map where the paper's claims hold across plausible plants (Dask; resumable)"
+ORDER = 35
+
+
+def _list(kind: str, known):
+    def parse(text: str) -> tuple[str, ...]:
+        items = tuple(x.strip() for x in text.split(",") if x.strip())
+        names = known() if callable(known) else known
+        if kind == "methods":   # method names match in any case (the registry's rule)
+            items = tuple(x.lower() for x in items)
+        bad = [x for x in items if x not in names]
+        if bad or not items:
+            raise argparse.ArgumentTypeError(
+                f"{kind}: unknown {', '.join(map(repr, bad)) or 'empty list'} (known: {', '.join(names)})")
+        return items
+    return parse
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Options of ``slipreflex study``."""
+    from .. import methods
+    from ..experiments import BOTTLE_NAMES, EXPERIMENTS
+    from ..study import DEFAULT_PLANTS, DEFAULT_TRIALS, DESIGNS
+    from ..study.runner import StudyConfig
+
+    seed = StudyConfig.__dataclass_fields__["seed"].default
+    p.add_argument("--plants", type=int, default=DEFAULT_PLANTS,
+                   help=f"plants to draw (default {DEFAULT_PLANTS}; saltelli rounds up to B(D+2))")
+    p.add_argument("--design", choices=DESIGNS, default="sobol", help="design over the constants (default sobol)")
+    p.add_argument("--trials", type=int, default=DEFAULT_TRIALS,
+                   help=f"trials per bottle, experiment and method on each plant (default {DEFAULT_TRIALS})")
+    p.add_argument("--bottles", type=_list("bottles", BOTTLE_NAMES), default=BOTTLE_NAMES,
+                   help=f"comma-separated bottles (default {','.join(BOTTLE_NAMES)})")
+    p.add_argument("--methods", type=_list("methods", methods.names), default=methods.names(paper=True),
+                   help=f"comma-separated methods (default {','.join(methods.names(paper=True))})")
+    p.add_argument("--experiments", type=_list("experiments", EXPERIMENTS), default=EXPERIMENTS,
+                   help=f"comma-separated experiments (default {','.join(EXPERIMENTS)})")
+    p.add_argument("--seed", type=int, default=seed, help=f"design and trial master seed (default {seed})")
+    p.add_argument("--out", type=Path, default=Path("out/study"), help="output directory (default out/study)")
+    p.add_argument("--ranges", type=Path, default=None, metavar="FILE",
+                   help="TOML file narrowing, widening or fixing uncertain constants")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="a running Dask scheduler, tcp://HOST:PORT (default: a local cluster)")
+    p.add_argument("--workers", type=int, default=None,
+                   help="local Dask worker processes (default: all cores; 0: no Dask, this process)")
+    p.add_argument("--no-calibration", action="store_true",
+                   help="keep each plant's pad friction (default: calibrate it to the 200 ml first slip)")
+    p.add_argument("--no-figures", action="store_true", help="skip the figures")
+    p.add_argument("--no-progress", action="store_true", help="no progress output")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the study, write the outputs, print the claims' fractions."""
+    from ..errors import ParameterError
+    from ..study import StudyConfig, run_study
+    from ..study.analyse import claim_fractions, plant_table, write_outputs
+
+    if args.trials < 1:
+        raise ParameterError(f"--trials must be >= 1, got {args.trials}")
+    config = StudyConfig(plants=args.plants, design=args.design, trials=args.trials, bottles=tuple(args.bottles),
+                         methods=tuple(args.methods), experiments=tuple(args.experiments), seed=args.seed,
+                         ranges=args.ranges, calibrate=not args.no_calibration)
+    try:
+        result = run_study(config, args.out, workers=args.workers, scheduler=args.scheduler,
+                           progress=not args.no_progress)
+    except KeyboardInterrupt:
+        from ..study import read_parts
+
+        done = len(read_parts(args.out, config.fingerprint()))
+        print(f"slipreflex study: interrupted; {done} finished plant(s) kept in {args.out}/parts, "
+              "run the same command again to resume", file=sys.stderr)
+        return 130
+    command = "slipreflex " + " ".join(shlex.quote(a) for a in sys.argv[1:]) if sys.argv[1:] else None
+    paths = write_outputs(result, figures=not args.no_figures, command=command)
+    plants = plant_table(result.parts)
+    print("claim  holds (95% CI)      not testable  " + "text")
+    for r in claim_fractions(plants):
+        ci = f"{100 * r['holds_ci_low']:.0f}-{100 * r['holds_ci_high']:.0f}%" if r["plants"] else "-"
+        frac = f"{100 * r['holds_fraction']:.0f}%" if r["plants"] else "-"
+        nt = f"{100 * r['not_testable_fraction']:.0f}%" if r["plants"] else "-"
+        print(f"{r['claim']:>5}  {frac:>5} ({ci:>9})   {nt:>12}  {r['text']}")
+    errors = sum(1 for p in plants if p.get("error"))
+    print(f"{len(result.parts)} plants ({len(result.computed)} computed now, {errors} with errors) in "
+          f"{result.wall_s:.1f} s on {result.workers}; wrote {paths['study_md'].parent}/"
+          "{results.parquet, results.csv, plants.csv, claims.csv, sensitivity.csv, study.md, figures/}")
+    return 0

@@ -1,0 +1,390 @@
+"""What a study's plants say: claim fractions with confidence intervals, sensitivity, figures, study.md.
+
+* :func:`plant_table` - one record per plant: its constants, its error and
+  each claim's verdict.
+* :func:`claim_fractions` - per claim, the fraction of plants where it
+  holds with a 95 % Wilson score interval, and the fraction where it is not
+  testable (denominator: the plants that ran without error).
+* :func:`sensitivity` - which constants decide each claim. For every design:
+  Spearman's rank correlation between each constant and the claim holding
+  (1) or failing (0), over the plants where it was testable, with its
+  p-value; it needs no particular design and any N, and a rank measure fits a
+  yes/no outcome of constants with log-uniform ranges. For the ``saltelli``
+  design, also SALib's first-order and total Sobol' indices of the same
+  indicator (not testable and errors count as 0).
+* :func:`write_outputs` - results.parquet / results.csv, plants.csv,
+  claims.csv, sensitivity.csv, figures and study.md from a
+  :class:`~slipreflex.study.StudyRun`.
+
+Examples
+--------
+>>> [round(x, 4) for x in wilson(8, 10)]
+[0.4902, 0.9433]
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..analysis.claims import CLAIMS, FAILS, HOLDS, NOT_TESTABLE
+from .design import varying
+
+__all__ = ["wilson", "plant_table", "claim_fractions", "sensitivity", "top_constants", "write_outputs",
+           "study_markdown", "CLAIMS_COLUMNS", "SENSITIVITY_COLUMNS", "Z95"]
+
+#: Normal quantile of the 95 % intervals.
+Z95: float = 1.959963984540054
+#: Columns of claims.csv.
+CLAIMS_COLUMNS: tuple[str, ...] = ("claim", "text", "plants", "errors", "holds", "fails", "not_testable",
+                                   "holds_fraction", "holds_ci_low", "holds_ci_high", "not_testable_fraction")
+#: Columns of sensitivity.csv.
+SENSITIVITY_COLUMNS: tuple[str, ...] = ("claim", "constant", "n", "spearman_rho", "spearman_p",
+                                        "sobol_s1", "sobol_s1_conf", "sobol_st", "sobol_st_conf", "rank")
+
+
+def wilson(k: int, n: int, z: float = Z95) -> tuple[float, float]:
+    """Wilson score interval of a binomial proportion ``k / n`` (NaN, NaN for ``n == 0``).
+
+    Examples
+    --------
+    >>> lo, hi = wilson(0, 20)
+    >>> lo, round(hi, 3)
+    (0.0, 0.161)
+    """
+    if n == 0:
+        return float("nan"), float("nan")
+    p = k / n
+    den = 1 + z * z / n
+    mid = (p + z * z / (2 * n)) / den
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / den
+    return (0.0 if k == 0 else max(0.0, mid - half)), (1.0 if k == n else min(1.0, mid + half))
+
+
+def plant_table(parts: Mapping[int, tuple[dict, list]]) -> list[dict[str, Any]]:
+    """One record per plant: ``plant``, its constants, ``error``, ``claim_1`` .. ``claim_10``.
+
+    Examples
+    --------
+    >>> plant_table({0: ({"values": {"a": 1.0}, "error": "", "claims": [[1, "holds", ""]]}, [])})
+    [{'plant': 0, 'a': 1.0, 'error': '', 'claim_1': 'holds'}]
+    """
+    out = []
+    for i in sorted(parts):
+        meta = parts[i][0]
+        rec = {"plant": i, **meta["values"], "error": meta["error"]}
+        rec.update({f"claim_{n}": v for n, v, _ in meta["claims"]})
+        out.append(rec)
+    return out
+
+
+def claim_fractions(plants: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
+    """Per claim: plants where it holds (fraction, 95 % Wilson interval), fails, is not testable.
+
+    Examples
+    --------
+    >>> rows = claim_fractions([{"error": "", "claim_3": "holds"}, {"error": "", "claim_3": "fails"}])
+    >>> rows[2]["holds"], rows[2]["holds_fraction"]
+    (1, 0.5)
+    """
+    ok = [p for p in plants if not p.get("error")]
+    out = []
+    for c in CLAIMS:
+        v = [p.get(f"claim_{c.number}", NOT_TESTABLE) for p in ok]
+        k, f, nt = v.count(HOLDS), v.count(FAILS), v.count(NOT_TESTABLE)
+        lo, hi = wilson(k, len(v))
+        out.append({"claim": c.number, "text": c.text, "plants": len(v), "errors": len(plants) - len(ok),
+                    "holds": k, "fails": f, "not_testable": nt,
+                    "holds_fraction": k / len(v) if v else float("nan"), "holds_ci_low": lo, "holds_ci_high": hi,
+                    "not_testable_fraction": nt / len(v) if v else float("nan")})
+    return out
+
+
+def _sobol(plants: Sequence[Mapping[str, Any]], names: list[str], table: Mapping, claim: int,
+           seed: int) -> dict[str, tuple[float, float, float, float]]:
+    from SALib.analyze import sobol
+
+    d = len(names)
+    if not names or len(plants) % (d + 2):
+        return {}
+    y = np.array([1.0 if p.get(f"claim_{claim}") == HOLDS else 0.0 for p in plants])
+    if y.std() == 0:
+        return {}
+    problem = {"num_vars": d, "names": names, "bounds": [[0.0, 1.0]] * d}
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        si = sobol.analyze(problem, y, calc_second_order=False, seed=seed % 2**32)
+    return {k: (float(si["S1"][i]), float(si["S1_conf"][i]), float(si["ST"][i]), float(si["ST_conf"][i]))
+            for i, k in enumerate(names)}
+
+
+def sensitivity(plants: Sequence[Mapping[str, Any]], table: Mapping, *, design: str = "sobol",
+                seed: int = 0) -> list[dict[str, Any]]:
+    """Which constants decide each claim (see the module notes); rank 1 matters most.
+
+    Examples
+    --------
+    >>> from slipreflex.sim.uncertain import UNCERTAIN
+    >>> ps = [{"error": "", "hand_latency": x, "claim_8": "holds" if x < 0.02 else "fails"}
+    ...       for x in np.linspace(0.005, 0.03, 12)]
+    >>> top = [r for r in sensitivity(ps, UNCERTAIN) if r["claim"] == 8 and r["rank"] == 1][0]
+    >>> top["constant"], top["spearman_rho"] < -0.8
+    ('hand_latency', True)
+    """
+    from scipy.stats import spearmanr
+
+    names = [k for k in varying(table) if all(k in p for p in plants)]
+    ok = [p for p in plants if not p.get("error")]
+    out = []
+    for c in CLAIMS:
+        testable = [p for p in ok if p.get(f"claim_{c.number}") in (HOLDS, FAILS)]
+        y = np.array([p[f"claim_{c.number}"] == HOLDS for p in testable], dtype=float)
+        sob = _sobol(plants, names, table, c.number, seed) if design == "saltelli" and len(ok) == len(plants) \
+            else {}
+        rows = []
+        for k in names:
+            x = np.array([p[k] for p in testable], dtype=float)
+            rho, pv = (float("nan"), float("nan"))
+            if len(y) > 2 and y.std() > 0 and x.std() > 0:
+                res = spearmanr(x, y)
+                rho, pv = float(res.statistic), float(res.pvalue)
+            s = sob.get(k, (float("nan"),) * 4)
+            rows.append({"claim": c.number, "constant": k, "n": len(testable), "spearman_rho": rho,
+                         "spearman_p": pv, "sobol_s1": s[0], "sobol_s1_conf": s[1], "sobol_st": s[2],
+                         "sobol_st_conf": s[3]})
+        key = (lambda r: -r["sobol_st"]) if sob else (lambda r: -abs(r["spearman_rho"]))
+        ranked = sorted(rows, key=lambda r: (math.isnan(key(r)), key(r) if not math.isnan(key(r)) else 0,
+                                            r["constant"]))
+        for i, r in enumerate(ranked):
+            r["rank"] = i + 1 if not math.isnan(key(r)) else 0
+        out += sorted(ranked, key=lambda r: names.index(r["constant"]))
+    return out
+
+
+def top_constants(sens: Sequence[Mapping[str, Any]], claim: int, k: int = 2) -> list[str]:
+    """The ``k`` constants that matter most for ``claim`` (fewer when fewer are ranked).
+
+    Examples
+    --------
+    >>> top_constants([{"claim": 1, "constant": "a", "rank": 2}, {"claim": 1, "constant": "b", "rank": 1}], 1)
+    ['b', 'a']
+    """
+    ranked = sorted((r for r in sens if r["claim"] == claim and r["rank"] > 0), key=lambda r: r["rank"])
+    return [r["constant"] for r in ranked[:k]]
+
+
+def _cell(v: Any) -> str:
+    if isinstance(v, float):
+        return "" if math.isnan(v) else repr(v)
+    if v is None:
+        return ""
+    return str(v)
+
+
+def _write_csv(path: Path, rows: Sequence[Mapping[str, Any]], columns: Sequence[str]) -> Path:
+    with path.open("w", newline="") as fh:
+        w = csv.writer(fh, lineterminator="\n")
+        w.writerow(columns)
+        for r in rows:
+            w.writerow([_cell(r.get(c)) for c in columns])
+    return path
+
+
+def _columns(rows: Sequence[Mapping[str, Any]]) -> list[str]:
+    cols: list[str] = []
+    seen = set()
+    for r in rows:
+        for k in r:
+            if k not in seen:
+                seen.add(k)
+                cols.append(k)
+    return cols
+
+
+_COLORS = {HOLDS: "#2ca02c", FAILS: "#d62728", NOT_TESTABLE: "0.75", "error": "black"}
+
+
+def _plot_claim(plants, claim: Any, xy: list[str], table: Mapping, path: Path) -> Path:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(5.5, 4.2), constrained_layout=True)
+    for verdict, color in _COLORS.items():
+        sel = [p for p in plants if (("error" if p.get("error") else p.get(f"claim_{claim.number}")) == verdict)]
+        if sel:
+            x = [p[xy[0]] for p in sel]
+            y = [p[xy[1]] if len(xy) > 1 else 0.0 for p in sel]
+            ax.scatter(x, y, s=28, c=color, marker="x" if verdict == "error" else "o",
+                       label=f"{verdict} ({len(sel)})", edgecolors="none" if verdict != "error" else None)
+    for axis, name in zip("xy", xy):
+        c = table[name]
+        getattr(ax, f"set_{axis}label")(f"{name} ({c.unit})")
+        if c.distribution == "loguniform":
+            getattr(ax, f"set_{axis}scale")("log")
+    ax.set_title(f"claim {claim.number}: {claim.text}", fontsize=8, wrap=True)
+    ax.legend(fontsize=7, loc="best")
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return path
+
+
+def _plot_fractions(fractions: Sequence[Mapping[str, Any]], path: Path) -> Path:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7.5, 4.2), constrained_layout=True)
+    n = [r["claim"] for r in fractions]
+    f = np.array([r["holds_fraction"] for r in fractions], dtype=float) * 100
+    lo = np.array([r["holds_ci_low"] for r in fractions], dtype=float) * 100
+    hi = np.array([r["holds_ci_high"] for r in fractions], dtype=float) * 100
+    nt = np.array([r["not_testable_fraction"] for r in fractions], dtype=float) * 100
+    ax.bar(n, f, color="#2ca02c", label="holds")
+    ax.bar(n, nt, bottom=100 - nt, color="0.8", label="not testable")
+    ax.errorbar(n, f, yerr=[np.maximum(np.nan_to_num(f - lo), 0), np.maximum(np.nan_to_num(hi - f), 0)], fmt="none", ecolor="black",
+                capsize=3, label="95 % Wilson interval")
+    ax.set(xticks=n, xlabel="claim (SPEC 4.1)", ylabel="% of plants", ylim=(0, 100),
+           title="Where the paper's claims hold across plausible plants")
+    ax.legend(fontsize=8, loc="upper right")
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return path
+
+
+def write_outputs(run: Any, *, figures: bool = True, command: str | None = None) -> dict[str, Path]:
+    """Write the combined results and the map of a study run into ``run.out``.
+
+    Returns
+    -------
+    dict
+        Paths by name: results_parquet, results_csv, plants, claims, sensitivity, study_md,
+        and one per figure.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from slipreflex.study import StudyConfig, run_study
+    >>> cfg = StudyConfig(plants=2, trials=1, bottles=("TX",), methods=("dath",), experiments=("drop",),
+    ...                   calibrate=False, scan=False)
+    >>> paths = write_outputs(run_study(cfg, tempfile.mkdtemp(), workers=0, progress=False), figures=False)
+    >>> sorted(paths)
+    ['claims', 'plants', 'results_csv', 'results_parquet', 'sensitivity', 'study_md']
+    """
+    import pyarrow.parquet as pq
+
+    from .runner import _arrow_table
+
+    out = Path(run.out)
+    rows = [r for i in sorted(run.parts) for r in run.parts[i][1]]
+    paths: dict[str, Path] = {}
+    paths["results_parquet"] = out / "results.parquet"
+    pq.write_table(_arrow_table(rows), paths["results_parquet"])
+    paths["results_csv"] = _write_csv(out / "results.csv", rows, _columns(rows))
+    plants = plant_table(run.parts)
+    paths["plants"] = _write_csv(out / "plants.csv", plants, _columns(plants))
+    fractions = claim_fractions(plants)
+    paths["claims"] = _write_csv(out / "claims.csv", fractions, CLAIMS_COLUMNS)
+    table = run.config.table
+    sens = sensitivity(plants, table, design=run.config.design, seed=run.config.seed)
+    paths["sensitivity"] = _write_csv(out / "sensitivity.csv", sens, SENSITIVITY_COLUMNS)
+    figs: list[tuple[str, str]] = []
+    if figures:
+        fig_dir = out / "figures"
+        fig_dir.mkdir(exist_ok=True)
+        paths["fractions.png"] = _plot_fractions(fractions, fig_dir / "fractions.png")
+        figs.append(("Every claim's holding fraction", "figures/fractions.png"))
+        for c in CLAIMS:
+            xy = top_constants(sens, c.number) or varying(table)[:2]
+            if xy:
+                name = f"claim_{c.number:02d}.png"
+                paths[name] = _plot_claim(plants, c, xy, table, fig_dir / name)
+                figs.append((f"Claim {c.number} over {' and '.join(xy)}", f"figures/{name}"))
+    paths["study_md"] = out / "study.md"
+    paths["study_md"].write_text(study_markdown(run, plants, fractions, sens, figs, command))
+    return paths
+
+
+def _pct(x: float) -> str:
+    return "-" if x != x else f"{100 * x:.0f}%"
+
+
+def study_markdown(run: Any, plants: Sequence[Mapping[str, Any]], fractions: Sequence[Mapping[str, Any]],
+                   sens: Sequence[Mapping[str, Any]], figures: Sequence[tuple[str, str]],
+                   command: str | None = None) -> str:
+    """study.md: what the map says about each of the paper's conclusions, computed from the run.
+
+    Examples
+    --------
+    >>> from slipreflex.study import StudyConfig, StudyRun
+    >>> run = StudyRun(StudyConfig(plants=1), Path("o"), {}, [], 0.0, "serial")
+    >>> study_markdown(run, [], claim_fractions([]), [], []).splitlines()[0]
+    '# slipreflex study: where the paper\\'s claims hold'
+    """
+    cfg = run.config
+    names = varying(cfg.table)
+    errors = [p for p in plants if p.get("error")]
+    lines = ["# slipreflex study: where the paper's claims hold", ""]
+    if command:
+        lines += [f"Command: `{command}`", ""]
+    lines += [f"{len(plants)} plants ({cfg.design} design, seed {cfg.seed}) over {len(names)} uncertain "
+              f"constants; on each: {cfg.trials} trial(s) x bottles {', '.join(cfg.bottles)} x experiments "
+              f"{', '.join(cfg.experiments)} x methods {', '.join(cfg.methods)} = {cfg.trials_per_plant} "
+              "closed-loop trials, the same trial seeds on every plant; pads calibrated to the paper's "
+              f"open-loop first slip: {'yes' if cfg.calibrate else 'no'}; scan: {'yes' if cfg.scan else 'no'}. "
+              f"{len(errors)} plant(s) raised an error (in plants.csv).", ""]
+    lines += ["## Claims", "",
+              "Holds: % of the plants that ran where the claim holds, with its 95 % Wilson interval. "
+              "Decided by: the constants that matter most (sensitivity.csv; Spearman's rho between the "
+              "constant and the claim holding, over the plants where it was testable"
+              + (", ranked by SALib's total Sobol' index" if cfg.design == "saltelli" else "") + ").", "",
+              "| # | claim | holds | 95 % interval | fails | not testable | decided by |",
+              "|---|---|---|---|---|---|---|"]
+    for r in fractions:
+        top = [s for s in sens if s["claim"] == r["claim"] and 0 < s["rank"] <= 2]
+        top.sort(key=lambda s: s["rank"])
+        dec = ", ".join(f"{s['constant']} (rho {s['spearman_rho']:+.2f})" for s in top) or "-"
+        n = r["plants"] or 1
+        lines.append(f"| {r['claim']} | {r['text']} | {_pct(r['holds_fraction'])} | "
+                     f"{_pct(r['holds_ci_low'])}-{_pct(r['holds_ci_high'])} | {_pct(r['fails'] / n)} | "
+                     f"{_pct(r['not_testable_fraction'])} | {dec} |")
+    lines += ["", "## What the map says", ""] + [f"- {s}" for s in _verdict_lines(fractions)] + [""]
+    lines += ["## Uncertain constants", "", "| constant | unit | range | distribution |", "|---|---|---|---|"]
+    for k, c in cfg.table.items():
+        rng = f"{c.low:g}" if c.fixed else f"{c.low:g} .. {c.high:g}"
+        lines.append(f"| {k} | {c.unit} | {rng} | {'fixed' if c.fixed else c.distribution} |")
+    lines += [""]
+    if figures:
+        lines += ["## Figures", ""]
+        for cap, rel in figures:
+            lines += [f"![{cap}]({rel})", "", f"*{cap}*", ""]
+    return "\n".join(lines)
+
+
+def _verdict_lines(fractions: Sequence[Mapping[str, Any]]) -> list[str]:
+    out = []
+    for r in fractions:
+        lo, hi, nt = r["holds_ci_low"], r["holds_ci_high"], r["not_testable_fraction"]
+        if r["plants"] == 0:
+            out.append(f"Claim {r['claim']}: no plant ran.")
+        elif nt == 1.0:
+            out.append(f"Claim {r['claim']} ({r['text']}): not testable on any plant of this study.")
+        elif hi < 0.5:
+            out.append(f"Claim {r['claim']} ({r['text']}) fails on most plausible plants: it holds on "
+                       f"{_pct(r['holds_fraction'])} ({_pct(lo)}-{_pct(hi)}).")
+        elif lo > 0.5:
+            out.append(f"Claim {r['claim']} ({r['text']}) holds on most plausible plants: "
+                       f"{_pct(r['holds_fraction'])} ({_pct(lo)}-{_pct(hi)}).")
+        else:
+            out.append(f"Claim {r['claim']} ({r['text']}) depends on the plant: it holds on "
+                       f"{_pct(r['holds_fraction'])} ({_pct(lo)}-{_pct(hi)}); see its figure for where.")
+    return out

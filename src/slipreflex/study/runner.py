@@ -1,0 +1,519 @@
+"""Run a study: every plant of the design through the reproduce grid, on Dask or in this process.
+
+One *plant* is one draw of the uncertain constants. :func:`run_plant`
+builds it (:func:`slipreflex.sim.uncertain.plant_from_values`), calibrates
+its pads so the open-loop first pour slip comes at the paper's 200 ml
+(:func:`slipreflex.sim.calibration.calibrate_bottle`, per bottle), runs the
+reproduce grid on it (same master seed for every plant: every plant faces
+the same trials, so plants differ by physics only) and the characterization
+scan with its slip sensor, and judges the paper's claims
+(:func:`slipreflex.analysis.claims.judge`). It never raises: an error is
+recorded with the plant.
+
+:func:`run_study` sends the plants to a ``dask.distributed`` cluster (a
+``LocalCluster`` of single-threaded worker processes by default, or the
+scheduler at ``scheduler``), or runs them here with ``workers=0``. Each
+finished plant is written at once, by this process, as one Parquet part
+(``parts/plant-NNNNNN.parquet``, written to a temporary name and renamed, so
+a part is whole or absent); its metadata holds the study's fingerprint, the
+plant's error and its claim verdicts. A run with the same arguments skips
+the plants whose parts exist, so a killed study resumes and ends with the
+same bits. Workers need no shared file system: results travel back to the
+client.
+
+Examples
+--------
+>>> cfg = StudyConfig(plants=2, trials=1, bottles=("TX",), methods=("dath",), experiments=("drop",),
+...                   calibrate=False)
+>>> len(cfg.plant_values()), cfg.trials_per_plant
+(2, 1)
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import os
+import sys
+import time
+import traceback
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from ..errors import ParameterError
+from .design import DESIGNS, draw_design
+
+__all__ = ["StudyConfig", "PlantOutcome", "run_plant", "run_study", "StudyRun", "PARTS_DIR",
+           "read_parts", "part_path", "DEFAULT_PLANTS", "DEFAULT_TRIALS"]
+
+#: Plants of the default study (a power of two keeps the Sobol' design balanced; see docs/study.md).
+DEFAULT_PLANTS: int = 64
+#: Trials per bottle, experiment and method on each plant of the default study.
+DEFAULT_TRIALS: int = 1
+#: Sub-directory of ``--out`` holding one Parquet part per finished plant.
+PARTS_DIR: str = "parts"
+_META_KEY = b"slipreflex.study"
+#: Rig seeds of each plant's open-loop calibration (one seed: a third of the cost of the
+#: reproduce default's three; the calibration's seed-to-seed spread is a few ml).
+CALIBRATION_SEEDS: tuple[int, ...] = (0,)
+
+
+@dataclass(frozen=True)
+class StudyConfig:
+    """Everything that decides a study's rows (not where or how fast it runs).
+
+    Parameters
+    ----------
+    plants : int
+        Plants asked for (``saltelli`` rounds up).
+    design : {"sobol", "lhs", "saltelli"}
+    trials : int
+        Trials per bottle, experiment and method on each plant.
+    bottles, methods, experiments : tuple of str
+        The reproduce grid on each plant (methods: names of :mod:`slipreflex.methods`).
+    seed : int
+        Seeds the design and is the reproduce master seed of every plant.
+    ranges : str or Path, optional
+        A TOML file narrowing, widening or fixing constants
+        (:func:`slipreflex.sim.uncertain.load_ranges`).
+    calibrate : bool
+        Calibrate each plant's pad friction to the paper's open-loop first slip (200 ml).
+    scan : bool
+        Run each plant's characterization scan (claims 1-2).
+
+    Examples
+    --------
+    >>> StudyConfig(design="grid")
+    Traceback (most recent call last):
+    ...
+    slipreflex.errors.ParameterError: design: unknown 'grid' (known: sobol, lhs, saltelli)
+    """
+
+    plants: int = DEFAULT_PLANTS
+    design: str = "sobol"
+    trials: int = DEFAULT_TRIALS
+    bottles: tuple[str, ...] = ("TR", "DK", "TX")
+    methods: tuple[str, ...] = ("dath", "fixed", "nmsd", "swt")
+    experiments: tuple[str, ...] = ("drop", "pour")
+    seed: int = 20191215
+    ranges: str | None = None
+    calibrate: bool = True
+    scan: bool = True
+    _table: Any = field(default=None, init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        from ..sim.uncertain import UNCERTAIN, load_ranges
+
+        if self.design not in DESIGNS:
+            raise ParameterError(f"design: unknown {self.design!r} (known: {', '.join(DESIGNS)})")
+        if isinstance(self.plants, bool) or not isinstance(self.plants, int) or self.plants < 1:
+            raise ParameterError(f"plants must be an integer >= 1, got {self.plants!r}")
+        if self.ranges is not None:
+            object.__setattr__(self, "ranges", str(self.ranges))
+        table = UNCERTAIN if self.ranges is None else load_ranges(self.ranges)
+        object.__setattr__(self, "_table", dict(table))
+        self.reproduce_config()   # validates the grid before any work
+
+    @property
+    def table(self) -> dict:
+        """The uncertain constants of this study (name -> UncertainConstant).
+
+        Examples
+        --------
+        >>> "hand_latency" in StudyConfig(plants=1).table
+        True
+        """
+        return self._table
+
+    def reproduce_config(self, plant: Any = None):
+        """The reproduce grid run on each plant.
+
+        Examples
+        --------
+        >>> StudyConfig(plants=1, trials=2).reproduce_config().trials
+        2
+        """
+        from ..experiments import ReproduceConfig
+
+        return ReproduceConfig(trials=self.trials, bottles=tuple(self.bottles), methods=tuple(self.methods),
+                               experiments=tuple(self.experiments), seed=self.seed, plant=plant)
+
+    @property
+    def trials_per_plant(self) -> int:
+        """Closed-loop trials run on each plant.
+
+        Examples
+        --------
+        >>> StudyConfig(plants=1, trials=2, bottles=("TR",), methods=("dath",)).trials_per_plant
+        4
+        """
+        return len(self.reproduce_config().cells())
+
+    def plant_values(self) -> list[dict[str, float]]:
+        """Every plant's constants, in plant order (reproducible from :attr:`seed`).
+
+        Examples
+        --------
+        >>> StudyConfig(plants=3).plant_values() == StudyConfig(plants=3).plant_values()
+        True
+        """
+        return draw_design(self.table, self.plants, self.design, self.seed)
+
+    def fingerprint(self) -> str:
+        """A hash of everything that decides the rows (the grid, the design, the table, the package).
+
+        Examples
+        --------
+        >>> StudyConfig(plants=2).fingerprint() != StudyConfig(plants=3).fingerprint()
+        True
+        """
+        from .. import __version__
+
+        rc = self.reproduce_config()
+        doc = {"version": __version__, "plants": self.plants, "design": self.design, "seed": self.seed,
+               "calibrate": self.calibrate, "scan": self.scan,
+               "grid": {f.name: repr(getattr(rc, f.name)) for f in dataclasses.fields(rc) if f.name != "plant"},
+               "table": {k: [c.low, c.high, c.nominal, c.distribution] for k, c in self.table.items()}}
+        return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()[:20]
+
+    def to_dict(self) -> dict[str, Any]:
+        """The arguments, as study.json records them.
+
+        Examples
+        --------
+        >>> StudyConfig(plants=1).to_dict()["plants"]
+        1
+        """
+        return {f.name: (list(v) if isinstance(v := getattr(self, f.name), tuple) else v)
+                for f in dataclasses.fields(self) if f.init}
+
+
+@dataclass(frozen=True)
+class PlantOutcome:
+    """What one plant produced.
+
+    Attributes
+    ----------
+    plant : int
+    values : dict
+        Its uncertain constants.
+    rows : list of dict
+        One per trial and slip (constants and calibration as columns); empty on error.
+    claims : list of (int, str, str)
+        (claim number, verdict, numbers); empty on error.
+    error : str
+        ``""``, or the exception (type and message) that stopped the plant.
+    trials : int
+        Closed-loop trials it ran.
+
+    Examples
+    --------
+    >>> PlantOutcome(0, {}, [], [], "ValueError: x", 0).error
+    'ValueError: x'
+    """
+
+    plant: int
+    values: dict
+    rows: list
+    claims: list
+    error: str
+    trials: int
+
+
+def _calibrated(plant: Any) -> tuple[Any, dict[str, float]]:
+    """The plant with its pads calibrated to its open-loop first slip, and the calibrated mu_s."""
+    plant = plant.calibrated(seeds=CALIBRATION_SEEDS)
+    return plant, {f"calibrated_mu_s_{name}": float(b.mu_s) for name, b in plant.bottles.items()}
+
+
+def run_plant(index: int, values: Mapping[str, float], config: StudyConfig) -> PlantOutcome:
+    """Build, calibrate and run one plant; judge the claims. Never raises.
+
+    Examples
+    --------
+    >>> cfg = StudyConfig(plants=1, trials=1, bottles=("TX",), methods=("dath",), experiments=("drop",),
+    ...                   calibrate=False, scan=False)
+    >>> out = run_plant(0, cfg.plant_values()[0], cfg)
+    >>> out.error, len(out.rows), out.claims[2][1]
+    ('', 1, 'not testable here')
+    """
+    from ..analysis.claims import judge
+    from ..experiments import run_trial
+    from ..sim.uncertain import plant_from_values
+    from ..thresholds import calibrate
+
+    values = {k: float(v) for k, v in values.items()}
+    try:
+        plant = plant_from_values(values, table=config.table)
+        extra: dict[str, float] = {}
+        if config.calibrate:
+            plant, extra = _calibrated(plant)
+        rc = config.reproduce_config(plant)
+        from .. import methods
+
+        thresholds = calibrate(rc) if set(rc.methods) & set(methods.calibrated()) else {}
+        rows = []
+        for cell in rc.cells():
+            rows += run_trial(cell, rc, thresholds)[0]
+        summary = None
+        if config.scan:
+            from ..sim import scan
+
+            summary = scan(seed=config.seed, sensor=plant.slip_sensor).analyse()
+        verdicts = [(r.number, r.verdict, r.numbers) for r in judge(rows, summary)]
+        out_rows = [{"plant": index, **values, **extra, "error": "", **dict(r)} for r in rows]
+        return PlantOutcome(index, values, out_rows, verdicts, "", len(rc.cells()))
+    except Exception as err:   # a plant that raises is recorded, the study goes on
+        last = traceback.extract_tb(err.__traceback__)[-1]
+        msg = f"{type(err).__name__}: {err} ({Path(last.filename).name}:{last.lineno})"
+        return PlantOutcome(index, values, [{"plant": index, **values, "error": msg}], [], msg, 0)
+
+
+def part_path(out: Path, index: int) -> Path:
+    """Where plant ``index``'s Parquet part lives.
+
+    Examples
+    --------
+    >>> part_path(Path("o"), 7).name
+    'plant-000007.parquet'
+    """
+    return Path(out) / PARTS_DIR / f"plant-{index:06d}.parquet"
+
+
+def _arrow_table(rows: Sequence[Mapping[str, Any]]):
+    import pyarrow as pa
+
+    cols: list[str] = []
+    for r in rows:
+        cols += [k for k in r if k not in cols]
+    return pa.Table.from_pydict({c: [r.get(c) for r in rows] for c in cols})
+
+
+def write_part(out: Path, outcome: PlantOutcome, fingerprint: str) -> Path:
+    """Write one plant's rows and verdicts as a Parquet part (temporary name, then rename)."""
+    import pyarrow.parquet as pq
+
+    table = _arrow_table(outcome.rows)
+    meta = {"fingerprint": fingerprint, "plant": outcome.plant, "error": outcome.error,
+            "claims": outcome.claims, "trials": outcome.trials, "values": outcome.values}
+    table = table.replace_schema_metadata({_META_KEY: json.dumps(meta).encode()})
+    path = part_path(out, outcome.plant)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(".tmp")
+    pq.write_table(table, tmp)
+    os.replace(tmp, path)
+    return path
+
+
+def read_parts(out: Path, fingerprint: str | None = None) -> dict[int, tuple[dict, list[dict]]]:
+    """Finished plants in ``out``: index -> (metadata, rows); parts of another study are left out.
+
+    Examples
+    --------
+    >>> read_parts(Path("/nonexistent"))
+    {}
+    """
+    import pyarrow.parquet as pq
+
+    found = {}
+    for p in sorted((Path(out) / PARTS_DIR).glob("plant-*.parquet")):
+        try:
+            t = pq.read_table(p)
+            meta = json.loads(t.schema.metadata[_META_KEY])
+        except Exception:   # a part cut short is not a finished plant
+            continue
+        if fingerprint is None or meta.get("fingerprint") == fingerprint:
+            found[int(meta["plant"])] = (meta, t.to_pylist())
+    return found
+
+
+@dataclass
+class StudyRun:
+    """A finished (or interrupted) study: the plants' outcomes as read back from the parts.
+
+    Attributes
+    ----------
+    config : StudyConfig
+    out : Path
+    parts : dict
+        Plant index -> (metadata, rows).
+    computed : list of int
+        Plants computed by this run (the rest were resumed).
+    wall_s : float
+    workers : str
+        Where it ran ("serial", "LocalCluster(2)", the scheduler address).
+
+    Examples
+    --------
+    >>> StudyRun(StudyConfig(plants=1), Path("o"), {}, [], 0.0, "serial").complete
+    False
+    """
+
+    config: StudyConfig
+    out: Path
+    parts: dict
+    computed: list
+    wall_s: float
+    workers: str
+
+    @property
+    def complete(self) -> bool:
+        """Every plant of the design has a part.
+
+        Examples
+        --------
+        >>> StudyRun(StudyConfig(plants=1), Path("o"), {0: ({}, [])}, [], 0.0, "serial").complete
+        True
+        """
+        return len(self.parts) == len(self.config.plant_values())
+
+
+class _Progress:
+    """Plants and trials done: tqdm bars on a terminal, a few plain lines otherwise."""
+
+    def __init__(self, plants: int, trials: int, done: int, enabled: bool):
+        self.enabled, self.plants, self.trials, self.done = enabled, plants, trials, done
+        self.tty = enabled and sys.stderr.isatty()
+        self.bars = []
+        self.next_line = 0
+        if self.tty:
+            from tqdm import tqdm
+
+            self.bars = [tqdm(total=plants, initial=done, desc="plants", unit="plant", file=sys.stderr,
+                              position=0, dynamic_ncols=True),
+                         tqdm(total=plants * trials, initial=done * trials, desc="trials", unit="trial",
+                              file=sys.stderr, position=1, dynamic_ncols=True)]
+
+    def update(self, trials: int) -> None:
+        self.done += 1
+        if self.bars:
+            self.bars[0].update()
+            self.bars[1].update(self.trials)
+        elif self.enabled and (self.done >= self.next_line or self.done == self.plants):
+            print(f"study: {self.done}/{self.plants} plants, {self.done * self.trials} trials",
+                  file=sys.stderr, flush=True)
+            self.next_line = self.done + max(1, self.plants // 10)
+
+    def close(self) -> None:
+        for b in self.bars:
+            b.close()
+
+
+def _check_out(out: Path, config: StudyConfig) -> None:
+    """Refuse an --out that holds another study (before any work)."""
+    meta = out / "study.json"
+    fp = config.fingerprint()
+    if meta.exists():
+        try:
+            old = json.loads(meta.read_text()).get("fingerprint")
+        except (OSError, ValueError):
+            old = None
+        if old != fp:
+            raise ParameterError(f"--out {out}: holds another study (study.json fingerprint {old}, this "
+                                 f"one {fp}); choose another directory or delete it")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        meta.write_text(json.dumps({"fingerprint": fp, "config": config.to_dict()}, indent=1, sort_keys=True)
+                        + "\n")
+    except OSError as err:
+        raise ParameterError(f"--out {out}: cannot write: {err.strerror}") from None
+
+
+def _client(workers: int | None, scheduler: str | None):
+    from dask.distributed import Client, LocalCluster
+
+    if scheduler:
+        try:
+            return Client(scheduler, timeout="20s"), None, scheduler
+        except OSError as err:
+            raise ParameterError(f"--scheduler {scheduler}: cannot connect: {err}") from None
+    n = int(workers or os.cpu_count() or 1)
+    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None)
+    return Client(cluster), cluster, f"LocalCluster({n})"
+
+
+def run_study(config: StudyConfig, out: str | Path, *, workers: int | None = None, scheduler: str | None = None,
+              progress: bool = True, on_plant: Callable[[PlantOutcome], None] | None = None) -> StudyRun:
+    """Run every plant not yet finished in ``out``; write one Parquet part per plant as it finishes.
+
+    Parameters
+    ----------
+    config : StudyConfig
+    out : str or Path
+        Output directory (parts, study.json; :func:`slipreflex.study.write_outputs` adds the rest).
+    workers : int, optional
+        Local Dask worker processes (default: the machine's cores); 0 runs the
+        plants in this process, without Dask.
+    scheduler : str, optional
+        ``tcp://HOST:PORT`` of a running Dask scheduler (overrides ``workers``).
+    progress : bool
+        Progress on stderr.
+    on_plant : callable, optional
+        Called with each plant's outcome after its part is written.
+
+    Returns
+    -------
+    StudyRun
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> cfg = StudyConfig(plants=2, trials=1, bottles=("TX",), methods=("dath",), experiments=("drop",),
+    ...                   calibrate=False, scan=False)
+    >>> run = run_study(cfg, tempfile.mkdtemp(), workers=0, progress=False)
+    >>> sorted(run.parts), run.computed
+    ([0, 1], [0, 1])
+    """
+    out = Path(out)
+    if workers is not None and workers < 0:
+        raise ParameterError(f"--workers must be >= 0, got {workers}")
+    _check_out(out, config)
+    t0 = time.perf_counter()
+    fp = config.fingerprint()
+    plants = config.plant_values()
+    have = set(read_parts(out, fp))
+    todo = [i for i in range(len(plants)) if i not in have]
+    bar = _Progress(len(plants), config.trials_per_plant, len(have), progress)
+    computed: list[int] = []
+
+    def finished(o: PlantOutcome) -> None:
+        write_part(out, o, fp)
+        computed.append(o.plant)
+        bar.update(o.trials)
+        if on_plant:
+            on_plant(o)
+
+    where = "serial"
+    try:
+        if todo and (workers != 0 or scheduler):
+            where = _run_dask(todo, plants, config, workers, scheduler, finished, fp)
+        else:
+            for i in todo:
+                finished(run_plant(i, plants[i], config))
+    finally:
+        bar.close()
+    return StudyRun(config, out, read_parts(out, fp), computed, time.perf_counter() - t0, where)
+
+
+def _run_dask(todo: list[int], plants: list[dict], config: StudyConfig, workers: int | None,
+              scheduler: str | None, finished: Callable[[PlantOutcome], None], fp: str) -> str:
+    from dask.distributed import as_completed
+
+    client, cluster, where = _client(workers, scheduler)
+    futures = []
+    try:
+        futures = [client.submit(run_plant, i, plants[i], config, key=f"slipreflex-study-{fp}-{i}", pure=False)
+                   for i in todo]
+        for fut in as_completed(futures):
+            finished(fut.result())
+            fut.release()
+    finally:
+        for f in futures:
+            f.cancel()
+        client.close()
+        if cluster is not None:
+            cluster.close()
+    return where
