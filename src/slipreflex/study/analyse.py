@@ -327,8 +327,8 @@ def study_markdown(run: Any, plants: Sequence[Mapping[str, Any]], fractions: Seq
     --------
     >>> from slipreflex.study import StudyConfig, StudyRun
     >>> run = StudyRun(StudyConfig(plants=1), Path("o"), {}, [], 0.0, "serial")
-    >>> study_markdown(run, [], claim_fractions([]), [], []).splitlines()[0]
-    '# slipreflex study: where the paper\\'s claims hold'
+    >>> study_markdown(run, [], claim_fractions([]), [], []).startswith("# slipreflex study")
+    True
     """
     cfg = run.config
     names = varying(cfg.table)
