@@ -46,6 +46,7 @@ Examples
 
 from __future__ import annotations
 
+import io
 import json
 import os
 import time
@@ -359,6 +360,14 @@ class Recording:
     complete : bool
         True if the file ended with its footer; False for a file cut short
         (e.g. by a crash), read up to its last complete chunk.
+    damaged : list of (int, str)
+        Byte offset and reason of every damaged record the reader skipped
+        (a chunk whose CRC or compression fails, unreadable bytes).
+    cut_at : int or None
+        Byte offset of the record a crash cut short (the file ends inside it).
+    before_damage : dict of str to int
+        Messages per topic read before the first damaged record (all of them
+        if nothing was damaged): the part a replay can check exactly.
 
     Examples
     --------
@@ -371,6 +380,51 @@ class Recording:
     messages: dict[str, list[dict[str, Any]]] = field(default_factory=dict)
     log_times: dict[str, list[int]] = field(default_factory=dict)
     complete: bool = False
+    damaged: list[tuple[int, str]] = field(default_factory=list)
+    cut_at: int | None = None
+    before_damage: dict[str, int] | None = None
+
+    def expected_samples(self) -> int:
+        """About how many samples the run recorded: its summary, its last /stats, or the time span.
+
+        Examples
+        --------
+        >>> Recording("x.mcap", messages={"/stats": [{"counters": {"samples": 40}}]}).expected_samples()
+        40
+        """
+        got = len(self.topic("/daq/samples"))
+        guesses = [got]
+        summary = self.metadata.get("run_summary", {})
+        if str(summary.get("samples", "")).isdigit():
+            guesses.append(int(summary["samples"]))
+        stats = self.topic("/stats")
+        if stats and isinstance(stats[-1].get("counters", {}).get("samples"), int):
+            guesses.append(stats[-1]["counters"]["samples"])
+        samples = self.topic("/daq/samples")
+        if len(samples) > 1:
+            from .hardware import DAQ_PERIOD_S
+            guesses.append(round((samples[-1]["t"] - samples[0]["t"]) / DAQ_PERIOD_S) + 1)
+        return max(guesses)
+
+    def gaps(self) -> str:
+        """One line on what is missing, or "" for an intact file.
+
+        Examples
+        --------
+        >>> Recording("x.mcap", complete=True).gaps()
+        ''
+        >>> Recording("x.mcap", damaged=[(2061, "CRC")]).gaps()
+        'x.mcap: read 0 of about 0 samples; chunk at byte 2061 damaged (CRC)'
+        """
+        parts = [f"chunk at byte {pos} damaged ({why})" for pos, why in self.damaged]
+        if self.cut_at is not None:
+            parts.append(f"cut short at byte {self.cut_at} (a crash?)")
+        elif not self.complete and not self.damaged:
+            parts.append("ends without its footer")
+        if not parts:
+            return ""
+        return (f"{self.path}: read {len(self.topic('/daq/samples'))} of about "
+                f"{self.expected_samples()} samples; " + "; ".join(parts))
 
     def topic(self, name: str) -> list[dict[str, Any]]:
         """Messages of one topic (empty list if none).
@@ -384,7 +438,12 @@ class Recording:
 
 
 def read_recording(path: str | os.PathLike) -> Recording:
-    """Read a recording, including one cut short by a crash.
+    """Read a recording, including one cut short by a crash or with damaged chunks.
+
+    Every record is read on its own with its CRC checked; a damaged one is
+    skipped (listed in :attr:`Recording.damaged`, reading goes on at the next
+    whole chunk), and a record a crash cut short ends the reading
+    (:attr:`Recording.cut_at`). :meth:`Recording.gaps` says what is missing.
 
     Parameters
     ----------
@@ -408,51 +467,113 @@ def read_recording(path: str | os.PathLike) -> Recording:
     ...
     slipreflex.recording.RecordingError: /nonexistent.mcap: cannot open recording: No such file or directory
     """
-    import struct
-
-    from mcap.exceptions import InvalidMagic, McapError
-    from mcap.records import Channel, Footer, Message, Metadata
-    from mcap.stream_reader import StreamReader
+    from mcap.records import Channel, Message, Metadata
 
     path = os.fspath(path)
     rec = Recording(path=path)
+    topics: dict[int, str] = {}
+    for pos, record in _scan(path, rec):
+        if isinstance(record, Channel):
+            topics[record.id] = record.topic
+        elif isinstance(record, Message):
+            topic = topics.get(record.channel_id)
+            if topic is None:
+                continue
+            try:
+                msg = json.loads(record.data)
+            except ValueError:
+                rec.damaged.append((pos, f"message {record.sequence} on {topic} is not JSON"))
+                continue
+            rec.messages.setdefault(topic, []).append(msg)
+            rec.log_times.setdefault(topic, []).append(record.log_time)
+        elif isinstance(record, Metadata):
+            rec.metadata[record.name] = dict(record.metadata)
+    if rec.before_damage is None:
+        rec.before_damage = {t: len(m) for t, m in rec.messages.items()}
+    return rec
+
+
+#: MCAP's file magic, its record opcodes (spec: Records) and the byte size of an opcode + length.
+_MAGIC = b"\x89MCAP0\r\n"
+_OPCODES = frozenset(range(0x01, 0x10))
+_OP_CHUNK = 0x06
+_RECORD_HEAD = 9
+
+
+def _parse_record(data: bytes, pos: int) -> tuple[int, list[Any] | None, str]:
+    """Parse the one record at ``pos`` (a chunk: its inner records), checking CRCs.
+
+    Returns ``(end, records, why)``: ``records`` is None when it is damaged or cut.
+    """
+    from mcap.exceptions import EndOfFile
+    from mcap.stream_reader import StreamReader
+
+    op = data[pos]
+    end = pos + _RECORD_HEAD + int.from_bytes(data[pos + 1:pos + _RECORD_HEAD], "little")
+    if op not in _OPCODES:
+        return end, None, f"unknown record type 0x{op:02x}"
+    if end > len(data):
+        return end, None, "cut"
+    out: list[Any] = []
     try:
-        fh = open(path, "rb")
+        for r in StreamReader(io.BytesIO(data[pos:end]), skip_magic=True, validate_crcs=True).records:
+            out.append(r)
+    except EndOfFile:
+        pass
+    except (NameError, AttributeError, ImportError):
+        raise  # a bug here, not damage in the file
+    except Exception as err:  # noqa: BLE001 - any decoding failure (CRC, zstd, struct) is damage
+        return end, None, f"{type(err).__name__}: {err}"[:120]
+    return end, out, ""
+
+
+def _resync(data: bytes, pos: int) -> int | None:
+    """The next offset after ``pos`` where a whole chunk parses (None if there is none)."""
+    q = data.find(bytes([_OP_CHUNK]), pos + 1)
+    while q >= 0:
+        end, records, _ = _parse_record(data, q)
+        if records is not None and end <= len(data):
+            return q
+        q = data.find(bytes([_OP_CHUNK]), q + 1)
+    return None
+
+
+def _scan(path: str, rec: Recording) -> Any:
+    """Yield ``(offset, record)`` for every readable record of an MCAP file, skipping damaged
+    records (noted in ``rec.damaged``) and stopping at a record a crash cut (``rec.cut_at``)."""
+    try:
+        with open(path, "rb") as fh:
+            data = fh.read()
     except OSError as err:
         raise RecordingError(f"{path}: cannot open recording: {err.strerror or err}") from None
-    topics: dict[int, str] = {}
-    with fh:
-        records = StreamReader(fh).records
-        while True:
-            try:
-                record = next(records)
-            except StopIteration:
-                break
-            except InvalidMagic as err:
-                if not topics and not rec.metadata:
-                    raise DataError(f"{path}: not an MCAP file ({err})") from None
-                break  # a file cut right after its footer's start
-            except (McapError, EOFError, struct.error, ValueError, KeyError):
-                break  # cut short: keep what was read
-            except Exception:  # noqa: BLE001 - e.g. a decompression error in a torn chunk
-                break
-            if isinstance(record, Channel):
-                topics[record.id] = record.topic
-            elif isinstance(record, Message):
-                topic = topics.get(record.channel_id)
-                if topic is None:
-                    continue
-                try:
-                    msg = json.loads(record.data)
-                except ValueError:
-                    raise DataError(f"{path}: message {record.sequence} on {topic} is not JSON") from None
-                rec.messages.setdefault(topic, []).append(msg)
-                rec.log_times.setdefault(topic, []).append(record.log_time)
-            elif isinstance(record, Metadata):
-                rec.metadata[record.name] = dict(record.metadata)
-            elif isinstance(record, Footer):
-                rec.complete = True
-    return rec
+    if not data.startswith(_MAGIC):
+        if data and _MAGIC.startswith(data):
+            raise DataError(f"{path}: cut short after {len(data)} bytes, before its first record")
+        raise DataError(f"{path}: not an MCAP file (no MCAP magic at its start)")
+    pos = len(_MAGIC)
+    while pos + _RECORD_HEAD <= len(data):
+        end, records, why = _parse_record(data, pos)
+        if records is None:
+            nxt = _resync(data, pos)
+            if nxt is None:
+                if why == "cut" or end > len(data):
+                    rec.cut_at = pos
+                else:
+                    rec.damaged.append((pos, why or "unreadable"))
+                return
+            if rec.before_damage is None:
+                rec.before_damage = {t: len(m) for t, m in rec.messages.items()}
+            rec.damaged.append((pos, why if why != "cut" else "bad record length"))
+            pos = nxt
+            continue
+        for r in records:
+            yield pos, r
+        if data[pos] == 0x02:  # the footer: only the closing magic follows
+            rec.complete = True
+            return
+        pos = end
+    if pos < len(data):
+        rec.cut_at = pos
 
 
 def chain_params_of(rec: Recording):
@@ -482,6 +603,10 @@ def chain_params_of(rec: Recording):
     from .chain import ReflexParams
 
     raw = rec.metadata.get(METADATA_NAME, {}).get("reflex_params")
+    if raw is None and not rec.complete:
+        where = f"at byte {rec.cut_at}" if rec.cut_at is not None else "before its parameters"
+        raise DataError(f"{rec.path}: cut short {where}, before the chain parameters were written "
+                        f"(nothing to replay)")
     if raw is None:
         raise DataError(f"{rec.path}: no chain parameters in the metadata record {METADATA_NAME!r} "
                         f"(not a slipreflex run recording?)")
@@ -503,7 +628,9 @@ class ReplayResult:
     recorded_events, replayed_events : list of tuple
     recorded_commands, replayed_commands : list of tuple
     complete : bool
-        Whether the recording was complete (see :attr:`Recording.complete`).
+        Whether the recording was complete (see :attr:`Recording.complete`) and undamaged.
+    gaps : str
+        What the recording misses (:meth:`Recording.gaps`), "" if nothing.
 
     Examples
     --------
@@ -518,6 +645,7 @@ class ReplayResult:
     recorded_commands: list[tuple]
     replayed_commands: list[tuple]
     complete: bool
+    gaps: str = ""
 
     @property
     def identical(self) -> bool:
@@ -557,7 +685,8 @@ class ReplayResult:
                 verdict = (f"DIFFERENT from #{k}: recorded {a[k] if k < len(a) else None}, "
                            f"replayed {b[k] if k < len(b) else None}")
             return f"{name}: recorded {len(a)}, replayed {len(b)} - {verdict}"
-        return "\n".join([f"samples {self.samples}" + ("" if self.complete else " (recording cut short)"),
+        return "\n".join([f"samples {self.samples}" + ("" if self.complete else
+                                                      " (recording cut short or damaged: checked up to the first gap)"),
                           line("events", self.recorded_events, self.replayed_events),
                           line("commands", self.recorded_commands, self.replayed_commands)])
 
@@ -602,9 +731,13 @@ def replay(path: str | os.PathLike | Recording) -> ReplayResult:
 
     rec = path if isinstance(path, Recording) else read_recording(path)
     reflex = SlipReflex.from_params(chain_params_of(rec))
+    upto = rec.before_damage or {}
+    samples = rec.topic("/daq/samples")[:upto.get("/daq/samples", 0)]  # exact up to the first damage
+    if not samples:
+        raise DataError(f"{rec.path}: no samples before {'the first damaged chunk' if rec.damaged else 'its end'}"
+                        f": nothing to replay")
     events: list[tuple] = []
     commands: list[tuple] = []
-    samples = rec.topic("/daq/samples")
     for s in samples:
         cmd = reflex.step(s["slip_volts"], s.get("position"))
         if reflex.last_event:
@@ -613,13 +746,14 @@ def replay(path: str | os.PathLike | Recording) -> ReplayResult:
             commands.append((s["seq"], s["t"], float(cmd)))
     return ReplayResult(
         samples=len(samples),
-        recorded_events=[(m["seq"], m["t"]) for m in rec.topic("/chain/events")],
+        recorded_events=[(m["seq"], m["t"]) for m in rec.topic("/chain/events")[:upto.get("/chain/events", 0)]],
         replayed_events=events,
-        recorded_commands=[(m["seq"], m["t"], float(m["target"])) for m in rec.topic("/hand/commands")],
-        replayed_commands=commands, complete=rec.complete)
+        recorded_commands=[(m["seq"], m["t"], float(m["target"]))
+                           for m in rec.topic("/hand/commands")[:upto.get("/hand/commands", 0)]],
+        replayed_commands=commands, complete=rec.complete and not rec.damaged, gaps=rec.gaps())
 
 
-def export_csv(path: str | os.PathLike, out: str | os.PathLike | None = None, *,
+def export_csv(path: str | os.PathLike | Recording, out: str | os.PathLike | None = None, *,
                all_streams: bool = False) -> list[str]:
     """Write a recording's slip-sensor samples as a CSV that ``slipreflex detect`` reads.
 
@@ -662,7 +796,7 @@ def export_csv(path: str | os.PathLike, out: str | os.PathLike | None = None, *,
     """
     from pathlib import Path
 
-    rec = read_recording(path)
+    rec = path if isinstance(path, Recording) else read_recording(path)
     samples = rec.topic("/daq/samples")
     if not samples:
         raise DataError(f"{rec.path}: no slip-sensor samples to export")
@@ -740,3 +874,112 @@ def _write_csv(target: Any, columns: Mapping[str, Any], **kw: Any) -> None:
 
 
 __all__ += ["chain_params_of", "ReplayResult", "replay", "export_csv", "export_preamble", "EXPORT_FORMAT"]
+
+
+@dataclass(frozen=True)
+class RecoverResult:
+    """What :func:`recover_recording` wrote.
+
+    Attributes
+    ----------
+    messages : int
+        Messages written.
+    metadata : tuple of str
+        Names of the metadata records written.
+    gaps : str
+        What the original misses (:meth:`Recording.gaps`), "" if it was intact.
+
+    Examples
+    --------
+    >>> RecoverResult(3, ("slipreflex",), "").messages
+    3
+    """
+
+    messages: int
+    metadata: tuple[str, ...]
+    gaps: str
+
+
+def recover_recording(path: str | os.PathLike, out: str | os.PathLike) -> RecoverResult:
+    """Rewrite every readable record of a recording as a complete MCAP file.
+
+    A file cut by a crash has no summary or footer, which mcap's standard
+    readers need. This reads it the way :func:`read_recording` does
+    (damaged chunks skipped, up to the last complete chunk) and writes the
+    schemas, channels, messages (same log times, publish times and sequence
+    numbers) and metadata to ``out``, with a summary and footer. The file
+    appears under its name only when complete; ``path`` is never changed.
+
+    Parameters
+    ----------
+    path : path-like
+        The recording.
+    out : path-like
+        The complete file to write (not ``path``; never replaces a non-regular file).
+
+    Returns
+    -------
+    RecoverResult
+
+    Raises
+    ------
+    RecordingError
+        ``out`` is ``path``, not a regular file, in a missing folder, or cannot be written.
+    DataError
+        ``path`` is not an MCAP file.
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> d = tempfile.mkdtemp(); path = os.path.join(d, "r.mcap")
+    >>> with Recorder(path) as rec:
+    ...     _ = rec.write("/chain/events", {"seq": 1, "t": 0.003}, 1)
+    >>> res = recover_recording(path, os.path.join(d, "copy.mcap"))
+    >>> res.messages, res.gaps
+    (1, '')
+    """
+    import tempfile
+    from pathlib import Path
+
+    from mcap.records import Channel, Message, Metadata, Schema
+    from mcap.writer import CompressionType, Writer
+
+    src, dst = Path(path), Path(out)
+    if dst.exists() and src.exists() and dst.resolve() == src.resolve():
+        raise RecordingError(f"{dst}: recover writes a new file; give another --out than the recording")
+    _check_output(dst)
+    rec = Recording(path=os.fspath(path))
+    fd, tmp = tempfile.mkstemp(dir=dst.parent, prefix=f".{dst.name}.", suffix=".part")
+    messages, names = 0, []
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            writer = Writer(fh, chunk_size=64 * 1024, compression=CompressionType.ZSTD)
+            writer.start(profile="", library="slipreflex recover")
+            schemas: dict[int, int] = {}
+            channels: dict[int, int] = {}
+            for _, r in _scan(os.fspath(path), rec):
+                if isinstance(r, Schema) and r.id not in schemas:
+                    schemas[r.id] = writer.register_schema(name=r.name, encoding=r.encoding, data=r.data)
+                elif isinstance(r, Channel) and r.id not in channels:
+                    channels[r.id] = writer.register_channel(
+                        topic=r.topic, message_encoding=r.message_encoding,
+                        schema_id=schemas.get(r.schema_id, 0), metadata=dict(r.metadata))
+                elif isinstance(r, Message) and r.channel_id in channels:
+                    writer.add_message(channel_id=channels[r.channel_id], log_time=r.log_time,
+                                       data=r.data, publish_time=r.publish_time, sequence=r.sequence)
+                    messages += 1
+                elif isinstance(r, Metadata):
+                    writer.add_metadata(r.name, dict(r.metadata))
+                    names.append(r.name)
+            writer.finish()
+        os.replace(tmp, dst)
+    except OSError as err:
+        Path(tmp).unlink(missing_ok=True)
+        raise RecordingError(f"{dst}: cannot write: {err.strerror or err}") from None
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return RecoverResult(messages, tuple(names), rec.gaps())
+
+
+__all__ += ["RecoverResult", "recover_recording"]

@@ -23,12 +23,18 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("-o", "--out", type=Path, default=None, help="CSV to write (default: REC.csv)")
     p.add_argument("--all", action="store_true",
                    help="also write REC-imu/-flow/-events/-windows/-commands/-faults.csv")
+    p.add_argument("--allow-partial", action="store_true",
+                   help="export what was read from a recording cut by a crash or with damaged chunks "
+                        "(without it, such a recording is an error naming every gap)")
 
 
 def run(args: argparse.Namespace) -> int:
-    """Export; print the files written."""
-    from ..recording import export_csv
+    """Export; print the files written (exit 2 for a partial recording without --allow-partial)."""
+    from ..recording import export_csv, read_recording
+    from .replay import check_partial
 
-    for name in export_csv(args.recording, args.out, all_streams=args.all):
+    rec = read_recording(args.recording)
+    check_partial(rec, args.allow_partial)
+    for name in export_csv(rec, args.out, all_streams=args.all):
         print(f"wrote {name}")
     return 0

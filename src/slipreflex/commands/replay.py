@@ -22,12 +22,30 @@ ORDER = 32
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``slipreflex replay``."""
     p.add_argument("recording", type=Path, help="MCAP file written by 'slipreflex run'")
+    p.add_argument("--allow-partial", action="store_true",
+                   help="replay a recording cut by a crash or with damaged chunks up to its first gap "
+                        "(without it, such a recording is an error naming every gap)")
 
 
 def run(args: argparse.Namespace) -> int:
-    """Replay; exit 0 if identical, 1 if not."""
-    from ..recording import replay
+    """Replay; exit 0 if identical, 1 if not, 2 for a partial recording without --allow-partial."""
+    from ..recording import read_recording, replay
 
-    res = replay(args.recording)
+    rec = read_recording(args.recording)
+    check_partial(rec, args.allow_partial)
+    res = replay(rec)
     print(res.summary())
     return 0 if res.identical else 1
+
+
+def check_partial(rec, allow: bool) -> None:
+    """A recording with gaps is an error naming them, or with ``allow`` a warning on stderr."""
+    import sys
+
+    from ..errors import DataError
+
+    gaps = rec.gaps()
+    if gaps and not allow:
+        raise DataError(f"{gaps} (--allow-partial uses what was read)")
+    if gaps:
+        print(f"slipreflex: warning: {gaps}", file=sys.stderr, flush=True)
