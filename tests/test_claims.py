@@ -155,7 +155,7 @@ def test_tables_print_every_claim():
     assert md.count("**holds**") == 10
     term = C.claims_terminal(res)
     assert term.splitlines()[0].endswith("10 hold, 0 fail, 0 not testable here")
-    assert len(term.splitlines()) == 11
+    assert len(term.splitlines()) == 21 and "DATH vs fixed mean response" in term.splitlines()[6]
 
 
 def test_window_phase_sd_is_uniform_phase_over_the_window():
@@ -183,3 +183,16 @@ def test_contradictions_of_the_paper():
     # a first slip at 50 ml would be consistent with a drop slip-out
     assert not C.contradictions(first_slip_ml=50.0)[0].inconsistent
     assert C.contradictions_markdown(list(items.values())).count("(inconsistent)") == len(items)
+
+
+def test_report_and_terminal_carry_the_claims(tmp_path):
+    from slipreflex.analysis.outputs import write_outputs
+    from slipreflex.experiments import ReproduceConfig, run_reproduce
+
+    res = run_reproduce(ReproduceConfig(trials=1, bottles=("TX",), methods=("dath",), experiments=("drop",)),
+                        jobs=1, progress=False, plots=False)
+    md = write_outputs(res, tmp_path)["report"].read_text()
+    assert "## The paper's claims, judged on this run" in md and "## Where the paper contradicts itself" in md
+    verdicts = C.judge_run(res.rows, seed=res.config.seed)
+    assert md.count("| **") == 10 and all(f"| **{r.verdict}** | {r.numbers} |" in md for r in verdicts)
+    assert verdicts[2].verdict == C.NOT_TESTABLE     # one bottle, one method: claim 3 cannot be judged

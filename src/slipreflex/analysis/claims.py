@@ -60,7 +60,7 @@ from .paper import BOTTLE_ORDER, EXPERIMENTS, PAPER
 __all__ = [
     "HOLDS", "FAILS", "NOT_TESTABLE", "VERDICTS", "ABOUT_VOLTS", "ABOUT_REL", "ABOUT_RATE_POINTS",
     "ABOUT_RATIO_FACTOR", "NEAR_ML", "MOST", "TOLERANCES", "Claim", "ClaimInput", "ClaimResult",
-    "CLAIMS", "judge", "claims_markdown", "claims_terminal", "Contradiction", "contradictions",
+    "CLAIMS", "judge", "judge_run", "claims_section", "claims_markdown", "claims_terminal", "Contradiction", "contradictions",
     "contradictions_markdown", "window_phase_sd_ms", "drop_slipout_capacity_n",
     "first_slip_capacity_n", "STATIC_OVER_KINETIC_MAX",
 ]
@@ -457,6 +457,46 @@ def judge(rows: Sequence[Any], scan: Any = None) -> list[ClaimResult]:
     return out
 
 
+def judge_run(rows: Sequence[Any], *, seed: int = 0, plant: Any = None) -> list[ClaimResult]:
+    """Judge the claims of a run: its rows, and a characterization scan of its slip sensor.
+
+    The scan (:func:`slipreflex.sim.scan`, seeded with the run's master
+    seed, with the plant's slip sensor when ``plant`` is given) supplies
+    claims 1-2; it takes milliseconds.
+
+    Examples
+    --------
+    >>> [r.verdict for r in judge_run([], seed=0)][2]
+    'not testable here'
+    """
+    from ..sim import scan
+
+    sensor = None if plant is None else plant.slip_sensor
+    return judge(rows, scan(seed=seed, sensor=sensor).analyse())
+
+
+def claims_section(results: Sequence[ClaimResult], items: Sequence[Contradiction] | None = None) -> list[str]:
+    """The report.md sections: the claims judged, the tolerances, the paper's contradictions.
+
+    Examples
+    --------
+    >>> claims_section(judge([]), [])[0]
+    "## The paper's claims, judged on this run"
+    """
+    lines = ["## The paper's claims, judged on this run", "",
+             "Each claim of the paper (SPEC 4.1) judged from this run's results.csv and a "
+             "characterization scan (`slipreflex.analysis.claims`): *holds*, *fails*, or *not testable "
+             "here* (the run lacks the cells or values it needs).", "", claims_markdown(results), "",
+             "Tolerances (one definition each): " + "; ".join(f"{k}: {v}" for k, v in TOLERANCES.items())
+             + ".", ""]
+    items = contradictions() if items is None else items
+    if items:
+        lines += ["## Where the paper contradicts itself", "",
+                  "Computed from the paper's own numbers; reported as inconsistent, not chased.", "",
+                  contradictions_markdown(items), ""]
+    return lines
+
+
 def claims_markdown(results: Sequence[ClaimResult]) -> str:
     """The claims table as markdown (claim, verdict, numbers, tolerance).
 
@@ -471,8 +511,8 @@ def claims_markdown(results: Sequence[ClaimResult]) -> str:
     return "\n".join(lines)
 
 
-def claims_terminal(results: Sequence[ClaimResult], width: int = 100) -> str:
-    """The claims table for the terminal: one line per claim, verdict first.
+def claims_terminal(results: Sequence[ClaimResult]) -> str:
+    """The claims table for the terminal: per claim, its verdict and text, then its numbers.
 
     Examples
     --------
@@ -482,8 +522,7 @@ def claims_terminal(results: Sequence[ClaimResult], width: int = 100) -> str:
     n = {v: sum(r.verdict == v for r in results) for v in VERDICTS}
     lines = [f"paper's claims (SPEC 4.1): {n[HOLDS]} hold, {n[FAILS]} fail, {n[NOT_TESTABLE]} not testable here"]
     for r in results:
-        line = f"{r.number:>3} {r.verdict:17} {r.text}: {r.numbers}"
-        lines.append(line if len(line) <= width else line[:width - 3] + "...")
+        lines += [f"{r.number:>3} {r.verdict:17} {r.text}", f"{'':21}{r.numbers}"]
     return "\n".join(lines)
 
 

@@ -56,9 +56,12 @@ def write_outputs(result: Any, out_dir: str | Path, *, command: str | None = Non
     paths = {"results": write_csv(out / "results.csv", result.rows, RESULT_COLUMNS),
              "summary": write_csv(out / "summary.csv", result.summary, SUMMARY_COLUMNS)}
     figs = _write_figures(result, out, paths)
+    from .claims import judge_run
+
     md = report_markdown(summary=result.summary, rows=result.rows, figures=figs,
                          setup=setup_lines(result, command),
-                         discussion=list(discussion) if discussion is not None else discussion_text(result))
+                         discussion=list(discussion) if discussion is not None else discussion_text(result),
+                         claims=judge_run(result.rows, seed=result.config.seed, plant=result.config.plant))
     paths["report"] = out / "report.md"
     paths["report"].write_text(md)
     return paths

@@ -360,7 +360,7 @@ def differences(summary: Sequence[dict[str, Any]], *, tolerance_sd: float = 2.0)
 
 def report_markdown(*, summary: Sequence[dict[str, Any]], rows: Sequence[dict[str, Any]],
                     figures: Sequence[tuple[str, str]], setup: Sequence[str],
-                    discussion: Sequence[str]) -> str:
+                    discussion: Sequence[str], claims: Sequence[Any] = ()) -> str:
     """The whole report.md: the paper's table beside ours, success, onsets, figures, honesty.
 
     Parameters
@@ -372,6 +372,9 @@ def report_markdown(*, summary: Sequence[dict[str, Any]], rows: Sequence[dict[st
         Bullet lines describing the run (command, seeds, thresholds, timing).
     discussion : sequence of str
         Paragraphs on why our numbers differ where they do.
+    claims : sequence of ClaimResult, optional
+        The paper's claims judged on this run (:func:`slipreflex.analysis.claims.judge_run`);
+        with them come the paper's self-contradictions.
 
     Examples
     --------
@@ -390,6 +393,10 @@ def report_markdown(*, summary: Sequence[dict[str, Any]], rows: Sequence[dict[st
               "(accelerometer) to the first increase of the commanded finger position. Total: first "
               "to last change of the command for that slip (fixed, DATH) or the closing time the "
               "method generated (NMSD, SWT-SD).", "", comparison_markdown(summary), ""]
+    if claims:
+        from .claims import claims_section
+
+        lines += claims_section(claims)
     lines += ["## Success (slip suppressed before the bottle slipped out)", "",
               success_markdown(summary), ""]
     lines += ["## Onset estimate vs the simulator's true onset", "",

@@ -107,6 +107,9 @@ def run(args: argparse.Namespace) -> int:
     command = "slipreflex " + " ".join(shlex.quote(a) for a in sys.argv[1:]) if sys.argv[1:] else None
     paths = write_outputs(result, args.out, command=command)
     print(terminal_table(result.summary))
+    from ..analysis.claims import claims_terminal, judge_run
+
+    print(claims_terminal(judge_run(result.rows, seed=config.seed)))
     print(f"{len(result.rows)} rows from {len(config.cells())} trials in {result.wall_s:.1f} s "
           f"({result.jobs} jobs); wrote {paths['results'].parent}/"
           "{results.csv, summary.csv, report.md, figures/}")

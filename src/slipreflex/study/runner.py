@@ -240,7 +240,7 @@ def run_plant(index: int, values: Mapping[str, float], config: StudyConfig) -> P
     >>> out.error, len(out.rows), out.claims[2][1]
     ('', 1, 'not testable here')
     """
-    from ..analysis.claims import judge
+    from ..analysis.claims import judge, judge_run
     from ..experiments import run_trial
     from ..sim.uncertain import plant_from_values
     from ..thresholds import calibrate
@@ -258,12 +258,8 @@ def run_plant(index: int, values: Mapping[str, float], config: StudyConfig) -> P
         rows = []
         for cell in rc.cells():
             rows += run_trial(cell, rc, thresholds)[0]
-        summary = None
-        if config.scan:
-            from ..sim import scan
-
-            summary = scan(seed=config.seed, sensor=plant.slip_sensor).analyse()
-        verdicts = [(r.number, r.verdict, r.numbers) for r in judge(rows, summary)]
+        judged = judge_run(rows, seed=config.seed, plant=plant) if config.scan else judge(rows)
+        verdicts = [(r.number, r.verdict, r.numbers) for r in judged]
         out_rows = [{"plant": index, **values, **extra, "error": "", **dict(r)} for r in rows]
         return PlantOutcome(index, values, out_rows, verdicts, "", len(rc.cells()))
     except Exception as err:   # a plant that raises is recorded, the study goes on
@@ -431,7 +427,8 @@ def _client(workers: int | None, scheduler: str | None):
         except OSError as err:
             raise ParameterError(f"--scheduler {scheduler}: cannot connect: {err}") from None
     n = int(workers or os.cpu_count() or 1)
-    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None)
+    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                           dashboard_address=":0")   # a free port: two studies may run side by side
     return Client(cluster), cluster, f"LocalCluster({n})"
 
 
