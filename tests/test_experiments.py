@@ -7,12 +7,13 @@ import math
 import numpy as np
 import pytest
 
+from slipreflex import methods
 from slipreflex.baselines import NMSD, SWTSD
 from slipreflex.chain import SlipReflex
 from slipreflex.errors import ParameterError
 from slipreflex.experiments import (
     RESULTS_CSV_COLUMNS, Cell, ReproduceConfig, calibrate, calibration_seed, closing_speed,
-    make_reflex, run_reproduce, run_trial, trial_seed)
+    method_context, run_reproduce, run_trial, trial_seed)
 from slipreflex.sim import PAPER_DROP, PAPER_POUR, HandParams
 
 
@@ -52,19 +53,24 @@ def test_seeds_are_spawned_and_independent_of_the_selection():
     assert trial_seed(8, "drop", "TR", 0) != trial_seed(7, "drop", "TR", 0)
 
 
-def test_make_reflex_swaps_methods_by_name():
+def _make(name, p0, thresholds, **config):
+    """A method's reflex as the trial runner builds it: the registry with the run's context."""
+    return methods.make(name, p0=p0, context=method_context(ReproduceConfig(**config), thresholds))
+
+
+def test_the_runner_swaps_methods_by_name():
     th = {"nmsd": 10.0, "swt": 0.02}
-    r = make_reflex("fixed", p0=150.0, thresholds=th)
+    r = _make("fixed", 150.0, th)
     assert isinstance(r, SlipReflex) and r.name == "fixed" and r.input_kind == "slip"
-    assert make_reflex("dath", p0=150.0, thresholds=th).name == "dath"
-    n = make_reflex("nmsd", p0=150.0, thresholds=th)
-    s = make_reflex("swt", p0=150.0, thresholds=th)
+    assert _make("dath", 150.0, th).name == "dath"
+    n = _make("nmsd", 150.0, th)
+    s = _make("swt", 150.0, th)
     assert isinstance(n, NMSD) and isinstance(s, SWTSD)
     assert (n.fs, s.fs) == (260.0, 380.0)
     assert n.params.speed == s.params.speed == closing_speed()
-    assert s.params.persist == 8 and make_reflex("swt", p0=1.0, thresholds=th, swt_persist=3).params.persist == 3
+    assert s.params.persist == 8 and _make("swt", 1.0, th, swt_persist=3).params.persist == 3
     with pytest.raises(ParameterError):
-        make_reflex("nope", p0=0.0, thresholds=th)
+        _make("nope", 0.0, th)
 
 
 def test_calibration_gives_one_positive_threshold_per_method():

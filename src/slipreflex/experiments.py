@@ -45,9 +45,9 @@ from typing import Any
 import numpy as np
 
 from . import methods
+from .analysis.outputs import ReproduceResult, trial_plot, write_outputs
 from .analysis.paper import BOTTLE_ORDER
 from .analysis.paper import EXPERIMENTS as PAPER_EXPERIMENTS
-from .analysis.outputs import trial_plot, write_outputs
 from .analysis.trial import RESULT_COLUMNS, TrialRow
 from .baselines.calibration import REST_K
 from .baselines.swt import SWT_WINDOW
@@ -58,7 +58,7 @@ from .validation import choices, flag, integer, positive, set_field
 
 __all__ = [
     "METHODS", "EXPERIMENTS", "BOTTLE_NAMES", "DEFAULT_SEED", "ReproduceConfig", "Cell",
-    "trial_seed", "calibration_seed", "closing_speed", "calibrate", "make_reflex", "run_trial",
+    "trial_seed", "calibration_seed", "closing_speed", "calibrate", "run_trial",
     "ReproduceResult", "run_reproduce", "write_outputs", "method_context",
     "RESULTS_CSV_COLUMNS", "LANDING_S",
 ]
@@ -311,20 +311,6 @@ def method_context(config: ReproduceConfig, thresholds: dict[str, float]) -> met
                                  options={"swt_persist": config.swt_persist})
 
 
-def make_reflex(method: str, *, p0: float, thresholds: dict[str, float], swt_persist: int | None = None):
-    """The reflex of ``method``, starting from finger position ``p0`` (via :func:`slipreflex.methods.make`).
-
-    Examples
-    --------
-    >>> make_reflex("dath", p0=200.0, thresholds={}).name
-    'dath'
-    >>> make_reflex("swt", p0=200.0, thresholds={"swt": 0.02}).fs
-    380.0
-    """
-    return methods.make(method, p0=p0, context=methods.MethodContext(
-        thresholds=dict(thresholds), speed=closing_speed(), options={"swt_persist": swt_persist}))
-
-
 def run_trial(cell: Cell, config: ReproduceConfig, thresholds: dict[str, float], *,
               keep_plot: bool = False, spec: methods.MethodSpec | None = None):
     """Run and analyse one trial: grasp, rest, perturb, closed loop, metrics.
@@ -403,45 +389,6 @@ def _jet_fall_s(pour) -> float:
 def _run_cell(cell: Cell, config: ReproduceConfig, thresholds: dict[str, float], keep_plot: bool,
               spec: methods.MethodSpec):
     return cell, run_trial(cell, config, thresholds, keep_plot=keep_plot, spec=spec)
-
-
-@dataclass
-class ReproduceResult:
-    """Everything a reproduction produced.
-
-    Attributes
-    ----------
-    config : ReproduceConfig
-    rows : list of TrialRow
-        One per trial and slip event (the rows of results.csv).
-    summary : list of dict
-        Per experiment, bottle and method (columns of summary.csv).
-    thresholds : dict
-        The calibrated methods' thresholds, by method name.
-    plots : dict
-        Plot data of the example trials, by cell key.
-    wall_s : float
-        Wall time of the whole run (s).
-    jobs : int
-        Worker processes used.
-    calibration_wall_s : float
-        Wall time of the threshold calibration (s); the length of each
-        calibration *recording* is ``config.calibration_s``.
-
-    Examples
-    --------
-    >>> ReproduceResult(ReproduceConfig(), [], [], {}, {}, 0.0, 1).rows
-    []
-    """
-
-    config: ReproduceConfig
-    rows: list[TrialRow]
-    summary: list[dict[str, Any]]
-    thresholds: dict[str, float]
-    plots: dict[tuple, Any]
-    wall_s: float
-    jobs: int
-    calibration_wall_s: float = 0.0
 
 
 def _order(row: TrialRow) -> tuple:

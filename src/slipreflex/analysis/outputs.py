@@ -1,6 +1,7 @@
 """The files a reproduction writes: results.csv, summary.csv, report.md and the figures.
 
-:func:`write_outputs` writes a run (a :class:`slipreflex.experiments.ReproduceResult`);
+:class:`ReproduceResult` holds what a run of the grid produced (made by
+:func:`slipreflex.experiments.run_reproduce`); :func:`write_outputs` writes it;
 :func:`trial_plot` turns one simulated trial into the data of its figure, drawing the
 method's detections the way its :class:`~slipreflex.methods.MethodSpec` says. The text
 comes from :mod:`slipreflex.analysis.report`, the drawing from :mod:`slipreflex.analysis.figures`.
@@ -19,22 +20,62 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from .paper import BOTTLE_ORDER, EXPERIMENTS
 from .report import (SUCCESS_CAPTION, SUMMARY_COLUMNS, bars_caption, discussion_text, report_markdown,
                      setup_lines, trial_caption, write_csv, zoom_caption)
-from .trial import RESULT_COLUMNS
+from .trial import RESULT_COLUMNS, TrialRow
 
-__all__ = ["write_outputs", "trial_plot"]
+__all__ = ["ReproduceResult", "write_outputs", "trial_plot"]
 
 
-def write_outputs(result: Any, out_dir: str | Path, *, command: str | None = None,
+@dataclass
+class ReproduceResult:
+    """Everything a reproduction produced.
+
+    Attributes
+    ----------
+    config : slipreflex.experiments.ReproduceConfig
+    rows : list of TrialRow
+        One per trial and slip event (the rows of results.csv).
+    summary : list of dict
+        Per experiment, bottle and method (columns of summary.csv).
+    thresholds : dict
+        The calibrated methods' thresholds, by method name.
+    plots : dict
+        Plot data of the example trials, by cell key.
+    wall_s : float
+        Wall time of the whole run (s).
+    jobs : int
+        Worker processes used.
+    calibration_wall_s : float
+        Wall time of the threshold calibration (s); the length of each
+        calibration *recording* is ``config.calibration_s``.
+
+    Examples
+    --------
+    >>> from slipreflex.experiments import ReproduceConfig
+    >>> ReproduceResult(ReproduceConfig(), [], [], {}, {}, 0.0, 1).rows
+    []
+    """
+
+    config: Any
+    rows: list[TrialRow]
+    summary: list[dict[str, Any]]
+    thresholds: dict[str, float]
+    plots: dict[tuple, Any]
+    wall_s: float
+    jobs: int
+    calibration_wall_s: float = 0.0
+
+
+def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str | None = None,
                   discussion: Sequence[str] | None = None) -> dict[str, Path]:
     """Write results.csv, summary.csv, the figures and report.md of a run into ``out_dir``.
 
-    ``result`` is a :class:`slipreflex.experiments.ReproduceResult`.
 
     Returns
     -------
@@ -67,7 +108,7 @@ def write_outputs(result: Any, out_dir: str | Path, *, command: str | None = Non
     return paths
 
 
-def _write_figures(result: Any, out: Path, paths: dict[str, Path]) -> list[tuple[str, str]]:
+def _write_figures(result: ReproduceResult, out: Path, paths: dict[str, Path]) -> list[tuple[str, str]]:
     """Draw the example trials, bar charts and success chart; (caption, relative path) of each."""
     from . import figures as F
 
