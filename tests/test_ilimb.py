@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import random
+import time
 
 import pytest
 import serial
@@ -101,12 +102,27 @@ def test_parser_roundtrip_with_garbage_truncation_and_bit_flips():
     assert r.rejected > 0 and len(out) < len(sent)
 
 
+def _packets(port, n, timeout=10.0):
+    """The next ``n`` packets from the pty, awaiting each one (the tty layer passes bytes on
+    asynchronously: one read right after the write may find only part of them)."""
+    import select
+
+    parser, out = PacketParser(), []
+    deadline = time.monotonic() + timeout
+    while len(out) < n:
+        left = deadline - time.monotonic()
+        assert left > 0, f"got {len(out)} of {n} packets"
+        if select.select([port.master], [], [], left)[0]:
+            out += parser.feed(port.read())
+    return out
+
+
 def test_hand_port_that_disappears_and_comes_back(tmp_path):
     port = PtyPort(link=str(tmp_path / "hand"))
     hand = ILimb(port.path, reconnect_interval=0.0)
     try:
         hand.set_positions({f: 200 for f in hw.TRIPOD})
-        assert len(PacketParser().feed(port.read())) == 1
+        assert len(_packets(port, 1)) == 1
         port.unplug()
         with pytest.raises(DeviceError, match="hand"):
             hand.set_positions({f: 210 for f in hw.TRIPOD})
@@ -115,7 +131,7 @@ def test_hand_port_that_disappears_and_comes_back(tmp_path):
             hand.set_positions({f: 215 for f in hw.TRIPOD})
         port.replug()
         hand.set_positions({Finger.MIDDLE: 220})
-        packets = PacketParser().feed(port.read())
+        packets = _packets(port, 2)
         # First the whole grip is restored (latest targets), then the new command.
         assert [{c.finger: c.value for c in p} for p in packets] == [
             {Finger.THUMB: 215, Finger.INDEX: 215, Finger.MIDDLE: 220}, {Finger.MIDDLE: 220}]

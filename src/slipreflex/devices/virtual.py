@@ -361,7 +361,7 @@ class VirtualDevices:
         return self
 
     def stop(self) -> None:
-        """Stop the thread and close the ports (idempotent).
+        """Carry out the requests already made, stop the thread and close the ports (idempotent).
 
         Raises
         ------
@@ -490,8 +490,16 @@ class VirtualDevices:
     def _run(self) -> None:
         try:
             self._loop()
+            self._drain()  # requests made before stop() are carried out, never dropped
         except BaseException as err:  # noqa: BLE001 - reported by stop()
             self._error = err
+
+    def _drain(self) -> None:
+        while True:
+            try:
+                self._handle(self._requests.get_nowait())
+            except queue.Empty:
+                return
 
     def _loop(self) -> None:
         schedule = list(self._schedule)
@@ -499,11 +507,7 @@ class VirtualDevices:
             t = time.perf_counter() - self._t0
             while schedule and schedule[0][0] <= t:
                 self._handle(schedule.pop(0)[1])
-            while True:
-                try:
-                    self._handle(self._requests.get_nowait())
-                except queue.Empty:
-                    break
+            self._drain()
             for s in self.rig.advance_to(t):
                 self._last_seq = s.seq
                 if self._daq_paused:
