@@ -7,6 +7,10 @@ theta0 sets ``theta = max(|x_k - x_(k-1)|, floor)`` (Eq. 4) for the next D
 samples; spikes during that time do not re-arm it; sample k+D+1 is compared
 against theta0 again.
 
+Two options let the accumulator forget (docs/method.md, "Variants"): a periodic
+reset every ``acc_reset`` samples (the authors' rig code) and an exponential
+leak with a time constant of ``acc_leak`` samples. Both are off by default.
+
 Examples
 --------
 >>> import numpy as np
@@ -45,7 +49,8 @@ class EncoderTrace(NamedTuple):
 
 
 def encode_trace(x, threshold: float = DEFAULT_THRESHOLD, dath: bool = False, dath_samples: int = 16,
-                 x0: float | None = None, dath_floor: float = 0.0) -> EncoderTrace:
+                 x0: float | None = None, dath_floor: float = 0.0, acc_reset: int | None = None,
+                 acc_leak: float | None = None) -> EncoderTrace:
     """Encode filtered samples and return events with accumulator and threshold.
 
     Parameters are those of :func:`encode`.
@@ -62,7 +67,7 @@ def encode_trace(x, threshold: float = DEFAULT_THRESHOLD, dath: bool = False, da
     ([False, True, False, False], [0.008, 0.008, 0.01, 0.01])
     """
     p = EncoderParams(threshold=threshold, dath=dath, dath_samples=dath_samples, x0=x0,
-                      dath_floor=dath_floor)
+                      dath_floor=dath_floor, acc_reset=acc_reset, acc_leak=acc_leak)
     xs = as_samples("x", x)
     k = xs.size
     events = np.zeros(k, dtype=np.bool_)
@@ -72,12 +77,14 @@ def encode_trace(x, threshold: float = DEFAULT_THRESHOLD, dath: bool = False, da
         from ._kernels import encode_kernel
 
         prev = xs[0] if p.x0 is None else p.x0
-        encode_kernel(xs, prev, p.threshold, p.dath, p.dath_samples, p.dath_floor, events, acc, theta)
+        encode_kernel(xs, prev, p.threshold, p.dath, p.dath_samples, p.dath_floor, p.acc_reset or 0,
+                      p.leak_factor, p.acc_leak is not None, events, acc, theta)
     return EncoderTrace(events, acc, theta)
 
 
 def encode(x, threshold: float = DEFAULT_THRESHOLD, dath: bool = False, dath_samples: int = 16,
-           x0: float | None = None, dath_floor: float = 0.0) -> np.ndarray:
+           x0: float | None = None, dath_floor: float = 0.0, acc_reset: int | None = None,
+           acc_leak: float | None = None) -> np.ndarray:
     """Turn filtered slip-sensor samples into spikes (one bool per sample).
 
     Parameters
@@ -94,6 +101,11 @@ def encode(x, threshold: float = DEFAULT_THRESHOLD, dath: bool = False, dath_sam
         Initial reference; None uses the first sample; 0.0 is the paper's literal start.
     dath_floor : float
         Lower bound of the DATH threshold (V).
+    acc_reset : int or None
+        Clear the accumulator every this many samples (None: never, the paper).
+    acc_leak : float or None
+        Time constant of the accumulator's exponential leak, in samples (None:
+        no leak, the paper): ``acc = acc * exp(-1 / acc_leak) + d``.
 
     Returns
     -------
@@ -105,8 +117,11 @@ def encode(x, threshold: float = DEFAULT_THRESHOLD, dath: bool = False, dath_sam
     >>> import numpy as np
     >>> encode(np.full(4, 0.4), x0=0.0).tolist()   # the paper's start-up spike
     [True, False, False, False]
+    >>> drift = np.arange(12) * 0.001              # 1 mV per sample, never 8 mV at once
+    >>> int(encode(drift).sum()), int(encode(drift, acc_reset=5).sum())
+    (1, 0)
     """
-    return encode_trace(x, threshold, dath, dath_samples, x0, dath_floor).events
+    return encode_trace(x, threshold, dath, dath_samples, x0, dath_floor, acc_reset, acc_leak).events
 
 
 class EventEncoder:
@@ -125,13 +140,15 @@ class EventEncoder:
     0.01
     """
 
-    __slots__ = ("params", "_prev", "acc", "threshold", "remaining", "last_threshold",
-                 "last_accumulator")
+    __slots__ = ("params", "_prev", "acc", "threshold", "remaining", "clock", "last_threshold",
+                 "last_accumulator", "_leak")
 
     def __init__(self, threshold: float = DEFAULT_THRESHOLD, dath: bool = False, dath_samples: int = 16,
-                 x0: float | None = None, dath_floor: float = 0.0) -> None:
+                 x0: float | None = None, dath_floor: float = 0.0, acc_reset: int | None = None,
+                 acc_leak: float | None = None) -> None:
         self.params = EncoderParams(threshold=threshold, dath=dath, dath_samples=dath_samples, x0=x0,
-                                    dath_floor=dath_floor)
+                                    dath_floor=dath_floor, acc_reset=acc_reset, acc_leak=acc_leak)
+        self._leak = self.params.leak_factor
         self.reset()
 
     def reset(self) -> None:
@@ -140,6 +157,7 @@ class EventEncoder:
         self.acc = 0.0
         self.threshold = self.params.threshold
         self.remaining = 0
+        self.clock = 0
         self.last_threshold = self.params.threshold
         self.last_accumulator = 0.0
 
@@ -148,15 +166,20 @@ class EventEncoder:
         x = float(x)
         prev = x if self._prev is None else self._prev
         d = x - prev
-        acc = self.acc + d
+        p = self.params
+        acc = self.acc * self._leak + d if p.acc_leak is not None else self.acc + d
         theta = self.threshold
         self.last_threshold = theta
         self.last_accumulator = acc
         event = abs(acc) > theta
         if event:
             acc = 0.0
+        if p.acc_reset is not None:
+            self.clock += 1
+            if self.clock >= p.acc_reset:
+                self.clock = 0
+                acc = 0.0
         self.acc = acc
-        p = self.params
         if p.dath:
             if self.remaining > 0:
                 self.remaining -= 1

@@ -28,7 +28,7 @@ def _clip(value: float, lo: float, hi: float) -> float:
     return lo if value < lo else hi if value > hi else value
 
 
-def mpi(v, p0: float = 0.0, kp: float = 5.0, ki: float = 5.0, reset_after: int = 10,
+def mpi(v, p0: float = 0.0, kp: float = 5.0, ki: float = 5.0, reset_after: int | None = 10,
         lo: float = float(FINGER_MIN), hi: float = float(FINGER_MAX)) -> np.ndarray:
     """Finger commands for a whole sequence of window counts.
 
@@ -40,8 +40,9 @@ def mpi(v, p0: float = 0.0, kp: float = 5.0, ki: float = 5.0, reset_after: int =
         Initial finger position P0.
     kp, ki : float
         Gains (the paper uses 5 and 5).
-    reset_after : int
-        Zero windows in a row after which P0 := last command and h := 0.
+    reset_after : int or None
+        Zero windows in a row after which P0 := last command and h := 0;
+        None never resets.
     lo, hi : float
         Saturation range (finger positions 0 .. 500).
 
@@ -65,7 +66,8 @@ def mpi(v, p0: float = 0.0, kp: float = 5.0, ki: float = 5.0, reset_after: int =
     if counts.size:
         from ._kernels import mpi_kernel
 
-        mpi_kernel(counts, p.p0, _clip(p.p0, p.lo, p.hi), p.kp, p.ki, p.reset_after, p.lo, p.hi, out)
+        reset_after = -1 if p.reset_after is None else p.reset_after
+        mpi_kernel(counts, p.p0, _clip(p.p0, p.lo, p.hi), p.kp, p.ki, reset_after, p.lo, p.hi, out)
     return out
 
 
@@ -84,7 +86,7 @@ class MPIController:
 
     __slots__ = ("params", "p_base", "integral", "command", "zero_windows")
 
-    def __init__(self, p0: float = 0.0, kp: float = 5.0, ki: float = 5.0, reset_after: int = 10,
+    def __init__(self, p0: float = 0.0, kp: float = 5.0, ki: float = 5.0, reset_after: int | None = 10,
                  lo: float = float(FINGER_MIN), hi: float = float(FINGER_MAX)) -> None:
         self.params = MPIParams(p0=p0, kp=kp, ki=ki, reset_after=reset_after, lo=lo, hi=hi)
         self.reset()

@@ -22,12 +22,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..hardware import DAQ_FS
+from . import _layout as _k
 from ._checks import as_samples
-from .encoder import EventEncoder
-from .filters import LowPass, _design
-from .mpi import MPIController, _clip
 from .params import ReflexParams
-from .windows import WindowCounter
 
 __all__ = ["SlipReflex", "run_chain", "ChainResult"]
 
@@ -35,18 +33,27 @@ __all__ = ["SlipReflex", "run_chain", "ChainResult"]
 class SlipReflex:
     """Streaming reflex chain: raw slip-sensor volts in, finger commands out.
 
+    The chain's state is one float64 vector and every step is one call of the
+    compiled :func:`slipreflex.chain._kernels.chain_step`, the function
+    :func:`run_chain` runs over a whole recording (and a compiled closed loop
+    may call from its own numba code): streaming and batch agree by
+    construction.
+
     Parameters
     ----------
     params : ReflexParams, optional
         A complete parameter set; alternatively give the fields as keywords
         (``fs``, ``cutoff``, ``filter``, ``threshold``, ``dath``, ``dath_samples``,
         ``x0``, ``dath_floor``, ``n``, ``p0``, ``kp``, ``ki``, ``reset_after``,
-        ``lo``, ``hi``). Unknown keywords are an error.
+        ``lo``, ``hi`` and the variants' ``filter_kind``, ``mean_samples``,
+        ``acc_reset``, ``acc_leak``, ``mpi_mode``, ``slip_finger_offset``).
+        Unknown keywords are an error.
 
     Attributes
     ----------
     name : str
-        ``"dath"`` or ``"fixed"``, the method name used by the trial runner.
+        The method name used by the trial runner: ``"dath"``, ``"fixed"``,
+        ``"dath-event"``, or the preset's name (:meth:`from_preset`).
     input_kind : str
         ``"slip"``: :meth:`step` takes slip-sensor volts.
     fs : float
@@ -68,17 +75,19 @@ class SlipReflex:
     """
 
     input_kind = "slip"
+    __slots__ = ("params", "name", "_P", "_S", "_S0")
 
     def __init__(self, params: ReflexParams | None = None, **kwargs) -> None:
         if params is not None and kwargs:
             raise TypeError("give either params or keyword parameters, not both")
         self.params = params if params is not None else ReflexParams.from_dict(kwargs)
-        p = self.params
-        self._filter = LowPass(fs=p.fs, cutoff=p.cutoff, enabled=p.filter)
-        self._encoder = EventEncoder(**vars_of(p.encoder))
-        self._windows = WindowCounter(n=p.n)
-        self._mpi = MPIController(**vars_of(p.mpi))
-        self.reset()
+        from ._layout import init_state, pack_params
+
+        _load_step()
+        self.name = self.params.name
+        self._P = pack_params(self.params)
+        self._S0 = init_state(self._P)
+        self._S = self._S0.copy()
 
     @classmethod
     def from_params(cls, params: ReflexParams) -> "SlipReflex":
@@ -91,10 +100,30 @@ class SlipReflex:
         """
         return cls(params)
 
-    @property
-    def name(self) -> str:
-        """Method name, ``"dath"`` or ``"fixed"``."""
-        return self.params.name
+    @classmethod
+    def from_preset(cls, name: str, fs: float = DAQ_FS, **overrides) -> "SlipReflex":
+        """A chain with a named parameter set (:meth:`ReflexParams.preset`), named after it.
+
+        Parameters
+        ----------
+        name : {"paper", "fixed", "dath", "authors-gui", "dath-event"}
+            ``"authors-gui"`` is the authors' rig code (docs/method.md).
+        fs : float
+            Sampling rate (Hz); the preset's lengths follow from it.
+        **overrides
+            Fields to change (``p0=...``).
+
+        Examples
+        --------
+        >>> r = SlipReflex.from_preset("authors-gui", fs=333.0, p0=150.0)
+        >>> r.name, r.params.n, r.finger_offsets
+        ('authors-gui', 9, {'middle': 20.0})
+        """
+        params = ReflexParams.preset(name, fs, **overrides)
+        reflex = cls(params)
+        if name.casefold() not in ("paper", "fixed", "dath"):
+            reflex.name = name.casefold()
+        return reflex
 
     @property
     def fs(self) -> float:
@@ -102,25 +131,58 @@ class SlipReflex:
         return self.params.fs
 
     @property
+    def finger_offsets(self) -> dict[str, float]:
+        """Offsets a hand adds to the command per finger (the authors' middle + 20), or {}."""
+        off = self.params.slip_finger_offset
+        return {"middle": off} if off else {}
+
+    @property
     def command(self) -> float:
         """The current finger command (the last MPI output, or clip(p0))."""
-        return self._mpi.command
+        return float(self._S[_k.S_M])
+
+    @property
+    def last_filtered(self) -> float:
+        """The filtered sample of the last step (NaN if it was skipped or none yet)."""
+        return float(self._S[_k.S_LAST_X])
+
+    @property
+    def last_event(self) -> bool:
+        """True if the last step spiked."""
+        return bool(self._S[_k.S_LAST_EVENT])
+
+    @property
+    def last_threshold(self) -> float:
+        """The threshold the last sample was compared with."""
+        return float(self._S[_k.S_LAST_THETA])
+
+    @property
+    def last_accumulator(self) -> float:
+        """The accumulator the last sample compared, before its reset."""
+        return float(self._S[_k.S_LAST_ACC])
+
+    @property
+    def last_count(self) -> int | None:
+        """The window count if the last step completed a window, else None."""
+        c = self._S[_k.S_LAST_COUNT]
+        return None if c < 0 else int(c)
+
+    @property
+    def skipped_samples(self) -> int:
+        """Non-finite samples skipped since the last reset."""
+        return int(self._S[_k.S_SKIPPED])
+
+    @property
+    def state(self) -> np.ndarray:
+        """A copy of the state vector (layout in :mod:`slipreflex.chain._kernels`)."""
+        return self._S.copy()
 
     def reset(self) -> None:
         """Restore every stage to its initial state."""
-        self._filter.reset()
-        self._encoder.reset()
-        self._windows.reset()
-        self._mpi.reset()
-        self.skipped_samples = 0
-        self.last_filtered = math.nan
-        self.last_event = False
-        self.last_threshold = self.params.threshold
-        self.last_accumulator = 0.0
-        self.last_count: int | None = None
+        self._S[:] = self._S0
 
     def step(self, raw: float, position: float | None = None) -> float | None:
-        """Feed one raw sample; return the new finger command when a window completes.
+        """Feed one raw sample; return the new finger command when there is one.
 
         Parameters
         ----------
@@ -136,30 +198,24 @@ class SlipReflex:
         Returns
         -------
         float or None
-            The command u_z on the sample that completes window z, else None.
+            With the paper's MPI: the command u_z on the sample that completes
+            window z, else None. With the event-driven MPI: the command on the
+            samples where it changes, else None.
         """
-        r = float(raw)
-        if math.isfinite(r):
-            x = self._filter.step(r)
-            event = self._encoder.step(x)
-            self.last_filtered = x
-            self.last_threshold = self._encoder.last_threshold
-            self.last_accumulator = self._encoder.last_accumulator
-        else:
-            self.skipped_samples += 1
-            event = False
-            self.last_filtered = math.nan
-        self.last_event = event
-        v = self._windows.step(event)
-        self.last_count = v
-        if v is None:
-            return None
-        return self._mpi.step(v, position)
+        u = _chain_step(self._S, self._P, float(raw), _NAN if position is None else float(position))
+        return None if u != u else u
 
 
-def vars_of(params) -> dict:
-    """Field dict of a slotted dataclass."""
-    return {name: getattr(params, name) for name in params.__dataclass_fields__}
+_NAN = math.nan
+_chain_step = None  # the compiled step, imported with the first chain (numba stays out of `import`)
+
+
+def _load_step() -> None:
+    global _chain_step
+    if _chain_step is None:
+        from ._kernels import chain_step
+
+        _chain_step = chain_step
 
 
 @dataclass(frozen=True)
@@ -176,7 +232,11 @@ class ChainResult:
     counts : numpy.ndarray of int64
         Per complete window: v_z.
     commands : numpy.ndarray of float
-        Per complete window: u_z.
+        Per complete window: the command in force at the window's last sample
+        (u_z for the paper's MPI).
+    sample_commands : numpy.ndarray of float
+        Per sample: the command in force after that sample (the event-driven
+        MPI changes it between window ends).
 
     Examples
     --------
@@ -193,6 +253,7 @@ class ChainResult:
     threshold: np.ndarray
     counts: np.ndarray
     commands: np.ndarray
+    sample_commands: np.ndarray
 
     def window_end_index(self) -> np.ndarray:
         """Index of the sample that completes each window."""
@@ -245,14 +306,11 @@ def run_chain(raw, params: ReflexParams | None = None, **kwargs) -> ChainResult:
     p = params if params is not None else ReflexParams.from_dict(kwargs)
     r = as_samples("raw", raw)
     from ._kernels import chain_kernel, empty_like_chain
+    from ._layout import init_state, pack_params
 
     out = empty_like_chain(r.size, p.n)
     if r.size:
-        sos, zi0 = _design(p.fs, p.cutoff)
-        zi = zi0 * r[0]
-        x0 = 0.0 if p.x0 is None else p.x0
-        chain_kernel(r, p.filter, sos, zi, x0, p.x0 is not None, p.threshold, p.dath, p.dath_samples,
-                     p.dath_floor, p.n, p.p0, _clip(p.p0, p.lo, p.hi), p.kp, p.ki, p.reset_after,
-                     p.lo, p.hi, *out)
-    x, events, acc, theta, counts, commands = out
-    return ChainResult(p, x, events, acc, theta, counts, commands)
+        P = pack_params(p)
+        chain_kernel(r, init_state(P), P, *out)
+    x, events, acc, theta, counts, commands, sample_commands = out
+    return ChainResult(p, x, events, acc, theta, counts, commands, sample_commands)
