@@ -243,19 +243,21 @@ def _plot_fractions(fractions: Sequence[Mapping[str, Any]], path: Path) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(7.5, 4.2), constrained_layout=True)
+    fig, ax = plt.subplots(figsize=(8.5, 4.2), constrained_layout=True)
     n = [r["claim"] for r in fractions]
     f = np.array([r["holds_fraction"] for r in fractions], dtype=float) * 100
     lo = np.array([r["holds_ci_low"] for r in fractions], dtype=float) * 100
     hi = np.array([r["holds_ci_high"] for r in fractions], dtype=float) * 100
     nt = np.array([r["not_testable_fraction"] for r in fractions], dtype=float) * 100
-    ax.bar(n, f, color="#2ca02c", label="holds")
-    ax.bar(n, nt, bottom=100 - nt, color="0.8", label="not testable")
+    fails = np.array([r["fails"] / r["plants"] if r["plants"] else np.nan for r in fractions]) * 100
+    ax.bar(n, f, color=_COLORS[HOLDS], label="holds")
+    ax.bar(n, fails, bottom=f, color=_COLORS[FAILS], alpha=0.35, label="fails")
+    ax.bar(n, nt, bottom=100 - nt, color=_COLORS[NOT_TESTABLE], label="not testable")
     ax.errorbar(n, f, yerr=[np.maximum(np.nan_to_num(f - lo), 0), np.maximum(np.nan_to_num(hi - f), 0)], fmt="none", ecolor="black",
                 capsize=3, label="95 % Wilson interval")
     ax.set(xticks=n, xlabel="claim (SPEC 4.1)", ylabel="% of plants", ylim=(0, 100),
            title="Where the paper's claims hold across plausible plants")
-    ax.legend(fontsize=8, loc="upper right")
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.0, 1.0))
     fig.savefig(path, dpi=100)
     plt.close(fig)
     return path

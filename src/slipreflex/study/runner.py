@@ -368,34 +368,26 @@ class StudyRun:
 
 
 class _Progress:
-    """Plants and trials done: tqdm bars on a terminal, a few plain lines otherwise."""
+    """Plants and trials done: two bars on a terminal, a line per tenth of the plants in a log."""
 
     def __init__(self, plants: int, trials: int, done: int, enabled: bool):
-        self.enabled, self.plants, self.trials, self.done = enabled, plants, trials, done
-        self.tty = enabled and sys.stderr.isatty()
-        self.bars = []
-        self.next_line = 0
-        if self.tty:
-            from tqdm import tqdm
+        from ..progress import Progress
 
-            self.bars = [tqdm(total=plants, initial=done, desc="plants", unit="plant", file=sys.stderr,
-                              position=0, dynamic_ncols=True),
-                         tqdm(total=plants * trials, initial=done * trials, desc="trials", unit="trial",
-                              file=sys.stderr, position=1, dynamic_ncols=True)]
+        self.trials = trials
+        self.plants = Progress(plants, desc="plants", unit="plant", enabled=enabled)
+        tty = enabled and sys.stderr.isatty()
+        self.trial_bar = Progress(plants * trials, desc="trials", unit="trial", enabled=tty)
+        if done:
+            self.plants.update(done)
+            self.trial_bar.update(done * trials)
 
     def update(self, trials: int) -> None:
-        self.done += 1
-        if self.bars:
-            self.bars[0].update()
-            self.bars[1].update(self.trials)
-        elif self.enabled and (self.done >= self.next_line or self.done == self.plants):
-            print(f"study: {self.done}/{self.plants} plants, {self.done * self.trials} trials",
-                  file=sys.stderr, flush=True)
-            self.next_line = self.done + max(1, self.plants // 10)
+        self.plants.update()
+        self.trial_bar.update(self.trials)
 
     def close(self) -> None:
-        for b in self.bars:
-            b.close()
+        self.plants.close()
+        self.trial_bar.close()
 
 
 def _check_out(out: Path, config: StudyConfig) -> None:

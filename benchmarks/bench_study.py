@@ -1,0 +1,68 @@
+"""Throughput of ``slipreflex study``: trials per second with 1 and 2 workers, and core-hours, printed.
+
+Runs a small study (``--plants`` plants of the default per-plant grid:
+``--trials`` x 3 bottles x 2 experiments x 4 methods, calibration and scan
+included) in this process (serial), then on a Dask LocalCluster of 1 and of
+2 worker processes, each into a fresh temporary directory. Prints wall time,
+plants and trials per second, core-seconds per plant, and what the default
+study and a large one (``--large`` plants) cost in core-hours at the measured
+serial rate.
+
+Usage::
+
+    python benchmarks/bench_study.py [--plants N] [--trials T] [--workers 1,2] [--large N]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import tempfile
+import time
+
+
+def _run(config, workers):
+    from slipreflex.study import run_study
+
+    with tempfile.TemporaryDirectory() as out:
+        t0 = time.perf_counter()
+        run = run_study(config, out, workers=workers, progress=False)
+        return time.perf_counter() - t0, run
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--plants", type=int, default=4, help="plants per measured run (default 4)")
+    ap.add_argument("--trials", type=int, default=None, help="trials per cell (default: the study's)")
+    ap.add_argument("--workers", default="1,2", help="LocalCluster sizes to measure (default 1,2)")
+    ap.add_argument("--large", type=int, default=4096, help="plants of the 'large study' estimate")
+    args = ap.parse_args()
+
+    from slipreflex.study import DEFAULT_PLANTS, DEFAULT_TRIALS, StudyConfig
+
+    trials = args.trials or DEFAULT_TRIALS
+    config = StudyConfig(plants=args.plants, trials=trials)
+    per_plant = config.trials_per_plant
+    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+          f"python {platform.python_version()}; {args.plants} plants x {per_plant} trials")
+    _run(StudyConfig(plants=1, trials=1, bottles=("TX",), experiments=("drop",)), 0)   # numba cache, imports
+    wall, run = _run(config, 0)
+    core_s = wall / args.plants
+    print(f"serial: {wall:.1f} s, {args.plants / wall:.3f} plants/s, {args.plants * per_plant / wall:.1f} "
+          f"trials/s, {core_s:.2f} core-s per plant")
+    for w in (int(x) for x in args.workers.split(",") if x.strip()):
+        wall_w, _ = _run(config, w)
+        print(f"LocalCluster({w}): {wall_w:.1f} s (cluster start included), {args.plants / wall_w:.3f} plants/s, "
+              f"{args.plants * per_plant / wall_w:.1f} trials/s")
+    default = StudyConfig(plants=DEFAULT_PLANTS, trials=DEFAULT_TRIALS)
+    d_core_s = core_s * default.trials_per_plant / per_plant
+    print(f"default study ({DEFAULT_PLANTS} plants x {default.trials_per_plant} trials): "
+          f"{DEFAULT_PLANTS * d_core_s / 3600:.3f} core-hours, {DEFAULT_PLANTS * d_core_s / 2 / 60:.1f} min "
+          "on 2 cores (plus cluster start)")
+    print(f"large study ({args.large} plants x {per_plant} trials): {args.large * core_s / 3600:.2f} "
+          f"core-hours, {args.large * core_s / 64 / 60:.1f} min on 64 cores")
+
+
+if __name__ == "__main__":
+    main()
