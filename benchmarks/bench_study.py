@@ -26,9 +26,9 @@ def _run(config, workers):
     from slipreflex.study import run_study
 
     with tempfile.TemporaryDirectory() as out:
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         run = run_study(config, out, workers=workers, progress=False)
-        return time.perf_counter() - t0, run
+        return time.perf_counter() - t0, time.process_time() - c0
 
 
 def main() -> None:
@@ -47,12 +47,13 @@ def main() -> None:
     print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
           f"python {platform.python_version()}; {args.plants} plants x {per_plant} trials")
     _run(StudyConfig(plants=1, trials=1, bottles=("TX",), experiments=("drop",)), 0)   # numba cache, imports
-    wall, run = _run(config, 0)
-    core_s = wall / args.plants
-    print(f"serial: {wall:.1f} s, {args.plants / wall:.3f} plants/s, {args.plants * per_plant / wall:.1f} "
-          f"trials/s, {core_s:.2f} core-s per plant")
+    wall, cpu = _run(config, 0)
+    core_s = cpu / args.plants   # CPU time: the cost on an idle core, whatever else the machine runs
+    print(f"serial: {wall:.1f} s wall, {cpu:.1f} s CPU, {args.plants / wall:.3f} plants/s, "
+          f"{args.plants * per_plant / wall:.1f} trials/s; {core_s:.2f} CPU-s per plant, "
+          f"{cpu / (args.plants * per_plant):.3f} CPU-s per trial (calibration and scan included)")
     for w in (int(x) for x in args.workers.split(",") if x.strip()):
-        wall_w, _ = _run(config, w)
+        wall_w, _ = _run(config, w)   # the workers' CPU is not this process's
         print(f"LocalCluster({w}): {wall_w:.1f} s (cluster start included), {args.plants / wall_w:.3f} plants/s, "
               f"{args.plants * per_plant / wall_w:.1f} trials/s")
     default = StudyConfig(plants=DEFAULT_PLANTS, trials=DEFAULT_TRIALS)

@@ -475,12 +475,13 @@ def judge_run(rows: Sequence[Any], *, seed: int = 0, plant: Any = None) -> list[
     return judge(rows, scan(seed=seed, sensor=sensor).analyse())
 
 
-def claims_section(results: Sequence[ClaimResult], items: Sequence[Contradiction] | None = None) -> list[str]:
+def claims_section(results: Sequence[ClaimResult], items: Sequence[Contradiction] | None = None, *,
+                   plant: Any = None) -> list[str]:
     """The report.md sections: the claims judged, the tolerances, the paper's contradictions.
 
     Examples
     --------
-    >>> claims_section(judge([]), [])[0]
+    >>> claims_section(judge([]), [])[0]   # items None: computed, with the plant's open-loop drop
     "## The paper's claims, judged on this run"
     """
     lines = ["## The paper's claims, judged on this run", "",
@@ -489,7 +490,7 @@ def claims_section(results: Sequence[ClaimResult], items: Sequence[Contradiction
              "here* (the run lacks the cells or values it needs).", "", claims_markdown(results), "",
              "Tolerances (one definition each): " + "; ".join(f"{k}: {v}" for k, v in TOLERANCES.items())
              + ".", ""]
-    items = contradictions() if items is None else items
+    items = contradictions(plant=plant) if items is None else items
     if items:
         lines += ["## Where the paper contradicts itself", "",
                   "Computed from the paper's own numbers; reported as inconsistent, not chased.", "",
@@ -605,12 +606,14 @@ def drop_slipout_capacity_n(bottle_mass_kg: float, drop_mass_kg: float, height_m
 STATIC_OVER_KINETIC_MAX: float = 2.0
 
 
-def _capacity_contradiction(first_slip_ml: float = 200.0) -> Contradiction:
+def _capacity_contradiction(first_slip_ml: float = 200.0, plant: Any = None, simulate: bool = True
+                            ) -> Contradiction:
     from ..sim import BOTTLES, PAPER_DROP, PAPER_POUR
 
+    bottles = BOTTLES if plant is None else plant.bottles
     parts, worst = [], 0.0
     for name in BOTTLE_ORDER:
-        b = BOTTLES[name]
+        b = bottles[name]
         pour_c = first_slip_capacity_n(b.mass_kg, first_slip_ml, rate_l_min=PAPER_POUR.rate_l_min,
                                        fall_height_m=PAPER_POUR.fall_height_m)
         drop_c = drop_slipout_capacity_n(b.mass_kg, PAPER_DROP.mass_kg, PAPER_DROP.height_m, b.grip_travel_m,
@@ -618,12 +621,19 @@ def _capacity_contradiction(first_slip_ml: float = 200.0) -> Contradiction:
         worst = max(worst, drop_c / pour_c)
         parts.append(f"{name}: drop slip-out needs C <= {drop_c:.2f} N, first pour slip at "
                      f"{first_slip_ml:g} ml implies C = {pour_c:.2f} N")
-    return Contradiction(
-        "static capacity: drop slip-outs vs the first pour slip",
-        "; ".join(parts) + f" (C <= r[(M+m)g + mgh/d] with r = {STATIC_OVER_KINETIC_MAX:g} static/sliding, "
-        f"no impact loss; C = (M + rho V)g + rho Q sqrt(2 g h_jet)). The same 0.8 N grasp cannot be "
-        "both: a 10 g drop cannot end in complete slippage of a grasp that holds 200 ml.",
-        worst < 1.0)
+    text = ("; ".join(parts) + f" (C <= r[(M+m)g + mgh/d] with r = {STATIC_OVER_KINETIC_MAX:g} static/sliding, "
+            "no impact loss; C = (M + rho V)g + rho Q sqrt(2 g h_jet)).")
+    if simulate:
+        from ..sim.calibration import drop_fall_capacity
+
+        kw = None if plant is None else plant.rig_kwargs()
+        sim = drop_fall_capacity(bottles["TR"], rig_kwargs=kw, iterations=8)
+        text += (f" The simulated plant agrees (open loop, sim.calibration.drop_fall_capacity): a 10 g drop "
+                 f"ends in complete slippage of TR only below a capacity of {sim['capacity_g']:.0f} g, while "
+                 f"its pour-calibrated grasp holds {sim['bottle_capacity_g']:.0f} g.")
+    return Contradiction("static capacity: drop slip-outs vs the first pour slip",
+                         text + " The same 0.8 N grasp cannot be both: a 10 g drop cannot end in complete "
+                         "slippage of a grasp that holds 200 ml.", worst < 1.0)
 
 
 def _identical_totals() -> Contradiction:
@@ -676,13 +686,19 @@ def _own_table() -> list[Contradiction]:
     return out
 
 
-def contradictions(first_slip_ml: float = 200.0) -> list[Contradiction]:
+def contradictions(first_slip_ml: float = 200.0, *, plant: Any = None, simulate: bool = True
+                   ) -> list[Contradiction]:
     """Where the paper's numbers contradict each other (SPEC 4.1), computed.
 
     Parameters
     ----------
     first_slip_ml : float
         Volume at the paper's first pour slip (its Fig. 15: about 200 ml).
+    plant : slipreflex.sim.uncertain.Plant, optional
+        The simulated plant (default: the package's) whose open-loop drop is simulated.
+    simulate : bool
+        Also find, on the simulated plant, the largest capacity at which the
+        drop still ends in complete slippage (about a second).
 
     Returns
     -------
@@ -690,10 +706,10 @@ def contradictions(first_slip_ml: float = 200.0) -> list[Contradiction]:
 
     Examples
     --------
-    >>> [c.inconsistent for c in contradictions()][:3]
+    >>> [c.inconsistent for c in contradictions(simulate=False)][:3]
     [True, True, True]
     """
-    return [_capacity_contradiction(first_slip_ml), _identical_totals(), _window_sd(), *_own_table()]
+    return [_capacity_contradiction(first_slip_ml, plant, simulate), _identical_totals(), _window_sd(), *_own_table()]
 
 
 def contradictions_markdown(items: Sequence[Contradiction]) -> str:
