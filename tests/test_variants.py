@@ -314,3 +314,56 @@ def test_window_mpi_without_reset_matches_oracle_and_stream():
     assert sr.mpi(v, p0=30.0, reset_after=None).tolist() == expected
     c = sr.MPIController(p0=30.0, reset_after=None)
     assert [c.step(x) for x in v] == expected
+
+
+# --- the authors' hand rule in the simulated closed loop -----------------------------------------
+
+def test_closed_loop_sends_the_middle_finger_its_offset():
+    from slipreflex.hardware import TRIPOD, Finger, HandCommand
+    from slipreflex.sim.loop import _offset_command
+
+    sent = []
+    record = lambda kind, fingers, value, at=None: sent.append((tuple(fingers), value))  # noqa: E731
+    reflex = SlipReflex.from_preset("authors-gui")
+    send = _offset_command(record, TRIPOD, reflex.finger_offsets)
+    send(HandCommand.POSITION, TRIPOD, 150.0, at=0.0)
+    send(HandCommand.POSITION, TRIPOD, 495.0, at=0.1)
+    assert sent == [((Finger.THUMB, Finger.INDEX), 150.0), ((Finger.MIDDLE,), 170.0),
+                    ((Finger.THUMB, Finger.INDEX), 495.0), ((Finger.MIDDLE,), 500.0)]
+    assert _offset_command(record, TRIPOD, SlipReflex(dath=True).finger_offsets) is record
+
+
+def test_registered_variants_build_their_chains():
+    from slipreflex import methods
+
+    assert {"authors-gui", "dath-event", "dath-floor"} <= set(methods.names())
+    assert methods.names(paper=True) == ("dath", "fixed", "nmsd", "swt")
+    gui = methods.make("authors-gui", p0=150.0)
+    assert gui.name == "authors-gui" and gui.params == ReflexParams.preset("authors-gui", p0=150.0,
+                                                                           fs=hw.DAQ_FS)
+    assert methods.make("dath-event", p0=10.0).params.mpi_mode == "event"
+    floor = methods.make("dath-floor")
+    assert floor.name == "dath-floor" and floor.params.dath_floor == hw.ADC_LSB
+
+
+def test_detect_preset_authors_gui_runs_the_preset(tmp_path, capsys):
+    from pathlib import Path
+
+    from slipreflex.cli import main
+    from slipreflex.csvfiles import read_slip_csv
+
+    example = Path(__file__).resolve().parents[1] / "examples" / "slip_example.csv"
+    assert main(["detect", str(example), "--preset", "authors-gui", "--out", str(tmp_path / "g")]) == 0
+    out = capsys.readouterr().out
+    t, raw = read_slip_csv(example)
+    fs = 1 / np.median(np.diff(t))
+    x, ys, v, cmds = oracle.authors_gui(raw.tolist(), fs)
+    windows = np.genfromtxt(tmp_path / "g.windows.csv", delimiter=",", names=True)
+    assert windows["command"].tolist() == cmds and windows["v"].tolist() == v
+    assert "preset authors-gui: acc_reset, filter_kind, reset_after, slip_finger_offset" in out
+    assert f"p0 {125:g}" in out
+    assert main(["detect", str(example), "--preset", "authors-gui", "--p0", "200", "--out",
+                 str(tmp_path / "h")]) == 0
+    assert np.genfromtxt(tmp_path / "h.windows.csv", delimiter=",", names=True)["command"][0] >= 200
+    assert main(["detect", str(example), "--preset", "authors-gui", "--board"]) == 2
+    assert "--preset and --board" in capsys.readouterr().err

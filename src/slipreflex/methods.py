@@ -77,7 +77,7 @@ from .validation import choice, flag, positive, text
 
 __all__ = ["MethodSpec", "MethodContext", "Detections", "register", "unregister", "get", "names",
            "make", "label", "canonical", "chain_method", "calibrated", "load_plugins", "ENTRY_POINT_GROUP",
-           "FIXED", "DATH", "NMSD", "SWT"]
+           "FIXED", "DATH", "NMSD", "SWT", "AUTHORS_GUI", "DATH_EVENT", "DATH_FLOOR"]
 
 #: Names of the paper's four methods (the one place they are spelled).
 FIXED, DATH, NMSD, SWT = "fixed", "dath", "nmsd", "swt"
@@ -433,11 +433,13 @@ def make(name: str, *, p0: float = 0.0, context: MethodContext | None = None, **
 # --- the built-in methods -------------------------------------------------------------------
 
 
-def _build_chain(chain_params: Mapping[str, Any], p0: float, context: MethodContext,
+def _build_chain(chain_params: Mapping[str, Any], name: str, p0: float, context: MethodContext,
                  **params: Any) -> Reflex:
     from .chain import SlipReflex
 
-    return SlipReflex(**{"fs": hw.DAQ_FS, **chain_params, **params, "p0": p0})
+    reflex = SlipReflex(**{"fs": hw.DAQ_FS, **chain_params, **params, "p0": p0})
+    reflex.name = name
+    return reflex
 
 
 def _chain_detections(reflex: Any, volts: np.ndarray) -> Detections:
@@ -473,7 +475,7 @@ def chain_method(name: str, label: str, *, color: str = "0.5", paper: bool = Fal
     """
     fs = chain_params.get("fs", hw.DAQ_FS)
     return MethodSpec(name=name, label=label, input_kind="slip", fs=fs,
-                      build=functools.partial(_build_chain, dict(chain_params)),
+                      build=functools.partial(_build_chain, dict(chain_params), name),
                       detections=_chain_detections, color=color, paper=paper)
 
 
@@ -569,3 +571,24 @@ register(MethodSpec(name="dath-board", label="DATH (board)", input_kind="slip", 
 register(MethodSpec(name="fixed-board", label="fixed (board)", input_kind="slip", fs=hw.DAQ_FS,
                     build=functools.partial(_build_board, False), detections=_board_detections,
                     color="#bcbd22"))
+
+
+# Variants of the paper's chain (docs/method.md, "Variants"), beside the paper's methods in
+# `reproduce --methods fixed,dath,nmsd,swt,authors-gui,dath-event`; not run by default.
+AUTHORS_GUI, DATH_EVENT, DATH_FLOOR = "authors-gui", "dath-event", "dath-floor"
+
+
+def _build_preset(preset: str, p0: float, context: MethodContext, **params: Any) -> Reflex:
+    from .chain import SlipReflex
+
+    return SlipReflex.from_preset(preset, fs=params.pop("fs", hw.DAQ_FS), **{**params, "p0": p0})
+
+
+register(MethodSpec(name=AUTHORS_GUI, label="authors' GUI", input_kind="slip", fs=hw.DAQ_FS,
+                    build=functools.partial(_build_preset, AUTHORS_GUI), detections=_chain_detections,
+                    color="#9467bd"))
+register(MethodSpec(name=DATH_EVENT, label="DATH, event MPI", input_kind="slip", fs=hw.DAQ_FS,
+                    build=functools.partial(_build_preset, DATH_EVENT), detections=_chain_detections,
+                    color="#8c564b"))
+# DATH whose threshold never drops below one ADC step (docs/method.md, "A DATH floor")
+register(chain_method(DATH_FLOOR, "DATH, floor 1 LSB", dath=True, dath_floor=hw.ADC_LSB, color="#e377c2"))

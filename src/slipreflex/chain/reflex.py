@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..hardware import DAQ_FS
+from ..hardware import DAQ_FS, SLIP_FINGER, Finger
 from . import _layout as _k
 from ._checks import as_samples
 from .params import ReflexParams
@@ -117,7 +117,7 @@ class SlipReflex:
         --------
         >>> r = SlipReflex.from_preset("authors-gui", fs=333.0, p0=150.0)
         >>> r.name, r.params.n, r.finger_offsets
-        ('authors-gui', 9, {'middle': 20.0})
+        ('authors-gui', 9, {<Finger.MIDDLE: 2>: 20.0})
         """
         params = ReflexParams.preset(name, fs, **overrides)
         reflex = cls(params)
@@ -131,10 +131,11 @@ class SlipReflex:
         return self.params.fs
 
     @property
-    def finger_offsets(self) -> dict[str, float]:
-        """Offsets a hand adds to the command per finger (the authors' middle + 20), or {}."""
+    def finger_offsets(self) -> dict[Finger, float]:
+        """What a hand adds to the command per finger: {} for the paper, the middle's + 20
+        for the authors' rig code (``slip_finger_offset``; the sim's closed loop applies it)."""
         off = self.params.slip_finger_offset
-        return {"middle": off} if off else {}
+        return {SLIP_FINGER: off} if off else {}
 
     @property
     def command(self) -> float:

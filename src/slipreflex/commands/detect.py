@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ..chain import ReflexParams, run_chain
+from ..chain.params import PRESETS
 from ..csvfiles import Recording, irregular_steps, read_recording, write_columns
 from ..errors import DataError, ParameterError
 from ..paths import output_dir
@@ -43,6 +44,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("recording", type=Path, help="CSV with columns t (s) and x (V), or one column of volts")
     p.add_argument("--method", choices=("fixed", "dath"), default=None,
                    help="fixed threshold or Dynamic Adaptive Threshold (default: the file's, else dath)")
+    p.add_argument("--preset", choices=sorted(PRESETS), default=None,
+                   help="start from a named chain instead of the file's or the paper's: authors-gui is "
+                        "the authors' rig code, dath-event DATH with the event-driven MPI (docs/method.md); "
+                        "other options still override it")
     p.add_argument("--fs", type=float, default=None,
                    help="sampling rate in Hz (required for a single-column file; with a t column it must agree)")
     p.add_argument("--cutoff", type=float, default=None, help=f"low-pass cutoff, Hz ({d.cutoff:g})")
@@ -99,15 +104,17 @@ def _sampling_rate(rec: Recording, given: float | None, base: ReflexParams | Non
 def chain_params(args: argparse.Namespace, rec: Recording) -> ReflexParams:
     """The chain to run: explicit options, else the file's header, else the defaults."""
     base = _file_params(rec)
-    values = (base or _DEFAULTS).to_dict()
+    fs = _sampling_rate(rec, args.fs, base)
+    preset = getattr(args, "preset", None)
+    values = (ReflexParams.preset(preset, fs=fs) if preset else base or _DEFAULTS).to_dict()
     values.update({k: getattr(args, k) for k in _FIELDS if getattr(args, k) is not None})
     if args.method is not None:
         values["dath"] = args.method == "dath"
-    elif base is None:
+    elif base is None and not preset:
         values["dath"] = True
     if args.no_filter:
         values["filter"] = False
-    values["fs"] = _sampling_rate(rec, args.fs, base)
+    values["fs"] = fs
     return ReflexParams.from_dict(values)
 
 
@@ -140,6 +147,8 @@ def _saturation(res, t: np.ndarray, params: ReflexParams) -> str | None:
 def run(args: argparse.Namespace) -> int:
     """Run the chain and write the two CSVs; print a summary."""
     if args.board:
+        if args.preset:
+            raise ParameterError("--preset and --board: the board runs the paper's chain only")
         return _run_board(args)
     rec = read_recording(args.recording, fs=args.fs)
     params = chain_params(args, rec)
@@ -152,6 +161,8 @@ def run(args: argparse.Namespace) -> int:
     write_columns(windows_path, res.window_columns(rec.t))
     final = f"{res.commands[-1]:g}" if res.commands.size else "none (shorter than one window)"
     source = " (chain and p0 from the file's header)" if "reflex_params" in rec.preamble else ""
+    if args.preset:
+        source = f" (preset {args.preset}: {', '.join(params.variants) or 'the paper chain'})"
     print(f"{args.recording}: {rec.x.size} samples at {params.fs:.2f} Hz, method {params.name}{source}")
     print(f"  windows: {_ms(params.n, params.fs)}" + (f"; DATH: {_ms(params.dath_samples, params.fs)}"
                                                      if params.dath else ""))

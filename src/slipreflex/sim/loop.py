@@ -273,6 +273,25 @@ def simulate_open_loop(rig: Rig, duration: float, *, tactile_fs: float | None = 
     return _trace(rig, t0, "open-loop", [], [], tac_t, tac)
 
 
+def _offset_command(command, fingers: tuple[Finger, ...], offsets):
+    """``command`` itself, or one that sends command + offset to the fingers a reflex offsets.
+
+    A reflex may declare ``finger_offsets`` ({finger: units}, e.g. the authors' rig code
+    sends the middle finger, the sensor's, 20 units further than the others).
+    """
+    offsets = {Finger(f): float(v) for f, v in (offsets or {}).items() if Finger(f) in fingers}
+    if not offsets:
+        return command
+    plain = tuple(f for f in fingers if f not in offsets)
+
+    def send(kind, _fingers, value, at):
+        if plain:
+            command(kind, plain, value, at=at)
+        for f, off in offsets.items():
+            command(kind, (f,), min(max(value + off, hw.FINGER_MIN), hw.FINGER_MAX), at=at)
+    return send
+
+
 def run_closed_loop(rig: Rig, reflex: Reflex, duration: float, *,
                     fingers: Sequence[Finger] = hw.TRIPOD, tactile_fs: float | None = None) -> SimTrace:
     """Run ``reflex`` on ``rig`` for ``duration`` seconds from the rig's current time.
@@ -330,7 +349,7 @@ def run_closed_loop(rig: Rig, reflex: Reflex, duration: float, *,
     try:
         if kind == "slip":
             step = reflex.step
-            command = rig.hand.command
+            command = _offset_command(rig.hand.command, fingers, getattr(reflex, "finger_offsets", None))
             dt = rig.physics.dt
             period = hw.DAQ_PERIOD_S
             C = rig._C
