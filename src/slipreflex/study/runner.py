@@ -61,6 +61,14 @@ _META_KEY = b"slipreflex.study"
 CALIBRATION_SEEDS: tuple[int, ...] = (0,)
 
 
+def _grid_defaults() -> tuple:
+    """The reproduce defaults: every bottle, the paper's methods, both experiments, the master seed."""
+    from .. import methods
+    from ..experiments import BOTTLE_NAMES, DEFAULT_SEED, EXPERIMENTS
+
+    return BOTTLE_NAMES, methods.names(paper=True), EXPERIMENTS, DEFAULT_SEED
+
+
 @dataclass(frozen=True)
 class StudyConfig:
     """Everything that decides a study's rows (not where or how fast it runs).
@@ -95,10 +103,10 @@ class StudyConfig:
     plants: int = DEFAULT_PLANTS
     design: str = "sobol"
     trials: int = DEFAULT_TRIALS
-    bottles: tuple[str, ...] = ("TR", "DK", "TX")
-    methods: tuple[str, ...] = ("dath", "fixed", "nmsd", "swt")
-    experiments: tuple[str, ...] = ("drop", "pour")
-    seed: int = 20191215
+    bottles: tuple[str, ...] = field(default_factory=lambda: _grid_defaults()[0])
+    methods: tuple[str, ...] = field(default_factory=lambda: _grid_defaults()[1])
+    experiments: tuple[str, ...] = field(default_factory=lambda: _grid_defaults()[2])
+    seed: int = field(default_factory=lambda: _grid_defaults()[3])
     ranges: str | None = None
     calibrate: bool = True
     scan: bool = True
@@ -416,7 +424,7 @@ def _client(workers: int | None, scheduler: str | None):
     if scheduler:
         try:
             return Client(scheduler, timeout="20s"), None, scheduler
-        except OSError as err:
+        except (OSError, ValueError) as err:   # unreachable, timed out, or not an address
             raise ParameterError(f"--scheduler {scheduler}: cannot connect: {err}") from None
     n = int(workers or os.cpu_count() or 1)
     cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
