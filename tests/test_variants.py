@@ -336,12 +336,15 @@ def test_closed_loop_sends_the_middle_finger_its_offset():
 def test_registered_variants_build_their_chains():
     from slipreflex import methods
 
-    assert {"authors-gui", "dath-event", "dath-floor"} <= set(methods.names())
+    assert {"authors-gui", "authors-chain", "dath-event", "dath-floor"} <= set(methods.names())
     assert methods.names(paper=True) == ("dath", "fixed", "nmsd", "swt")
     gui = methods.make("authors-gui", p0=150.0)
     assert gui.name == "authors-gui" and gui.params == ReflexParams.preset("authors-gui", p0=150.0,
                                                                            fs=hw.DAQ_FS)
     assert methods.make("dath-event", p0=10.0).params.mpi_mode == "event"
+    chain = methods.make("authors-chain", p0=150.0)
+    assert chain.name == "authors-chain" and chain.finger_offsets == {}
+    assert chain.params == ReflexParams.preset("authors-gui", p0=150.0, slip_finger_offset=0.0)
     floor = methods.make("dath-floor")
     assert floor.name == "dath-floor" and floor.params.dath_floor == hw.ADC_LSB
 

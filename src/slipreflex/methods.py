@@ -77,7 +77,8 @@ from .validation import choice, flag, positive, text
 
 __all__ = ["MethodSpec", "MethodContext", "Detections", "register", "unregister", "get", "names",
            "make", "label", "canonical", "chain_method", "calibrated", "load_plugins", "ENTRY_POINT_GROUP",
-           "FIXED", "DATH", "NMSD", "SWT", "AUTHORS_GUI", "DATH_EVENT", "DATH_FLOOR"]
+           "FIXED", "DATH", "NMSD", "SWT", "AUTHORS_GUI", "AUTHORS_CHAIN", "DATH_EVENT",
+           "DATH_FLOOR"]
 
 #: Names of the paper's four methods (the one place they are spelled).
 FIXED, DATH, NMSD, SWT = "fixed", "dath", "nmsd", "swt"
@@ -575,20 +576,26 @@ register(MethodSpec(name="fixed-board", label="fixed (board)", input_kind="slip"
 
 # Variants of the paper's chain (docs/method.md, "Variants"), beside the paper's methods in
 # `reproduce --methods fixed,dath,nmsd,swt,authors-gui,dath-event`; not run by default.
-AUTHORS_GUI, DATH_EVENT, DATH_FLOOR = "authors-gui", "dath-event", "dath-floor"
+AUTHORS_GUI, AUTHORS_CHAIN, DATH_EVENT, DATH_FLOOR = "authors-gui", "authors-chain", "dath-event", "dath-floor"
 
 
-def _build_preset(preset: str, p0: float, context: MethodContext, **params: Any) -> Reflex:
+def _build_preset(preset: str, name: str, p0: float, context: MethodContext, **params: Any) -> Reflex:
     from .chain import SlipReflex
 
-    return SlipReflex.from_preset(preset, fs=params.pop("fs", hw.DAQ_FS), **{**params, "p0": p0})
+    reflex = SlipReflex.from_preset(preset, fs=params.pop("fs", hw.DAQ_FS), **{**params, "p0": p0})
+    reflex.name = name
+    return reflex
 
 
 register(MethodSpec(name=AUTHORS_GUI, label="authors' GUI", input_kind="slip", fs=hw.DAQ_FS,
-                    build=functools.partial(_build_preset, AUTHORS_GUI), detections=_chain_detections,
-                    color="#9467bd"))
+                    build=functools.partial(_build_preset, AUTHORS_GUI, AUTHORS_GUI),
+                    detections=_chain_detections, color="#9467bd"))
+# the authors' chain with the paper's hand rule (every finger at the command): what the +20 does
+register(MethodSpec(name=AUTHORS_CHAIN, label="authors' chain, no +20", input_kind="slip", fs=hw.DAQ_FS,
+                    build=functools.partial(_build_preset, AUTHORS_GUI, AUTHORS_CHAIN, slip_finger_offset=0.0),
+                    detections=_chain_detections, color="#7f7f7f"))
 register(MethodSpec(name=DATH_EVENT, label="DATH, event MPI", input_kind="slip", fs=hw.DAQ_FS,
-                    build=functools.partial(_build_preset, DATH_EVENT), detections=_chain_detections,
-                    color="#8c564b"))
+                    build=functools.partial(_build_preset, DATH_EVENT, DATH_EVENT),
+                    detections=_chain_detections, color="#8c564b"))
 # DATH whose threshold never drops below one ADC step (docs/method.md, "A DATH floor")
 register(chain_method(DATH_FLOOR, "DATH, floor 1 LSB", dath=True, dath_floor=hw.ADC_LSB, color="#e377c2"))
