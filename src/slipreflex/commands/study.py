@@ -103,7 +103,8 @@ def run(args: argparse.Namespace) -> int:
         nt = f"{100 * r['not_testable_fraction']:.0f}%" if r["plants"] else "-"
         print(f"{r['claim']:>5}  {frac:>5} ({ci:>9})   {nt:>12}  {r['text']}")
     errors = sum(1 for p in plants if p.get("error"))
+    files = "results.parquet, results.csv, plants.csv, claims.csv, sensitivity.csv, study.md"
+    files += "" if args.no_figures else ", figures/"
     print(f"{len(result.parts)} plants ({len(result.computed)} computed now, {errors} with errors) in "
-          f"{result.wall_s:.1f} s on {result.workers}; wrote {paths['study_md'].parent}/"
-          "{results.parquet, results.csv, plants.csv, claims.csv, sensitivity.csv, study.md, figures/}")
+          f"{result.wall_s:.1f} s on {result.workers}; wrote {paths['study_md'].parent}/{{{files}}}")
     return 0

@@ -229,7 +229,13 @@ def _plot_claim(plants, claim: Any, xy: list[str], table: Mapping, path: Path) -
         c = table[name]
         getattr(ax, f"set_{axis}label")(f"{name} ({c.unit})")
         if c.distribution == "loguniform":
+            from matplotlib import ticker
+
             getattr(ax, f"set_{axis}scale")("log")
+            a = getattr(ax, f"{axis}axis")
+            a.set_major_locator(ticker.LogLocator(subs=(1.0, 2.0, 5.0)))
+            a.set_major_formatter(ticker.FormatStrFormatter("%g"))
+            a.set_minor_formatter(ticker.NullFormatter())
     ax.set_title(f"claim {claim.number}: {claim.text}", fontsize=8, wrap=True)
     ax.legend(fontsize=7, loc="best")
     fig.savefig(path, dpi=100)
