@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import os
 import platform
+import resource
 import tempfile
 import time
 
@@ -26,7 +27,7 @@ def main() -> None:
     ap.add_argument("--no-warmup", action="store_true", help="measure the first (possibly cold) run too")
     args = ap.parse_args()
 
-    from slipreflex.experiments import ReproduceConfig, run_reproduce, write_outputs
+    from slipreflex.experiments import TRIAL_SIM_SPEED, ReproduceConfig, run_reproduce, write_outputs
 
     config = ReproduceConfig(trials=args.trials)
     jobs = args.jobs or os.cpu_count() or 1
@@ -37,15 +38,26 @@ def main() -> None:
         run_reproduce(ReproduceConfig(trials=1, experiments=("drop",)), jobs=jobs, progress=False,
                       plots=False)
         print(f"warm-up (numba cache, worker start): {time.perf_counter() - t0:.1f} s")
+    sim_s = sum(config.duration(c.experiment) for c in config.cells())
     for i in range(args.repeat):
         with tempfile.TemporaryDirectory() as out:
+            cpu0 = _cpu_s()
             t0 = time.perf_counter()
             result = run_reproduce(config, jobs=jobs, progress=False)
             t_run = time.perf_counter() - t0
+            cpu = _cpu_s() - cpu0
             write_outputs(result, out)
             t_all = time.perf_counter() - t0
         print(f"run {i + 1}: trials + analysis {t_run:.1f} s (calibration {result.calibration_wall_s:.1f} s), "
               f"with CSV/figures/report {t_all:.1f} s wall")
+        print(f"  {sim_s:.0f} simulated s in {cpu:.1f} CPU s (all processes): {sim_s / cpu:.0f} simulated s "
+              f"per CPU s (the run-time estimate assumes TRIAL_SIM_SPEED = {TRIAL_SIM_SPEED:g} per worker)")
+
+
+def _cpu_s() -> float:
+    """User + system CPU seconds of this process and its finished children (the workers)."""
+    own, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
 
 
 if __name__ == "__main__":

@@ -5,6 +5,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from stk500_standin import Bootloader, read_hex  # noqa: E402
 
@@ -140,3 +142,114 @@ def test_progress_on_a_terminal_is_a_live_bar():
     with Progress(10, desc="trials", file=term, tty=True) as p:
         p.update(10)
     assert "\r" in term.getvalue() and "10/10" in term.getvalue()
+
+
+def _reproduce_then_signal(tmp_path, send):
+    """Start a reproduction, wait for its first progress line, signal it; (exit, stderr, out dir)."""
+    import signal as sig
+    out = tmp_path / "r"
+    cmd = [sys.executable, "-m", "slipreflex", "reproduce", "--out", str(out), "--jobs", "2", "--trials", "40",
+           "--bottles", "TR", "--methods", "dath", "--experiments", "pour"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    err = []
+    for line in proc.stderr:            # the estimate, then one line per tenth of the trials
+        err.append(line)
+        if line.startswith("trials:"):
+            break
+    send(proc, sig)
+    try:
+        _, rest = proc.communicate(timeout=60)   # the kill timer: a hang fails here, not forever
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, sig.SIGKILL)
+        proc.communicate()
+        raise AssertionError("reproduce did not stop after the signal")
+    return proc.returncode, "".join(err) + rest, out
+
+
+@pytest.mark.parametrize("send", [
+    lambda p, sig: os.killpg(p.pid, sig.SIGINT),        # Ctrl-C reaches the parent and every worker
+    lambda p, sig: p.send_signal(sig.SIGTERM),          # kill PID: the parent only
+], ids=["ctrl-c", "sigterm"])
+def test_interrupted_reproduce_writes_the_finished_trials_marked_partial(tmp_path, send):
+    import re
+
+    from slipreflex.analysis.report import read_csv
+    code, err, out = _reproduce_then_signal(tmp_path, send)
+    assert code == 130, err
+    assert err.startswith("40 trials on 2 worker(s): about ")
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
+    m = re.search(r"slipreflex reproduce: interrupted after (\d+) of 40 trials", err)
+    assert m, err
+    n = int(m.group(1))
+    assert 4 <= n < 40                  # the 10 % line had come; queued trials were cancelled
+    assert (out / "results.csv").read_text().startswith(f"# partial: interrupted after {n} of 40 trials\n")
+    assert (out / "summary.csv").read_text().startswith(f"# partial: interrupted after {n} of 40 trials\n")
+    rows = read_csv(out / "results.csv")
+    assert len({r["trial"] for r in rows}) == n
+    report = (out / "report.md").read_text().splitlines()
+    assert any(f"Partial run: interrupted after {n} of 40 trials" in line for line in report[:4])
+    assert not (out / "figures").exists()
+
+
+@pytest.mark.parametrize("out, says", [
+    ("README.md", "--out README.md: is a file, not a directory"),
+    ("README.md/sub", "--out README.md/sub: cannot create the directory (Not a directory)"),
+    ("/proc/nope", "--out /proc/nope: cannot create the directory"),
+])
+def test_reproduce_out_is_checked_before_the_first_trial(capsys, monkeypatch, out, says):
+    import slipreflex.experiments as ex
+
+    monkeypatch.chdir(ROOT)
+    monkeypatch.setattr(ex, "run_trial", lambda *a, **k: pytest.fail("a trial ran"))
+    before = (ROOT / "README.md").read_bytes()
+    line = _one_line_exit_2(capsys, ["reproduce", "--out", out, "--trials", "1", "--jobs", "1"], says)
+    assert line.startswith("slipreflex reproduce: error:")
+    assert (ROOT / "README.md").read_bytes() == before
+
+
+def test_method_names_take_any_case(tmp_path, capsys):
+    from slipreflex.cli import build_parser
+    args = build_parser().parse_args(["reproduce", "--methods", "DATH,Fixed,nmsd,SWT"])
+    assert args.methods == ("dath", "fixed", "nmsd", "swt")
+
+
+def test_seeds_are_derived_in_time_linear_in_the_trials(monkeypatch):
+    """3000 trials: every seed comes from O(1) spawned children (it was O(trials) each)."""
+    import numpy as np
+
+    from slipreflex.experiments import ReproduceConfig, trial_seed
+    spawned = []
+    real = np.random.SeedSequence
+
+    class Counting(real):
+        def spawn(self, n):
+            spawned.append(n)
+            return super().spawn(n)
+    monkeypatch.setattr(np.random, "SeedSequence", Counting)
+    trial_seed.__globals__["_cell_sequence"].cache_clear()
+    cells = ReproduceConfig(trials=3000, methods=("dath",)).cells()
+    assert len(cells) == 18000 and 0 < sum(spawned) <= 5 * 6     # (2 + 3) children per experiment and bottle
+    # Same bits as spawning: SeedSequence(m).spawn(2)[e].spawn(3)[b].spawn(k + 1)[k].
+    monkeypatch.setattr(np.random, "SeedSequence", real)
+    trial_seed.__globals__["_cell_sequence"].cache_clear()
+    ss = np.random.SeedSequence(11).spawn(2)[1].spawn(3)[2].spawn(8)[7]
+    assert trial_seed(11, "pour", "TX", 7) == int(ss.generate_state(2, dtype=np.uint64)[0] >> np.uint64(1))
+
+
+def test_reproduce_estimates_its_run_time_before_starting(tmp_path, capsys, monkeypatch):
+    import slipreflex.experiments as ex
+    from slipreflex.cli import main
+    from slipreflex.errors import ParameterError
+
+    def stop(*a, **k):
+        raise ParameterError("stopped by the test")
+    monkeypatch.setattr(ex, "run_reproduce", stop)
+    assert main(["reproduce", "--out", str(tmp_path), "--trials", "3000", "--jobs", "2"]) == 2
+    err = capsys.readouterr().err.splitlines()
+    from slipreflex.progress import format_duration
+    est = ex.estimate_wall_s(ex.ReproduceConfig(trials=3000), 2)
+    assert est > 3600
+    assert err[0] == (f"72000 trials on 2 worker(s): about {format_duration(est)} "
+                      "(a long run: fewer --trials, --bottles or --methods shorten it)")
+    assert main(["reproduce", "--out", str(tmp_path), "--trials", "1", "--jobs", "2"]) == 2
+    assert "long run" not in capsys.readouterr().err

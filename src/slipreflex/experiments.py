@@ -33,9 +33,9 @@ True
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import os
-import sys
 import time
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -52,13 +52,16 @@ from .analysis.trial import RESULT_COLUMNS, TrialRow
 from .baselines.calibration import REST_K
 from .baselines.swt import SWT_WINDOW
 from .errors import ParameterError
+from .interrupts import Interrupted, ignore_sigint, stop_pool
+from .progress import Progress
 from .hardware import CONTACT_FORCE_N
 from .thresholds import calibrate, calibration_seed
 from .validation import choices, flag, integer, positive, set_field
 
 __all__ = [
     "METHODS", "EXPERIMENTS", "BOTTLE_NAMES", "DEFAULT_SEED", "ReproduceConfig", "Cell",
-    "trial_seed", "calibration_seed", "closing_speed", "calibrate", "run_trial",
+    "trial_seed", "calibration_seed", "estimate_wall_s", "TRIAL_SIM_SPEED", "closing_speed", "calibrate",
+    "run_trial",
     "ReproduceResult", "run_reproduce", "write_outputs", "method_context",
     "RESULTS_CSV_COLUMNS", "LANDING_S",
 ]
@@ -273,18 +276,55 @@ def trial_seed(master: int, experiment: str, bottle: str, trial: int, method: st
     >>> trial_seed(1, "pour", "TX", 2) == trial_seed(1, "pour", "TX", 2)
     True
     """
-    e, b = EXPERIMENTS.index(experiment), BOTTLE_NAMES.index(bottle)
-    ss = np.random.SeedSequence(master).spawn(len(EXPERIMENTS))[e].spawn(len(BOTTLE_NAMES))[b]
-    child = ss.spawn(trial + 1)[trial]
+    entropy, spawn_key, pool_size = _cell_sequence(master, EXPERIMENTS.index(experiment),
+                                                   BOTTLE_NAMES.index(bottle))
+    # The child spawn(trial + 1)[trial] would make, built directly: the same bits in O(1),
+    # so a grid's seeds take time linear in its trials (spawning them was quadratic).
+    child = np.random.SeedSequence(entropy, spawn_key=(*spawn_key, trial), pool_size=pool_size)
     if method is not None:
         key = [int(c) for c in method.lower().encode()]
         child = np.random.SeedSequence([*child.generate_state(2), *key])
     return _seed63(child)
 
 
+@functools.lru_cache(maxsize=64)
+def _cell_sequence(master: int, e: int, b: int) -> tuple[Any, tuple[int, ...], int]:
+    """(entropy, spawn_key, pool_size) of ``SeedSequence(master).spawn(2)[e].spawn(3)[b]``."""
+    ss = np.random.SeedSequence(master).spawn(len(EXPERIMENTS))[e].spawn(len(BOTTLE_NAMES))[b]
+    return ss.entropy, tuple(ss.spawn_key), ss.pool_size
+
+
 def _seed63(ss: np.random.SeedSequence) -> int:
     """A seed sequence as the 63-bit integer results.csv records."""
     return int(ss.generate_state(2, dtype=np.uint64)[0] >> np.uint64(1))
+
+
+#: Simulated seconds per wall second of one trial (simulation, reflex, analysis) on one
+#: worker, for the run-time estimate printed before a reproduction starts.
+#: ``python benchmarks/bench_reproduce.py --jobs 2`` prints it as simulated s per CPU s
+#: (135 for the default grid's 4200 simulated s on the development machine, a Xeon
+#: core); 120 leaves a margin. A busy machine runs slower, and the progress lines say so.
+TRIAL_SIM_SPEED: float = 120.0
+#: Wall seconds before the first trial: imports, threshold calibration, worker start.
+STARTUP_S: float = 3.0
+
+
+def estimate_wall_s(config: ReproduceConfig, jobs: int) -> float:
+    """A rough run time (s) of ``config`` on ``jobs`` workers, before it starts.
+
+    From the simulated time of every trial and :data:`TRIAL_SIM_SPEED`; the progress
+    lines then measure the real pace.
+
+    Examples
+    --------
+    >>> small = ReproduceConfig(trials=1, bottles=("TR",), methods=("dath",))
+    >>> estimate_wall_s(small, 1) < estimate_wall_s(ReproduceConfig(), 1)
+    True
+    """
+    per_trial = [config.duration(e) for e in config.experiments]
+    sim_s = sum(per_trial) * config.trials * len(config.bottles) * len(config.methods)
+    cells = config.trials * len(config.bottles) * len(config.methods) * len(config.experiments)
+    return STARTUP_S + sim_s / (TRIAL_SIM_SPEED * max(1, min(jobs, cells)))
 
 
 def closing_speed() -> float:
@@ -397,20 +437,34 @@ def _order(row: TrialRow) -> tuple:
 
 
 def _run_cells(cells: list[Cell], args: list[tuple], jobs: int,
-               finished: Callable[[Cell], Any]) -> dict[tuple, tuple]:
-    """Run every cell (in this process for ``jobs == 1``); results by cell key."""
-    done: dict[tuple, tuple] = {}
+               finished: Callable[[Cell], Any], done: dict[tuple, tuple]) -> None:
+    """Run every cell (in this process for ``jobs == 1``) into ``done``, by cell key.
+
+    On Ctrl-C or SIGTERM (a :class:`KeyboardInterrupt`) queued cells are cancelled,
+    running ones get :data:`~slipreflex.interrupts.GRACE_S` to finish, and the
+    interrupt propagates with ``done`` holding every finished cell.
+    """
     if jobs == 1:
         for c, a in zip(cells, args):
             done[c.key] = _run_cell(c, *a)[1]
             finished(c)
-        return done
-    with ProcessPoolExecutor(max_workers=jobs) as ex:
-        for f in as_completed([ex.submit(_run_cell, c, *a) for c, a in zip(cells, args)]):
-            c, res = f.result()
+        return
+
+    def collect(f) -> None:
+        c, res = f.result()
+        if c.key not in done:
             done[c.key] = res
             finished(c)
-    return done
+
+    ex = ProcessPoolExecutor(max_workers=jobs, initializer=ignore_sigint)
+    futures = [ex.submit(_run_cell, c, *a) for c, a in zip(cells, args)]
+    try:
+        for f in as_completed(futures):
+            collect(f)
+    except KeyboardInterrupt:
+        stop_pool(ex, futures, collect)
+        raise
+    ex.shutdown()
 
 
 def run_reproduce(config: ReproduceConfig | None = None, *, jobs: int | None = None,
@@ -443,10 +497,6 @@ def run_reproduce(config: ReproduceConfig | None = None, *, jobs: int | None = N
     >>> [(r.method, r.n_events) for r in res.rows]
     [('dath', 1), ('fixed', 1)]
     """
-    from tqdm import tqdm
-
-    from .analysis.report import summarize
-
     config = config or ReproduceConfig()
     jobs = int(jobs or os.cpu_count() or 1)
     if jobs < 1:
@@ -463,14 +513,25 @@ def run_reproduce(config: ReproduceConfig | None = None, *, jobs: int | None = N
     cells = config.cells()
     plot_method = methods.DATH if methods.DATH in config.methods else config.methods[0]
     want = {c.key for c in cells if plots and c.trial == 0 and c.method == plot_method}
-    bar = tqdm(total=len(cells), file=sys.stderr, disable=not progress, desc="trials", unit="trial",
-               dynamic_ncols=True)
-    try:
-        done = _run_cells(cells, [(config, thresholds, c.key in want, specs[c.method]) for c in cells],
-                          jobs, lambda c: (bar.update(), on_done and on_done(c)))
-    finally:
-        bar.close()
-    rows = sorted((r for c in cells for r in done[c.key][0]), key=_order)
-    plot_data = {c.key: done[c.key][1] for c in cells if done[c.key][1] is not None}
+    done: dict[tuple, tuple] = {}
+    with Progress(len(cells), desc="trials", unit="trial", enabled=progress) as bar:
+        try:
+            _run_cells(cells, [(config, thresholds, c.key in want, specs[c.method]) for c in cells],
+                       jobs, lambda c: (bar.update(), on_done and on_done(c)), done)
+        except KeyboardInterrupt:
+            partial = _result(config, cells, done, thresholds, t0, jobs, t_cal)
+            raise Interrupted(partial, partial.partial_note) from None
+    return _result(config, cells, done, thresholds, t0, jobs, t_cal)
+
+
+def _result(config: ReproduceConfig, cells: list[Cell], done: dict[tuple, tuple],
+            thresholds: dict[str, float], t0: float, jobs: int, t_cal: float) -> ReproduceResult:
+    """The run's result over the finished cells (all of them unless interrupted)."""
+    from .analysis.report import summarize
+
+    fin = [c for c in cells if c.key in done]
+    rows = sorted((r for c in fin for r in done[c.key][0]), key=_order)
+    plot_data = {c.key: done[c.key][1] for c in fin if done[c.key][1] is not None}
     return ReproduceResult(config, rows, summarize(rows), thresholds, plot_data,
-                           time.perf_counter() - t0, jobs, calibration_wall_s=t_cal)
+                           time.perf_counter() - t0, jobs, calibration_wall_s=t_cal,
+                           trials_planned=len(cells), trials_finished=len(fin))

@@ -54,6 +54,9 @@ class ReproduceResult:
     calibration_wall_s : float
         Wall time of the threshold calibration (s); the length of each
         calibration *recording* is ``config.calibration_s``.
+    trials_planned, trials_finished : int
+        Trials in the grid and trials finished: fewer when Ctrl-C or SIGTERM
+        stopped the run (:class:`~slipreflex.interrupts.Interrupted` carries it).
 
     Examples
     --------
@@ -70,6 +73,22 @@ class ReproduceResult:
     wall_s: float
     jobs: int
     calibration_wall_s: float = 0.0
+    trials_planned: int = 0
+    trials_finished: int = 0
+
+    @property
+    def partial_note(self) -> str:
+        """``"interrupted after 87 of 240 trials"`` for a stopped run, else ``""``.
+
+        Examples
+        --------
+        >>> from slipreflex.experiments import ReproduceConfig
+        >>> ReproduceResult(ReproduceConfig(), [], [], {}, {}, 0.0, 1, 0.0, 240, 87).partial_note
+        'interrupted after 87 of 240 trials'
+        """
+        if self.trials_finished >= self.trials_planned:
+            return ""
+        return f"interrupted after {self.trials_finished} of {self.trials_planned} trials"
 
 
 def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str | None = None,
@@ -94,15 +113,21 @@ def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str 
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    paths = {"results": write_csv(out / "results.csv", result.rows, RESULT_COLUMNS),
-             "summary": write_csv(out / "summary.csv", result.summary, SUMMARY_COLUMNS)}
-    figs = _write_figures(result, out, paths)
+    partial = getattr(result, "partial_note", "")
+    notes = [f"partial: {partial}"] if partial else []
+    paths = {"results": write_csv(out / "results.csv", result.rows, RESULT_COLUMNS, notes=notes),
+             "summary": write_csv(out / "summary.csv", result.summary, SUMMARY_COLUMNS, notes=notes)}
+    # A stopped run is saved at once: its figures would take seconds the user did not give.
+    figs = [] if partial else _write_figures(result, out, paths)
+    notices = [f"Partial run: {partial}; the tables cover the finished trials only, "
+               "and no figures were drawn nor claims judged."] if partial else []
     from .claims import judge_run
 
     md = report_markdown(summary=result.summary, rows=result.rows, figures=figs,
-                         setup=setup_lines(result, command),
+                         setup=setup_lines(result, command), notices=notices,
                          discussion=list(discussion) if discussion is not None else discussion_text(result),
-                         claims=judge_run(result.rows, seed=result.config.seed, plant=result.config.plant))
+                         claims=() if partial else judge_run(result.rows, seed=result.config.seed,
+                                                             plant=result.config.plant))
     paths["report"] = out / "report.md"
     paths["report"].write_text(md)
     return paths

@@ -137,8 +137,11 @@ def _cell(v: Any) -> str:
 
 
 def write_csv(path: str | Path, rows: Sequence[dict[str, Any]],
-              columns: Sequence[str] = RESULT_COLUMNS) -> Path:
+              columns: Sequence[str] = RESULT_COLUMNS, *, notes: Sequence[str] = ()) -> Path:
     """Write ``rows`` with exactly ``columns`` (NaN as an empty cell).
+
+    ``notes`` come first, as ``# `` lines (a partial run says so there); :func:`read_csv`
+    skips them.
 
     Examples
     --------
@@ -150,6 +153,7 @@ def write_csv(path: str | Path, rows: Sequence[dict[str, Any]],
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     with path.open("w", newline="") as fh:
+        fh.writelines(f"# {n}\n" for n in notes)
         w = csv.writer(fh)
         w.writerow(columns)
         for r in rows:
@@ -168,7 +172,7 @@ def read_csv(path: str | Path) -> list[dict[str, str]]:
     [{'a': '1'}]
     """
     with Path(path).open(newline="") as fh:
-        return list(csv.DictReader(fh))
+        return list(csv.DictReader(line for line in fh if not line.startswith("#")))
 
 
 def fmt_mean_sd(mean: float, sd: float, n: int | None = None, digits: int = 0) -> str:
@@ -360,7 +364,8 @@ def differences(summary: Sequence[dict[str, Any]], *, tolerance_sd: float = 2.0)
 
 def report_markdown(*, summary: Sequence[dict[str, Any]], rows: Sequence[dict[str, Any]],
                     figures: Sequence[tuple[str, str]], setup: Sequence[str],
-                    discussion: Sequence[str], claims: Sequence[Any] = ()) -> str:
+                    discussion: Sequence[str], claims: Sequence[Any] = (),
+                    notices: Sequence[str] = ()) -> str:
     """The whole report.md: the paper's table beside ours, success, onsets, figures, honesty.
 
     Parameters
@@ -375,6 +380,9 @@ def report_markdown(*, summary: Sequence[dict[str, Any]], rows: Sequence[dict[st
     claims : sequence of ClaimResult, optional
         The paper's claims judged on this run (:func:`slipreflex.analysis.claims.judge_run`);
         with them come the paper's self-contradictions.
+    notices : sequence of str
+        What a reader must know first (a partial run, objects that are not the
+        paper's): bold lines right under the title.
 
     Examples
     --------
@@ -386,6 +394,7 @@ def report_markdown(*, summary: Sequence[dict[str, Any]], rows: Sequence[dict[st
     from .paper import PAPER_NOTES
 
     lines = ["# slipreflex reproduce: the paper's experiments on the simulated rig", ""]
+    lines += [line for n in notices for line in (f"**{n}**", "")]
     lines += ["## Run", ""] + [f"- {s}" for s in setup] + [""]
     lines += ["## The paper's table beside ours", "",
               "Mean ± sd (n) in ms; *paper* columns are the paper's section III / SPEC 4 values, "

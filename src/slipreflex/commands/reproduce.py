@@ -13,6 +13,7 @@ Examples
 from __future__ import annotations
 
 import argparse
+import os
 import shlex
 import sys
 from pathlib import Path
@@ -88,10 +89,16 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Run the grid, write the outputs, print a compact table."""
-    from ..analysis.report import terminal_table
+    """Check the outputs, estimate, run the grid, write the outputs, print a compact table.
+
+    Ctrl-C or SIGTERM stops the run within about two seconds and writes what finished,
+    marked partial; exit status 130.
+    """
     from ..errors import ParameterError
-    from ..experiments import ReproduceConfig, run_reproduce, write_outputs
+    from ..experiments import ReproduceConfig, estimate_wall_s, run_reproduce
+    from ..interrupts import Interrupted, signals_ignored, sigterm_interrupts
+    from ..paths import output_dir
+    from ..progress import format_duration
 
     if args.jobs is not None and args.jobs < 1:
         raise ParameterError(f"--jobs must be >= 1, got {args.jobs}")
@@ -102,15 +109,43 @@ def run(args: argparse.Namespace) -> int:
         rest_s=args.rest, after_s=args.after, calibration_s=args.calibration, rest_k=args.rest_k,
         swt_persist=args.swt_persist, variations=not args.no_variations,
         independent_seeds=args.independent_seeds)
-    result = run_reproduce(config, jobs=args.jobs, progress=not args.no_progress,
-                           plots=not args.no_figures)
+    output_dir(args.out, "--out")                    # before the first trial, not after the last
+    jobs = int(args.jobs or os.cpu_count() or 1)
+    n, estimate = len(config.cells()), estimate_wall_s(config, jobs)
+    print(f"{n} trials on {jobs} worker(s): about {format_duration(estimate)}"
+          + (" (a long run: fewer --trials, --bottles or --methods shorten it)" if estimate > LONG_RUN_S else ""),
+          file=sys.stderr, flush=True)
     command = "slipreflex " + " ".join(shlex.quote(a) for a in sys.argv[1:]) if sys.argv[1:] else None
-    paths = write_outputs(result, args.out, command=command)
-    print(terminal_table(result.summary))
+    try:
+        with sigterm_interrupts():
+            result = run_reproduce(config, jobs=jobs, progress=not args.no_progress,
+                                   plots=not args.no_figures)
+    except Interrupted as stop:
+        with signals_ignored():
+            paths = _write(stop.partial, args.out, command)
+        print(f"slipreflex reproduce: {stop.partial.partial_note}; wrote the finished trials to "
+              f"{paths['results'].parent}/ (results.csv, summary.csv, report.md marked partial)",
+              file=sys.stderr)
+        return 130
+    _write(result, args.out, command)
+    return 0
+
+
+#: A run estimated longer than this (s) says how to shorten it before it starts.
+LONG_RUN_S: float = 600.0
+
+
+def _write(result, out: Path, command: str | None) -> dict:
+    from ..analysis.report import terminal_table
+    from ..experiments import write_outputs
+
     from ..analysis.claims import claims_terminal, judge_run
 
-    print(claims_terminal(judge_run(result.rows, seed=config.seed)))
-    print(f"{len(result.rows)} rows from {len(config.cells())} trials in {result.wall_s:.1f} s "
+    paths = write_outputs(result, out, command=command)
+    print(terminal_table(result.summary))
+    if not result.partial_note:
+        print(claims_terminal(judge_run(result.rows, seed=result.config.seed)))
+    print(f"{len(result.rows)} rows from {result.trials_finished} trials in {result.wall_s:.1f} s "
           f"({result.jobs} jobs); wrote {paths['results'].parent}/"
-          "{results.csv, summary.csv, report.md, figures/}")
-    return 0
+          "{results.csv, summary.csv, report.md" + ("" if result.partial_note else ", figures/") + "}")
+    return paths
