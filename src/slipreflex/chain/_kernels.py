@@ -213,8 +213,8 @@ def _event_mpi_step(S, P, event, position):
     return m if m != m_prev else np.nan
 
 
-@njit(cache=True)
-def chain_step(S, P, raw, position):
+@njit(cache=True, inline="always")
+def _chain_step(S, P, raw, position):
     """One raw sample through the whole chain; the new command, or NaN for none.
 
     ``position`` is the measured slip-finger position, NaN when unknown. A
@@ -258,11 +258,19 @@ def chain_step(S, P, raw, position):
 
 
 @njit(cache=True)
+def chain_step(S, P, raw, position):
+    """One raw sample through the whole chain (state ``S``, parameters ``P``, layout in
+    :mod:`slipreflex.chain._layout`); the new command, or NaN for none. ``position`` is the
+    measured slip-finger position, NaN when unknown; a non-finite ``raw`` is skipped."""
+    return _chain_step(S, P, raw, position)
+
+
+@njit(cache=True)
 def chain_kernel(raw, S, P, x_out, events, acc_out, theta_out, counts, commands, sample_commands):
     """chain_step over a whole recording, keeping its per-sample and per-window outputs."""
     n = int(P[P_N])
     for k in range(raw.size):
-        chain_step(S, P, raw[k], np.nan)
+        _chain_step(S, P, raw[k], np.nan)
         x_out[k] = S[S_LAST_X]
         events[k] = S[S_LAST_EVENT] != 0.0
         acc_out[k] = S[S_LAST_ACC]
