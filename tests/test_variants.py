@@ -150,6 +150,15 @@ def test_dath_floor_stops_the_zoom_below_one_adc_step():
     assert np.flatnonzero(floored.events).tolist() == [335]
 
 
+def test_chain_parameters_take_numpy_numbers_like_every_other_class():
+    # one validator (slipreflex.validation): numpy integers and floats are numbers, bool is not
+    p = ReflexParams(n=np.int64(8), acc_reset=np.int32(33), acc_leak=np.float32(12.5), kp=np.int16(3))
+    assert (p.n, p.acc_reset, p.acc_leak, p.kp) == (8, 33, 12.5, 3.0)
+    assert type(p.n) is int and type(p.acc_leak) is float and type(p.kp) is float
+    with pytest.raises(ParameterError, match="n must be an integer >= 1, got True"):
+        ReflexParams(n=True)
+
+
 def test_forgetting_options_refused_when_meaningless():
     with pytest.raises(ParameterError, match="acc_leak must be a finite number > 0"):
         ReflexParams(acc_leak=0.0)
@@ -345,6 +354,8 @@ def test_registered_variants_build_their_chains():
     chain = methods.make("authors-chain", p0=150.0)
     assert chain.name == "authors-chain" and chain.finger_offsets == {}
     assert chain.params == ReflexParams.preset("authors-gui", p0=150.0, slip_finger_offset=0.0)
+    leak = methods.make("dath-leak")
+    assert leak.name == "dath-leak" and leak.params.acc_leak == pytest.approx(0.1 * hw.DAQ_FS)
     floor = methods.make("dath-floor")
     assert floor.name == "dath-floor" and floor.params.dath_floor == hw.ADC_LSB
 

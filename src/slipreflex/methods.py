@@ -78,7 +78,7 @@ from .validation import choice, flag, positive, text
 __all__ = ["MethodSpec", "MethodContext", "Detections", "register", "unregister", "get", "names",
            "make", "label", "canonical", "chain_method", "calibrated", "load_plugins", "ENTRY_POINT_GROUP",
            "FIXED", "DATH", "NMSD", "SWT", "AUTHORS_GUI", "AUTHORS_CHAIN", "DATH_EVENT",
-           "DATH_FLOOR"]
+           "DATH_FLOOR", "DATH_LEAK"]
 
 #: Names of the paper's four methods (the one place they are spelled).
 FIXED, DATH, NMSD, SWT = "fixed", "dath", "nmsd", "swt"
@@ -576,7 +576,8 @@ register(MethodSpec(name="fixed-board", label="fixed (board)", input_kind="slip"
 
 # Variants of the paper's chain (docs/method.md, "Variants"), beside the paper's methods in
 # `reproduce --methods fixed,dath,nmsd,swt,authors-gui,dath-event`; not run by default.
-AUTHORS_GUI, AUTHORS_CHAIN, DATH_EVENT, DATH_FLOOR = "authors-gui", "authors-chain", "dath-event", "dath-floor"
+AUTHORS_GUI, AUTHORS_CHAIN, DATH_EVENT = "authors-gui", "authors-chain", "dath-event"
+DATH_FLOOR, DATH_LEAK = "dath-floor", "dath-leak"
 
 
 def _build_preset(preset: str, name: str, p0: float, context: MethodContext, **params: Any) -> Reflex:
@@ -599,3 +600,6 @@ register(MethodSpec(name=DATH_EVENT, label="DATH, event MPI", input_kind="slip",
                     detections=_chain_detections, color="#8c564b"))
 # DATH whose threshold never drops below one ADC step (docs/method.md, "A DATH floor")
 register(chain_method(DATH_FLOOR, "DATH, floor 1 LSB", dath=True, dath_floor=hw.ADC_LSB, color="#e377c2"))
+# DATH whose accumulator forgets with a 0.1 s time constant (docs/method.md, "An accumulator that forgets")
+register(chain_method(DATH_LEAK, "DATH, leak 0.1 s", dath=True, acc_leak=round(0.1 * hw.DAQ_FS, 6),
+                      color="#aec7e8"))
