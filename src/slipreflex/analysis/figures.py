@@ -82,6 +82,16 @@ class TrialPlot:
     notes: dict = field(default_factory=dict)
 
 
+def _save(plt, fig, path: str | Path) -> Path:
+    """Lay out, write (creating the folder) and close one figure; the path written."""
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
 def _mark(ax, times: Sequence[float], color: str, label: str | None, style: str = "--") -> None:
     first = True
     for x in times:
@@ -148,12 +158,7 @@ def plot_trial(p: TrialPlot, path: str | Path) -> Path:
     if p.xlim:
         ax_cmd.set_xlim(*p.xlim)
     fig.suptitle(p.title, fontsize=9)
-    fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return _save(plt, fig, path)
 
 
 def _present(summary, experiment):
@@ -208,12 +213,7 @@ def bar_chart(summary: Sequence[dict[str, Any]], experiment: str, metric: str,
     ax.set_ylabel(f"{label} (ms)")
     ax.set_title(f"{label.capitalize()}, {what} (bars: sd)", fontsize=9)
     ax.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
-    fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return _save(plt, fig, path)
 
 
 def success_chart(summary: Sequence[dict[str, Any]], path: str | Path) -> Path:
@@ -245,9 +245,4 @@ def success_chart(summary: Sequence[dict[str, Any]], path: str | Path) -> Path:
         ax.set_ylabel("slips suppressed (%)")
         ax.set_title(f"Success, {e}", fontsize=9)
         ax.legend(fontsize=7, loc="lower left", framealpha=0.9)
-    fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return _save(plt, fig, path)
