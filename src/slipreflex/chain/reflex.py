@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._slots import slot
 from ..hardware import DAQ_FS, SLIP_FINGER, Finger
 from . import _layout as _k
 from ._checks import as_samples
@@ -137,30 +138,12 @@ class SlipReflex:
         off = self.params.slip_finger_offset
         return {SLIP_FINGER: off} if off else {}
 
-    @property
-    def command(self) -> float:
-        """The current finger command (the last MPI output, or clip(p0))."""
-        return float(self._S[_k.S_M])
-
-    @property
-    def last_filtered(self) -> float:
-        """The filtered sample of the last step (NaN if it was skipped or none yet)."""
-        return float(self._S[_k.S_LAST_X])
-
-    @property
-    def last_event(self) -> bool:
-        """True if the last step spiked."""
-        return bool(self._S[_k.S_LAST_EVENT])
-
-    @property
-    def last_threshold(self) -> float:
-        """The threshold the last sample was compared with."""
-        return float(self._S[_k.S_LAST_THETA])
-
-    @property
-    def last_accumulator(self) -> float:
-        """The accumulator the last sample compared, before its reset."""
-        return float(self._S[_k.S_LAST_ACC])
+    command = slot(_k.S_M, float, "The current finger command (the last MPI output, or clip(p0)).")
+    last_filtered = slot(_k.S_LAST_X, float,
+                         "The filtered sample of the last step (NaN if it was skipped or none yet).")
+    last_event = slot(_k.S_LAST_EVENT, bool, "True if the last step spiked.")
+    last_threshold = slot(_k.S_LAST_THETA, float, "The threshold the last sample was compared with.")
+    last_accumulator = slot(_k.S_LAST_ACC, float, "The accumulator the last sample compared, before its reset.")
 
     @property
     def last_count(self) -> int | None:
@@ -168,10 +151,7 @@ class SlipReflex:
         c = self._S[_k.S_LAST_COUNT]
         return None if c < 0 else int(c)
 
-    @property
-    def skipped_samples(self) -> int:
-        """Non-finite samples skipped since the last reset."""
-        return int(self._S[_k.S_SKIPPED])
+    skipped_samples = slot(_k.S_SKIPPED, int, "Non-finite samples skipped since the last reset.")
 
     @property
     def state(self) -> np.ndarray:

@@ -49,6 +49,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import hardware as hw
+from .._slots import slot
 from ..errors import ParameterError
 from ..hardware import Finger, HandCommand
 from ..interfaces import DaqSample
@@ -551,6 +552,8 @@ class Rig:
     >>> rig = Rig("DK", seed=5)
     >>> rig.t, rig.fallen
     (0.0, False)
+    >>> rig.displacement, rig.slip, rig.velocity, rig.normal_force, Rig("TR").load_mass
+    (0.0, 0.0, 0.0, 0.0, 0.04)
     """
 
     def __init__(self, bottle: Bottle | str = "TR", seed: int | np.random.SeedSequence | np.random.Generator
@@ -957,38 +960,12 @@ class Rig:
         self.perturbations.append((at, what))
 
     # ------------------------------------------------------------------ truth
-    @property
-    def displacement(self) -> float:
-        """Bottle position below where it was grasped (m), pad shear included.
-
-        Examples
-        --------
-        >>> Rig("TR").displacement
-        0.0
-        """
-        return float(self._S[K.S_X])
-
-    @property
-    def slip(self) -> float:
-        """Sliding distance at the contacts (m).
-
-        Examples
-        --------
-        >>> Rig("TR").slip
-        0.0
-        """
-        return float(self._S[K.S_S])
-
-    @property
-    def velocity(self) -> float:
-        """Bottle velocity (m/s, down positive).
-
-        Examples
-        --------
-        >>> Rig("TR").velocity
-        0.0
-        """
-        return float(self._S[K.S_V])
+    # One slot of the state vector each (the class example reads them).
+    displacement = slot(K.S_X, float, "Bottle position below where it was grasped (m), pad shear included.")
+    slip = slot(K.S_S, float, "Sliding distance at the contacts (m).")
+    velocity = slot(K.S_V, float, "Bottle velocity (m/s, down positive).")
+    normal_force = slot(K.S_NC, float, "Normal force per contact (N).")
+    load_mass = slot(K.S_MASS, float, "Bottle + water + landed masses (kg).")
 
     @property
     def slipping(self) -> bool:
@@ -1000,28 +977,6 @@ class Rig:
         False
         """
         return bool(self._S[K.S_STUCK] == 0.0)
-
-    @property
-    def normal_force(self) -> float:
-        """Normal force per contact (N).
-
-        Examples
-        --------
-        >>> Rig("TR").normal_force
-        0.0
-        """
-        return float(self._S[K.S_NC])
-
-    @property
-    def load_mass(self) -> float:
-        """Bottle + water + landed masses (kg).
-
-        Examples
-        --------
-        >>> Rig("TR").load_mass
-        0.04
-        """
-        return float(self._S[K.S_MASS])
 
     @property
     def fallen(self) -> bool:
