@@ -381,3 +381,30 @@ def test_detect_preset_authors_gui_runs_the_preset(tmp_path, capsys):
     assert np.genfromtxt(tmp_path / "h.windows.csv", delimiter=",", names=True)["command"][0] >= 200
     assert main(["detect", str(example), "--preset", "authors-gui", "--board"]) == 2
     assert "--preset and --board" in capsys.readouterr().err
+
+
+def test_a_compiled_caller_runs_the_same_step_as_slipreflex():
+    # what a compiled closed loop does: hold (S, P) and call chain_step from its own numba code
+    from numba import njit
+
+    from slipreflex.chain._kernels import chain_step
+    from slipreflex.chain._layout import init_state, pack_params
+
+    @njit
+    def loop(S, P, raw, positions, out):
+        for k in range(raw.size):
+            out[k] = chain_step(S, P, raw[k], positions[k])
+
+    raw = _signals(hw.DAQ_FS)["rest-then-slip"].copy()
+    raw[[5, 400]] = np.nan
+    positions = np.where(np.arange(raw.size) % 7 == 0, np.nan, 150.0)
+    for p in (ReflexParams(dath=True, p0=100.0), ReflexParams.preset("authors-gui"),
+              ReflexParams.preset("dath-event", p0=90.0)):
+        P = pack_params(p)
+        S = init_state(P)
+        out = np.empty(raw.size)
+        loop(S, P, raw, positions, out)
+        reflex = SlipReflex(p)
+        ref = [reflex.step(r, None if np.isnan(q) else q) for r, q in zip(raw, positions)]
+        assert [None if np.isnan(u) else u for u in out] == ref
+        assert S.tobytes() == reflex.state.tobytes()
