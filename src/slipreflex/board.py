@@ -38,6 +38,7 @@ import numpy as np
 
 from . import hardware as hw
 from .errors import DataError, ParameterError
+from .validation import instance
 
 __all__ = [
     "COEF_Q", "SIG_Q", "H_MAX", "BoardParams", "BoardChain", "BoardReflex", "BoardResult",
@@ -278,9 +279,7 @@ class BoardChain:
     """
 
     def __init__(self, params: BoardParams) -> None:
-        if not isinstance(params, BoardParams):
-            raise ParameterError(f"params must be BoardParams, got {type(params).__name__}")
-        self.params = params
+        self.params = instance("params", params, BoardParams)
         self.reset()
 
     def reset(self) -> None:

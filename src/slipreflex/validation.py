@@ -69,7 +69,7 @@ import numpy as np
 
 from .errors import ParameterError
 
-__all__ = ["number", "positive", "integer", "flag", "choice", "choices", "text", "set_field",
+__all__ = ["number", "positive", "integer", "flag", "choice", "choices", "text", "instance", "set_field",
            "build", "resolve_params"]
 
 T = TypeVar("T")
@@ -274,6 +274,23 @@ def text(name: str, value: Any) -> str:
     return value
 
 
+def instance(name: str, value: Any, cls: type[T]) -> T:
+    """``value`` itself if it is a ``cls``; anything else is refused by name.
+
+    Examples
+    --------
+    >>> instance("speed", 3.0, float)
+    3.0
+    >>> instance("speed", "3", float)
+    Traceback (most recent call last):
+    ...
+    slipreflex.errors.ParameterError: speed must be a float, got str
+    """
+    if not isinstance(value, cls):
+        raise ParameterError(f"{name} must be a {cls.__name__}, got {type(value).__name__}")
+    return value
+
+
 def set_field(obj: Any, name: str, value: Any) -> None:
     """Store a checked value on a frozen dataclass from inside its ``__post_init__``.
 
@@ -345,8 +362,7 @@ def resolve_params(cls: type[T], params: Any, overrides: dict[str, Any]) -> T:
     """
     if params is None:
         return build(cls, dict(overrides))
-    if not isinstance(params, cls):
-        raise ParameterError(f"params must be a {cls.__name__}, got {type(params).__name__}")
+    instance("params", params, cls)
     if overrides:
         fields = {f.name: getattr(params, f.name) for f in dataclasses.fields(params)}
         return build(cls, {**fields, **overrides})

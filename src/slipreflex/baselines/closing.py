@@ -36,7 +36,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..hardware import FINGER_MAX, FINGER_MIN
-from ..validation import number, set_field
+from ..validation import instance, number, set_field
 
 __all__ = ["CLOSE_S", "ClosingParams", "Closer", "closing_commands"]
 
@@ -130,9 +130,7 @@ class Closer:
     """
 
     def __init__(self, params: ClosingParams) -> None:
-        if not isinstance(params, ClosingParams):
-            raise ParameterError(f"params must be a ClosingParams, got {type(params).__name__}")
-        self.params = params
+        self.params = instance("params", params, ClosingParams)
         self.reset()
 
     def reset(self) -> None:
