@@ -222,6 +222,10 @@ class MPIParams:
             raise ParameterError(f"lo must be <= hi, got lo={self.lo!r}, hi={self.hi!r}")
 
 
+#: The stages' defaults, which are also the flat defaults of :class:`ReflexParams`.
+_F, _E, _W, _M = FilterParams(), EncoderParams(), WindowParams(), MPIParams()
+
+
 @dataclass(frozen=True, slots=True)
 class ReflexParams:
     """Every parameter of the composed chain, flat, with the batch functions' names.
@@ -249,26 +253,27 @@ class ReflexParams:
     ('acc_leak', 'mpi_mode')
     """
 
-    fs: float = DAQ_FS
-    cutoff: float = 10.0
-    filter: bool = True
-    threshold: float = DEFAULT_THRESHOLD
-    dath: bool = False
-    dath_samples: int = WINDOW_N
-    x0: float | None = None
-    dath_floor: float = 0.0
-    n: int = WINDOW_N
-    p0: float = 0.0
-    kp: float = 5.0
-    ki: float = 5.0
-    reset_after: int | None = 10
-    lo: float = float(FINGER_MIN)
-    hi: float = float(FINGER_MAX)
-    filter_kind: str = "butterworth"
-    mean_samples: int | None = None
-    acc_reset: int | None = None
-    acc_leak: float | None = None
-    mpi_mode: str = "window"
+    # The defaults are the stages' (one definition each).
+    fs: float = _F.fs
+    cutoff: float = _F.cutoff
+    filter: bool = _F.enabled
+    threshold: float = _E.threshold
+    dath: bool = _E.dath
+    dath_samples: int = _E.dath_samples
+    x0: float | None = _E.x0
+    dath_floor: float = _E.dath_floor
+    n: int = _W.n
+    p0: float = _M.p0
+    kp: float = _M.kp
+    ki: float = _M.ki
+    reset_after: int | None = _M.reset_after
+    lo: float = _M.lo
+    hi: float = _M.hi
+    filter_kind: str = _F.kind
+    mean_samples: int | None = _F.mean_samples
+    acc_reset: int | None = _E.acc_reset
+    acc_leak: float | None = _E.acc_leak
+    mpi_mode: str = _M.mode
     slip_finger_offset: float = 0.0
 
     def __post_init__(self) -> None:
