@@ -21,21 +21,32 @@ ORDER = 32
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``slipreflex replay``."""
-    p.add_argument("recording", type=Path, help="MCAP file written by 'slipreflex run'")
-    p.add_argument("--allow-partial", action="store_true",
-                   help="replay a recording cut by a crash or with damaged chunks up to its first gap "
-                        "(without it, such a recording is an error naming every gap)")
+    add_recording_arguments(p, "replay a recording cut by a crash or with damaged chunks up to its first gap")
 
 
 def run(args: argparse.Namespace) -> int:
     """Replay; exit 0 if identical, 1 if not, 2 for a partial recording without --allow-partial."""
-    from ..recording import read_recording, replay
+    from ..recording import replay
+
+    res = replay(read_checked(args))
+    print(res.summary())
+    return 0 if res.identical else 1
+
+
+def add_recording_arguments(p: argparse.ArgumentParser, partial_help: str) -> None:
+    """The recording to read and ``--allow-partial`` (what the command does with a partial one)."""
+    p.add_argument("recording", type=Path, help="MCAP file written by 'slipreflex run'")
+    p.add_argument("--allow-partial", action="store_true",
+                   help=f"{partial_help} (without it, such a recording is an error naming every gap)")
+
+
+def read_checked(args: argparse.Namespace):
+    """The recording ``args.recording``, partial ones refused unless ``args.allow_partial``."""
+    from ..recording import read_recording
 
     rec = read_recording(args.recording)
     check_partial(rec, args.allow_partial)
-    res = replay(rec)
-    print(res.summary())
-    return 0 if res.identical else 1
+    return rec
 
 
 def check_partial(rec, allow: bool) -> None:
