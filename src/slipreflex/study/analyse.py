@@ -360,7 +360,8 @@ def study_markdown(run: Any, plants: Sequence[Mapping[str, Any]], fractions: Seq
     for r in fractions:
         top = [s for s in sens if s["claim"] == r["claim"] and 0 < s["rank"] <= 2]
         top.sort(key=lambda s: s["rank"])
-        dec = ", ".join(f"{s['constant']} (rho {s['spearman_rho']:+.2f})" for s in top) or "-"
+        dec = ", ".join(f"{s['constant']} (rho {s['spearman_rho']:+.2f}, p {s['spearman_p']:.2g})"
+                        for s in top) or "-"
         n = r["plants"] or 1
         lines.append(f"| {r['claim']} | {r['text']} | {_pct(r['holds_fraction'])} | "
                      f"{_pct(r['holds_ci_low'])}-{_pct(r['holds_ci_high'])} | {_pct(r['fails'] / n)} | "
