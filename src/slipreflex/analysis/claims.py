@@ -54,6 +54,7 @@ from typing import Any
 import numpy as np
 
 from .. import hardware as hw
+from ..methods import DATH, FIXED, NMSD, SWT
 from ..methods import label as _label
 from .paper import BOTTLE_ORDER, EXPERIMENTS, PAPER
 
@@ -275,14 +276,14 @@ def _scan_spikes(ci: ClaimInput) -> tuple[str, str]:
     if ci.scan is None:
         return NOT_TESTABLE, "no scan in this run"
     gap = {m: [g for (mm, region), g in ci.scan.min_spacing_mm.items()
-               if mm == m and region in ("white", "black") and g is not None] for m in ("fixed", "dath")}
-    if not all(gap.values()) or not {"fixed", "dath"} <= set(ci.scan.spikes):
+               if mm == m and region in ("white", "black") and g is not None] for m in (FIXED, DATH)}
+    if not all(gap.values()) or not {FIXED, DATH} <= set(ci.scan.spikes):
         return NOT_TESTABLE, "the scan has fewer than two spikes on white or black for a method"
     small = {m: min(v) for m, v in gap.items()}
-    f, d = ci.scan.spikes["fixed"], ci.scan.spikes["dath"]
+    f, d = ci.scan.spikes[FIXED], ci.scan.spikes[DATH]
     ok = min(small.values()) >= (1 - ABOUT_REL) * 0.09 and d > f
-    return _verdict(ok), (f"smallest spike spacing on white/black: fixed {small['fixed']:.3f} mm, DATH "
-                          f"{small['dath']:.3f} mm (paper 0.09 for both); spikes DATH {d} vs fixed {f}")
+    return _verdict(ok), (f"smallest spike spacing on white/black: fixed {small[FIXED]:.3f} mm, DATH "
+                          f"{small[DATH]:.3f} mm (paper 0.09 for both); spikes DATH {d} vs fixed {f}")
 
 
 def _need(ci: ClaimInput, experiment: str, methods: Sequence[str], bottles: Sequence[str] = BOTTLE_ORDER,
@@ -294,17 +295,17 @@ def _need(ci: ClaimInput, experiment: str, methods: Sequence[str], bottles: Sequ
 
 
 def _drop_faster(ci: ClaimInput) -> tuple[str, str]:
-    if why := _need(ci, "drop", ("dath", "fixed")):
+    if why := _need(ci, "drop", (DATH, FIXED)):
         return NOT_TESTABLE, why
-    v = {b: (ci.cell_mean("drop", b, "dath", "response_ms"), ci.cell_mean("drop", b, "fixed", "response_ms"))
+    v = {b: (ci.cell_mean("drop", b, DATH, "response_ms"), ci.cell_mean("drop", b, FIXED, "response_ms"))
          for b in BOTTLE_ORDER}
     return (_verdict(all(d < f for d, f in v.values())),
             "DATH vs fixed mean response (ms): " + ", ".join(f"{b} {_ms(d)} vs {_ms(f)}" for b, (d, f) in v.items()))
 
 
 def _drop_success(ci: ClaimInput) -> tuple[str, str]:
-    d, nd = ci.success("drop", BOTTLE_ORDER, "dath")
-    f, nf = ci.success("drop", BOTTLE_ORDER, "fixed")
+    d, nd = ci.success("drop", BOTTLE_ORDER, DATH)
+    f, nf = ci.success("drop", BOTTLE_ORDER, FIXED)
     if not nd or not nf:
         return NOT_TESTABLE, "needs drop rows of DATH and fixed"
     ok = abs(d - 0.8) <= ABOUT_RATE_POINTS + 1e-12 and f < 0.5
@@ -312,11 +313,11 @@ def _drop_success(ci: ClaimInput) -> tuple[str, str]:
 
 
 def _nmsd_twice(ci: ClaimInput) -> tuple[str, str]:
-    bottles = [b for b in BOTTLE_ORDER if ci.cell("drop", b, "dath") and ci.cell("drop", b, "nmsd")]
-    if not bottles or _need(ci, "drop", ("dath", "nmsd"), bottles, "total_ms"):
+    bottles = [b for b in BOTTLE_ORDER if ci.cell("drop", b, DATH) and ci.cell("drop", b, NMSD)]
+    if not bottles or _need(ci, "drop", (DATH, NMSD), bottles, "total_ms"):
         return NOT_TESTABLE, "needs drop total times of DATH and NMSD"
-    num = [_num(_get(r, "total_ms")) for b in bottles for r in ci.cell("drop", b, "nmsd")]
-    den = [_num(_get(r, "total_ms")) for b in bottles for r in ci.cell("drop", b, "dath")]
+    num = [_num(_get(r, "total_ms")) for b in bottles for r in ci.cell("drop", b, NMSD)]
+    den = [_num(_get(r, "total_ms")) for b in bottles for r in ci.cell("drop", b, DATH)]
     n, d = float(np.nanmean(num)), float(np.nanmean(den))
     if not d > 0:
         return NOT_TESTABLE, f"DATH's mean drop total is {_ms(d)} ms"
@@ -335,7 +336,7 @@ def _pour_trials(ci: ClaimInput) -> list[list[Any]]:
 
 
 def _pour_dath(ci: ClaimInput) -> tuple[str, str]:
-    s, n = ci.success("pour", BOTTLE_ORDER, "dath")
+    s, n = ci.success("pour", BOTTLE_ORDER, DATH)
     trials = _pour_trials(ci)
     if not n or not trials:
         return NOT_TESTABLE, "needs pour rows of DATH"
@@ -354,7 +355,7 @@ def _pour_dath(ci: ClaimInput) -> tuple[str, str]:
 
 
 def _pour_faster(ci: ClaimInput) -> tuple[str, str]:
-    fast, slow = ("dath", "swt"), ("nmsd", "fixed")
+    fast, slow = (DATH, SWT), (NMSD, FIXED)
     bottles = [b for b in BOTTLE_ORDER if all(ci.cell("pour", b, m) for m in fast + slow)]
     if not bottles or _need(ci, "pour", fast + slow, bottles):
         return NOT_TESTABLE, "needs pour responses of DATH, SWT-SD, NMSD and fixed on one bottle"
@@ -367,8 +368,8 @@ def _pour_faster(ci: ClaimInput) -> tuple[str, str]:
 
 
 def _under_85(ci: ClaimInput) -> tuple[str, str]:
-    v = {(e, b): ci.cell_mean(e, b, "dath", "response_ms") for e in EXPERIMENTS for b in BOTTLE_ORDER
-         if ci.cell(e, b, "dath")}
+    v = {(e, b): ci.cell_mean(e, b, DATH, "response_ms") for e in EXPERIMENTS for b in BOTTLE_ORDER
+         if ci.cell(e, b, DATH)}
     v = {k: x for k, x in v.items() if x == x}
     if not v:
         return NOT_TESTABLE, "no DATH responses"
@@ -378,7 +379,7 @@ def _under_85(ci: ClaimInput) -> tuple[str, str]:
 
 
 def _bottle_order(ci: ClaimInput, experiment: str, column: str = "response_ms") -> dict[str, float]:
-    v = {b: ci.cell_mean(experiment, b, "dath", column) for b in BOTTLE_ORDER}
+    v = {b: ci.cell_mean(experiment, b, DATH, column) for b in BOTTLE_ORDER}
     return v if all(x == x for x in v.values()) else {}
 
 
@@ -397,7 +398,7 @@ def _tx_best(ci: ClaimInput) -> tuple[str, str]:
         return NOT_TESTABLE, "needs DATH responses on TR, DK and TX in one experiment"
     ok, parts = True, []
     for e, v in orders.items():
-        succ = {b: ci.success(e, [b], "dath")[0] for b in BOTTLE_ORDER}
+        succ = {b: ci.success(e, [b], DATH)[0] for b in BOTTLE_ORDER}
         ok &= v["TX"] < min(x for b, x in v.items() if b != "TX") and succ["TX"] >= max(succ.values())
         parts.append(f"{e} " + ", ".join(f"{b} {_ms(v[b])} ms {100 * succ[b]:.0f}%" for b in BOTTLE_ORDER))
     return _verdict(ok), "DATH mean response and success: " + "; ".join(parts)
@@ -639,7 +640,7 @@ def _capacity_contradiction(first_slip_ml: float = 200.0, plant: Any = None, sim
 def _identical_totals() -> Contradiction:
     same, parts = 0, []
     for b in BOTTLE_ORDER:
-        d, f = PAPER[("pour", "total_ms", b, "dath")], PAPER[("pour", "total_ms", b, "fixed")]
+        d, f = PAPER[("pour", "total_ms", b, DATH)], PAPER[("pour", "total_ms", b, FIXED)]
         hits = [math.floor(fv) == dv for dv, fv in ((d.mean, f.mean), (d.sd, f.sd))]
         same += sum(hits)
         parts.append(f"{b} DATH {d.text()} vs fixed {f.text()}")
@@ -653,7 +654,7 @@ def _identical_totals() -> Contradiction:
 def _window_sd() -> Contradiction:
     floor = window_phase_sd_ms()
     low = [(e, b, m, v.sd) for (e, metric, b, m), v in PAPER.items()
-           if metric == "response_ms" and m in ("fixed", "dath") and v.sd is not None and v.sd < floor]
+           if metric == "response_ms" and m in (FIXED, DATH) and v.sd is not None and v.sd < floor]
     cells = ", ".join(f"{e} {b} {_label(m)} {sd:g}" for e, b, m, sd in low)
     return Contradiction(
         "response sd below the window's phase",
