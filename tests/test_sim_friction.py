@@ -59,7 +59,9 @@ def test_slide_speed_solver_converges_and_solves_the_balance():
         v0 = 10 ** rng.uniform(-8, -4)
         k = 10 ** rng.uniform(-2, 2)
         r = n * mu * (1.0 + 10 ** rng.uniform(-9, 1))
-        w = K.rs_slide_speed(r, k, n, mu, a, v0, C)
+        w, z = K.rs_slide_speed(r, k, n, mu, a, v0, C)
+        assert w == pytest.approx(v0 * math.expm1(z), rel=1e-12)
+        assert K.rs_slide_speed(r, k, n, mu, a, v0, C, z * 1.3 + 0.1)[0] == pytest.approx(w, rel=1e-9)
         assert w >= 0.0
         resid = r - k * w - n * (mu + a * math.log1p(w / v0))
         assert abs(resid) <= 1e-9 * r

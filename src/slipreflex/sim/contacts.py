@@ -122,5 +122,8 @@ def fill_contact_params(P: np.ndarray, hand: HandParams, bottle: Bottle, dt: flo
         P[b + K.PC_KT] = kt
         P[b + K.PC_CT] = ct
         P[b + K.PC_DECAY] = math.exp(-dt * kt / ct)
+        P[b + K.PC_HEAL_DECAY] = math.exp(-dt / bottle.heal_s)
     P[K.P_KN] = normal_stiffness(hand, bottle)
+    pads = P[K.P_C0:K.P_C0 + 2 * K.PC_SIZE].reshape(2, K.PC_SIZE)
+    P[K.P_PADS_SAME] = 1.0 if np.array_equal(pads[0], pads[1]) else 0.0
     return P

@@ -67,8 +67,8 @@ S_NC, S_FT, S_AF, S_SUPPORTED, S_FALLEN, S_TFALL = 15, 16, 17, 18, 19, 20
 S_AX, S_AY, S_AZ, S_AFRESH, S_MASS, S_A = 21, 22, 23, 24, 25, 26
 # per contact (thumb, index, middle): block of SC_SIZE starting at S_C0 + i * SC_SIZE
 S_C0 = 27
-SC_S, SC_W, SC_STUCK, SC_DIR, SC_PHI, SC_FT = range(6)
-SC_SIZE = 6
+SC_S, SC_W, SC_STUCK, SC_DIR, SC_PHI, SC_FT, SC_Z = range(7)   # SC_Z: ln(1 + w / v0), the solver's variable
+SC_SIZE = 7
 S_SIZE = S_C0 + 3 * SC_SIZE
 
 # ---- counters C (int64) ---------------------------------------------------
@@ -80,11 +80,11 @@ C_SIZE = 5
 (P_DT, P_G, P_MB, P_KN, P_LAM, P_QC, P_KSERVO, P_STALL, P_GRIP,
  P_DAQ_T, P_ACC_T, P_ACC_ALPHA, P_ACC_NOISE, P_ACC_LSB, P_ACC_RANGE, P_TILT_X, P_TILT_Z, P_TILT_Y,
  P_VCC, P_VSAT, P_KNEE, P_VNOISE, P_GAP, P_ADC_LSB, P_ADC_MAX, P_TRACK_DX, P_TRACK_OFF,
- P_FLOW_K, P_FLOW_PHASE, P_SPOT_K) = range(30)
+ P_FLOW_K, P_FLOW_PHASE, P_SPOT_K, P_PADS_SAME) = range(31)
 # per contact friction: block of PC_SIZE starting at P_C0 + i * PC_SIZE
-P_C0 = 30
-(PC_LAW, PC_MUS, PC_MUK, PC_VS, PC_A, PC_V0, PC_DC, PC_HEAL, PC_KT, PC_CT, PC_DECAY) = range(11)
-PC_SIZE = 11
+P_C0 = 31
+(PC_LAW, PC_MUS, PC_MUK, PC_VS, PC_A, PC_V0, PC_DC, PC_HEAL, PC_KT, PC_CT, PC_DECAY, PC_HEAL_DECAY) = range(12)
+PC_SIZE = 12
 P_SIZE = P_C0 + 3 * PC_SIZE
 #: Friction laws (PC_LAW): Coulomb with a Stribeck curve; slip weakening + healing + log rate.
 LAW_COULOMB, LAW_RATE_STATE = 0.0, 1.0
@@ -213,30 +213,38 @@ def _water(W, t):
     return m, jet, litres
 
 
-@njit(cache=True)
-def rs_slide_speed(R, K, N, mu_st, a, v0, C):
+@njit(cache=True, inline="always")
+def rs_slide_speed(R, K, N, mu_st, a, v0, C, z_guess=0.0):
     """Sliding speed ``w >= 0`` of a rate-state contact: ``R - K w = N (mu_st + a ln(1 + w / v0))``.
 
     ``R`` is the trial (stuck) force magnitude, ``R > N mu_st``; ``K = k_t dt + c_t``.
     Newton's method in ``z = ln(1 + w / v0)``, where the residual is concave and
-    decreasing, started at an upper bound of the root, so the iterates fall
-    monotonically onto it. ``C[C_NITER]`` keeps the most iterations one solve
-    took and ``C[C_NFAIL]`` counts solves that did not converge.
+    decreasing, so Newton converges from any start (from the right of the root
+    monotonically; from the left its first step lands on the right). It starts
+    from ``z_guess`` (the previous step's ``z``) when positive, else from an
+    upper bound of the root. Returns ``(w, z)``. ``C[C_NITER]`` keeps the most
+    iterations one solve took and ``C[C_NFAIL]`` counts solves that did not
+    converge.
     """
     rp = R - N * mu_st
     na = N * a
     if na <= 0.0:
-        return rp / K
-    z = min(rp / na, np.log1p(rp / (K * v0)))
+        return rp / K, np.log1p(rp / K / v0)
+    kv = K * v0
+    if z_guess > 0.0:
+        z = z_guess
+    else:
+        z = min(rp / na, np.log1p(rp / kv))
     it = 0
     converged = False
     while it < _NEWTON_MAX:
         ez = np.exp(z)
-        h = rp - K * v0 * (ez - 1.0) - na * z
-        dz = h / (-K * v0 * ez - na)
+        h = rp - kv * (ez - 1.0) - na * z
+        dz = h / (-kv * ez - na)
         z -= dz
         it += 1
-        if abs(dz) <= 1e-12 * (1.0 + abs(z)):
+        # quadratic convergence: after a step of 1e-7 the error is of order 1e-14
+        if abs(dz) <= 1e-7 * (1.0 + abs(z)):
             converged = True
             break
     if it > C[C_NITER]:
@@ -245,10 +253,10 @@ def rs_slide_speed(R, K, N, mu_st, a, v0, C):
         C[C_NFAIL] += 1
     if z < 0.0:
         z = 0.0
-    return v0 * np.expm1(z)
+    return v0 * np.expm1(z), z
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _contact(S, P, C, i, x, v, nc, dt):
     """Friction force (N, up on the bottle when positive) of contact ``i``; updates its state.
 
@@ -278,18 +286,24 @@ def _contact(S, P, C, i, x, v, nc, dt):
         if R <= mu_st * nc:
             F = A
             S[bs + SC_STUCK] = 1.0
+            S[bs + SC_Z] = 0.0
         else:
             d = 1.0 if A > 0.0 else -1.0
             K = kt * dt + ct
-            w = rs_slide_speed(R, K, nc, mu_st, P[bp + PC_A], P[bp + PC_V0], C)
+            w, z = rs_slide_speed(R, K, nc, mu_st, P[bp + PC_A], P[bp + PC_V0], C, S[bs + SC_Z])
+            S[bs + SC_Z] = z
             F = d * (R - K * w)
             S[bs + SC_S] = s + d * w * dt
             S[bs + SC_DIR] = d
             S[bs + SC_STUCK] = 0.0
-        heal = 1.0 / P[bp + PC_HEAL]
-        rate = w / P[bp + PC_DC] + heal
-        phi_ss = heal / rate
-        S[bs + SC_PHI] = phi_ss + (phi - phi_ss) * np.exp(-rate * dt)
+        if w > 0.0:
+            heal = 1.0 / P[bp + PC_HEAL]
+            rate = w / P[bp + PC_DC] + heal
+            phi_ss = heal / rate
+            S[bs + SC_PHI] = phi_ss + (phi - phi_ss) * np.exp(-rate * dt)
+        elif phi < 1.0:
+            # stuck: heal toward 1 (the same update with w = 0, its factor precomputed)
+            S[bs + SC_PHI] = 1.0 - (1.0 - phi) * P[bp + PC_HEAL_DECAY]
         S[bs + SC_W] = w
         S[bs + SC_FT] = F
         return F
@@ -307,7 +321,7 @@ def _contact(S, P, C, i, x, v, nc, dt):
     return F
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _contact_post(S, P, i, x_old, x_new, dt):
     """Coulomb-Stribeck contact after the bottle moved: the massless pad relaxes toward
     ``F / k_t`` exactly, the anchor follows, and the contact sticks when it stops."""
@@ -420,9 +434,12 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
             x += v * dt
             S[S_FT] = 0.0
         else:
-            ftot = 0.0
-            for i in range(3):
-                ftot += _contact(S, P, C, i, x, v, nc, dt)
+            # thumb and index pads with the same constants see the same x, v and N, so they
+            # evolve identically: compute the thumb's and copy it (P_PADS_SAME)
+            same = P[P_PADS_SAME] > 0.0
+            f0 = _contact(S, P, C, 0, x, v, nc, dt)
+            f1 = f0 if same else _contact(S, P, C, 1, x, v, nc, dt)
+            ftot = f0 + f1 + _contact(S, P, C, 2, x, v, nc, dt)
             a = (wload - ftot) / m
             v += a * dt
             x += v * dt
@@ -430,7 +447,11 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
             s_mean = 0.0
             w_min = np.inf
             for i in range(3):
-                _contact_post(S, P, i, x_old, x, dt)
+                if i == 1 and same:
+                    for j in range(SC_SIZE):
+                        S[S_C0 + SC_SIZE + j] = S[S_C0 + j]
+                else:
+                    _contact_post(S, P, i, x_old, x, dt)
                 bs = S_C0 + i * SC_SIZE
                 if S[bs + SC_STUCK] > 0.0:
                     sliding = False
