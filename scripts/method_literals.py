@@ -1,7 +1,7 @@
 """Count the method names written as string literals in the package (issue 12, item 1).
 
-A literal counts when the whole string is the name of a method the package registers itself
-(``slipreflex.methods.names()`` at import, any case), outside docstrings. The names' one home,
+A literal counts when the whole string is exactly the name of a method the package registers
+(``slipreflex.methods.names()`` at import), outside docstrings. The names' one home,
 ``slipreflex/methods.py``, is listed apart. Used to report the issue-12 count
 "method names stop being string literals scattered over the package".
 
@@ -35,7 +35,7 @@ def method_literals(root: Path, names: set[str]) -> list[tuple[str, int, str]]:
         docs = _docstring_nodes(tree)
         for node in ast.walk(tree):
             if (isinstance(node, ast.Constant) and isinstance(node.value, str) and id(node) not in docs
-                    and node.value.casefold() in names):
+                    and node.value in names):
                 out.append((str(path.relative_to(root.parent)), node.lineno, node.value))
     return out
 
@@ -48,7 +48,7 @@ def main(argv: list[str] | None = None) -> int:
     sys.path.insert(0, str(args.root.parent))
     from slipreflex import methods
 
-    found = method_literals(args.root, {n.casefold() for n in methods.names()})
+    found = method_literals(args.root, set(methods.names()))
     home = [f for f in found if f[0].endswith("slipreflex/methods.py")]
     rest = [f for f in found if f not in home]
     if args.list:

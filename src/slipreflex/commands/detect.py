@@ -19,6 +19,7 @@ from ..chain import ReflexParams, run_chain
 from ..chain.params import PRESETS
 from ..csvfiles import Recording, irregular_steps, read_recording, write_columns
 from ..errors import DataError, ParameterError
+from ..methods import DATH, FIXED
 from ..paths import output_dir
 
 NAME = "detect"
@@ -42,7 +43,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     """
     d = _DEFAULTS
     p.add_argument("recording", type=Path, help="CSV with columns t (s) and x (V), or one column of volts")
-    p.add_argument("--method", choices=("fixed", "dath"), default=None,
+    p.add_argument("--method", choices=(FIXED, DATH), default=None,
                    help="fixed threshold or Dynamic Adaptive Threshold (default: the file's, else dath)")
     p.add_argument("--preset", choices=sorted(PRESETS), default=None,
                    help="start from a named chain instead of the file's or the paper's: authors-gui is "
@@ -109,7 +110,7 @@ def chain_params(args: argparse.Namespace, rec: Recording) -> ReflexParams:
     values = (ReflexParams.preset(preset, fs=fs) if preset else base or _DEFAULTS).to_dict()
     values.update({k: getattr(args, k) for k in _FIELDS if getattr(args, k) is not None})
     if args.method is not None:
-        values["dath"] = args.method == "dath"
+        values["dath"] = args.method == DATH
     elif base is None and not preset:
         values["dath"] = True
     if args.no_filter:
@@ -188,12 +189,12 @@ def _run_board(args: argparse.Namespace) -> int:
     from ..board import BoardParams, read_adc_csv, run_board_chain, write_board_outputs
 
     p0 = 0.0 if args.p0 is None else args.p0
-    method = args.method or "dath"
+    method = args.method or DATH
     if p0 != int(p0):
         raise ParameterError(f"--p0 must be a whole position with --board, got {p0!r}")
     prefix = _prefix(args)
     adc = read_adc_csv(args.recording)
-    res = run_board_chain(adc, BoardParams.firmware(dath=method == "dath", p0=int(p0)))
+    res = run_board_chain(adc, BoardParams.firmware(dath=method == DATH, p0=int(p0)))
     paths = write_board_outputs(prefix, res.events, res.counts, res.commands)
     print(f"{args.recording}: {adc.size} ADC counts through the board's chain, method {method}")
     print(f"  events: {int(res.events.sum())}, faulty readings: {int(res.faults.sum())}")

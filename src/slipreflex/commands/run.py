@@ -21,6 +21,7 @@ from typing import Any
 from .. import __version__
 from ..errors import ParameterError
 from ..hardware import DAQ_FS, FINGER_MAX, SLIP_FINGER, TRIPOD, Finger
+from ..methods import DATH, FIXED
 
 from ..runtime import WATCHDOG_MAX_S, WATCHDOG_MIN_S, WATCHDOG_S
 
@@ -35,7 +36,7 @@ def add_chain_arguments(p: argparse.ArgumentParser) -> None:
 
     d = ReflexParams()
     g = p.add_argument_group("reflex chain")
-    g.add_argument("--method", choices=("fixed", "dath"), default="dath",
+    g.add_argument("--method", choices=(FIXED, DATH), default=DATH,
                    help="fixed threshold or Dynamic Adaptive Threshold (default: dath)")
     g.add_argument("--fs", type=float, default=DAQ_FS,
                    help=f"sampling rate the chain assumes, Hz (the DAQ's {DAQ_FS:.2f})")
@@ -56,7 +57,7 @@ def chain_params(args: argparse.Namespace, p0: float):
     from ..chain import ReflexParams
 
     return ReflexParams(fs=args.fs, cutoff=args.cutoff, filter=not args.no_filter,
-                        threshold=args.threshold, dath=args.method == "dath",
+                        threshold=args.threshold, dath=args.method == DATH,
                         dath_samples=args.dath_samples, dath_floor=args.dath_floor, n=args.n,
                         p0=p0, kp=args.kp, ki=args.ki, reset_after=args.reset_after)
 

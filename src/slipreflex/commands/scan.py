@@ -16,6 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..methods import DATH, FIXED
+
 NAME = "scan"
 HELP = "simulate the slip sensor's characterization scan (paper Fig. 4-9): CSV, figure, numbers"
 ORDER = 40
@@ -57,10 +59,10 @@ def run(args: argparse.Namespace) -> int:
     for region in ("white", "black"):
         lo, hi = summary.ranges[region]
         print(f"  {region:5s} filtered volts {lo:.3f} .. {hi:.3f} V")
-    print(f"  spikes over the whole scan: fixed {summary.spikes['fixed']}, DATH {summary.spikes['dath']}")
+    print(f"  spikes over the whole scan: fixed {summary.spikes[FIXED]}, DATH {summary.spikes[DATH]}")
     for region in ("white", "black"):
         parts = []
-        for meth in ("fixed", "dath"):
+        for meth in (FIXED, DATH):
             sp = summary.min_spacing_mm[(meth, region)]
             parts.append(f"{meth} {summary.spikes_in[(meth, region)]} spikes, smallest spacing "
                          + ("-" if sp is None else f"{sp:.3f} mm"))
@@ -97,24 +99,24 @@ def _figure(result, summary, path: Path, threshold: float) -> None:
         axb.plot(pos[sel], x[sel], lw=0.8)
         axb.set(title=f"B  {name}: filtered output", ylabel="V")
         axc = fig.add_subplot(gs[2, col], sharex=axb)
-        for meth, color in (("fixed", "C0"), ("dath", "C2")):
+        for meth, color in ((FIXED, "C0"), (DATH, "C2")):
             tr = result.analysis[meth]
             axc.plot(pos[sel], np.abs(tr.accumulator[sel]), lw=0.7, c=color, label=f"|acc| {meth}")
-            axc.plot(pos[sel], tr.threshold[sel], lw=0.9, c="C3" if meth == "fixed" else "C1",
+            axc.plot(pos[sel], tr.threshold[sel], lw=0.9, c="C3" if meth == FIXED else "C1",
                      label=f"threshold {meth}")
         axc.set(ylabel="V")
         axc.set_title(f"C  {name}: |accumulator| and threshold (base {threshold * 1000:g} mV)", fontsize=9)
         axc.legend(fontsize=7, loc="upper right")
         axd = fig.add_subplot(gs[3, col], sharex=axb)
-        for row, meth in enumerate(("fixed", "dath")):
+        for row, meth in enumerate((FIXED, DATH)):
             ev = result.analysis[meth].events & sel
             axd.vlines(pos[ev], row + 0.1, row + 0.9, lw=0.7, color=f"C{2 * row}")
         axd.set_yticks([0.5, 1.5], ["fixed", "DATH"])
         sp = summary.min_spacing_mm
-        gap = sp[("fixed", name)]
+        gap = sp[(FIXED, name)]
         axd.set(xlabel="position (mm)")
-        axd.set_title(f"D  {name}: spikes, fixed {summary.spikes_in[('fixed', name)]} "
+        axd.set_title(f"D  {name}: spikes, fixed {summary.spikes_in[(FIXED, name)]} "
                       f"(min spacing {'-' if gap is None else format(gap, '.3f')} mm), "
-                      f"DATH {summary.spikes_in[('dath', name)]}", fontsize=9)
+                      f"DATH {summary.spikes_in[(DATH, name)]}", fontsize=9)
     fig.savefig(path, dpi=110)
     plt.close(fig)

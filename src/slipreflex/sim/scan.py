@@ -31,6 +31,7 @@ import numpy as np
 
 from .. import hardware as hw
 from ..errors import ParameterError
+from ..methods import DATH, FIXED
 from . import kernel as K
 from .objects import Surface, resolve_surface
 from .params import SlipSensorParams
@@ -150,11 +151,11 @@ class ScanResult:
                 continue
             key = name if name not in ranges else f"{name}@{a * 1000:g}mm"
             ranges[key] = (float(x[sel].min()), float(x[sel].max()))
-            for meth, tr in (("fixed", fixed), ("dath", dath)):
+            for meth, tr in ((FIXED, fixed), (DATH, dath)):
                 pos = self.position[sel & tr.events]
                 spikes_in[(meth, key)] = int(pos.size)
                 spacing[(meth, key)] = float(np.diff(pos).min() * 1000.0) if pos.size > 1 else None
-        return ScanSummary(ranges=ranges, spikes={"fixed": int(fixed.events.sum()), "dath": int(dath.events.sum())},
+        return ScanSummary(ranges=ranges, spikes={FIXED: int(fixed.events.sum()), DATH: int(dath.events.sum())},
                            spikes_in=spikes_in, min_spacing_mm=spacing)
 
     def to_frame(self) -> dict[str, np.ndarray]:
@@ -169,7 +170,7 @@ class ScanResult:
         out = {"t": self.t, "position_mm": self.position * 1000.0, "volts": self.volts}
         if self.analysis:
             out["filtered"] = self.analysis["filtered"]
-            for meth in ("fixed", "dath"):
+            for meth in (FIXED, DATH):
                 tr = self.analysis[meth]
                 out[f"{meth}_accumulator"] = tr.accumulator
                 out[f"{meth}_threshold"] = tr.threshold
