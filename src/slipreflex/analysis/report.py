@@ -532,18 +532,32 @@ def setup_lines(result: Any, command: str | None = None) -> list[str]:
         f"= {c.trials * len(c.bottles) * len(c.experiments) * len(c.methods)} trials, "
         f"{len(result.rows)} result rows (slip events)",
         f"master seed {c.seed}; trial seeds spawned per experiment, bottle and trial "
-        "(numpy SeedSequence), shared by every method (paired comparison)",
+        "(numpy SeedSequence), " + ("each method its own (independent seeds)" if getattr(c, "independent_seeds", False)
+                                    else "shared by every method (paired comparison)")
+        + ("; each trial's placement, grip height and friction vary from its seed (sim.variations)"
+           if getattr(c, "variations", False) else "; every repeat is the nominal plant"),
         f"drop: {c.drop.mass_kg * 1e3:g} g from {c.drop.height_m * 1e2:g} cm above the opening; "
         f"pour: {c.pour.volume_ml:g} ml at {c.pour.rate_l_min:g} L/min ({c.pour.duration_s:.0f} s)",
-        f"protocol: grasp to {hw.CONTACT_FORCE_N} N, settle (simulator's grasp routine), "
+        f"protocol: grasp to {getattr(c, 'grasp_force_n', hw.CONTACT_FORCE_N):g} N, settle (simulator's grasp routine), "
         f"{c.rest_s:g} s of rest recorded, perturbation, {c.after_s:g} s after it ends",
         _chain_line(),
     ]
+    lines += _plant_lines(c)
     if result.thresholds:
         lines.append(_threshold_line(result.thresholds, c))
     return lines + _analysis_lines(c) + [
         f"wall time {result.wall_s:.1f} s on {result.jobs} worker process(es) "
         f"({os.cpu_count()} cores), calibration {result.calibration_wall_s:.1f} s"]
+
+
+def _plant_lines(c: Any) -> list[str]:
+    """The plant's open-loop first slip and contact friction, computed for the run's bottles."""
+    from .. import hardware as hw
+    from ..sim import BOTTLES
+    from ..sim.calibration import plant_lines
+
+    names = [b for b in c.bottles if b in BOTTLES]
+    return plant_lines([BOTTLES[b] for b in names], getattr(c, "grasp_force_n", hw.CONTACT_FORCE_N)) if names else []
 
 
 def _chain_line() -> str:

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -37,7 +37,7 @@ from .contacts import static_capacity
 from .objects import PAPER_DROP, PAPER_POUR, WATER_DENSITY, Bottle, Drop, Pour
 
 __all__ = ["PAPER_FIRST_SLIP_ML", "CALIBRATION_SEEDS", "first_slip_ml", "calibrate_bottle", "Calibration",
-           "drop_falls", "drop_fall_capacity", "GraspFailed", "check_grasp"]
+           "drop_falls", "drop_fall_capacity", "GraspFailed", "check_grasp", "plant_lines"]
 
 #: The paper's open-loop first pour slip (ml): "the first slip occurred at about 200 ml" (Fig. 15).
 PAPER_FIRST_SLIP_ML: float = 200.0
@@ -329,3 +329,25 @@ def drop_fall_capacity(bottle: Bottle, *, rig_kwargs: dict[str, Any] | None = No
         mu = lo
     cap = static_capacity(replace(bottle, mu_s=mu, mu_k=min(mu * ratio, mu)), nc)
     return {"capacity_n": cap, "capacity_g": cap / g * 1e3, "mu_s": mu, "bottle_capacity_g": own / g * 1e3}
+
+
+def plant_lines(bottles: Sequence[Bottle], grasp_force: float = hw.CONTACT_FORCE_N, *,
+                rig_kwargs: dict[str, Any] | None = None) -> list[str]:
+    """Report lines on the plant of a run: each bottle's open-loop first pour slip and its calibrated friction.
+
+    Computed (one open-loop pour per bottle, seed 0), not quoted, so a run with
+    another plant states its own values.
+
+    Examples
+    --------
+    >>> from slipreflex.sim import BOTTLES
+    >>> print(plant_lines([BOTTLES["TR"]])[0][:60])
+    open-loop first pour slip (0.8 N grasp, no reflex, seed 0): 
+    """
+    slips = ", ".join(f"{b.name} {first_slip_ml(b, rig_kwargs=rig_kwargs, seeds=(0,), grasp_force=grasp_force):.0f} ml"
+                      for b in bottles)
+    fr = "; ".join(f"{b.name} pads mu_s {b.mu_s:g} / mu_k {b.mu_k:g}, cuff {b.cuff_mu_s:g} / {b.cuff_mu_k:g} "
+                   f"({b.friction_law})" for b in bottles)
+    return [f"open-loop first pour slip ({grasp_force:g} N grasp, no reflex, seed 0): {slips} (paper: about "
+            f"{PAPER_FIRST_SLIP_ML:g} ml; the paper's bottles' pad mu_s is calibrated to it, `slipreflex calibrate`)",
+            f"contact friction: {fr}"]
