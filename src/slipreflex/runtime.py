@@ -73,7 +73,8 @@ from .interfaces import DaqSample, Hand, Reflex, SampleSource
 from .validation import number
 
 __all__ = ["Fault", "SampleRecord", "RunResult", "run_loop", "print_fault", "realtime_priority",
-           "WATCHDOG_S", "WATCHDOG_MIN_S", "WATCHDOG_MAX_S", "start_positions", "safe_start"]
+           "WATCHDOG_S", "WATCHDOG_MIN_S", "WATCHDOG_MAX_S", "start_positions", "safe_start",
+           "finger_offsets"]
 
 #: Seconds without a valid sample after which the watchdog holds the fingers.
 WATCHDOG_S: float = 0.1
@@ -461,6 +462,47 @@ def safe_start(hand: Hand, p0: float | Mapping[Any, float],
     return start
 
 
+def finger_offsets(reflex: Any, fingers: Sequence[Finger] = TRIPOD) -> dict[Finger, float]:
+    """The per-finger offsets a reflex asks the hand to add to its command, checked.
+
+    A reflex may declare ``finger_offsets`` ({finger: units}; the authors' rig
+    code, preset ``authors-gui``, sends the middle finger the command + 20).
+    Offsets of fingers outside ``fingers`` are ignored, as in the simulator.
+
+    Parameters
+    ----------
+    reflex : Reflex
+    fingers : sequence of Finger
+
+    Returns
+    -------
+    dict of Finger to float
+
+    Raises
+    ------
+    ParameterError
+        An offset that is not a finite number (before anything is sent).
+
+    Examples
+    --------
+    >>> from slipreflex.chain import SlipReflex
+    >>> finger_offsets(SlipReflex.from_preset("authors-gui", p0=147.0))
+    {<Finger.MIDDLE: 2>: 20.0}
+    >>> finger_offsets(SlipReflex())
+    {}
+    """
+    out: dict[Finger, float] = {}
+    for k, v in (getattr(reflex, "finger_offsets", None) or {}).items():
+        f = Finger(k)
+        if f not in fingers:
+            continue
+        if not (isinstance(v, (int, float)) and math.isfinite(v)):
+            raise ParameterError(f"run_loop: reflex finger_offsets[{f.name.lower()}] must be a finite "
+                                 f"number, got {v!r}")
+        out[f] = float(v)
+    return out
+
+
 def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
              p0: float | Mapping[Any, float] | None = None, recorder: Any = None,
              duration: float | None = None, watchdog: float = WATCHDOG_S, poll: float = 0.01,
@@ -552,6 +594,7 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
     if p0 is None and not ref_ok:
         raise ParameterError("run_loop: give p0 (the reflex has no initial command)")
     given = start_positions(p0 if p0 is not None else ref0, fingers)  # checked before anything is sent
+    finger_offsets(reflex, fingers)
     try:
         start, start_error = safe_start(hand, given, fingers), None
     except DeviceError as err:  # the STOP did not go out: the fingers stay as the grasp left them
@@ -625,10 +668,13 @@ class _Loop:
         self.fingers = tuple(start)
         self.finger_names = [f.name.lower() for f in self.fingers]
         self.start = start
-        self.shift = {f: start[f] - ref0 for f in self.fingers}  # reflex frame -> each finger's
+        # reflex frame -> each finger's; a reflex's finger_offsets (authors-gui: middle + 20)
+        # add to that finger's targets only (the floor at start and the cap at 500 still hold)
+        self.offsets = finger_offsets(reflex, self.fingers)
+        self.shift = {f: start[f] - ref0 + self.offsets.get(f, 0.0) for f in self.fingers}
         self.top = {f: float(THUMB_ROTATOR_MAX if f == Finger.THUMB_ROTATOR else FINGER_MAX)
                     for f in self.fingers}
-        self.slip_shift = self.shift.get(SLIP_FINGER, 0.0)
+        self.slip_shift = self.shift.get(SLIP_FINGER, 0.0) - self.offsets.get(SLIP_FINGER, 0.0)
         self.duration, self.watchdog_s, self.poll, self.stop = duration, watchdog, poll, stop
         self.on_fault, self.stats_interval, self.clock = on_fault, stats_interval, clock
         self.res = RunResult(start={f.name.lower(): v for f, v in start.items()},
@@ -658,7 +704,9 @@ class _Loop:
         self.next_counters = self.t0
         if recorder is not None and hasattr(recorder, "add_metadata"):
             recorder.add_metadata("start", {"p0": json.dumps(self.res.start), "reflex_start": repr(ref0),
-                                            "initial_command": self.res.initial_command})
+                                            "initial_command": self.res.initial_command,
+                                            "finger_offsets": json.dumps({f.name.lower(): v for f, v
+                                                                          in self.offsets.items()})})
 
     # -- the loop --------------------------------------------------------------------
     def run(self, guard: bool) -> RunResult:

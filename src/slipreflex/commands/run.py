@@ -38,6 +38,10 @@ def add_chain_arguments(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("reflex chain")
     g.add_argument("--method", choices=(FIXED, DATH), default=DATH,
                    help="fixed threshold or Dynamic Adaptive Threshold (default: dath)")
+    g.add_argument("--preset", choices=("authors-gui", "dath-event"), default=None,
+                   help="a named chain instead of the options below: authors-gui is the authors' rig "
+                        "code (the middle finger gets the command + 20), dath-event DATH with the "
+                        "event-driven MPI (docs/method.md); only --fs may be given with it")
     g.add_argument("--fs", type=float, default=DAQ_FS,
                    help=f"sampling rate the chain assumes, Hz (the DAQ's {DAQ_FS:.2f})")
     g.add_argument("--cutoff", type=float, default=d.cutoff, help=f"low-pass cutoff, Hz ({d.cutoff:g})")
@@ -52,10 +56,25 @@ def add_chain_arguments(p: argparse.ArgumentParser) -> None:
                    help=f"zero windows before P0 resets ({d.reset_after})")
 
 
+#: chain options a preset replaces: option -> its argparse dest (a ReflexParams field)
+_PRESET_REPLACES = {"--cutoff": "cutoff", "--threshold": "threshold", "--dath-samples": "dath_samples",
+                    "--dath-floor": "dath_floor", "--n": "n", "--kp": "kp", "--ki": "ki",
+                    "--reset-after": "reset_after"}
+
+
 def chain_params(args: argparse.Namespace, p0: float):
-    """Build the ReflexParams the options describe."""
+    """Build the ReflexParams the options describe (a ``--preset`` with any other chain option
+    is an error naming it, rather than one of them being silently ignored)."""
     from ..chain import ReflexParams
 
+    if getattr(args, "preset", None):
+        d = ReflexParams()
+        given = [o for o, k in _PRESET_REPLACES.items() if getattr(args, k) != getattr(d, k)]
+        given += ["--method fixed"] * (args.method != "dath") + ["--no-filter"] * args.no_filter
+        if given:
+            raise ParameterError(f"--preset {args.preset} sets the whole chain; {given[0]} cannot be "
+                                 f"combined with it")
+        return ReflexParams.preset(args.preset, fs=args.fs, p0=p0)
     return ReflexParams(fs=args.fs, cutoff=args.cutoff, filter=not args.no_filter,
                         threshold=args.threshold, dath=args.method == DATH,
                         dath_samples=args.dath_samples, dath_floor=args.dath_floor, n=args.n,
@@ -137,6 +156,8 @@ def run(args: argparse.Namespace) -> int:
     p0 = check_arguments(args)  # everything, before a port opens or a byte is sent
     params = chain_params(args, p0[SLIP_FINGER])
     reflex = SlipReflex.from_params(params)
+    if args.preset:
+        reflex.name = args.preset
     if args.realtime:
         print(realtime_priority(), flush=True)
     stop = threading.Event()
