@@ -408,3 +408,26 @@ def test_a_compiled_caller_runs_the_same_step_as_slipreflex():
         ref = [reflex.step(r, None if np.isnan(q) else q) for r, q in zip(raw, positions)]
         assert [None if np.isnan(u) else u for u in out] == ref
         assert S.tobytes() == reflex.state.tobytes()
+
+
+@pytest.mark.parametrize("option, value", [
+    ("acc_reset", 33), ("acc_leak", 32.0), ("mpi_mode", "event"), ("filter_kind", "mean"),
+    ("reset_after", None), ("slip_finger_offset", 20.0)])
+def test_the_board_refuses_a_chain_option_it_cannot_reproduce(option, value):
+    from slipreflex.board import BoardParams
+
+    with pytest.raises(ParameterError, match=f"^{option}=") as err:
+        BoardParams.from_chain(**{option: value})
+    assert "\n" not in str(err.value)
+    with pytest.raises(ParameterError, match="paper's method only"):
+        BoardParams.from_chain(ReflexParams.preset("authors-gui"))
+
+
+def test_the_board_refuses_a_level_that_would_round_to_zero_and_keeps_a_real_dath_floor():
+    from slipreflex.board import BoardParams, volts_to_q16
+
+    for option in ("threshold", "dath_floor"):
+        with pytest.raises(ParameterError, match=f"^{option}=1e-09 V is below the board's resolution"):
+            BoardParams.from_chain(**{option: 1e-9})
+    assert BoardParams.from_chain(dath=True, dath_floor=0.001).dath_floor == volts_to_q16(0.001) > 0
+    assert BoardParams.from_chain(dath=True).dath_floor == 0

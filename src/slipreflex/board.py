@@ -205,7 +205,10 @@ class BoardParams:
         params : ReflexParams, optional
             Or the same fields as keywords (``fs`` defaults to the board's 333.33 Hz).
             Volts become Q16 counts (:func:`volts_to_q16`); positions and gains must
-            be whole numbers.
+            be whole numbers. Only the paper's method: any ``params.variants``
+            (moving-mean filter, ``acc_reset``, ``acc_leak``, the event-driven MPI,
+            no reset, a finger offset) is refused, as is a positive threshold or
+            DATH floor too small for Q16.
         adc_min, adc_max, stuck_after : int
             Fault rules (the defaults never fault on a 10-bit reading).
 
@@ -217,6 +220,10 @@ class BoardParams:
         --------
         >>> BoardParams.from_chain(x0=0.0).x0
         0
+        >>> BoardParams.from_chain(acc_leak=32.0)
+        Traceback (most recent call last):
+        ...
+        slipreflex.errors.ParameterError: acc_leak=32.0: the board's fixed-point chain runs the paper's method only (no acc_leak); use the float chain (slipreflex.chain)
         """
         from .chain.params import ReflexParams
 
@@ -225,6 +232,13 @@ class BoardParams:
         if params is None:
             params = ReflexParams.from_dict({"fs": hw.DAQ_FS, **kwargs})
         p = params
+        for name in p.variants:  # other methods: refused, never silently run as the paper's chain
+            raise ParameterError(f"{name}={getattr(p, name)!r}: the board's fixed-point chain runs the "
+                                 f"paper's method only (no {name}); use the float chain (slipreflex.chain)")
+        for name in ("threshold", "dath_floor"):  # a positive level must stay positive in Q16
+            if getattr(p, name) > 0 and volts_to_q16(getattr(p, name)) == 0:
+                raise ParameterError(f"{name}={getattr(p, name)!r} V is below the board's resolution "
+                                     f"({hw.ADC_LSB / (1 << SIG_Q):.3g} V): it would become 0")
         whole = {}
         for name in ("p0", "kp", "ki", "lo", "hi"):
             value = getattr(p, name)
