@@ -253,3 +253,76 @@ def test_reproduce_estimates_its_run_time_before_starting(tmp_path, capsys, monk
                       "(a long run: fewer --trials, --bottles or --methods shorten it)")
     assert main(["reproduce", "--out", str(tmp_path), "--trials", "1", "--jobs", "2"]) == 2
     assert "long run" not in capsys.readouterr().err
+
+
+OBJECTS = """
+[bottles.JAR]
+mass_kg = 0.25
+diameter_m = 0.07
+mu_s = {mu_s}
+mu_k = {mu_k}
+surface = "TX"
+
+[drops.HEAVY]
+mass_kg = 0.02
+height_m = 0.05
+
+[pours.FAST]
+rate_l_min = 2.0
+volume_ml = 300
+"""
+
+
+def _objects_file(tmp_path, mu_s=1.2, mu_k=1.0):
+    p = tmp_path / "objs.toml"
+    p.write_text(OBJECTS.format(mu_s=mu_s, mu_k=mu_k))
+    return p
+
+
+def test_reproduce_with_own_objects_compares_with_the_paper_only_where_they_are_the_papers(tmp_path, capsys):
+    from slipreflex.analysis.report import read_csv
+    from slipreflex.cli import main
+    objs = _objects_file(tmp_path)
+    out = tmp_path / "r"
+    assert main(["reproduce", "--objects", str(objs), "--bottles", "JAR,TR", "--drop", "HEAVY", "--trials", "1",
+                 "--methods", "DATH", "--jobs", "1", "--no-progress", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    rows = read_csv(out / "results.csv")
+    assert {(r["experiment"], r["bottle"]) for r in rows} == {(e, b) for e in ("drop", "pour") for b in ("JAR", "TR")}
+    report = (out / "report.md").read_text()
+    first = report.splitlines()[2]
+    assert first.startswith("**Not the paper's objects: bottle JAR, drop (20 g from 5 cm). The paper's numbers "
+                            "are compared only where the bottle and its load are the paper's")
+    assert printed.startswith("Not the paper's objects: bottle JAR, drop (20 g from 5 cm).")
+    paper_table, yours = report.split("## Your objects (no paper values)")
+    assert "| pour, response ms | TR |" in paper_table             # the paper's bottle under the paper's pour
+    assert "drop, response ms" not in paper_table and "JAR" not in paper_table.split("## Run")[1].split("##")[1]
+    assert "drop  JAR" in yours and "drop  TR" in yours and "pour  JAR" in yours and "pour  TR" not in yours
+
+
+def test_own_objects_names_are_checked_before_any_work(tmp_path, capsys):
+    objs = _objects_file(tmp_path)
+    for argv, says in [
+        (["reproduce", "--drop", "HEAVY"], "--drop HEAVY: no such drop (give --objects FILE.toml)"),
+        (["reproduce", "--objects", str(objs), "--pour", "SLOW"], f"--pour SLOW: no such pour ({objs} has FAST)"),
+        (["reproduce", "--objects", str(objs), "--bottles", "JAR,XX"], "bottles: unknown 'XX' (known: TR, DK, TX, JAR)"),
+        (["reproduce", "--objects", str(tmp_path)], f"{tmp_path}: is a directory, not a TOML file"),
+        (["virtual-rig", "--objects", str(objs), "--bottle", "POT"], "--bottle POT: unknown (known: TR, DK, TX, JAR)"),
+        (["virtual-rig", "--objects", str(objs), "--drop", "NOPE"], f"--drop NOPE: no such drop ({objs} has HEAVY)"),
+    ]:
+        _one_line_exit_2(capsys, argv + ["--out" if argv[0] == "reproduce" else "--duration",
+                                         str(tmp_path / "o") if argv[0] == "reproduce" else "0"], says)
+
+
+def test_a_grasp_that_cannot_hold_the_object_says_what_to_change(tmp_path, capsys):
+    """Item 14: a 250 g jar with mu 0.4 in the 0.8 N grasp; --grasp-force makes it hold."""
+    from slipreflex.cli import main
+    objs = _objects_file(tmp_path, mu_s=0.4, mu_k=0.3)
+    for argv in (["virtual-rig", "--objects", str(objs), "--bottle", "JAR", "--duration", "0"],
+                 ["reproduce", "--objects", str(objs), "--bottles", "JAR", "--trials", "1", "--out", str(tmp_path)]):
+        assert main(argv) == 2
+        err = capsys.readouterr().err.strip().splitlines()[-1]
+        assert "bottle JAR: the 0.8 N grasp cannot hold it" in err and "--grasp-force" in err
+    assert main(["virtual-rig", "--objects", str(objs), "--bottle", "JAR", "--grasp-force", "3",
+                 "--duration", "0"]) == 0
+    assert "grasp: bottle JAR" in capsys.readouterr().out

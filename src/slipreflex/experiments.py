@@ -37,6 +37,7 @@ import functools
 import math
 import os
 import time
+import zlib
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
@@ -125,7 +126,11 @@ class ReproduceConfig:
         force that cannot hold a bottle is an error before the first trial.
     plant : slipreflex.sim.uncertain.Plant, optional
         The simulated plant (parameter objects and bottles); None: the
-        default plant. ``slipreflex study`` runs the grid on many plants.
+        default plant. ``slipreflex study`` runs the grid on many plants, and
+        ``--objects FILE.toml`` adds a file's bottles to the plant's.
+    drop_object, pour_object : slipreflex.sim.Drop, slipreflex.sim.Pour, optional
+        The sudden and gradual loads (None: the paper's, ``PAPER_DROP`` and
+        ``PAPER_POUR``); ``drop_mass_kg`` and the others override their fields.
 
     Examples
     --------
@@ -155,13 +160,16 @@ class ReproduceConfig:
     independent_seeds: bool = False
     grasp_force_n: float = CONTACT_FORCE_N
     plant: Any = None
+    drop_object: Any = None
+    pour_object: Any = None
 
     def __post_init__(self) -> None:
         for name in ("variations", "independent_seeds"):
             set_field(self, name, flag(name, getattr(self, name)))
         set_field(self, "trials", integer("trials", self.trials, lo=1))
         set_field(self, "seed", integer("seed", self.seed, lo=0))
-        for name, known in (("bottles", BOTTLE_NAMES), ("experiments", EXPERIMENTS)):
+        known_bottles = tuple(self.plant.bottles) if self.plant is not None else BOTTLE_NAMES
+        for name, known in (("bottles", known_bottles), ("experiments", EXPERIMENTS)):
             set_field(self, name, choices(name, getattr(self, name), known))
         set_field(self, "methods", choices("methods", self.methods, methods.names(), any_case=True))
         for name in ("rest_s", "after_s", "calibration_s", "rest_k", "grasp_force_n"):
@@ -187,7 +195,7 @@ class ReproduceConfig:
         """
         from .sim import PAPER_DROP
 
-        return _override(PAPER_DROP, mass_kg=self.drop_mass_kg, height_m=self.drop_height_m)
+        return _override(self.drop_object or PAPER_DROP, mass_kg=self.drop_mass_kg, height_m=self.drop_height_m)
 
     @property
     def pour(self):
@@ -200,7 +208,49 @@ class ReproduceConfig:
         """
         from .sim import PAPER_POUR
 
-        return _override(PAPER_POUR, rate_l_min=self.pour_rate_l_min, volume_ml=self.pour_volume_ml)
+        return _override(self.pour_object or PAPER_POUR, rate_l_min=self.pour_rate_l_min, volume_ml=self.pour_volume_ml)
+
+    def bottle(self, name: str):
+        """The :class:`slipreflex.sim.Bottle` called ``name`` in this run's plant.
+
+        Examples
+        --------
+        >>> ReproduceConfig().bottle("TX").name
+        'TX'
+        """
+        from .sim import BOTTLES
+
+        return (self.plant.bottles if self.plant is not None else BOTTLES)[name]
+
+    def not_the_papers(self) -> list[str]:
+        """What in this run is not the paper's: its own bottles, drop or pour (empty: all the paper's).
+
+        Examples
+        --------
+        >>> ReproduceConfig().not_the_papers()
+        []
+        >>> ReproduceConfig(drop_mass_kg=0.02).not_the_papers()
+        ['drop (20 g from 2 cm)']
+        """
+        from .sim import BOTTLES, PAPER_DROP, PAPER_POUR
+
+        out = [f"bottle {b}" for b in self.bottles if b not in BOTTLES or self.bottle(b) != BOTTLES[b]]
+        if "drop" in self.experiments and self.drop != PAPER_DROP:
+            out.append(f"drop ({1e3 * self.drop.mass_kg:g} g from {1e2 * self.drop.height_m:g} cm)")
+        if "pour" in self.experiments and self.pour != PAPER_POUR:
+            out.append(f"pour ({self.pour.volume_ml:g} ml at {self.pour.rate_l_min:g} L/min)")
+        return out
+
+    def comparable(self, experiment: str, bottle: str) -> bool:
+        """True where the paper's numbers apply: the paper's bottle under the paper's load.
+
+        Examples
+        --------
+        >>> ReproduceConfig(pour_rate_l_min=2.0).comparable("pour", "TR")
+        False
+        """
+        differ = self.not_the_papers()
+        return f"bottle {bottle}" not in differ and not any(d.startswith(experiment) for d in differ)
 
     def duration(self, experiment: str) -> float:
         """Closed-loop recording length (s) of one trial of ``experiment``.
@@ -276,8 +326,7 @@ def trial_seed(master: int, experiment: str, bottle: str, trial: int, method: st
     >>> trial_seed(1, "pour", "TX", 2) == trial_seed(1, "pour", "TX", 2)
     True
     """
-    entropy, spawn_key, pool_size = _cell_sequence(master, EXPERIMENTS.index(experiment),
-                                                   BOTTLE_NAMES.index(bottle))
+    entropy, spawn_key, pool_size = _cell_sequence(master, EXPERIMENTS.index(experiment), _bottle_key(bottle))
     # The child spawn(trial + 1)[trial] would make, built directly: the same bits in O(1),
     # so a grid's seeds take time linear in its trials (spawning them was quadratic).
     child = np.random.SeedSequence(entropy, spawn_key=(*spawn_key, trial), pool_size=pool_size)
@@ -287,10 +336,24 @@ def trial_seed(master: int, experiment: str, bottle: str, trial: int, method: st
     return _seed63(child)
 
 
+def _bottle_key(bottle: str) -> int:
+    """A paper bottle's canonical position; another bottle's a key from its name (never 0-2)."""
+    if bottle in BOTTLE_NAMES:
+        return BOTTLE_NAMES.index(bottle)
+    return (1 << 32) + zlib.crc32(bottle.encode())
+
+
 @functools.lru_cache(maxsize=64)
 def _cell_sequence(master: int, e: int, b: int) -> tuple[Any, tuple[int, ...], int]:
-    """(entropy, spawn_key, pool_size) of ``SeedSequence(master).spawn(2)[e].spawn(3)[b]``."""
-    ss = np.random.SeedSequence(master).spawn(len(EXPERIMENTS))[e].spawn(len(BOTTLE_NAMES))[b]
+    """(entropy, spawn_key, pool_size) of ``SeedSequence(master).spawn(2)[e].spawn(3)[b]``.
+
+    A bottle that is not the paper's (``b`` >= 3) gets the child with spawn key ``b``,
+    built directly, so its seeds do not depend on which other bottles run.
+    """
+    parent = np.random.SeedSequence(master).spawn(len(EXPERIMENTS))[e]
+    if b >= len(BOTTLE_NAMES):
+        return parent.entropy, (*parent.spawn_key, b), parent.pool_size
+    ss = parent.spawn(len(BOTTLE_NAMES))[b]
     return ss.entropy, tuple(ss.spawn_key), ss.pool_size
 
 
@@ -432,7 +495,7 @@ def _run_cell(cell: Cell, config: ReproduceConfig, thresholds: dict[str, float],
 
 
 def _order(row: TrialRow) -> tuple:
-    return (EXPERIMENTS.index(row.experiment), BOTTLE_NAMES.index(row.bottle),
+    return (EXPERIMENTS.index(row.experiment), _bottle_key(row.bottle), row.bottle,
             methods.names().index(row.method), row.trial, row.event)
 
 
@@ -502,11 +565,10 @@ def run_reproduce(config: ReproduceConfig | None = None, *, jobs: int | None = N
     if jobs < 1:
         raise ParameterError(f"jobs must be >= 1, got {jobs}")
     t0 = time.perf_counter()
-    from .sim import BOTTLES
     from .sim.calibration import check_grasp
 
     for b in config.bottles:                    # a grasp that cannot hold a bottle fails here, at once
-        check_grasp(BOTTLES[b], config.grasp_force_n)
+        check_grasp(config.bottle(b), config.grasp_force_n)
     thresholds = calibrate(config) if set(config.methods) & set(methods.calibrated()) else {}
     specs = {m: methods.get(m) for m in config.methods}
     t_cal = time.perf_counter() - t0

@@ -29,7 +29,7 @@ from .report import (SUCCESS_CAPTION, SUMMARY_COLUMNS, bars_caption, discussion_
                      setup_lines, trial_caption, write_csv, zoom_caption)
 from .trial import RESULT_COLUMNS, TrialRow
 
-__all__ = ["ReproduceResult", "write_outputs", "trial_plot"]
+__all__ = ["ReproduceResult", "write_outputs", "trial_plot", "paper_part"]
 
 
 @dataclass
@@ -121,16 +121,49 @@ def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str 
     figs = [] if partial else _write_figures(result, out, paths)
     notices = [f"Partial run: {partial}; the tables cover the finished trials only, "
                "and no figures were drawn nor claims judged."] if partial else []
+    paper, others, notice = paper_part(result)
+    notices += [notice] if notice else []
     from .claims import judge_run
 
-    md = report_markdown(summary=result.summary, rows=result.rows, figures=figs,
+    md = report_markdown(summary=paper.summary, rows=paper.rows, figures=figs,
                          setup=setup_lines(result, command), notices=notices,
-                         discussion=list(discussion) if discussion is not None else discussion_text(result),
-                         claims=() if partial else judge_run(result.rows, seed=result.config.seed,
-                                                             plant=result.config.plant))
+                         discussion=list(discussion) if discussion is not None else discussion_text(paper),
+                         claims=() if partial or not paper.rows else judge_run(
+                             paper.rows, seed=result.config.seed, plant=result.config.plant))
+    if others:
+        from .report import terminal_table
+
+        md += ("\n## Your objects (no paper values)\n\n```\n" + terminal_table(others) + "\n```\n")
     paths["report"] = out / "report.md"
     paths["report"].write_text(md)
     return paths
+
+
+def paper_part(result: ReproduceResult) -> tuple[ReproduceResult, list[dict[str, Any]], str]:
+    """The run restricted to the paper's bottles and loads, the other summary rows, and a notice.
+
+    The report compares with the paper only the first part; the notice (empty when every
+    object is the paper's) says so in the report's first lines.
+
+    Examples
+    --------
+    >>> from slipreflex.experiments import ReproduceConfig
+    >>> res = ReproduceResult(ReproduceConfig(drop_mass_kg=0.02), [], [], {}, {}, 0.0, 1)
+    >>> paper_part(res)[2][:50]
+    "Not the paper's objects: drop (20 g from 2 cm). Th"
+    """
+    config = result.config
+    differ = config.not_the_papers() if hasattr(config, "not_the_papers") else []
+    if not differ:
+        return result, [], ""
+    keep = [s for s in result.summary if config.comparable(s["experiment"], s["bottle"])]
+    others = [s for s in result.summary if not config.comparable(s["experiment"], s["bottle"])]
+    rows = [r for r in result.rows if config.comparable(r["experiment"], r["bottle"])]
+    notice = ("Not the paper's objects: " + ", ".join(differ) + ". The paper's numbers are compared "
+              "only where the bottle and its load are the paper's"
+              + ("" if keep else " (none in this run)") + "; the other results are at the end, "
+              "under 'Your objects', and in results.csv.")
+    return dataclasses.replace(result, rows=rows, summary=keep), others, notice
 
 
 def _write_figures(result: ReproduceResult, out: Path, paths: dict[str, Path]) -> list[tuple[str, str]]:
@@ -139,7 +172,8 @@ def _write_figures(result: ReproduceResult, out: Path, paths: dict[str, Path]) -
 
     figs: list[tuple[str, str]] = []
     fig_dir = out / "figures"
-    for key in sorted(result.plots, key=lambda k: (EXPERIMENTS.index(k[0]), BOTTLE_ORDER.index(k[1]))):
+    for key in sorted(result.plots, key=lambda k: (EXPERIMENTS.index(k[0]), BOTTLE_ORDER.index(k[1])
+                                                   if k[1] in BOTTLE_ORDER else len(BOTTLE_ORDER), k[1])):
         e, b, m, _ = key
         name = f"trial_{e}_{b}_{m}.png"
         paths[name] = F.plot_trial(result.plots[key], fig_dir / name)

@@ -586,7 +586,7 @@ def _analysis_lines(c: Any) -> list[str]:
     from .trial import MAX_RESPONSE_S
 
     op = OnsetParams()
-    travel = sorted({BOTTLES[b].grip_travel_m for b in c.bottles})
+    travel = sorted({c.bottle(b).grip_travel_m if hasattr(c, "bottle") else BOTTLES[b].grip_travel_m for b in c.bottles})
     return [
         f"onset: paper's recipe with k = {op.k:g} sd over the first {op.baseline_s * 1e3:.0f} ms; slip "
         f"episodes must peak at {op.peak_factor:g}x the threshold; responses later than "

@@ -37,6 +37,39 @@ def _csv_list(kind: str, known, *, any_case: bool = False):
     return parse
 
 
+def _names(text: str) -> tuple[str, ...]:
+    """A comma-separated list of names, checked later against the run's objects."""
+    return tuple(x.strip() for x in text.split(",") if x.strip())
+
+
+def own_objects(args: argparse.Namespace) -> dict:
+    """The ReproduceConfig fields for ``--objects``, ``--drop``, ``--pour`` (empty: the paper's).
+
+    Every name is checked here, before any work: an unknown one is one line naming the
+    option, the file and the names it has.
+    """
+    from ..errors import ParameterError
+    from ..sim import load_objects
+
+    objs = load_objects(args.objects) if args.objects is not None else None
+    out: dict = {}
+    for option, kind in (("--drop", "drops"), ("--pour", "pours")):
+        name = getattr(args, option[2:])
+        if name is None:
+            continue
+        table = getattr(objs, kind) if objs is not None else {}
+        if name not in table:
+            where = f"{args.objects} has {', '.join(table) or 'none'}" if objs else "give --objects FILE.toml"
+            raise ParameterError(f"{option} {name}: no such {kind[:-1]} ({where})")
+        out[f"{option[2:]}_object"] = table[name]
+    if objs is not None and objs.bottles:
+        from ..sim import BOTTLES
+        from ..sim.uncertain import Plant
+
+        out["plant"] = Plant(bottles={**BOTTLES, **objs.bottles})
+    return out
+
+
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``slipreflex reproduce``: every count and load parameter."""
     import dataclasses
@@ -49,8 +82,19 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="output directory (default: ./out/reproduce)")
     p.add_argument("--trials", type=int, default=d["trials"],
                    help=f"trials per bottle, experiment and method (default {d['trials']})")
-    p.add_argument("--bottles", type=_csv_list("bottles", lambda: BOTTLE_NAMES), default=BOTTLE_NAMES,
-                   help=f"comma-separated bottles (default: {','.join(BOTTLE_NAMES)})")
+    p.add_argument("--bottles", type=_names, default=BOTTLE_NAMES,
+                   help=f"comma-separated bottles: the paper's ({','.join(BOTTLE_NAMES)}, the default) "
+                        "and those of --objects")
+    p.add_argument("--objects", type=Path, default=None, metavar="FILE.toml",
+                   help="your own bottles, surfaces, drops and pours (slipreflex.sim.load_objects); "
+                        "then --bottles, --drop and --pour take their names")
+    p.add_argument("--drop", default=None, metavar="NAME",
+                   help="the sudden load: a drop of --objects (default: the paper's, 10 g from 2 cm)")
+    p.add_argument("--pour", default=None, metavar="NAME",
+                   help="the gradual load: a pour of --objects (default: the paper's, 500 ml at 1 L/min)")
+    p.add_argument("--grasp-force", type=float, default=d["grasp_force_n"], metavar="N",
+                   help=f"contact force at which the grasp stops closing, N (default: the paper's "
+                        f"{d['grasp_force_n']:g})")
     p.add_argument("--methods", type=_csv_list("methods", methods.names, any_case=True), default=METHODS,
                    help=f"comma-separated methods, any case (registered: {','.join(methods.names())}; "
                         f"default: {','.join(METHODS)})")
@@ -108,7 +152,7 @@ def run(args: argparse.Namespace) -> int:
         drop_height_m=args.drop_height, pour_rate_l_min=args.pour_rate, pour_volume_ml=args.pour_volume,
         rest_s=args.rest, after_s=args.after, calibration_s=args.calibration, rest_k=args.rest_k,
         swt_persist=args.swt_persist, variations=not args.no_variations,
-        independent_seeds=args.independent_seeds)
+        independent_seeds=args.independent_seeds, grasp_force_n=args.grasp_force, **own_objects(args))
     output_dir(args.out, "--out")                    # before the first trial, not after the last
     jobs = int(args.jobs or os.cpu_count() or 1)
     n, estimate = len(config.cells()), estimate_wall_s(config, jobs)
@@ -140,11 +184,15 @@ def _write(result, out: Path, command: str | None) -> dict:
     from ..experiments import write_outputs
 
     from ..analysis.claims import claims_terminal, judge_run
+    from ..analysis.outputs import paper_part
 
     paths = write_outputs(result, out, command=command)
+    paper, _, notice = paper_part(result)
+    if notice:
+        print(notice)
     print(terminal_table(result.summary))
-    if not result.partial_note:
-        print(claims_terminal(judge_run(result.rows, seed=result.config.seed)))
+    if not result.partial_note and paper.rows:
+        print(claims_terminal(judge_run(paper.rows, seed=result.config.seed)))
     print(f"{len(result.rows)} rows from {result.trials_finished} trials in {result.wall_s:.1f} s "
           f"({result.jobs} jobs); wrote {paths['results'].parent}/"
           "{results.csv, summary.csv, report.md" + ("" if result.partial_note else ", figures/") + "}")

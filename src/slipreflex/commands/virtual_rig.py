@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import select
+from pathlib import Path
 import signal
 import sys
 import threading
@@ -30,12 +31,38 @@ ORDER = 31
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``slipreflex virtual-rig``."""
-    p.add_argument("--bottle", default="TR", help="bottle of the simulated rig (TX, TR, DK; default TR)")
+    p.add_argument("--bottle", default="TR",
+                   help="bottle of the simulated rig (TX, TR, DK, or one of --objects; default TR)")
+    p.add_argument("--objects", type=Path, default=None, metavar="FILE.toml",
+                   help="your own bottles, surfaces, drops and pours (slipreflex.sim.load_objects)")
+    p.add_argument("--drop", default=None, metavar="NAME", help="the drop of --objects that 'd' starts")
+    p.add_argument("--pour", default=None, metavar="NAME", help="the pour of --objects that 'p' starts")
+    p.add_argument("--grasp-force", type=float, default=None, metavar="N",
+                   help="contact force at which the grasp stops closing, N (default: the paper's 0.8)")
     p.add_argument("--seed", type=int, default=0, help="random seed of the simulation (0)")
     p.add_argument("--schedule", default="", help='perturbations, e.g. "drop@2.0,pour@5.0" (s after start)')
     p.add_argument("--link-dir", default=None,
                    help="also create DIR/daq and DIR/hand symlinks to the ports (stable paths; DIR is created)")
     p.add_argument("--duration", type=float, default=None, help="exit after this many seconds")
+
+
+def _objects(args: argparse.Namespace):
+    """The bottle and the drop / pour to use, by name, from the paper's or ``--objects``."""
+    from ..errors import ParameterError
+    from ..sim import BOTTLES, load_objects
+    from ..sim.calibration import check_grasp
+    from .reproduce import own_objects
+
+    objs = load_objects(args.objects) if args.objects is not None else None
+    table = {**BOTTLES, **(objs.bottles if objs is not None else {})}
+    if args.bottle not in table:
+        raise ParameterError(f"--bottle {args.bottle}: unknown (known: {', '.join(table)})")
+    loads = {k[:-len("_object")]: v for k, v in own_objects(args).items() if k.endswith("_object")}
+    if args.grasp_force is not None:
+        check_grasp(table[args.bottle], args.grasp_force)
+    else:
+        check_grasp(table[args.bottle])
+    return table[args.bottle], loads
 
 
 def run(args: argparse.Namespace) -> int:
@@ -48,8 +75,9 @@ def run(args: argparse.Namespace) -> int:
     schedule = parse_schedule(args.schedule)
     if args.link_dir is not None:
         output_dir(args.link_dir, "--link-dir")      # before the grasp: a bad DIR costs one line
-    rig = SimRig(bottle=args.bottle, seed=args.seed)
-    grasp = rig.grasp()
+    bottle, loads = _objects(args)
+    rig = SimRig(bottle=bottle, seed=args.seed, **loads)
+    grasp = rig.grasp(args.grasp_force)
     stop = threading.Event()
     pending: list[str] = []
 

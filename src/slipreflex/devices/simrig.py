@@ -101,8 +101,8 @@ class SimRig:
         """The simulated i-Limb (a :class:`~slipreflex.interfaces.Hand` with ``command``)."""
         return self.rig.hand
 
-    def grasp(self) -> SimGrasp:
-        """Grasp the bottle (the simulator's tripod routine, 0.8 N contact) and let it settle.
+    def grasp(self, force: float | None = None) -> SimGrasp:
+        """Grasp the bottle (the simulator's tripod routine, 0.8 N contact or ``force``) and let it settle.
 
         Returns
         -------
@@ -113,7 +113,7 @@ class SimRig:
         >>> SimRig("TX").grasp().stable
         True
         """
-        g = self.rig.grasp()
+        g = self.rig.grasp() if force is None else self.rig.grasp(force)
         return SimGrasp(position=float(g.positions[SLIP_FINGER]), force=float(g.force_n),
                         stable=bool(g.stable), t=self.rig.t,
                         positions={f: float(g.positions[f]) for f in TRIPOD})
