@@ -53,7 +53,7 @@ from .analysis.trial import RESULT_COLUMNS, TrialRow
 from .baselines.calibration import REST_K
 from .baselines.swt import SWT_WINDOW
 from .errors import ParameterError
-from .interrupts import Interrupted, ignore_sigint, stop_pool
+from .interrupts import Interrupted, worker_signals, stop_pool
 from .progress import Progress
 from .hardware import CONTACT_FORCE_N
 from .thresholds import calibrate, calibration_seed
@@ -519,7 +519,7 @@ def _run_cells(cells: list[Cell], args: list[tuple], jobs: int,
             done[c.key] = res
             finished(c)
 
-    ex = ProcessPoolExecutor(max_workers=jobs, initializer=ignore_sigint)
+    ex = ProcessPoolExecutor(max_workers=jobs, initializer=worker_signals)
     futures = [ex.submit(_run_cell, c, *a) for c, a in zip(cells, args)]
     try:
         for f in as_completed(futures):

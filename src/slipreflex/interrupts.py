@@ -23,7 +23,7 @@ from collections.abc import Callable, Iterator
 from concurrent.futures import Future, ProcessPoolExecutor, wait
 from typing import Any
 
-__all__ = ["Interrupted", "sigterm_interrupts", "signals_ignored", "ignore_sigint", "stop_pool",
+__all__ = ["Interrupted", "sigterm_interrupts", "signals_ignored", "worker_signals", "stop_pool",
            "GRACE_S"]
 
 #: How long running items may take to finish after an interrupt before their workers
@@ -102,17 +102,23 @@ def signals_ignored() -> Iterator[None]:
             signal.signal(s, h)
 
 
-def ignore_sigint() -> None:
+def worker_signals() -> None:
     """Worker initializer: the parent handles Ctrl-C; a worker just gets ended.
+
+    SIGINT is ignored, and SIGTERM is reset to its default (a forked worker inherits
+    the parent's :func:`sigterm_interrupts` handler, which would print a traceback
+    when the parent ends the worker).
 
     Examples
     --------
-    >>> old = signal.getsignal(signal.SIGINT); ignore_sigint()
-    >>> signal.getsignal(signal.SIGINT) is signal.SIG_IGN
-    True
-    >>> _ = signal.signal(signal.SIGINT, old)
+    >>> old = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    >>> worker_signals()
+    >>> signal.getsignal(signal.SIGINT) is signal.SIG_IGN, signal.getsignal(signal.SIGTERM) is signal.SIG_DFL
+    (True, True)
+    >>> for s, h in old.items(): _ = signal.signal(s, h)
     """
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
 def stop_pool(ex: ProcessPoolExecutor, futures: list[Future], collect: Callable[[Future], None],
