@@ -326,3 +326,89 @@ def test_a_grasp_that_cannot_hold_the_object_says_what_to_change(tmp_path, capsy
     assert main(["virtual-rig", "--objects", str(objs), "--bottle", "JAR", "--grasp-force", "3",
                  "--duration", "0"]) == 0
     assert "grasp: bottle JAR" in capsys.readouterr().out
+
+
+@pytest.fixture
+def captured_figures(monkeypatch):
+    """The matplotlib figures the figure functions would save, kept open for inspection."""
+    from slipreflex.analysis import figures as F
+    figs = []
+
+    def keep(plt, fig, path, layout=True):
+        figs.append(fig)
+        return Path(path)
+    monkeypatch.setattr(F, "_save", keep)
+    return figs
+
+
+def _summary(rates):
+    out = []
+    for (e, b, m), rate in rates.items():
+        out.append({"experiment": e, "bottle": b, "method": m, "success_rate": rate, "success_n": 10,
+                    "response_mean_ms": 30.0, "response_sd_ms": 50.0, "response_n": 7,
+                    "total_mean_ms": 300.0, "total_sd_ms": 40.0, "total_n": 7})
+    return out
+
+
+def test_success_chart_starts_at_zero_shows_zero_bars_the_papers_values_and_n(captured_figures, tmp_path):
+    from slipreflex.analysis import figures as F
+    s = _summary({("pour", "TR", "dath"): 1.0, ("pour", "TR", "swt"): 0.0})
+    F.success_chart(s, tmp_path / "s.png")
+    fig = captured_figures[0]
+    ax = fig.axes[0]
+    assert ax.get_ylim()[0] == 0 and ax.get_ylim()[1] > 100
+    texts = [t.get_text() for t in ax.texts]
+    assert "0\nn=10" in texts and "n=10" in texts                 # the zero bar is labelled, n shown
+    assert "slip stopped before the bottle fell" in ax.get_title()
+    paper = [ln for ln in ax.get_lines() if ln.get_marker() == "D"]
+    assert [tuple(ln.get_ydata()) for ln in paper] == [(100.0,)]   # the paper's "100 %" for DATH pour
+    assert fig.legends and not ax.get_legend()
+
+
+def test_bar_chart_clips_sd_at_zero_and_shows_n(captured_figures, tmp_path):
+    from slipreflex.analysis import figures as F
+    F.bar_chart(_summary({("drop", "TR", "dath"): 1.0}), "drop", "response", tmp_path / "b.png")
+    ax = captured_figures[0].axes[0]
+    assert ax.get_ylim()[0] == 0
+    lows = [seg[0][1] for coll in ax.collections for seg in coll.get_segments()]
+    assert min(lows) >= 0                                          # mean 30, sd 50: the bar stops at 0
+    assert "n=7" in [t.get_text() for t in ax.texts]
+
+
+def test_trial_figure_says_what_happened_keeps_legends_off_the_data_and_zooms_every_axis(captured_figures,
+                                                                                         tmp_path):
+    import numpy as np
+
+    from slipreflex.analysis import figures as F
+    t = np.linspace(0, 30, 9000)
+    tp = F.TrialPlot(title="pour TR dath", accel_t=t, accel=np.sin(t), sensor_t=t, sensor=t, event_t=[14.8],
+                     cmd_t=[14.8, 15.0], cmd_v=[150, 200], load_t=t, load=t * 500 / 30, onsets=[14.6],
+                     responses=[14.8], lasts=[15.0], xlim=(14.3, 15.3),
+                     outcome="slip at 14.60 s, detected and caught (response 200 ms)")
+    F.plot_trial(tp, tmp_path / "t.png")
+    fig = captured_figures[0]
+    assert "detected and caught" in fig._suptitle.get_text()
+    assert fig.legends and not any(ax.get_legend() for ax in fig.axes)
+    volume = fig.axes[0]
+    lo, hi = volume.get_ylim()
+    assert 14.3 * 500 / 30 - 20 < lo and hi < 15.3 * 500 / 30 + 20   # scaled to the zoom, not 0..500
+
+
+def test_scan_figure_names_its_regions_and_shows_both_thresholds(tmp_path, monkeypatch):
+    import matplotlib
+    matplotlib.use("Agg", force=True)
+    import matplotlib.pyplot as plt
+
+    from slipreflex.cli import main
+    kept = []
+    monkeypatch.setattr(plt, "close", lambda fig=None: kept.append(fig))
+    assert main(["scan", "--out", str(tmp_path), "--distance", "50"]) == 0
+    fig = kept[-1]
+    overview = fig.axes[0]
+    assert [t.get_text() for t in overview.texts] == ["stand", "white", "black", "stand"]
+    for ax in fig.axes:
+        labels = [ln.get_label() for ln in ax.get_lines()]
+        if "threshold fixed" in labels:
+            fixed, dath = (ax.get_lines()[labels.index(f"threshold {m}")] for m in ("fixed", "dath"))
+            assert fixed.get_zorder() > dath.get_zorder() and dath.get_linewidth() > fixed.get_linewidth()
+            assert ax.get_legend() is not None and ax.get_legend().get_bbox_to_anchor().y0 < ax.bbox.y0

@@ -80,11 +80,13 @@ class TrialPlot:
     true_onsets: Sequence[float] = ()
     xlim: tuple[float, float] | None = None
     notes: dict = field(default_factory=dict)
+    outcome: str = ""
 
 
-def _save(plt, fig, path: str | Path) -> Path:
-    """Lay out, write (creating the folder) and close one figure; the path written."""
-    fig.tight_layout()
+def _save(plt, fig, path: str | Path, layout: bool = True) -> Path:
+    """Lay out (unless done), write (creating the folder) and close one figure; the path written."""
+    if layout:
+        fig.tight_layout()
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)
@@ -116,8 +118,9 @@ def plot_trial(p: TrialPlot, path: str | Path) -> Path:
     plt = _plt()
     has_load = p.load_t is not None and len(p.load_t) > 0
     n = 4 + int(has_load)
-    fig, axes = plt.subplots(n, 1, figsize=(7.5, 1.7 * n + 0.6), sharex=True)
+    fig, axes = plt.subplots(n, 1, figsize=(7.5, 1.7 * n + 0.9), sharex=True)
     axes = list(axes)
+    every = list(axes)
     letters = iter("ABCDE")
     if has_load:
         ax = axes.pop(0)
@@ -133,6 +136,7 @@ def plot_trial(p: TrialPlot, path: str | Path) -> Path:
             ax2.axhline(p.threshold, color="tab:purple", ls=":", lw=0.8)
         ax2.set_ylabel("envelope (g)", fontsize=7)
         ax2.tick_params(labelsize=7)
+        every.append(ax2)
     ax_acc.set_ylabel("g", fontsize=8)
     ax_acc.set_title(f"{next(letters)}) {p.accel_label}", loc="left", fontsize=8)
     if p.sensor is not None:
@@ -154,11 +158,35 @@ def plot_trial(p: TrialPlot, path: str | Path) -> Path:
         _mark(ax, p.lasts, "tab:olive", "III last change" if ax is ax_acc else None, ":")
         _mark(ax, p.true_onsets, "k", "true onset (sim)" if ax is ax_acc else None, "-.")
         ax.tick_params(labelsize=7)
-    ax_acc.legend(fontsize=6, loc="upper left", ncol=4)
+    handles, labels = [], []
+    for ax in every:
+        h, lab = ax.get_legend_handles_labels()
+        handles += h
+        labels += lab
+    # Below the axes, never over the data.
+    fig.legend(handles, labels, fontsize=6.5, loc="lower center", ncol=min(6, max(1, len(labels))))
     if p.xlim:
         ax_cmd.set_xlim(*p.xlim)
-    fig.suptitle(p.title, fontsize=9)
-    return _save(plt, fig, path)
+        for ax in every:
+            _fit_y(ax, p.xlim)
+    fig.suptitle(p.title + (f"\n{p.outcome}" if p.outcome else ""), fontsize=9)
+    fig.tight_layout(rect=(0, 0.035, 1, 1))
+    return _save(plt, fig, path, layout=False)
+
+
+def _fit_y(ax, xlim: tuple[float, float]) -> None:
+    """Scale the y axis to the data inside ``xlim`` (a zoom shows its own range, not the trial's)."""
+    lo, hi = math.inf, -math.inf
+    for line in ax.get_lines():
+        if line.get_transform() != ax.transData:   # axvline / axhline markers, not data
+            continue
+        x, y = (np.asarray(v, dtype=float) for v in line.get_data())
+        inside = (x >= xlim[0]) & (x <= xlim[1]) & np.isfinite(y)
+        if x.size and inside.any():
+            lo, hi = min(lo, float(y[inside].min())), max(hi, float(y[inside].max()))
+    if math.isfinite(lo) and math.isfinite(hi):
+        pad = 0.08 * (hi - lo) if hi > lo else max(abs(hi) * 0.05, 0.5)
+        ax.set_ylim(lo - pad, hi + pad)
 
 
 def _present(summary, experiment):
@@ -193,18 +221,23 @@ def bar_chart(summary: Sequence[dict[str, Any]], experiment: str, metric: str,
         xs = np.arange(len(bottles)) + (j - (len(methods) - 1) / 2) * width
         mean = [by.get((b, m), {}).get(f"{metric}_mean_ms", np.nan) for b in bottles]
         sd = [by.get((b, m), {}).get(f"{metric}_sd_ms", np.nan) for b in bottles]
+        ns = [by.get((b, m), {}).get(f"{metric}_n", "") for b in bottles]
         mean = np.array([float(x) for x in mean])
         sd = np.nan_to_num(np.array([float(x) for x in sd]))
         ok = np.isfinite(mean)
-        ax.bar(xs[ok], mean[ok], width * 0.9, yerr=sd[ok], capsize=3, color=_color(m))
+        below = np.minimum(sd, np.maximum(mean, 0.0))    # a time is never negative: clip at zero
+        ax.bar(xs[ok], mean[ok], width * 0.9, yerr=[below[ok], sd[ok]], capsize=3, color=_color(m))
+        for x, top, n in zip(xs[ok], (mean + sd)[ok], np.asarray(ns, dtype=object)[ok]):
+            ax.text(x, top, f"n={n}", ha="center", va="bottom", fontsize=5.5)
         handles.append(Patch(color=_color(m), label=f"{_registry.label(m)} (ours)"))
         for x in xs[~ok]:
             ax.text(x, 0, "n/a", ha="center", va="bottom", fontsize=6, rotation=90)
         for x, b in zip(xs, bottles):
             pv = paper_value(experiment, f"{metric}_ms", b, m)
             if pv is not None and pv.mean is not None:
-                ax.errorbar(x + width * 0.25, pv.mean, yerr=pv.sd, fmt="D", color="k", ms=3.5,
-                            capsize=2, lw=0.8)
+                psd = pv.sd or 0.0
+                ax.errorbar(x + width * 0.25, pv.mean, yerr=[[min(psd, pv.mean)], [psd]], fmt="D", color="k",
+                            ms=3.5, capsize=2, lw=0.8)
     handles.append(Line2D([], [], marker="D", color="k", ms=3.5, lw=0.8, label="paper (mean ± sd)"))
     ax.set_xticks(np.arange(len(bottles)))
     ax.set_xticklabels(bottles)
@@ -212,12 +245,27 @@ def bar_chart(summary: Sequence[dict[str, Any]], experiment: str, metric: str,
     what = "sudden 10 g drop" if experiment == "drop" else "pouring 500 ml"
     ax.set_ylabel(f"{label} (ms)")
     ax.set_title(f"{label.capitalize()}, {what} (bars: sd)", fontsize=9)
+    ax.set_ylim(bottom=0)
     ax.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     return _save(plt, fig, path)
 
 
+def _paper_rate(experiment: str, bottle: str, method: str) -> tuple[float, str] | None:
+    """The paper's stated success (percent, marker): "D" a value, "v" an upper bound."""
+    from .paper import PAPER_SUCCESS
+
+    text = PAPER_SUCCESS.get((experiment, bottle, method)) or PAPER_SUCCESS.get((experiment, "all", method))
+    if not text:
+        return None
+    value = float("".join(ch for ch in text if ch.isdigit() or ch == ".") or "nan")
+    return value, "v" if "under" in text else "D"
+
+
 def success_chart(summary: Sequence[dict[str, Any]], path: str | Path) -> Path:
-    """Success rate per experiment, bottle and method.
+    """Success rate per experiment, bottle and method, the paper's stated rates beside ours.
+
+    The axis runs from 0 to 100 %; a rate of zero is drawn as a visible "0" at the
+    base, a method not run as "n/a"; each bar says how many slip events it counts.
 
     Examples
     --------
@@ -227,22 +275,43 @@ def success_chart(summary: Sequence[dict[str, Any]], path: str | Path) -> Path:
     True
     """
     plt = _plt()
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
     exps = [e for e in ("drop", "pour") if any(s["experiment"] == e for s in summary)] or ["drop"]
-    fig, axes = plt.subplots(1, len(exps), figsize=(4.2 * len(exps), 3.4), squeeze=False)
+    fig, axes = plt.subplots(1, len(exps), figsize=(4.4 * len(exps) + 1.6, 3.6), squeeze=False)
+    shown: dict[str, Any] = {}
     for ax, e in zip(axes[0], exps):
         by, bottles, methods = _present(summary, e)
         width = 0.8 / max(1, len(methods))
         for j, m in enumerate(methods):
             xs = np.arange(len(bottles)) + (j - (len(methods) - 1) / 2) * width
-            rate = [100 * float(by.get((b, m), {}).get("success_rate", np.nan)) for b in bottles]
-            ax.bar(xs, np.nan_to_num(rate), width * 0.9, color=_color(m),
-                   label=_registry.label(m))
+            for x, b in zip(xs, bottles):
+                row = by.get((b, m), {})
+                rate = 100 * float(row.get("success_rate", np.nan))
+                n = row.get("success_n")
+                if np.isfinite(rate):
+                    ax.bar(x, rate, width * 0.9, color=_color(m), edgecolor=_color(m), lw=1.2)
+                    label = ("0" if rate == 0 else "") + (f"\nn={n}" if n else "")
+                    ax.text(x, rate + 1.5, label.strip(), ha="center", va="bottom", fontsize=5.5)
+                else:
+                    ax.text(x, 1.5, "n/a", ha="center", va="bottom", fontsize=6, rotation=90)
+                paper = _paper_rate(e, b, m)
+                if paper is not None:
+                    ax.plot(x, paper[0], paper[1], color="k", ms=4.5, zorder=5)
+                    shown[paper[1]] = True
+            shown.setdefault(m, True)
         ax.set_xticks(np.arange(len(bottles)))
         ax.set_xticklabels(bottles)
-        ax.set_ylim(-35, 105)
+        ax.set_ylim(0, 118)
         ax.set_yticks([0, 20, 40, 60, 80, 100])
-        ax.axhline(0, color="k", lw=0.6)
-        ax.set_ylabel("slips suppressed (%)")
-        ax.set_title(f"Success, {e}", fontsize=9)
-        ax.legend(fontsize=7, loc="lower left", framealpha=0.9)
-    return _save(plt, fig, path)
+        ax.set_ylabel("successful trials (%)")
+        ax.set_title(f"Success, {e}: the slip stopped before the bottle fell", fontsize=8)
+    handles = [Patch(color=_color(m), label=f"{_registry.label(m)} (ours)") for m in shown if m not in "Dv"]
+    if "D" in shown:
+        handles.append(Line2D([], [], ls="", marker="D", color="k", ms=4.5, label="paper, as stated"))
+    if "v" in shown:
+        handles.append(Line2D([], [], ls="", marker="v", color="k", ms=4.5, label="paper: under this"))
+    fig.legend(handles=handles, fontsize=7, loc="center right")
+    fig.tight_layout(rect=(0, 0, 1 - 1.5 / fig.get_figwidth(), 1))
+    return _save(plt, fig, path, layout=False)

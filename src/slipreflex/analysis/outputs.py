@@ -29,7 +29,7 @@ from .report import (SUCCESS_CAPTION, SUMMARY_COLUMNS, bars_caption, discussion_
                      setup_lines, trial_caption, write_csv, zoom_caption)
 from .trial import RESULT_COLUMNS, TrialRow
 
-__all__ = ["ReproduceResult", "write_outputs", "trial_plot", "paper_part"]
+__all__ = ["ReproduceResult", "write_outputs", "trial_plot", "paper_part", "trial_outcome"]
 
 
 @dataclass
@@ -179,12 +179,13 @@ def _write_figures(result: ReproduceResult, out: Path, paths: dict[str, Path]) -
         paths[name] = F.plot_trial(result.plots[key], fig_dir / name)
         figs.append((trial_caption(e, b, m), f"figures/{name}"))
         ons = [x for x in result.plots[key].onsets if x == x]
-        if e == "pour" and ons:
+        if ons:
             zname = f"trial_{e}_{b}_{m}_zoom.png"
-            zoom = dataclasses.replace(result.plots[key], xlim=(ons[0] - 0.3, ons[0] + 1.0),
-                                       title=result.plots[key].title + ", around the first slip")
+            span = (min(ons) - 0.3, max(ons) + 0.7)
+            zoom = dataclasses.replace(result.plots[key], xlim=span,
+                                       title=result.plots[key].title + ", zoomed on its slips")
             paths[zname] = F.plot_trial(zoom, fig_dir / zname)
-            figs.append((zoom_caption(b, m), f"figures/{zname}"))
+            figs.append((zoom_caption(b, m, e), f"figures/{zname}"))
     for e in result.config.experiments:
         for metric in ("response", "total"):
             name = f"bars_{e}_{metric}.png"
@@ -243,4 +244,31 @@ def trial_plot(cell: Any, spec: Any, tr: Any, reflex: Any, rows: Sequence[Any], 
         load_t=tr.t if pour else None, load=tr.water_ml if pour else None,
         onsets=[r.onset_s for r in rows], responses=[r.onset_s + r.response_ms / 1e3 for r in rows],
         lasts=[r.last_change_s for r in rows], true_onsets=[r.true_onset_s for r in rows],
-        xlim=xlim)
+        xlim=xlim, outcome=trial_outcome(rows, tr.fall_time))
+
+
+def trial_outcome(rows: Sequence[Any], fall_time: float | None) -> str:
+    """What happened in a trial, for its figure's title: slips found, caught or not, a fall.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace as R
+    >>> trial_outcome([R(n_events=1, onset_s=2.66, response_ms=71.0, success=True)], None)
+    'slip at 2.66 s, detected and caught (response 71 ms)'
+    >>> trial_outcome([R(n_events=0, onset_s=float("nan"), response_ms=float("nan"), success=True)], None)
+    'no slip found'
+    >>> trial_outcome([R(n_events=1, onset_s=14.6, response_ms=float("nan"), success=False)], 14.9)
+    'slip at 14.60 s, no response; fell out at 14.90 s'
+    """
+    fell = "" if fall_time is None else f"fell out at {float(fall_time):.2f} s"
+    found = [r for r in rows if r.n_events > 0 and r.onset_s == r.onset_s]
+    if not found:
+        return "no slip found" + (f"; {fell}" if fell else "")
+    parts = []
+    for r in found:
+        if r.response_ms != r.response_ms:
+            parts.append(f"slip at {r.onset_s:.2f} s, no response")
+        else:
+            how = "detected and caught" if r.success else "detected, not caught"
+            parts.append(f"slip at {r.onset_s:.2f} s, {how} (response {r.response_ms:.0f} ms)")
+    return "; ".join(parts + ([fell] if fell else []))

@@ -481,15 +481,16 @@ def trial_caption(experiment: str, bottle: str, method: str) -> str:
             f"{PAPER_FIGURES[(experiment, 'trial')]}): I onset, II first response, III last change")
 
 
-def zoom_caption(bottle: str, method: str) -> str:
-    """Caption of the zoom on a pour trial's first slip.
+def zoom_caption(bottle: str, method: str, experiment: str = "pour") -> str:
+    """Caption of the zoom on an example trial's slips.
 
     Examples
     --------
     >>> zoom_caption("DK", "dath")
-    'The same pour trial around its first slip (DK, DATH)'
+    'The same pour trial zoomed on its slips, every axis scaled to the zoom (DK, DATH)'
     """
-    return f"The same pour trial around its first slip ({bottle}, {_label(method)})"
+    return (f"The same {experiment} trial zoomed on its slips, every axis scaled to the zoom "
+            f"({bottle}, {_label(method)})")
 
 
 def bars_caption(experiment: str, metric: str) -> str:

@@ -88,10 +88,14 @@ def _figure(result, summary, path: Path, threshold: float) -> None:
     ax = fig.add_subplot(gs[0, :])
     ax.plot(pos, x, lw=0.8)
     regions = {name: (a * 1000, b * 1000) for name, a, b in result.regions if name in ("white", "black")}
-    for a, b in regions.values():
-        ax.axvline(a, ls="--", c="grey", lw=0.8)
-        ax.axvline(b, ls="--", c="grey", lw=0.8)
-    ax.set(title="A  filtered slip-sensor output over the scan", xlabel="position (mm)", ylabel="V")
+    shade = {"white": "0.97", "black": "0.80", "stand": "#e8dcc8"}
+    for name, a, b in result.regions:         # every region named where it lies, the stand too
+        ax.axvspan(a * 1000, b * 1000, color=shade.get(name, "0.9"), zorder=0)
+        ax.axvline(a * 1000, ls="--", c="grey", lw=0.6)
+        ax.text((a + b) * 500, 0.97, name, transform=ax.get_xaxis_transform(), ha="center", va="top",
+                fontsize=8, bbox={"fc": "white", "ec": "0.6", "lw": 0.5, "pad": 1.5})
+    ax.set(title="A  filtered slip-sensor output over the scan (shaded: the test surface's regions)",
+           xlabel="position (mm)", ylabel="V")
     for col, name in enumerate(("white", "black")):
         a, b = regions[name]
         sel = (pos >= a + 2.5) & (pos <= b - 2.5)
@@ -102,11 +106,15 @@ def _figure(result, summary, path: Path, threshold: float) -> None:
         for meth, color in ((FIXED, "C0"), (DATH, "C2")):
             tr = result.analysis[meth]
             axc.plot(pos[sel], np.abs(tr.accumulator[sel]), lw=0.7, c=color, label=f"|acc| {meth}")
-            axc.plot(pos[sel], tr.threshold[sel], lw=0.9, c="C3" if meth == FIXED else "C1",
-                     label=f"threshold {meth}")
+        # Both thresholds stay visible where they coincide (DATH rests at the fixed one):
+        # DATH's as a wide pale band, the fixed one as a dashed line on top.
+        axc.plot(pos[sel], result.analysis[DATH].threshold[sel], lw=3.0, c="C1", alpha=0.45,
+                 label=f"threshold {DATH}", zorder=3)
+        axc.plot(pos[sel], result.analysis[FIXED].threshold[sel], lw=1.0, c="C3", ls=(0, (4, 2)),
+                 label=f"threshold {FIXED}", zorder=4)
         axc.set(ylabel="V")
         axc.set_title(f"C  {name}: |accumulator| and threshold (base {threshold * 1000:g} mV)", fontsize=9)
-        axc.legend(fontsize=7, loc="upper right")
+        axc.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=4, frameon=False)
         axd = fig.add_subplot(gs[3, col], sharex=axb)
         for row, meth in enumerate((FIXED, DATH)):
             ev = result.analysis[meth].events & sel
