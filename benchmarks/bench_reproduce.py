@@ -31,7 +31,7 @@ def main() -> None:
 
     config = ReproduceConfig(trials=args.trials)
     jobs = args.jobs or os.cpu_count() or 1
-    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+    print(f"machine: {_cpu_name()}, {os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f}, "
           f"python {platform.python_version()}; jobs={jobs}; {len(config.cells())} trials")
     if not args.no_warmup:
         t0 = time.perf_counter()
@@ -52,6 +52,15 @@ def main() -> None:
               f"with CSV/figures/report {t_all:.1f} s wall")
         print(f"  {sim_s:.0f} simulated s in {cpu:.1f} CPU s (all processes): {sim_s / cpu:.0f} simulated s "
               f"per CPU s (the run-time estimate assumes TRIAL_SIM_SPEED = {TRIAL_SIM_SPEED:g} per worker)")
+
+
+def _cpu_name() -> str:
+    """The CPU's model name as /proc/cpuinfo gives it (else what platform knows)."""
+    try:
+        with open("/proc/cpuinfo") as fh:
+            return next(line.split(":", 1)[1].strip() for line in fh if line.startswith("model name"))
+    except (OSError, StopIteration):
+        return platform.processor() or platform.machine()
 
 
 def _cpu_s() -> float:
