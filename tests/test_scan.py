@@ -41,3 +41,19 @@ def test_scan_command_writes_csv_and_figure(tmp_path, capsys):
 def test_scan_command_rejects_bad_arguments(capsys):
     assert main(["scan", "--speed", "0", "--no-figure"]) == 2
     assert "error" in capsys.readouterr().err
+
+
+def test_scan_takes_own_surfaces_and_bottles_from_objects(tmp_path, capsys):
+    """Issue 11 item 12: --objects FILE.toml and --layout with its surfaces (or a bottle's surface)."""
+    from slipreflex.cli import main
+    objs = tmp_path / "o.toml"
+    objs.write_text('[surfaces.foil]\nreflectance = 0.8\ntexture = 0.02\n\n'
+                    '[bottles.JAR]\nmass_kg = 0.1\ndiameter_m = 0.07\nmu_s = 1.0\nmu_k = 0.8\nsurface = "foil"\n')
+    assert main(["scan", "--out", str(tmp_path / "s"), "--objects", str(objs), "--no-figure",
+                 "--layout", "stand:5,foil:10,JAR:10,black:10", "--distance", "35"]) == 0
+    out = capsys.readouterr().out
+    assert "foil  filtered volts" in out and "JAR   filtered volts" in out and "black filtered volts" in out
+    assert "white" not in out
+    assert main(["scan", "--out", str(tmp_path / "s"), "--layout", "stand:2,foil:4"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--layout part 2: unknown surface 'foil'" in err

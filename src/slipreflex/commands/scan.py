@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -31,6 +32,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--threshold", type=float, default=0.008, help="base threshold in V (default 0.008)")
     parser.add_argument("--out", type=Path, default=Path("out/scan"), help="output directory (default out/scan)")
     parser.add_argument("--no-figure", action="store_true", help="skip the PNG figure")
+    parser.add_argument("--objects", type=Path, default=None, metavar="FILE.toml",
+                        help="your own surfaces and bottles (slipreflex.sim.load_objects) for --layout")
+    parser.add_argument("--layout", default=None, metavar="NAME:MM,...",
+                        help="the test surface top to bottom, e.g. 'stand:5,foil:10,black:30,stand:5'; a "
+                             "name is a surface (built-in or of --objects) or a bottle of --objects (its "
+                             "surface); default the paper's stand:5,white:10,black:30,stand:5")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -38,15 +45,14 @@ def run(args: argparse.Namespace) -> int:
     from ..errors import ParameterError
     from ..sim import scan
 
+    from ..paths import output_dir
+
     if args.speed <= 0 or args.distance <= 0:
         raise ParameterError("--speed and --distance must be > 0")
-    result = scan(seed=args.seed, speed=args.speed * 1e-3, distance=args.distance * 1e-3)
+    out: Path = output_dir(args.out, "--out")
+    kw = {"layout": _layout(args)} if args.layout is not None else {}
+    result = scan(seed=args.seed, speed=args.speed * 1e-3, distance=args.distance * 1e-3, **kw)
     summary = result.analyse(threshold=args.threshold)
-    out: Path = args.out
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise ParameterError(f"--out {out}: cannot create directory: {err.strerror}") from None
     csv_path = out / "scan.csv"
     frame = result.to_frame()
     with csv_path.open("w", newline="") as fh:
@@ -56,11 +62,12 @@ def run(args: argparse.Namespace) -> int:
         for i in range(result.t.size):
             w.writerow([repr(float(c[i])) if c.dtype.kind == "f" else str(int(c[i])) for c in cols])
     print(f"scan: {args.distance:g} mm at {args.speed:g} mm/s, seed {args.seed}, {result.t.size} samples")
-    for region in ("white", "black"):
+    shown = _shown(summary)
+    for region in shown:
         lo, hi = summary.ranges[region]
         print(f"  {region:5s} filtered volts {lo:.3f} .. {hi:.3f} V")
     print(f"  spikes over the whole scan: fixed {summary.spikes[FIXED]}, DATH {summary.spikes[DATH]}")
-    for region in ("white", "black"):
+    for region in shown:
         parts = []
         for meth in (FIXED, DATH):
             sp = summary.min_spacing_mm[(meth, region)]
@@ -75,6 +82,36 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _layout(args: argparse.Namespace) -> list:
+    """``--layout`` as (Surface, length_m) pairs; names from the built-ins or ``--objects``."""
+    from ..errors import ParameterError
+    from ..sim import load_objects
+    from ..sim.objects import resolve_surface
+
+    objs = load_objects(args.objects) if args.objects is not None else None
+    extra = dict(objs.surfaces) if objs else {}
+    if objs:
+        extra.update({n: b.surface for n, b in objs.bottles.items()})
+    out = []
+    for i, part in enumerate(p.strip() for p in args.layout.split(",") if p.strip()):
+        name, sep, mm = part.partition(":")
+        try:
+            length = float(mm) * 1e-3
+        except ValueError:
+            length = float("nan")
+        if not sep or not length > 0:
+            raise ParameterError(f"--layout part {i + 1} {part!r}: expected NAME:MM with MM > 0")
+        surf = resolve_surface(name.strip(), extra, where=f"--layout part {i + 1}")
+        # A bottle's surface is shown under the bottle's name.
+        out.append((dataclasses.replace(surf, name=name.strip()) if surf.name != name.strip() else surf, length))
+    return out
+
+
+def _shown(summary) -> list[str]:
+    """The regions to print and draw: every one but the stand, in layout order."""
+    return [r for r in summary.ranges if not r.startswith("stand")]
+
+
 def _figure(result, summary, path: Path, threshold: float) -> None:
     import matplotlib
 
@@ -83,11 +120,16 @@ def _figure(result, summary, path: Path, threshold: float) -> None:
 
     pos = result.position * 1000.0
     x = result.analysis["filtered"]
-    fig = plt.figure(figsize=(11, 9), constrained_layout=True)
-    gs = fig.add_gridspec(4, 2)
+    shown = _shown(summary)[:3]
+    fig = plt.figure(figsize=(5.5 * max(2, len(shown)), 9), constrained_layout=True)
+    gs = fig.add_gridspec(4, max(2, len(shown)))
     ax = fig.add_subplot(gs[0, :])
     ax.plot(pos, x, lw=0.8)
-    regions = {name: (a * 1000, b * 1000) for name, a, b in result.regions if name in ("white", "black")}
+    regions: dict = {}
+    for name, a, b in result.regions:
+        key = name if name not in regions else f"{name}@{a * 1000:g}mm"
+        if key in shown:
+            regions[key] = (a * 1000, b * 1000)
     shade = {"white": "0.97", "black": "0.80", "stand": "#e8dcc8"}
     for name, a, b in result.regions:         # every region named where it lies, the stand too
         ax.axvspan(a * 1000, b * 1000, color=shade.get(name, "0.9"), zorder=0)
@@ -96,7 +138,7 @@ def _figure(result, summary, path: Path, threshold: float) -> None:
                 fontsize=8, bbox={"fc": "white", "ec": "0.6", "lw": 0.5, "pad": 1.5})
     ax.set(title="A  filtered slip-sensor output over the scan (shaded: the test surface's regions)",
            xlabel="position (mm)", ylabel="V")
-    for col, name in enumerate(("white", "black")):
+    for col, name in enumerate(shown):
         a, b = regions[name]
         sel = (pos >= a + 2.5) & (pos <= b - 2.5)
         axb = fig.add_subplot(gs[1, col])
