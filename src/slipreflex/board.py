@@ -44,7 +44,7 @@ __all__ = [
     "COEF_Q", "SIG_Q", "H_MAX", "BoardParams", "BoardChain", "BoardReflex", "BoardResult",
     "run_board_chain", "adc_counts", "quantize_lowpass", "volts_to_q16", "board_detections",
     "FIRMWARE_ADC_MIN", "FIRMWARE_ADC_MAX", "FIRMWARE_STUCK_AFTER", "read_adc_csv",
-    "write_board_outputs",
+    "write_board_outputs", "CheckedBoardReflex", "BoardSource", "board_params_from_json",
 ]
 
 #: Fractional bits of the filter coefficients.
@@ -123,6 +123,29 @@ def quantize_lowpass(fs: float = hw.DAQ_FS, cutoff: float = 10.0) -> tuple[int, 
     a2 = math.floor(float(sos[0, 5]) * one + 0.5)
     g = math.floor((one + a1 + a2) / 4 + 0.5)
     return g, a1, 4 * g - one - a1
+
+
+def board_params_from_json(text: str, where: Any = "board_params") -> "BoardParams":
+    """:class:`BoardParams` from the JSON a ``run --board-reflex`` recording stores.
+
+    Raises
+    ------
+    DataError
+        Malformed JSON or fields, naming ``where`` (the recording).
+
+    Examples
+    --------
+    >>> import json
+    >>> p = BoardParams.firmware(p0=7)
+    >>> board_params_from_json(json.dumps(p.to_dict())) == p
+    True
+    """
+    import json
+
+    try:
+        return BoardParams(**json.loads(text))
+    except (ValueError, TypeError) as err:
+        raise DataError(f"{where}: bad board parameters in the metadata: {err}") from None
 
 
 def _int(name: str, value: Any, lo: int, hi: int) -> int:
@@ -682,3 +705,131 @@ def write_board_outputs(prefix, events, counts, commands) -> tuple[Any, Any]:
     write_columns(windows_path, {"window": np.arange(counts.size), "v": counts,
                                  "command": np.asarray(commands, dtype=np.int64)})
     return samples_path, windows_path
+
+
+class CheckedBoardReflex(BoardReflex):
+    """The twin of a board that runs the reflex itself, checking it on every sample.
+
+    ``slipreflex run --board-reflex`` reads a board built with the reflex on board
+    (version-2 frames: docs/wire-protocol.md) through a :class:`BoardSource`, which
+    hands this reflex each sample's frame. :meth:`step` runs the twin on the sample and
+    compares its filtered value, spike, fault flag, window, count and command with the
+    board's. The command it returns is the twin's, equal to the board's while they agree.
+
+    Attributes
+    ----------
+    last_board : dict or None
+        The board's output for the last sample (``spike, window, fault, hand, v,
+        command, x``) and ``match`` (whether the twin agreed).
+    last_mismatch : str or None
+        Set on the sample where board and twin start to disagree (one message per
+        episode, naming the seq and the fields), else None.
+    checked, mismatches : int
+        Samples compared, and those that disagreed.
+
+    Examples
+    --------
+    >>> from slipreflex.devices import wire
+    >>> twin = CheckedBoardReflex(BoardParams.firmware(p0=0))
+    >>> good = wire.ReflexFields(0, 0, 0, 300 << 16)
+    >>> twin.take_frames([wire.decode_frame(wire.encode_frame(seq=0, adc=300, reflex=good))])
+    >>> twin.step(300 * hw.ADC_LSB), twin.last_mismatch, twin.last_board["match"]
+    (None, None, True)
+    >>> bad = wire.ReflexFields(wire.REFLEX_SPIKE, 0, 0, 300 << 16)
+    >>> twin.take_frames([wire.decode_frame(wire.encode_frame(seq=1, adc=300, reflex=bad))])
+    >>> _ = twin.step(300 * hw.ADC_LSB); twin.last_mismatch
+    'seq 1: the board says spike=True, the twin spike=False'
+    """
+
+    def __init__(self, params: BoardParams | None = None, **kwargs) -> None:
+        super().__init__(params, **kwargs)
+        from collections import deque
+
+        self._frames: Any = deque()
+        self._reset_check()
+
+    def _reset_check(self) -> None:
+        self._frames.clear()
+        self.last_board: dict[str, Any] | None = None
+        self.last_mismatch: str | None = None
+        self.checked = self.mismatches = 0
+        self._bad = False
+
+    def reset(self) -> None:
+        """Restore the initial state and forget pending frames and counters."""
+        super().reset()
+        self._reset_check()
+
+    def take_frames(self, frames) -> None:
+        """Queue the board's frames of the samples :meth:`step` will get next, in order."""
+        self._frames.extend(frames)
+
+    def _disagreement(self, frame) -> str | None:
+        if frame is None:
+            return "a sample came without its board frame (read the board through BoardSource)"
+        r = frame.reflex
+        if r is None:
+            return (f"seq {frame.seq}: a version-1 frame: this board does not run the reflex "
+                    "(flash daq-reflex or hand2560, docs/firmware.md)")
+        if self.checked == 0 and frame.seq != 0:
+            return (f"the board was running before the host connected (first seq {frame.seq}, not 0): "
+                    "its chain state is unknown; reset the board")
+        c = self.chain
+        pairs = (("x", r.x, c.x), ("spike", r.spike, c.event), ("fault", r.fault, c.fault),
+                 ("window", r.window, c.window), ("v", r.v, c.v), ("command", r.command, c.command))
+        diff = [f"{k}={b}" for k, b, t in pairs if b != t]
+        if not diff:
+            return None
+        twin = [f"{k}={t}" for k, b, t in pairs if b != t]
+        return f"seq {frame.seq}: the board says {', '.join(diff)}, the twin {', '.join(twin)}"
+
+    def step(self, sample: float, position: float | None = None) -> float | None:
+        """Run the twin on one sample and compare it with the board's frame for it."""
+        frame = self._frames.popleft() if self._frames else None
+        cmd = super().step(sample, position)
+        problem = self._disagreement(frame)
+        self.checked += 1
+        self.mismatches += problem is not None
+        self.last_mismatch = problem if problem is not None and not self._bad else None
+        self._bad = problem is not None
+        r = frame.reflex if frame is not None else None
+        self.last_board = None if r is None else {
+            "spike": r.spike, "window": r.window, "fault": r.fault, "hand": r.hand, "v": r.v,
+            "command": r.command, "x": r.x, "match": problem is None}
+        return cmd
+
+
+class BoardSource:
+    """A :class:`~slipreflex.devices.daq.SerialDaq` that hands each sample's frame to a
+    :class:`CheckedBoardReflex` (everything else is the reader's: stats, arrival times).
+
+    Examples
+    --------
+    >>> import serial
+    >>> from slipreflex.devices import wire
+    >>> from slipreflex.devices.daq import SerialDaq
+    >>> loop = serial.serial_for_url("loop://")
+    >>> twin = CheckedBoardReflex(BoardParams.firmware())
+    >>> src = BoardSource(SerialDaq(loop), twin)
+    >>> _ = loop.write(wire.encode_frame(seq=0, adc=300, reflex=wire.ReflexFields(0, 0, 0, 300 << 16)))
+    >>> [twin.step(s.slip_volts) for s in src.read(0.1)], twin.mismatches
+    ([None], 0)
+    >>> src.close(); loop.close()
+    """
+
+    def __init__(self, daq: Any, reflex: CheckedBoardReflex) -> None:
+        self.daq, self.reflex = daq, reflex
+
+    def read(self, timeout: float) -> list:
+        """The reader's samples; their frames go to the reflex first."""
+        samples = self.daq.read(timeout)
+        if samples:
+            self.reflex.take_frames(self.daq.last_frames)
+        return samples
+
+    def close(self) -> None:
+        """Close the reader."""
+        self.daq.close()
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.daq, name)

@@ -29,6 +29,9 @@ started, on the PC's clock):
                    not sent: "at start", "stale", "rejected", "hand-port"), latency
                    (s from reading the bytes) and frame_latency (s from the frame's
                    own arrival)
+/board/state       (``run --board-reflex``) per sample: what the board's own chain sent
+                   (spike, window, fault, hand, v, command, x in Q16 counts) and
+                   ``match``, whether its Python twin agreed
 /faults            watchdog, device and recording faults, with the action taken
 /stats             periodic DAQ and loop counters
 =================  ===========================================================
@@ -82,6 +85,9 @@ TOPICS: dict[str, tuple[str, dict[str, Any]]] = {
                                               "targets": {"type": "object"},
                                               "sent": _B, "note": _S, "latency": _N,
                                               "frame_latency": _N}),
+    "/board/state": ("slipreflex.BoardState", {"seq": _I, "t": "number", "spike": _B, "window": _B,
+                                               "fault": _B, "hand": _B, "v": _I, "command": _I,
+                                               "x": _I, "match": _B}),
     "/faults": ("slipreflex.Fault", {"time": "number", "kind": _S, "message": _S, "action": _S}),
     "/stats": ("slipreflex.Stats", {"time": "number", "counters": {"type": "object"}}),
 }
@@ -631,6 +637,9 @@ class ReplayResult:
         Whether the recording was complete (see :attr:`Recording.complete`) and undamaged.
     gaps : str
         What the recording misses (:meth:`Recording.gaps`), "" if nothing.
+    board_events, board_commands : list of tuple or None
+        For a ``run --board-reflex`` recording: the spikes and window commands the
+        board itself sent (``/board/state``), which the replayed twin must match too.
 
     Examples
     --------
@@ -646,6 +655,16 @@ class ReplayResult:
     replayed_commands: list[tuple]
     complete: bool
     gaps: str = ""
+    board_events: list[tuple] | None = None
+    board_commands: list[tuple] | None = None
+
+    def _pairs(self) -> list[tuple[str, list, list]]:
+        out = [("events", self.recorded_events, self.replayed_events),
+               ("commands", self.recorded_commands, self.replayed_commands)]
+        if self.board_events is not None:
+            out += [("board events", self.board_events, self.replayed_events),
+                    ("board commands", self.board_commands or [], self.replayed_commands)]
+        return out
 
     @property
     def identical(self) -> bool:
@@ -661,10 +680,8 @@ class ReplayResult:
         True
         """
         if self.complete:
-            return (self.recorded_events == self.replayed_events
-                    and self.recorded_commands == self.replayed_commands)
-        return (self.replayed_events[:len(self.recorded_events)] == self.recorded_events
-                and self.replayed_commands[:len(self.recorded_commands)] == self.recorded_commands)
+            return all(a == b for _, a, b in self._pairs())
+        return all(b[:len(a)] == a for _, a, b in self._pairs())
 
     def summary(self) -> str:
         """One line per stream: counts and whether they match.
@@ -686,9 +703,8 @@ class ReplayResult:
                            f"replayed {b[k] if k < len(b) else None}")
             return f"{name}: recorded {len(a)}, replayed {len(b)} - {verdict}"
         return "\n".join([f"samples {self.samples}" + ("" if self.complete else
-                                                      " (recording cut short or damaged: checked up to the first gap)"),
-                          line("events", self.recorded_events, self.replayed_events),
-                          line("commands", self.recorded_commands, self.replayed_commands)])
+                                                      " (recording cut short or damaged: checked up to the first gap)")]
+                         + [line(name, a, b) for name, a, b in self._pairs()])
 
 
 def replay(path: str | os.PathLike | Recording) -> ReplayResult:
@@ -697,7 +713,9 @@ def replay(path: str | os.PathLike | Recording) -> ReplayResult:
     A fresh :class:`~slipreflex.chain.SlipReflex` built from the parameters in
     the metadata gets every recorded sample, in order, with the slip-finger
     position the loop gave it; its events and commands are compared with
-    the recorded ones.
+    the recorded ones. A ``run --board-reflex`` recording (metadata
+    ``board_params``) replays its Python twin (:class:`slipreflex.board.BoardReflex`)
+    and compares it with the board's own recorded output too.
 
     Parameters
     ----------
@@ -730,7 +748,13 @@ def replay(path: str | os.PathLike | Recording) -> ReplayResult:
     from .chain import SlipReflex
 
     rec = path if isinstance(path, Recording) else read_recording(path)
-    reflex = SlipReflex.from_params(chain_params_of(rec))
+    board_params = rec.metadata.get(METADATA_NAME, {}).get("board_params")
+    if board_params is not None:
+        from .board import BoardReflex, board_params_from_json
+
+        reflex: Any = BoardReflex(board_params_from_json(board_params, rec.path))
+    else:
+        reflex = SlipReflex.from_params(chain_params_of(rec))
     upto = rec.before_damage or {}
     samples = rec.topic("/daq/samples")[:upto.get("/daq/samples", 0)]  # exact up to the first damage
     if not samples:
@@ -750,7 +774,14 @@ def replay(path: str | os.PathLike | Recording) -> ReplayResult:
         replayed_events=events,
         recorded_commands=[(m["seq"], m["t"], float(m["target"]))
                            for m in rec.topic("/hand/commands")[:upto.get("/hand/commands", 0)]],
-        replayed_commands=commands, complete=rec.complete and not rec.damaged, gaps=rec.gaps())
+        replayed_commands=commands, complete=rec.complete and not rec.damaged, gaps=rec.gaps(),
+        **(_board_outputs(rec, upto.get("/board/state", 0)) if board_params is not None else {}))
+
+
+def _board_outputs(rec: Recording, upto: int) -> dict[str, list[tuple]]:
+    board = rec.topic("/board/state")[:upto]
+    return {"board_events": [(m["seq"], m["t"]) for m in board if m["spike"]],
+            "board_commands": [(m["seq"], m["t"], float(m["command"])) for m in board if m["window"]]}
 
 
 def export_csv(path: str | os.PathLike | Recording, out: str | os.PathLike | None = None, *,

@@ -117,7 +117,9 @@ class Fault:
         ``"daq-crc"``, ``"daq-truncated"``, ``"daq-invalid"``, ``"daq-garbage"``,
         ``"daq-gap"``, ``"daq-duplicate"``, ``"daq-reordered"``, ``"daq-reset"``,
         ``"daq-discarded"``, ``"hand-port"``, ``"hand-port-restored"``,
-        ``"command-rejected"``, ``"hold-failed"``, ``"mpi-saturated"`` or ``"recording"``.
+        ``"command-rejected"``, ``"hold-failed"``, ``"mpi-saturated"``, ``"recording"`` or
+        ``"board-mismatch"`` (``run --board-reflex``: the board's chain output differs
+        from its Python twin's on the same sample).
     message : str
         What happened, naming the port or file.
     action : str
@@ -173,6 +175,9 @@ class SampleRecord:
         Why a command was not sent: ``"at start"``, ``"stale"``, ``"rejected"``, ``"hand-port"``.
     latency, frame_latency : float or None
         Seconds from ``arrival`` (read) and from the frame's own arrival to the write.
+    board : dict or None
+        With a board that runs the reflex (``slipreflex.board.CheckedBoardReflex``):
+        the board's own output for this sample and whether the twin agreed.
 
     Examples
     --------
@@ -195,6 +200,7 @@ class SampleRecord:
     note: str = ""
     latency: float | None = None
     frame_latency: float | None = None
+    board: dict[str, Any] | None = None
 
 
 def _percentiles_ms(x: np.ndarray) -> dict[str, float]:
@@ -648,6 +654,8 @@ class _Sink:
                 self.write("/chain/events", {"seq": s.seq, "t": s.t}, arr)
             if r.count is not None:
                 self.write("/chain/windows", {"seq": s.seq, "t": s.t, "count": int(r.count)}, arr)
+            if r.board is not None:
+                self.write("/board/state", {"seq": s.seq, "t": s.t, **r.board}, arr)
             if r.command is not None:
                 targets = {f.name.lower(): _num(v) for f, v in (r.targets or {}).items()}
                 self.write("/hand/commands", {"seq": s.seq, "t": s.t, "target": float(r.command),
@@ -777,7 +785,11 @@ class _Loop:
             cmd = reflex.step(s.slip_volts, pos)
             r = SampleRecord(s, arrival, self.clock() - (s.t + self.offset), pos, cmd,
                              filtered=reflex.last_filtered, threshold=reflex.last_threshold,
-                             event=bool(reflex.last_event), count=reflex.last_count)
+                             event=bool(reflex.last_event), count=reflex.last_count,
+                             board=getattr(reflex, "last_board", None))
+            mismatch = getattr(reflex, "last_mismatch", None)
+            if mismatch:
+                self.fault("board-mismatch", mismatch, "recorded; the twin's command is the one used")
             self.freshness(r)
             if cmd is not None:
                 self.command(r, cmd)

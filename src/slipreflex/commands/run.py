@@ -120,7 +120,28 @@ def check_arguments(args: argparse.Namespace) -> dict[Finger, float]:
                              f"(a hold needs a bounded wait), got {args.watchdog}")
     p0 = parse_p0(args.p0)
     chain_params(args, p0[SLIP_FINGER])  # validates every chain option
+    if getattr(args, "board_reflex", False):
+        _check_board_arguments(args)
     return p0
+
+
+def _check_board_arguments(args: argparse.Namespace) -> None:
+    """``--board-reflex`` runs the chain the board was built with: only --method may change."""
+    from ..chain import ReflexParams
+
+    if args.preset:
+        raise ParameterError(f"--preset {args.preset} cannot be used with --board-reflex: the board "
+                             f"runs the paper's chain it was built with (docs/firmware.md)")
+    d = ReflexParams()
+    fixed = {"fs": DAQ_FS, "cutoff": d.cutoff, "no_filter": False, "threshold": d.threshold,
+             "dath_samples": d.dath_samples, "dath_floor": d.dath_floor, "n": d.n, "kp": d.kp,
+             "ki": d.ki, "reset_after": d.reset_after}
+    for name, value in fixed.items():
+        if getattr(args, name) != value:
+            raise ParameterError(f"--{name.replace('_', '-')} cannot be changed with --board-reflex: "
+                                 f"the board runs the chain it was built with (docs/firmware.md)")
+    if not (isinstance(args.board_p0, int) and 0 <= args.board_p0 <= FINGER_MAX):
+        raise ParameterError(f"--board-p0 must be a whole position in 0..{FINGER_MAX}, got {args.board_p0}")
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -142,6 +163,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         f"({WATCHDOG_MIN_S:g}..{WATCHDOG_MAX_S:g}; {WATCHDOG_S:g})")
     p.add_argument("--realtime", action="store_true",
                    help="ask for SCHED_FIFO real-time scheduling (Linux; needs privileges)")
+    p.add_argument("--board-reflex", action="store_true",
+                   help="the DAQ board runs the reflex itself (firmware daq-reflex or hand2560): record "
+                        "what it does and check its output on every sample against its Python twin; a "
+                        "difference is a recorded fault (board-mismatch). The hand gets the twin's commands")
+    p.add_argument("--board-p0", type=int, default=0,
+                   help="with --board-reflex: the REFLEX_P0 the board was built with (default 0)")
     add_chain_arguments(p)
 
 
@@ -155,9 +182,16 @@ def run(args: argparse.Namespace) -> int:
 
     p0 = check_arguments(args)  # everything, before a port opens or a byte is sent
     params = chain_params(args, p0[SLIP_FINGER])
-    reflex = SlipReflex.from_params(params)
+    reflex: Any = SlipReflex.from_params(params)
     if args.preset:
         reflex.name = args.preset
+    board_meta: dict[str, str] = {}
+    if args.board_reflex:
+        from ..board import BoardParams, CheckedBoardReflex
+
+        bparams = BoardParams.firmware(dath=args.method == "dath", p0=args.board_p0)
+        reflex = CheckedBoardReflex(bparams)
+        board_meta = {"board_params": json.dumps(bparams.to_dict())}
     if args.realtime:
         print(realtime_priority(), flush=True)
     stop = threading.Event()
@@ -175,7 +209,7 @@ def run(args: argparse.Namespace) -> int:
                 "fingers": json.dumps([f.name.lower() for f in TRIPOD]),
                 "p0": json.dumps({f.name.lower(): v for f, v in p0.items()}),
                 "daq": args.daq, "hand": args.hand, "watchdog_s": repr(args.watchdog),
-                "started": datetime.datetime.now(datetime.timezone.utc).isoformat()}
+                "started": datetime.datetime.now(datetime.timezone.utc).isoformat(), **board_meta}
         recorder = Recorder(path, metadata={METADATA_NAME: meta})  # fails before the ports open
     old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
     started = False
@@ -186,8 +220,13 @@ def run(args: argparse.Namespace) -> int:
                   + ",".join(f"{f.name.lower()}={v:g}" for f, v in p0.items())
                   + (f", recording {recorder.path}" if recorder else "") + " (Ctrl-C stops)",
                   flush=True)
+            source: Any = daq
+            if args.board_reflex:
+                from ..board import BoardSource
+
+                source = BoardSource(daq, reflex)
             # run_loop starts with STOP: the fingers stay where the grasp left them
-            res = run_loop(daq, hand, reflex, p0=p0, recorder=recorder, duration=args.duration,
+            res = run_loop(source, hand, reflex, p0=p0, recorder=recorder, duration=args.duration,
                            watchdog=args.watchdog, stop=stop, on_fault=print_fault)
     finally:
         for s, h in old.items():
@@ -199,6 +238,9 @@ def run(args: argparse.Namespace) -> int:
     if stop.is_set():
         print("stopped by signal", flush=True)
     print(res.summary(), flush=True)
+    if args.board_reflex:
+        print(f"board check: {reflex.checked} samples compared with the Python twin, "
+              f"{reflex.mismatches} differed", flush=True)
     if recorder is not None:
         print(f"recorded to {recorder.path}" + (" (incomplete)" if res.recording_error else ""))
     if res.recording_error:

@@ -99,6 +99,9 @@ class SerialDaq:
         ``time.perf_counter()`` just after the bytes of the latest samples were
         read from the port (the samples' arrival time), or NaN.
     port_name : str
+    last_frames : list of wire.Frame
+        The decoded frames of the samples the latest non-empty ``read`` returned
+        (version-2 frames carry the board's reflex output: ``slipreflex.board.BoardSource``).
 
     Raises
     ------
@@ -120,6 +123,7 @@ class SerialDaq:
         self._parser = wire.FrameParser()
         self._timeout: float | None = None  # set on the first read (a port given open may block)
         self.last_arrival = math.nan
+        self.last_frames: list[wire.Frame] = []
 
     @property
     def connected(self) -> bool:
@@ -210,7 +214,8 @@ class SerialDaq:
         if not data:
             return []
         self.last_arrival = time.perf_counter()
-        return [f.to_sample() for f in self._parser.feed(data)]
+        self.last_frames = self._parser.feed(data)
+        return [f.to_sample() for f in self.last_frames]
 
     def close(self) -> None:
         """Close the port if this reader opened it.
