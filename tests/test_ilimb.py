@@ -177,7 +177,7 @@ def test_tripod_grasp_stops_at_contact_force():
     h = _ToyHand()
     res = tripod_grasp(h, h.force, settle=h.settle, step=4.0)
     assert isinstance(res, GraspResult) and res.contact
-    assert res.force >= hw.CONTACT_FORCE_N
+    assert res.force_n >= hw.CONTACT_FORCE_N
     assert h.force() >= hw.CONTACT_FORCE_N and (res.position - 4.0 - 180.0) * 0.05 < hw.CONTACT_FORCE_N
     nothing = tripod_grasp(_ToyHand(), lambda: 0.0, step=100.0)
     assert not nothing.contact and nothing.position == hw.FINGER_MAX

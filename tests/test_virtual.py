@@ -191,7 +191,7 @@ def test_tripod_grasp_routine_on_the_simulated_hand():
         return min(rig.tactile(Finger.INDEX).sum(), rig.tactile(Finger.THUMB).sum())
 
     res = tripod_grasp(rig.hand, contact, step=2.0, settle=lambda: rig.advance(0.03))
-    assert res.contact and res.force >= CONTACT_FORCE_N
+    assert res.contact and res.force_n >= CONTACT_FORCE_N
     assert contact() >= CONTACT_FORCE_N
     pos = rig.hand.positions()
     assert all(abs(pos[f] - res.position) <= 2 for f in TRIPOD)

@@ -17,14 +17,14 @@ Examples
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
-from typing import Literal, Protocol, runtime_checkable
+from dataclasses import dataclass, field
+from typing import Any, Literal, Protocol, runtime_checkable
 
 import numpy as np
 
 from .hardware import Finger
 
-__all__ = ["DaqSample", "SampleSource", "Hand", "Reflex", "InputKind"]
+__all__ = ["DaqSample", "SampleSource", "Hand", "Reflex", "InputKind", "GraspResult", "Rig"]
 
 #: What a reflex reads: the slip sensor (one float per sample) or the 4 x 4
 #: tactile array (one ``(4, 4)`` float array of newtons per sample).
@@ -161,3 +161,95 @@ class Reflex(Protocol):
     def step(self, sample: float | np.ndarray, position: float | None = None) -> float | None: ...
 
     def reset(self) -> None: ...
+
+
+@dataclass(frozen=True)
+class GraspResult:
+    """Outcome of a grasp routine: the one type every home returns.
+
+    The simulated rig's routine (:meth:`slipreflex.sim.Rig.grasp`), the
+    hardware's step-and-read routine (:func:`slipreflex.devices.ilimb.tripod_grasp`)
+    and the virtual rig (:class:`slipreflex.devices.simrig.SimRig`) all return it;
+    a field a routine cannot know keeps its default.
+
+    Parameters
+    ----------
+    position : float
+        Measured (or, on hardware, commanded) slip-finger position when the
+        routine finished: the reflex's ``p0``.
+    force_n : float
+        Contact force (N): the normal force per contact after settling in
+        simulation, the tactile reading when closing stopped on hardware.
+    positions : dict of Finger to float
+        Every tripod finger's position (the per-finger ``p0``; the thumb often
+        stops at another position than the index and middle).
+    contact : bool
+        The target force was reached (False: the hand closed fully).
+    stable : bool or None
+        The object hangs still in the fingers after its support is removed
+        (None where the routine cannot tell, as on hardware).
+    steps : int
+        Position increments sent (step-and-read routines; 0 otherwise).
+    t, t_contact, t_release : float
+        When the routine finished, when the target force was first read and
+        when the support was removed (s, rig time; NaN where unknown).
+
+    Examples
+    --------
+    >>> from slipreflex.hardware import Finger
+    >>> g = GraspResult(147.0, 0.83, {Finger.THUMB: 149.0, Finger.MIDDLE: 147.0})
+    >>> g.contact, g.stable, g.p0_text()
+    (True, None, 'thumb=149,middle=147')
+    """
+
+    position: float
+    force_n: float
+    positions: dict = field(default_factory=dict)
+    contact: bool = True
+    stable: bool | None = None
+    steps: int = 0
+    t: float = float("nan")
+    t_contact: float = float("nan")
+    t_release: float = float("nan")
+
+    def p0_text(self) -> str:
+        """The positions as ``run --p0`` takes them: ``thumb=149,index=147,middle=147``.
+
+        Examples
+        --------
+        >>> from slipreflex.hardware import Finger
+        >>> GraspResult(147.0, 0.8, {Finger.INDEX: 147.0}).p0_text()
+        'index=147'
+        """
+        return ",".join(f"{f.name.lower()}={v:g}" for f, v in self.positions.items())
+
+
+@runtime_checkable
+class Rig(Protocol):
+    """A simulated rig as the virtual devices and the closed-loop runner see it.
+
+    ``t`` is the rig's time (s); ``advance_to(t)`` advances it and returns the
+    DAQ samples produced; ``hand`` is its :class:`Hand` (the simulated one also
+    takes ``command(kind, fingers, value, at=)``); ``grasp(force)`` runs the
+    grasp routine and ``perturb(what, at)`` schedules a load change.
+    :class:`slipreflex.sim.Rig` implements it.
+
+    Examples
+    --------
+    >>> class Still:
+    ...     t, hand = 0.0, None
+    ...     def advance_to(self, t): return []
+    ...     def grasp(self, force=0.8): return GraspResult(0.0, force)
+    ...     def perturb(self, what, at=None): pass
+    >>> isinstance(Still(), Rig)
+    True
+    """
+
+    t: float
+    hand: Any
+
+    def advance_to(self, t: float) -> list[DaqSample]: ...
+
+    def grasp(self, force: float = ...) -> GraspResult: ...
+
+    def perturb(self, what: Any, at: float | None = None) -> None: ...

@@ -94,7 +94,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"daq: {dev.daq_path}", flush=True)
         print(f"hand: {dev.hand_path}", flush=True)
         print(f"p0: {grasp.p0_text()}", flush=True)
-        print(f"grasp: bottle {args.bottle}, {grasp.force:.2f} N per contact, "
+        print(f"grasp: bottle {args.bottle}, {grasp.force_n:.2f} N per contact, "
               f"{'stable' if grasp.stable else 'NOT stable'}", flush=True)
         print(f"run: slipreflex run --daq {dev.daq_path} --hand {dev.hand_path} --p0 {grasp.p0_text()}",
               flush=True)

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..errors import DeviceError, ParameterError
+from ..interfaces import GraspResult
 from ..hardware import (
     CONTACT_FORCE_N, FINGER_MAX, FINGER_MIN, ILIMB_BAUD, ILIMB_END, ILIMB_START, PWM_MAX,
     THUMB_ROTATOR_MAX, TRIPOD, Finger, HandCommand,
@@ -486,33 +487,6 @@ def _round_position(finger: Finger, value: float) -> int:
     return v
 
 
-@dataclass(frozen=True, slots=True)
-class GraspResult:
-    """Outcome of :func:`tripod_grasp`.
-
-    Attributes
-    ----------
-    position : float
-        Final position target of the tripod fingers (the MPI's ``p0``).
-    force : float
-        Contact force (N) read when closing stopped.
-    steps : int
-        Position increments sent.
-    contact : bool
-        True if the force reached the target, False if the hand closed fully.
-
-    Examples
-    --------
-    >>> GraspResult(position=210.0, force=0.83, steps=42, contact=True).contact
-    True
-    """
-
-    position: float
-    force: float
-    steps: int
-    contact: bool
-
-
 def tripod_grasp(hand: Any, contact_force: Callable[[], float], *,
                  force: float = CONTACT_FORCE_N, start: float = float(FINGER_MIN),
                  step: float = 5.0, settle: Callable[[], None] | None = None,
@@ -574,4 +548,5 @@ def tripod_grasp(hand: Any, contact_force: Callable[[], float], *,
         if settle is not None:
             settle()
         f = float(contact_force())
-    return GraspResult(position=pos, force=f, steps=steps, contact=f >= force)
+    return GraspResult(position=pos, force_n=f, positions={finger: pos for finger in fingers}, contact=f >= force,
+                       steps=steps)

@@ -18,56 +18,13 @@ True
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from typing import Any
 
 from ..errors import ParameterError
-from ..hardware import SLIP_FINGER, TRIPOD, Finger
-from ..interfaces import DaqSample
 
-__all__ = ["SimRig", "SimGrasp"]
+from ..interfaces import DaqSample, GraspResult
 
-
-@dataclass(frozen=True, slots=True)
-class SimGrasp:
-    """Outcome of :meth:`SimRig.grasp`.
-
-    Attributes
-    ----------
-    position : float
-        Measured middle-finger position after the grasp: the reflex's ``p0``.
-    force : float
-        Normal force per contact (N) after settling.
-    stable : bool
-        Whether the bottle hangs still in the fingers.
-    t : float
-        Rig time (s) when the grasp routine finished.
-    positions : dict of Finger to float
-        Measured position of every tripod finger after the grasp: the
-        per-finger ``p0`` that ``slipreflex run --p0`` takes (the thumb often
-        stops at another position than the index and middle).
-
-    Examples
-    --------
-    >>> SimGrasp(position=212.0, force=0.8, stable=True, t=2.5).position
-    212.0
-    """
-
-    position: float
-    force: float
-    stable: bool
-    t: float
-    positions: dict = field(default_factory=dict)
-
-    def p0_text(self) -> str:
-        """The positions as ``run --p0`` takes them: ``thumb=149,index=147,middle=147``.
-
-        Examples
-        --------
-        >>> SimGrasp(147.0, 0.8, True, 2.5, {Finger.THUMB: 149.0, Finger.MIDDLE: 147.0}).p0_text()
-        'thumb=149,middle=147'
-        """
-        return ",".join(f"{f.name.lower()}={v:g}" for f, v in self.positions.items())
+__all__ = ["SimRig"]
 
 
 class SimRig:
@@ -101,22 +58,19 @@ class SimRig:
         """The simulated i-Limb (a :class:`~slipreflex.interfaces.Hand` with ``command``)."""
         return self.rig.hand
 
-    def grasp(self, force: float | None = None) -> SimGrasp:
+    def grasp(self, force: float | None = None) -> GraspResult:
         """Grasp the bottle (the simulator's tripod routine, 0.8 N contact or ``force``) and let it settle.
 
         Returns
         -------
-        SimGrasp
+        GraspResult
 
         Examples
         --------
         >>> SimRig("TX").grasp().stable
         True
         """
-        g = self.rig.grasp() if force is None else self.rig.grasp(force)
-        return SimGrasp(position=float(g.positions[SLIP_FINGER]), force=float(g.force_n),
-                        stable=bool(g.stable), t=self.rig.t,
-                        positions={f: float(g.positions[f]) for f in TRIPOD})
+        return self.rig.grasp() if force is None else self.rig.grasp(force)
 
     def advance_to(self, t: float) -> list[DaqSample]:
         """Advance to ``t`` seconds after the first call; return the new samples.

@@ -39,7 +39,6 @@ from .. import hardware as hw
 from ..errors import ParameterError
 from ..hardware import Finger, HandCommand
 from ..interfaces import Reflex
-from . import kernel as K
 from .objects import Drop, Pour
 from .rig import DaqBlock, Rig, SlipEvent
 
@@ -351,14 +350,12 @@ def run_closed_loop(rig: Rig, reflex: Reflex, duration: float, *,
             step = reflex.step
             command = _offset_command(rig.hand.command, fingers, getattr(reflex, "finger_offsets", None))
             dt = rig.physics.dt
-            period = hw.DAQ_PERIOD_S
-            C = rig._C
-            while C[K.C_DAQ] * period <= t_end + eps:
-                horizon = min(t_end, max(int(C[K.C_N]) * dt + dt, int(C[K.C_DAQ]) * period + lat))
-                rows = rig._advance_rows(horizon)
-                volts = rows[:, K.O_VOLTS].tolist()
-                mids = np.rint(rows[:, K.O_Q2]).tolist()
-                ts = rows[:, K.O_T].tolist()
+            while rig.next_daq_time <= t_end + eps:
+                horizon = min(t_end, max(rig.t + dt, rig.next_daq_time + lat))
+                times, volts_a, mids_a = rig.advance_slip(horizon)
+                volts = volts_a.tolist()
+                mids = np.rint(mids_a).tolist()
+                ts = times.tolist()
                 for v, pos, ts_k in zip(volts, mids, ts):
                     c = step(v, position=pos)
                     if c is not None:
@@ -373,12 +370,12 @@ def run_closed_loop(rig: Rig, reflex: Reflex, duration: float, *,
             command = rig.hand.command
             while tac_s.next_time <= t_end + eps:
                 horizon = min(t_end, max(rig.t + rig.physics.dt, tac_s.next_time + lat))
-                rig._advance_rows(horizon)
+                rig.advance_slip(horizon)
                 tt, frames = tac_s.read()
                 # measured middle position at each frame time: the latest DAQ-rate value
                 for k in range(tt.size):
                     ts_k = float(tt[k])
-                    pos = float(round(_finger_at(rig, ts_k)))
+                    pos = float(round(rig.finger_position_at(ts_k, Finger.MIDDLE)))
                     c = step(frames[k], position=pos)
                     if c is not None:
                         command(HandCommand.POSITION, fingers, float(c), at=ts_k)
@@ -393,12 +390,3 @@ def run_closed_loop(rig: Rig, reflex: Reflex, duration: float, *,
             tac_s.close()
     tac_t, tac = tac_s.history if tac_s is not None else (np.zeros(0), np.zeros((0,) + hw.TACTILE_SHAPE))
     return _trace(rig, t0, getattr(reflex, "name", type(reflex).__name__), cmd_t, cmd_v, tac_t, tac)
-
-
-def _finger_at(rig: Rig, t: float) -> float:
-    """Middle-finger position at time ``t``: the latest DAQ-rate value at or before ``t``."""
-    for rows in reversed(rig._daq_chunks):
-        if rows.shape[0] and rows[0, K.O_T] <= t + 1e-12:
-            i = int(np.searchsorted(rows[:, K.O_T], t + 1e-12, side="right")) - 1
-            return float(rows[i, K.O_Q2])
-    return float(rig._S[K.S_Q0 + 2])

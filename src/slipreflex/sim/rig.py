@@ -52,7 +52,7 @@ from .. import hardware as hw
 from .._slots import slot
 from ..errors import ParameterError
 from ..hardware import Finger, HandCommand
-from ..interfaces import DaqSample
+from ..interfaces import DaqSample, GraspResult
 from . import kernel as K
 from .contacts import fill_contact_params
 from .objects import BOTTLES, WATER_DENSITY, Bottle, Drop, Pour, Surface
@@ -220,37 +220,6 @@ class SlipEvent:
         return None if self.end is None else round(self.end - self.onset, 12)
 
 
-@dataclass(frozen=True)
-class GraspResult:
-    """Outcome of :meth:`Rig.grasp`.
-
-    Attributes
-    ----------
-    t_contact : float
-        When the tactile sensors first read the target force (s).
-    t_release : float
-        When the bottle's support was removed (s).
-    force_n : float
-        Normal force per contact after settling (N).
-    positions : dict
-        Finger positions after settling.
-    stable : bool
-        The bottle is held (stuck, not fallen) after settling.
-
-    Examples
-    --------
-    >>> from slipreflex.sim import Rig
-    >>> Rig("TR").grasp().positions[Finger.MIDDLE] > 0
-    True
-    """
-
-    t_contact: float
-    t_release: float
-    force_n: float
-    positions: dict
-    stable: bool
-
-
 class TactileSampler:
     """Frames of one finger's 4 x 4 tactile array at a fixed rate.
 
@@ -283,7 +252,7 @@ class TactileSampler:
         self._hist_f: list[np.ndarray] = []
         self._state = np.full((2,) + hw.TACTILE_SHAPE, np.nan)   # the taxels' low-pass and play
         # the first frame strictly after now (a frame at the current instant was due in the past)
-        self.next_index = 0 if rig.t == 0.0 else int(math.floor(rig.t * self.fs + 1e-9)) + 1
+        self.next_index = 0 if rig.step_index == 0 else int(math.floor(rig.t * self.fs + 1e-9)) + 1
 
     @property
     def next_time(self) -> float:
@@ -359,12 +328,10 @@ class TactileSampler:
         --------
         >>> from slipreflex.sim import Rig
         >>> rig = Rig("TR"); s = rig.tactile_sampler(100.0); s.close()
-        >>> s in rig._samplers
+        >>> s in rig.samplers
         False
         """
-        if self in self._rig._samplers:
-            self._rig._samplers.remove(self)
-            self._rig._sync_samplers()
+        self._rig.detach_sampler(self)
 
 
 class SimHand:
@@ -396,6 +363,9 @@ class SimHand:
         self._pending: list[tuple[int, int, HandCommand, tuple[Finger, ...], float]] = []
         self._count = 0
         self._others: dict[Finger, float] = {f: 0.0 for f in Finger if f not in hw.TRIPOD}
+        #: Servo targets and speed limits of thumb, index and middle (the rig hands them to the physics).
+        self.targets = np.zeros(len(hw.TRIPOD))
+        self.speeds = np.full(len(hw.TRIPOD), params.speed_units_s)
 
     @property
     def latency(self) -> float:
@@ -441,7 +411,7 @@ class SimHand:
             raise ParameterError(f"hand command value must be finite, got {value!r}")
         sent = self._rig.t if at is None else float(at)
         dt = self._rig.physics.dt
-        step = max(int(math.ceil((sent + self.params.latency_s) / dt - _ROUND)), self._rig._n)
+        step = max(int(math.ceil((sent + self.params.latency_s) / dt - _ROUND)), self._rig.step_index)
         bisect.insort(self._pending, (step, self._count, kind, fingers, float(value)))
         self._count += 1
 
@@ -468,14 +438,39 @@ class SimHand:
         >>> Rig("TR").hand.positions()[Finger.INDEX]
         0.0
         """
-        S = self._rig._S
-        out = {f: float(round(S[K.S_Q0 + i])) for i, f in enumerate(hw.TRIPOD)}
+        q = self._rig.finger_q
+        out = {f: float(round(q[i])) for i, f in enumerate(hw.TRIPOD)}
         out.update({f: float(round(v)) for f, v in self._others.items()})
         return dict(sorted(out.items()))
 
-    def _apply_due(self, n: int) -> None:
-        S = self._rig._S
+    def next_due_step(self) -> int | None:
+        """Physics step at which the next queued command takes effect (None: nothing queued).
+
+        Examples
+        --------
+        >>> from slipreflex.sim import Rig
+        >>> rig = Rig("TR"); rig.hand.set_positions({Finger.INDEX: 10}); rig.hand.next_due_step()
+        100
+        """
+        return self._pending[0][0] if self._pending else None
+
+    def apply_due(self, n: int) -> bool:
+        """Carry out the commands due by physics step ``n`` (called by the rig); True if any was.
+
+        Updates :attr:`targets` and :attr:`speeds` of the tripod fingers.
+
+        Examples
+        --------
+        >>> from slipreflex.sim import Rig
+        >>> rig = Rig("TR"); rig.hand.set_positions({Finger.INDEX: 10})
+        >>> rig.hand.apply_due(99), rig.hand.apply_due(100), float(rig.hand.targets[1])
+        (False, True, 10.0)
+        """
+        if not (self._pending and self._pending[0][0] <= n):
+            return False
         p = self.params
+        q = self._rig.finger_q
+        tgt, spd = self.targets, self.speeds
         while self._pending and self._pending[0][0] <= n:
             _, _, kind, fingers, value = self._pending.pop(0)
             for f in fingers:
@@ -483,15 +478,15 @@ class SimHand:
                     i = hw.TRIPOD.index(f)
                     if kind == HandCommand.POSITION:
                         # the packet carries whole units (value MSB, LSB)
-                        S[K.S_TGT0 + i] = min(max(round(value), hw.FINGER_MIN), hw.FINGER_MAX)
-                        S[K.S_SPD0 + i] = p.speed_units_s
+                        tgt[i] = min(max(round(value), hw.FINGER_MIN), hw.FINGER_MAX)
+                        spd[i] = p.speed_units_s
                     elif kind in (HandCommand.CLOSE, HandCommand.OPEN):
-                        S[K.S_TGT0 + i] = hw.FINGER_MAX if kind == HandCommand.CLOSE else hw.FINGER_MIN
-                        S[K.S_SPD0 + i] = p.speed_units_s * min(max(value, 0.0), hw.PWM_MAX) / hw.PWM_MAX
+                        tgt[i] = hw.FINGER_MAX if kind == HandCommand.CLOSE else hw.FINGER_MIN
+                        spd[i] = p.speed_units_s * min(max(value, 0.0), hw.PWM_MAX) / hw.PWM_MAX
                     else:
                         # STOP: the digit controller holds its encoder count (whole units)
-                        S[K.S_TGT0 + i] = round(S[K.S_Q0 + i])
-                        S[K.S_SPD0 + i] = p.speed_units_s
+                        tgt[i] = round(q[i])
+                        spd[i] = p.speed_units_s
                 else:
                     top = hw.THUMB_ROTATOR_MAX if f == Finger.THUMB_ROTATOR else hw.FINGER_MAX
                     if kind == HandCommand.POSITION:
@@ -500,6 +495,7 @@ class SimHand:
                         self._others[f] = float(top)
                     elif kind == HandCommand.OPEN:
                         self._others[f] = 0.0
+        return True
 
 
 
@@ -651,6 +647,51 @@ class Rig:
         return int(self._C[K.C_N])
 
     @property
+    def step_index(self) -> int:
+        """Physics steps done since the rig started (``t = step_index * physics.dt``).
+
+        Examples
+        --------
+        >>> Rig("TR").step_index
+        0
+        """
+        return self._n
+
+    @property
+    def finger_q(self) -> np.ndarray:
+        """Unrounded positions of thumb, index and middle (a copy; the hand reports them rounded).
+
+        Examples
+        --------
+        >>> Rig("TR").finger_q.tolist()
+        [0.0, 0.0, 0.0]
+        """
+        return self._S[K.S_Q0:K.S_Q0 + 3].copy()
+
+    @property
+    def samplers(self) -> tuple["TactileSampler", ...]:
+        """The tactile samplers now running.
+
+        Examples
+        --------
+        >>> rig = Rig("TR"); s = rig.tactile_sampler(100.0); rig.samplers == (s,)
+        True
+        """
+        return tuple(self._samplers)
+
+    def detach_sampler(self, sampler: "TactileSampler") -> None:
+        """Stop feeding ``sampler`` (what :meth:`TactileSampler.close` calls).
+
+        Examples
+        --------
+        >>> rig = Rig("TR"); s = rig.tactile_sampler(100.0); rig.detach_sampler(s); rig.samplers
+        ()
+        """
+        if sampler in self._samplers:
+            self._samplers.remove(sampler)
+            self._sync_samplers()
+
+    @property
     def t(self) -> float:
         """Rig time (s).
 
@@ -703,6 +744,39 @@ class Rig:
         seq0 = int(self._C[K.C_DAQ])
         return DaqBlock.from_rows(self._advance_rows(t), seq0)
 
+    def advance_slip(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Advance to ``t``; return the new DAQ samples' times, slip volts and middle-finger positions.
+
+        The fast path of the closed loop (arrays, no per-sample objects); the
+        same samples :meth:`advance_to` would return.
+
+        Examples
+        --------
+        >>> t, volts, middle = Rig("TR").advance_slip(0.01)
+        >>> t.size == volts.size == middle.size == 4
+        True
+        """
+        rows = self._advance_rows(t)
+        return rows[:, K.O_T].copy(), rows[:, K.O_VOLTS].copy(), rows[:, K.O_Q2].copy()
+
+    def finger_position_at(self, t: float, finger: Finger = Finger.MIDDLE) -> float:
+        """Unrounded position of a tripod finger at the latest DAQ sample at or before ``t``.
+
+        Needs the DAQ history (``history=True``); before the first sample, the current position.
+
+        Examples
+        --------
+        >>> rig = Rig("TR"); rig.hand.set_positions({Finger.MIDDLE: 100}); _ = rig.advance(0.5)
+        >>> rig.finger_position_at(0.0), rig.finger_position_at(0.5) > 90
+        (0.0, True)
+        """
+        col = K.O_Q0 + hw.TRIPOD.index(Finger(finger))
+        for rows in reversed(self._daq_chunks):
+            if rows.shape[0] and rows[0, K.O_T] <= t + 1e-12:
+                i = int(np.searchsorted(rows[:, K.O_T], t + 1e-12, side="right")) - 1
+                return float(rows[i, col])
+        return float(self._S[K.S_Q0 + hw.TRIPOD.index(Finger(finger))])
+
     def _advance_rows(self, t: float) -> np.ndarray:
         """Advance to ``t``; return the new DAQ rows in the kernel's layout (fast path)."""
         if not math.isfinite(t):
@@ -715,11 +789,13 @@ class Rig:
         C = self._C
         while True:
             n = int(C[K.C_N])
-            if hand._pending:
-                hand._apply_due(n)
+            if hand.apply_due(n):
+                self._S[K.S_TGT0:K.S_TGT0 + 3] = hand.targets
+                self._S[K.S_SPD0:K.S_SPD0 + 3] = hand.speeds
             if n >= n_end:
                 break
-            nxt = hand._pending[0][0] if hand._pending else n_end
+            due = hand.next_due_step()
+            nxt = n_end if due is None else due
             stop = min(n_end, n + chunk, nxt if nxt > n else n_end)
             rows.append(self._run(stop))
         if not rows:
@@ -898,8 +974,10 @@ class Rig:
         self._advance_rows(self.t + settle)
         S = self._S
         stable = bool(S[K.S_FALLEN] == 0.0 and S[K.S_STUCK] > 0.0 and abs(S[K.S_V]) < 1e-3)
-        self._grasp = GraspResult(t_contact=t_contact, t_release=t_release, force_n=float(S[K.S_NC]),
-                                  positions=self.hand.positions(), stable=stable)
+        pos = self.hand.positions()
+        self._grasp = GraspResult(position=pos[hw.SLIP_FINGER], force_n=float(S[K.S_NC]),
+                                  positions={f: pos[f] for f in hw.TRIPOD}, contact=True, stable=stable, t=self.t,
+                                  t_contact=t_contact, t_release=t_release)
         return self._grasp
 
     def release_support(self) -> None:
