@@ -196,3 +196,9 @@ def test_report_and_terminal_carry_the_claims(tmp_path):
     verdicts = C.judge_run(res.rows, seed=res.config.seed)
     assert md.count("| **") == 10 and all(f"| **{r.verdict}** | {r.numbers} |" in md for r in verdicts)
     assert verdicts[2].verdict == C.NOT_TESTABLE     # one bottle, one method: claim 3 cannot be judged
+
+
+def test_missing_counts_do_not_break_the_judge():
+    rows = [{**r, "n_events": "", "event": None} if r["experiment"] == "pour" else r for r in paper_like()]
+    res = {r.number: r for r in C.judge(rows)}
+    assert res[6].verdict == C.FAILS and "0% of" in res[6].numbers   # no slip counts: no two-slip pours

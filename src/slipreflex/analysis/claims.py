@@ -244,6 +244,12 @@ def _num(x: Any) -> float:
         return float("nan")
 
 
+def _count(x: Any) -> int:
+    """A count cell as int; a missing or unreadable cell counts 0."""
+    v = _num(x)
+    return int(v) if math.isfinite(v) else 0
+
+
 def _truthy(x: Any) -> bool:
     if isinstance(x, str):
         return x.strip().lower() in ("true", "1")
@@ -290,7 +296,7 @@ def _need(ci: ClaimInput, experiment: str, methods: Sequence[str], bottles: Sequ
           column: str = "response_ms") -> str | None:
     """Why a claim is not testable (missing cells or values), or None."""
     miss = [f"{_label(m)} {b}" for m in methods for b in bottles
-            if ci.cell_mean(experiment, b, m, column) != ci.cell_mean(experiment, b, m, column)]
+            if math.isnan(ci.cell_mean(experiment, b, m, column))]
     return f"no {column} for {experiment}: " + ", ".join(miss) if miss else None
 
 
@@ -340,12 +346,12 @@ def _pour_dath(ci: ClaimInput) -> tuple[str, str]:
     trials = _pour_trials(ci)
     if not n or not trials:
         return NOT_TESTABLE, "needs pour rows of DATH"
-    two = float(np.mean([int(_num(_get(t[0], "n_events")) or 0) >= 2 for t in trials]))
+    two = float(np.mean([_count(_get(t[0], "n_events")) >= 2 for t in trials]))
     vols = [[], []]
     for t in trials:
         for r in t:
-            e = int(_num(_get(r, "event")) or 0)
-            if e < 2 and int(_num(_get(r, "n_events")) or 0) > e:
+            e = _count(_get(r, "event"))
+            if e < 2 and _count(_get(r, "n_events")) > e:
                 vols[e].append(_num(_get(r, "load_at_onset")))
     med = [float(np.nanmedian(v)) if any(x == x for x in v) else float("nan") for v in vols]
     near = all(abs(m - want) <= NEAR_ML for m, want in zip(med, (200.0, 400.0)))
