@@ -253,6 +253,9 @@ def test_a_sigstopped_loop_raises_a_staleness_fault_and_holds_after_it_resumes(t
         stale = _line(run.stderr, "[")
         while "stale:" not in stale:
             stale = _line(run.stderr, "[")
+        cleared = _line(run.stderr, "[")
+        while "stale-clear:" not in cleared:  # await the backlog's end, so the clear is recorded
+            cleared = _line(run.stderr, "[")
         run.send_signal(signal.SIGINT)
         out, err = run.communicate(timeout=30)
     finally:
