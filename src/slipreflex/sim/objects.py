@@ -45,12 +45,11 @@ Examples
 >>> Drop(mass_kg=-1)
 Traceback (most recent call last):
 ...
-slipreflex.errors.ParameterError: Drop.mass_kg must be > 0, got -1
+slipreflex.errors.ParameterError: Drop.mass_kg must be a finite number > 0 and <= 5, got -1
 """
 
 from __future__ import annotations
 
-import math
 import tomllib
 from dataclasses import MISSING, dataclass, field, fields
 from pathlib import Path
@@ -58,6 +57,7 @@ from types import MappingProxyType
 from typing import Any, Mapping
 
 from ..errors import ParameterError
+from ..validation import number
 
 __all__ = [
     "Surface", "Bottle", "Drop", "Pour", "Objects", "SURFACES", "BOTTLES",
@@ -74,12 +74,8 @@ FRICTION_LAWS: tuple[str, ...] = ("rate-state", "coulomb")
 
 def _check(cls: str, name: str, value: Any, *, lo: float | None = None, hi: float | None = None,
            lo_open: bool = False, hi_open: bool = False) -> None:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise ParameterError(f"{cls}.{name} must be a finite number, got {value!r}")
-    if lo is not None and (value <= lo if lo_open else value < lo):
-        raise ParameterError(f"{cls}.{name} must be {'>' if lo_open else '>='} {lo:g}, got {value!r}")
-    if hi is not None and (value >= hi if hi_open else value > hi):
-        raise ParameterError(f"{cls}.{name} must be {'<' if hi_open else '<='} {hi:g}, got {value!r}")
+    """A finite number within the bounds (:func:`slipreflex.validation.number`, the one validator)."""
+    number(f"{cls}.{name}", value, lo=lo, hi=hi, lo_open=lo_open, hi_open=hi_open)
 
 
 @dataclass(frozen=True, slots=True)

@@ -22,30 +22,25 @@ Examples
 >>> HandParams(latency_s=-1)
 Traceback (most recent call last):
 ...
-slipreflex.errors.ParameterError: HandParams.latency_s must be >= 0, got -1
+slipreflex.errors.ParameterError: HandParams.latency_s must be a finite number >= 0, got -1
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 from .. import hardware as hw
 from ..errors import ParameterError
+from ..validation import positive, set_field
 
 __all__ = ["HandParams", "SlipSensorParams", "ImuParams", "TactileParams", "FlowParams", "PhysicsParams"]
 
 
-def _pos(cls: str, name: str, value: float, *, zero_ok: bool = False) -> None:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise ParameterError(f"{cls}.{name} must be a finite number, got {value!r}")
-    if value < 0 or (value == 0 and not zero_ok):
-        raise ParameterError(f"{cls}.{name} must be {'>=' if zero_ok else '>'} 0, got {value!r}")
-
-
 def _validate(obj: object, zero_ok: tuple[str, ...] = ()) -> None:
+    """Every field a finite number > 0 (>= 0 for ``zero_ok``), stored as a float (the one validator)."""
+    cls = type(obj).__name__
     for name in obj.__dataclass_fields__:  # type: ignore[attr-defined]
-        _pos(type(obj).__name__, name, getattr(obj, name), zero_ok=name in zero_ok)
+        set_field(obj, name, positive(f"{cls}.{name}", getattr(obj, name), zero_ok=name in zero_ok))
 
 
 @dataclass(frozen=True, slots=True)
