@@ -70,7 +70,7 @@ def chain_params(args: argparse.Namespace, p0: float):
     if getattr(args, "preset", None):
         d = ReflexParams()
         given = [o for o, k in _PRESET_REPLACES.items() if getattr(args, k) != getattr(d, k)]
-        given += ["--method fixed"] * (args.method != "dath") + ["--no-filter"] * args.no_filter
+        given += ["--method fixed"] * (args.method != DATH) + ["--no-filter"] * args.no_filter
         if given:
             raise ParameterError(f"--preset {args.preset} sets the whole chain; {given[0]} cannot be "
                                  f"combined with it")
@@ -189,7 +189,7 @@ def run(args: argparse.Namespace) -> int:
     if args.board_reflex:
         from ..board import BoardParams, CheckedBoardReflex
 
-        bparams = BoardParams.firmware(dath=args.method == "dath", p0=args.board_p0)
+        bparams = BoardParams.firmware(dath=args.method == DATH, p0=args.board_p0)
         reflex = CheckedBoardReflex(bparams)
         board_meta = {"board_params": json.dumps(bparams.to_dict())}
     if args.realtime:
