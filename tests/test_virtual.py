@@ -88,7 +88,12 @@ def test_run_over_virtual_devices_suppresses_slip_like_the_in_process_simulation
     sim = SimRig("TR", seed=0, pour=POUR)
     p0 = sim.grasp().position
     start_seq = round(sim.rig.next_daq_time / DAQ_PERIOD_S) + PHASE
-    reflex = SlipReflex(dath=True, p0=p0)  # built before the clock starts
+    reflex = SlipReflex(dath=True, p0=p0)
+    # stepped once before the clock starts: the first step compiles the chain (seconds under
+    # load, more with a stale numba cache), and inside the 3.9 s loop that once left time for
+    # one stale sample only ("samples=1, stale_samples=1")
+    reflex.step(0.4)
+    reflex.reset()
     with VirtualDevices(sim, link_dir=str(tmp_path)) as dev:
         with SerialDaq(dev.daq_path) as daq, ILimb(dev.hand_path) as hand:
             # The in-process loop sends every finger the middle finger's p0 at its first window
@@ -143,10 +148,26 @@ def _readline(proc, want, deadline_s=120.0):
     raise AssertionError(f"no line starting with {want!r}; got {lines}")
 
 
-def test_virtual_rig_command_keys_signals_schedule_and_run(tmp_path, capsys):
-    # the textured bottle: its drop slip fires spikes under the rate-state contacts
+def test_virtual_rig_command_keys_signals_schedule_and_run(tmp_path, capsys, monkeypatch):
+    import slipreflex.runtime as runtime
+
+    SlipReflex(dath=True, p0=148.0).step(0.4)  # the chain compiled: run's loop does not stall on it
+
+    def drop_when_running(source, *args, **kw):
+        # The drop starts when run's loop has its first sample, not at a time after the rig
+        # started: run may take seconds to start under load, and the slip was then over before
+        # the loop began ("(0 sent)", issue 15 item 7).
+        def drop():
+            proc.stdin.write("d\n")
+            proc.stdin.flush()
+        return run_loop(_From(source, 0, drop), *args, **kw)
+
+    run_loop = runtime.run_loop
+    monkeypatch.setattr(runtime, "run_loop", drop_when_running)
+    # the textured bottle: its drop slip fires spikes under the rate-state contacts; the schedule's
+    # pour at 0.2 s only starts the water (its first slip comes seconds later)
     proc = subprocess.Popen([sys.executable, "-m", "slipreflex", "virtual-rig", "--link-dir", str(tmp_path),
-                             "--bottle", "TX", "--schedule", "drop@0.2", "--duration", "60"],
+                             "--bottle", "TX", "--schedule", "pour@0.2", "--duration", "60"],
                             stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
     killer = threading.Timer(90, proc.kill)  # bounds the test if the child hangs
     killer.start()
@@ -161,6 +182,7 @@ def test_virtual_rig_command_keys_signals_schedule_and_run(tmp_path, capsys):
         out = capsys.readouterr().out
         assert "seq_gaps 0" in out and "crc_errors 0" in out
         assert "commands 0 " not in out and "(0 sent)" not in out
+        _readline(proc, "drop at")
         proc.stdin.write("p\n")
         proc.stdin.flush()
         _readline(proc, "pour at")
@@ -177,7 +199,7 @@ def test_virtual_rig_command_keys_signals_schedule_and_run(tmp_path, capsys):
             proc.wait()
         proc.stdin.close()
         proc.stdout.close()
-    assert "perturbations [('drop', 0.2" in rest and "'pour'" in rest and rest.count("'drop'") == 2
+    assert "perturbations [('pour', 0.2" in rest and rest.count("'pour'") == 2 and rest.count("'drop'") == 2
     assert "hand packets applied (0 rejected)" in rest
 
 
