@@ -363,7 +363,7 @@ class ILimb:
             if self._targets:  # back after a loss: restore the whole grip first
                 self._write(self._targets_packet(self._targets))
         try:
-            self._port.serial.write(packet)
+            self._port.write(packet)
         except (serial.SerialException, OSError) as err:
             self.write_failures += 1
             raise self._port.fail(err, "write failed") from None

@@ -24,6 +24,7 @@ False
 from __future__ import annotations
 
 import math
+import os
 import time
 from typing import Any
 
@@ -175,6 +176,51 @@ class ReconnectingPort:
             except Exception:  # noqa: BLE001 - the port is already gone
                 pass
         return DeviceError(f"{self.port_name}: {self.what} port {doing}: {err}")
+
+    def write(self, data: bytes) -> None:
+        """Write every byte of ``data``, waiting at most ``write_timeout`` for the port to drain.
+
+        pyserial's POSIX ``write`` with a write timeout raises ``SerialTimeoutException``
+        after a write that went out whole, whenever the timeout expired between its
+        ``os.write`` and its check (pyserial issue #281): a thread descheduled for 10 ms on
+        a loaded machine then reported a sent packet as a failed one. Here only bytes
+        still unwritten at the deadline make a timeout. Ports without a file descriptor
+        (``loop://``) and ports without a write timeout use pyserial's own ``write``.
+
+        Raises
+        ------
+        serial.SerialTimeoutException
+            Bytes left unwritten when ``write_timeout`` has passed.
+        OSError, serial.SerialException
+            From the port (the caller turns them into :meth:`fail`).
+
+        Examples
+        --------
+        >>> p = ReconnectingPort("loop://", what="hand", baudrate=9600, write_timeout=0.01)
+        >>> p.write(b"hi"); p.serial.read(2)
+        b'hi'
+        """
+        import select
+
+        import serial
+
+        ser = self.serial
+        fd = getattr(ser, "fd", None)
+        if not isinstance(fd, int) or not self.write_timeout:
+            ser.write(data)
+            return
+        deadline = time.monotonic() + self.write_timeout
+        left = memoryview(data)
+        while left:
+            try:
+                left = left[os.write(fd, left):]
+            except BlockingIOError:
+                pass
+            if left:
+                wait = deadline - time.monotonic()
+                if wait <= 0 or not select.select([], [fd], [], wait)[1]:
+                    raise serial.SerialTimeoutException(
+                        f"Write timeout ({len(left)} of {len(data)} bytes not written)")
 
     def close(self) -> None:
         """Close the port if it was opened here (idempotent); a port given open is only let go.
