@@ -44,6 +44,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--link-dir", default=None,
                    help="also create DIR/daq and DIR/hand symlinks to the ports (stable paths; DIR is created)")
     p.add_argument("--duration", type=float, default=None, help="exit after this many seconds")
+    p.add_argument("--realtime", action="store_true",
+                   help="run the rig's real-time thread under SCHED_FIFO (it stands in for hardware "
+                        "that a busy PC cannot slow; Linux, needs privileges)")
 
 
 def _objects(args: argparse.Namespace):
@@ -99,6 +102,10 @@ def run(args: argparse.Namespace) -> int:
         print(f"run: slipreflex run --daq {dev.daq_path} --hand {dev.hand_path} --p0 {grasp.p0_text()}",
               flush=True)
         print("keys: d+Enter drop, p+Enter pour, q+Enter quit; SIGUSR1 drop, SIGUSR2 pour", flush=True)
+        if args.realtime:
+            from ..runtime import realtime_priority
+
+            print(f"rig: {realtime_priority()}", flush=True)  # the rig's thread inherits it
         dev.start()
         t0 = time.monotonic()
         stdin_open = sys.stdin is not None and not sys.stdin.closed
