@@ -520,44 +520,34 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
     Parameters
     ----------
     source : SampleSource
-        ``read(timeout) -> list[DaqSample]``; may raise
-        :class:`~slipreflex.errors.DeviceError` (recorded, the loop goes on).
-        If it has ``last_arrival`` (a ``time.perf_counter()`` value) that is
-        the arrival time of the samples just read; if it has ``stats`` (with
-        ``to_dict()``), the counters are recorded, returned, and their
-        increases become fault events.
+        ``read(timeout) -> list[DaqSample]``; may raise :class:`~slipreflex.errors.DeviceError`
+        (recorded, the loop goes on). Optional ``last_arrival`` (``perf_counter`` of the read)
+        and ``stats`` (``to_dict()``: recorded, returned, increases become fault events).
     hand : Hand
         ``set_positions(targets)``; optional ``hold(fingers)``.
     reflex : Reflex
         A slip reflex (``input_kind == "slip"``), e.g. :class:`slipreflex.chain.SlipReflex`.
     p0 : float or mapping of Finger to float, optional
-        Position each finger holds at start, as the grasp routine left it (one
-        value or one per finger; default: the reflex's initial command). The
-        loop starts with :func:`safe_start` (STOP, never a move) and sends
-        each finger the reflex's command shifted by that finger's start
-        relative to the reflex's own start, never below the finger's start.
+        Position each finger holds at start, as the grasp left it (default: the reflex's
+        initial command). The loop starts with :func:`safe_start`; each finger gets the
+        reflex's command shifted by its own start, never below it.
     recorder : Recorder, optional
-        Where every stream goes.
     duration : float, optional
         Seconds to run (default: until stopped).
-    watchdog : float
-        Seconds (20 to 500 ms) without a fresh valid sample before the fingers are held.
-    poll : float
-        Longest wait for input in one read (s), at most half the watchdog.
+    watchdog, poll : float
+        Seconds (0.02..0.5) without a fresh valid sample before the fingers are held;
+        longest wait in one read (at most half the watchdog).
     fingers : sequence of Finger
         Fingers that get the reflex's command (default: the tripod).
     stop : threading.Event, optional
-        Set it (e.g. from a signal handler) to stop the loop.
     on_fault : callable, optional
         Called with each :class:`Fault` as it happens (e.g. to print it).
     stats_interval : float
         Seconds between /stats messages.
     clock : callable
-        Monotonic clock in seconds; must be ``time.perf_counter`` if the
-        source's ``last_arrival`` is to be used.
+        Monotonic clock (s); ``time.perf_counter`` if ``last_arrival`` is to be used.
     guard : bool
-        Run the stall guard (a thread that holds the fingers when the loop
-        stops iterating for longer than the watchdog).
+        Run the stall guard thread (holds the fingers if the loop stops iterating).
 
     Returns
     -------
