@@ -36,17 +36,20 @@ Examples
 --------
 >>> from slipreflex.chain import SlipReflex
 >>> from slipreflex.interfaces import DaqSample
->>> class Source:                          # 64 samples of a still surface, then nothing
-...     def __init__(self): self.left = [DaqSample(k, k * 0.003, 0.4, None, 0) for k in range(64)]
+>>> class Source:                  # 64 samples of a still surface, then nothing; simulated time
+...     def __init__(self): self.left, self.now = [DaqSample(k, k * 0.003, 0.4, None, 0) for k in range(64)], 0.0
 ...     def read(self, timeout):
+...         self.now += 0.024 if self.left else timeout    # 8 samples take 24 ms
 ...         out, self.left = self.left[:8], self.left[8:]
 ...         return out
+...     def clock(self): return self.now
 ...     def close(self): pass
 >>> class Hand:
 ...     def __init__(self): self.targets = {}
 ...     def set_positions(self, t): self.targets.update(t)
 ...     def positions(self): return dict(self.targets)
->>> res = run_loop(Source(), Hand(), SlipReflex(p0=200.0), duration=0.5)
+>>> src = Source()
+>>> res = run_loop(src, Hand(), SlipReflex(p0=200.0), duration=0.5, clock=src.clock)
 >>> res.samples, res.commands, res.commands_sent, [f.kind for f in res.faults]
 (64, 4, 0, ['watchdog'])
 """
@@ -54,6 +57,7 @@ Examples
 from __future__ import annotations
 
 import collections
+import copy
 import gc
 import json
 import math
@@ -561,16 +565,17 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
     Examples
     --------
     >>> from slipreflex.chain import SlipReflex
-    >>> class Silent:
-    ...     def read(self, timeout): return []
+    >>> class Silent:                      # simulated time: each read waits its whole timeout
+    ...     now = 0.0
+    ...     def read(self, timeout): self.now += timeout; return []
     ...     def close(self): pass
     >>> class Hand:
     ...     held = 0
     ...     def set_positions(self, t): pass
     ...     def positions(self): return {}
     ...     def hold(self, fingers): self.held += 1
-    >>> h = Hand()
-    >>> r = run_loop(Silent(), h, SlipReflex(), duration=0.15, poll=0.01)
+    >>> h, src = Hand(), Silent()
+    >>> r = run_loop(src, h, SlipReflex(), duration=0.15, poll=0.01, clock=lambda: src.now)
     >>> [f.kind for f in r.faults], h.held >= 2      # the safe start's STOP, then the watchdog's
     (['watchdog'], True)
     """
@@ -590,6 +595,7 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
     if p0 is None and not ref_ok:
         raise ParameterError("run_loop: give p0 (the reflex has no initial command)")
     given = start_positions(p0 if p0 is not None else ref0, fingers)  # checked before anything is sent
+    _warm_up(reflex)
     finger_offsets(reflex, fingers)
     try:
         start, start_error = safe_start(hand, given, fingers), None
@@ -603,6 +609,17 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
         loop.fault("hold-failed", f"safe start: {start_error}", "fingers stay where the grasp left them; "
                    "the watchdog holds again if samples stop")
     return loop.run(guard)
+
+
+def _warm_up(reflex: Any) -> None:
+    """Step a copy once, so that what the first step loads or compiles (about 0.3 s for the
+    chain) happens before the clock starts, not on the first real sample (a stall that the
+    staleness check and the stall guard would rightly report). The reflex itself is untouched."""
+    try:
+        twin = copy.deepcopy(reflex)
+    except Exception:  # noqa: BLE001 - a reflex that cannot be copied is simply not warmed up
+        return
+    twin.step(0.0 if getattr(reflex, "input_kind", "slip") == "slip" else np.zeros((4, 4)), None)
 
 
 class _Sink:
