@@ -184,25 +184,3 @@ def test_tripod_grasp_stops_at_contact_force():
     with pytest.raises(ParameterError):
         tripod_grasp(h, h.force, step=0.0)
 
-
-def test_a_write_timeout_keeps_the_port_open():
-    class Slow:
-        """pyserial raises a write timeout also when the bytes went out late (preempted)."""
-
-        port = "slow"
-
-        def __init__(self):
-            self.written = []
-
-        def write(self, data):
-            self.written.append(bytes(data))
-            raise serial.SerialTimeoutException("Write timeout")
-
-    port = Slow()
-    hand = ILimb(port)
-    with pytest.raises(DeviceError, match="not done within 10 ms"):
-        hand.set_positions({Finger.MIDDLE: 200})
-    assert hand.connected and hand.write_timeouts == 1 and hand.write_failures == 0
-    with pytest.raises(DeviceError):
-        hand.hold()
-    assert len(port.written) == 2  # the same port, no reopen in between

@@ -326,10 +326,9 @@ class ILimb:
         self.write_timeout = write_timeout
         self.reconnect_interval = reconnect_interval
         self._targets: dict[Finger, float] = {}
-        #: Packets written, write failures (the port was closed) and write timeouts (kept open).
+        #: Packets written and write failures.
         self.packets_sent = 0
         self.write_failures = 0
-        self.write_timeouts = 0
 
     @property
     def reconnects(self) -> int:
@@ -365,12 +364,6 @@ class ILimb:
                 self._write(self._targets_packet(self._targets))
         try:
             self._port.write(packet)
-        except serial.SerialTimeoutException as err:
-            # the port stopped taking bytes: keep it open, a stuck port is not a lost one
-            # (an OS error closes it)
-            self.write_timeouts += 1
-            raise DeviceError(f"{self.port_name}: i-Limb write not done within "
-                              f"{self.write_timeout * 1e3:g} ms, the port is not draining ({err})") from None
         except (serial.SerialException, OSError) as err:
             self.write_failures += 1
             raise self._port.fail(err, "write failed") from None
