@@ -703,6 +703,7 @@ class _Loop:
         self.frame_latencies: list[float] = []
         self.offset: float | None = None  # board time -> clock time of the earliest arrivals
         self.last_arrival = self.t0
+        self.anchor_resets = 0  # the source's reset counter at the last re-anchoring
         self.last_valid = self.t0
         self.last_hold = -math.inf
         self.no_data = self.stale = self.risen = self.hold_failed = self.warned = False
@@ -772,11 +773,22 @@ class _Loop:
         has just arrived). A newest frame that looks older than the watchdog means the board's
         time was restarted (a reset continues at the next period), not a stall: re-anchor."""
         cand = arrival - t_newest
-        if self.offset is None or cand - self.offset > self.watchdog_s:
+        if self.offset is None or (cand - self.offset > self.watchdog_s and self.board_restarted()):
             self.offset = cand
         else:
             self.offset = min(self.offset + _CLOCK_DRIFT * (arrival - self.last_arrival), cand)
         self.last_arrival = arrival
+
+    def board_restarted(self) -> bool:
+        """Whether the source counted a board reset since the last re-anchoring. A source
+        without counters cannot tell a reset from a backlog, so any old frame counts as one;
+        with counters, a backlog read in pieces keeps its age (it is stale, not a reset)."""
+        st = getattr(self.source, "stats", None)
+        if st is None:
+            return True
+        resets = int(self.source_stats().get("resets", 0))
+        restarted, self.anchor_resets = resets > self.anchor_resets, resets
+        return restarted
 
     # -- step 2: process (the time-critical part) -------------------------------------
     def process(self, samples: list[DaqSample], arrival: float) -> list[SampleRecord]:
