@@ -92,9 +92,20 @@ class ReproduceResult:
 
 
 def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str | None = None,
-                  discussion: Sequence[str] | None = None) -> dict[str, Path]:
+                  discussion: Sequence[str] | None = None, jobs: int | None = None) -> dict[str, Path]:
     """Write results.csv, summary.csv, the figures and report.md of a run into ``out_dir``.
 
+    Parameters
+    ----------
+    result : ReproduceResult
+    out_dir : str or Path
+        Created if missing.
+    command : str, optional
+        The command line, quoted in report.md.
+    discussion : sequence of str, optional
+        Replaces the computed discussion paragraphs.
+    jobs : int, optional
+        Processes that draw the figures (default: the run's ``result.jobs``).
 
     Returns
     -------
@@ -118,7 +129,7 @@ def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str 
     paths = {"results": write_csv(out / "results.csv", result.rows, RESULT_COLUMNS, notes=notes),
              "summary": write_csv(out / "summary.csv", result.summary, SUMMARY_COLUMNS, notes=notes)}
     # A stopped run is saved at once: its figures would take seconds the user did not give.
-    figs = [] if partial else _write_figures(result, out, paths)
+    figs = [] if partial else _write_figures(result, out, paths, result.jobs if jobs is None else jobs)
     notices = [f"Partial run: {partial}; the tables cover the finished trials only, "
                "and no figures were drawn nor claims judged."] if partial else []
     paper, others, notice = paper_part(result)
@@ -166,34 +177,60 @@ def paper_part(result: ReproduceResult) -> tuple[ReproduceResult, list[dict[str,
     return dataclasses.replace(result, rows=rows, summary=keep), others, notice
 
 
-def _write_figures(result: ReproduceResult, out: Path, paths: dict[str, Path]) -> list[tuple[str, str]]:
-    """Draw the example trials, bar charts and success chart; (caption, relative path) of each."""
+def _figure_tasks(result: ReproduceResult, fig_dir: Path) -> list[tuple[str, str, Any, tuple]]:
+    """(file name, caption, drawing function, its arguments before the path) of every figure of a run."""
     from . import figures as F
 
-    figs: list[tuple[str, str]] = []
-    fig_dir = out / "figures"
+    tasks: list[tuple[str, str, Any, tuple]] = []
     for key in sorted(result.plots, key=lambda k: (EXPERIMENTS.index(k[0]), BOTTLE_ORDER.index(k[1])
                                                    if k[1] in BOTTLE_ORDER else len(BOTTLE_ORDER), k[1])):
         e, b, m, _ = key
-        name = f"trial_{e}_{b}_{m}.png"
-        paths[name] = F.plot_trial(result.plots[key], fig_dir / name)
-        figs.append((trial_caption(e, b, m), f"figures/{name}"))
-        ons = [x for x in result.plots[key].onsets if x == x]
+        plot = result.plots[key]
+        tasks.append((f"trial_{e}_{b}_{m}.png", trial_caption(e, b, m), F.plot_trial, (plot,)))
+        ons = [x for x in plot.onsets if x == x]
         if ons:
-            zname = f"trial_{e}_{b}_{m}_zoom.png"
-            span = (min(ons) - 0.3, max(ons) + 0.7)
-            zoom = dataclasses.replace(result.plots[key], xlim=span,
-                                       title=result.plots[key].title + ", zoomed on its slips")
-            paths[zname] = F.plot_trial(zoom, fig_dir / zname)
-            figs.append((zoom_caption(b, m, e), f"figures/{zname}"))
+            zoom = dataclasses.replace(plot, xlim=(min(ons) - 0.3, max(ons) + 0.7),
+                                       title=plot.title + ", zoomed on its slips")
+            tasks.append((f"trial_{e}_{b}_{m}_zoom.png", zoom_caption(b, m, e), F.plot_trial, (zoom,)))
     for e in result.config.experiments:
         for metric in ("response", "total"):
-            name = f"bars_{e}_{metric}.png"
-            paths[name] = F.bar_chart(result.summary, e, metric, fig_dir / name)
-            figs.append((bars_caption(e, metric), f"figures/{name}"))
-    paths["success.png"] = F.success_chart(result.summary, fig_dir / "success.png")
-    figs.append((SUCCESS_CAPTION, "figures/success.png"))
-    return figs
+            tasks.append((f"bars_{e}_{metric}.png", bars_caption(e, metric), F.bar_chart,
+                          (result.summary, e, metric)))
+    tasks.append(("success.png", SUCCESS_CAPTION, F.success_chart, (result.summary,)))
+    return tasks
+
+
+def _draw(task: tuple[Any, tuple, Path]) -> Path:
+    draw, args, path = task
+    return draw(*args, path)
+
+
+def _write_figures(result: ReproduceResult, out: Path, paths: dict[str, Path],
+                   jobs: int = 1) -> list[tuple[str, str]]:
+    """Draw the example trials, bar charts and success chart; (caption, relative path) of each.
+
+    The figures are independent, so ``jobs`` > 1 draws them in that many processes (a
+    figure costs a few tenths of a second, mostly matplotlib's text layout).
+    """
+    from . import figures as F
+
+    fig_dir = out / "figures"
+    tasks = _figure_tasks(result, fig_dir)
+    work = [(draw, args, fig_dir / name) for name, _, draw, args in tasks]
+    jobs = max(1, min(int(jobs), len(work)))
+    if jobs == 1:
+        drawn = [_draw(w) for w in work]
+    else:
+        from concurrent.futures import ProcessPoolExecutor
+
+        from ..interrupts import worker_signals
+
+        F._plt()                       # imported once here, so the forked workers start warm
+        with ProcessPoolExecutor(max_workers=jobs, initializer=worker_signals) as ex:
+            drawn = list(ex.map(_draw, work))
+    for (name, caption, _, _), path in zip(tasks, drawn):
+        paths[name] = path
+    return [(caption, f"figures/{name}") for name, caption, _, _ in tasks]
 
 
 def trial_plot(cell: Any, spec: Any, tr: Any, reflex: Any, rows: Sequence[Any], t_pert: float):
