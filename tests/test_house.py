@@ -68,6 +68,17 @@ def test_no_function_outside_the_numba_kernels_is_longer_than_80_lines():
     assert not long, f"functions over 80 lines (docstring excluded): {long}"
 
 
+def test_experiments_keeps_to_its_job_in_at_most_500_lines():
+    """Issue 12: configuration, seeds, the trial and the grid; running the grid is grid.py's,
+    the report's prose analysis/report.py's. Its public names stay importable from it."""
+    from slipreflex import experiments, grid
+
+    lines = (ROOT / "src" / "slipreflex" / "experiments.py").read_text().count("\n")
+    assert lines <= 500, f"experiments.py has {lines} lines (at most 500)"
+    assert experiments.Cell is grid.Cell
+    assert all(hasattr(experiments, name) for name in experiments.__all__)
+
+
 def test_the_default_sampling_rate_is_the_daq_s_everywhere():
     import slipreflex as sr
     from slipreflex import hardware as hw

@@ -37,9 +37,7 @@ import functools
 import math
 import os
 import time
-import zlib
 from collections.abc import Callable
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 from typing import Any
 
@@ -47,13 +45,14 @@ import numpy as np
 
 from . import methods
 from .analysis.outputs import ReproduceResult, trial_plot, write_outputs
-from .analysis.paper import BOTTLE_ORDER
+from .analysis.paper import BOTTLE_ORDER, bottle_key
 from .analysis.paper import EXPERIMENTS as PAPER_EXPERIMENTS
-from .analysis.trial import RESULT_COLUMNS, TrialRow
+from .analysis.trial import RESULT_COLUMNS
 from .baselines.calibration import REST_K
 from .baselines.swt import SWT_WINDOW
 from .errors import ParameterError
-from .interrupts import Interrupted, worker_signals, stop_pool
+from .grid import Cell, grid_result, run_cells
+from .interrupts import Interrupted
 from .progress import Progress
 from .hardware import CONTACT_FORCE_N
 from .thresholds import calibrate, calibration_seed
@@ -222,36 +221,6 @@ class ReproduceConfig:
 
         return (self.plant.bottles if self.plant is not None else BOTTLES)[name]
 
-    def not_the_papers(self) -> list[str]:
-        """What in this run is not the paper's: its own bottles, drop or pour (empty: all the paper's).
-
-        Examples
-        --------
-        >>> ReproduceConfig().not_the_papers()
-        []
-        >>> ReproduceConfig(drop_mass_kg=0.02).not_the_papers()
-        ['drop (20 g from 2 cm)']
-        """
-        from .sim import BOTTLES, PAPER_DROP, PAPER_POUR
-
-        out = [f"bottle {b}" for b in self.bottles if b not in BOTTLES or self.bottle(b) != BOTTLES[b]]
-        if "drop" in self.experiments and self.drop != PAPER_DROP:
-            out.append(f"drop ({1e3 * self.drop.mass_kg:g} g from {1e2 * self.drop.height_m:g} cm)")
-        if "pour" in self.experiments and self.pour != PAPER_POUR:
-            out.append(f"pour ({self.pour.volume_ml:g} ml at {self.pour.rate_l_min:g} L/min)")
-        return out
-
-    def comparable(self, experiment: str, bottle: str) -> bool:
-        """True where the paper's numbers apply: the paper's bottle under the paper's load.
-
-        Examples
-        --------
-        >>> ReproduceConfig(pour_rate_l_min=2.0).comparable("pour", "TR")
-        False
-        """
-        differ = self.not_the_papers()
-        return f"bottle {bottle}" not in differ and not any(d.startswith(experiment) for d in differ)
-
     def duration(self, experiment: str) -> float:
         """Closed-loop recording length (s) of one trial of ``experiment``.
 
@@ -263,7 +232,7 @@ class ReproduceConfig:
         load = 0.0 if experiment == "drop" else self.pour.duration_s
         return self.rest_s + load + self.after_s
 
-    def cells(self) -> list["Cell"]:
+    def cells(self) -> list[Cell]:
         """Every trial to run, longest first (pours before drops) for load balance.
 
         Examples
@@ -282,34 +251,6 @@ class ReproduceConfig:
         return out
 
 
-@dataclass(frozen=True)
-class Cell:
-    """One trial of the grid.
-
-    Examples
-    --------
-    >>> Cell("drop", "TR", "dath", 0, 123).key
-    ('drop', 'TR', 'dath', 0)
-    """
-
-    experiment: str
-    bottle: str
-    method: str
-    trial: int
-    seed: int
-
-    @property
-    def key(self) -> tuple[str, str, str, int]:
-        """(experiment, bottle, method, trial).
-
-        Examples
-        --------
-        >>> Cell("pour", "DK", "nmsd", 3, 1).key[2]
-        'nmsd'
-        """
-        return (self.experiment, self.bottle, self.method, self.trial)
-
-
 def trial_seed(master: int, experiment: str, bottle: str, trial: int, method: str | None = None) -> int:
     """The rig seed of one trial, spawned from the master seed (shared by all methods).
 
@@ -326,7 +267,7 @@ def trial_seed(master: int, experiment: str, bottle: str, trial: int, method: st
     >>> trial_seed(1, "pour", "TX", 2) == trial_seed(1, "pour", "TX", 2)
     True
     """
-    entropy, spawn_key, pool_size = _cell_sequence(master, EXPERIMENTS.index(experiment), _bottle_key(bottle))
+    entropy, spawn_key, pool_size = _cell_sequence(master, EXPERIMENTS.index(experiment), bottle_key(bottle))
     # The child spawn(trial + 1)[trial] would make, built directly: the same bits in O(1),
     # so a grid's seeds take time linear in its trials (spawning them was quadratic).
     child = np.random.SeedSequence(entropy, spawn_key=(*spawn_key, trial), pool_size=pool_size)
@@ -334,13 +275,6 @@ def trial_seed(master: int, experiment: str, bottle: str, trial: int, method: st
         key = [int(c) for c in method.lower().encode()]
         child = np.random.SeedSequence([*child.generate_state(2), *key])
     return _seed63(child)
-
-
-def _bottle_key(bottle: str) -> int:
-    """A paper bottle's canonical position; another bottle's a key from its name (never 0-2)."""
-    if bottle in BOTTLE_NAMES:
-        return BOTTLE_NAMES.index(bottle)
-    return (1 << 32) + zlib.crc32(bottle.encode())
 
 
 @functools.lru_cache(maxsize=64)
@@ -489,47 +423,6 @@ def _jet_fall_s(pour) -> float:
     return math.sqrt(2.0 * pour.fall_height_m / hw.GRAVITY)
 
 
-def _run_cell(cell: Cell, config: ReproduceConfig, thresholds: dict[str, float], keep_plot: bool,
-              spec: methods.MethodSpec):
-    return cell, run_trial(cell, config, thresholds, keep_plot=keep_plot, spec=spec)
-
-
-def _order(row: TrialRow) -> tuple:
-    return (EXPERIMENTS.index(row.experiment), _bottle_key(row.bottle), row.bottle,
-            methods.names().index(row.method), row.trial, row.event)
-
-
-def _run_cells(cells: list[Cell], args: list[tuple], jobs: int,
-               finished: Callable[[Cell], Any], done: dict[tuple, tuple]) -> None:
-    """Run every cell (in this process for ``jobs == 1``) into ``done``, by cell key.
-
-    On Ctrl-C or SIGTERM (a :class:`KeyboardInterrupt`) queued cells are cancelled,
-    running ones get :data:`~slipreflex.interrupts.GRACE_S` to finish, and the
-    interrupt propagates with ``done`` holding every finished cell.
-    """
-    if jobs == 1:
-        for c, a in zip(cells, args):
-            done[c.key] = _run_cell(c, *a)[1]
-            finished(c)
-        return
-
-    def collect(f) -> None:
-        c, res = f.result()
-        if c.key not in done:
-            done[c.key] = res
-            finished(c)
-
-    ex = ProcessPoolExecutor(max_workers=jobs, initializer=worker_signals)
-    futures = [ex.submit(_run_cell, c, *a) for c, a in zip(cells, args)]
-    try:
-        for f in as_completed(futures):
-            collect(f)
-    except KeyboardInterrupt:
-        stop_pool(ex, futures, collect)
-        raise
-    ex.shutdown()
-
-
 def run_reproduce(config: ReproduceConfig | None = None, *, jobs: int | None = None,
                   progress: bool = True, plots: bool = True,
                   on_done: Callable[[Cell], None] | None = None) -> ReproduceResult:
@@ -575,25 +468,14 @@ def run_reproduce(config: ReproduceConfig | None = None, *, jobs: int | None = N
     cells = config.cells()
     plot_method = methods.DATH if methods.DATH in config.methods else config.methods[0]
     want = {c.key for c in cells if plots and c.trial == 0 and c.method == plot_method}
-    done: dict[tuple, tuple] = {}
+    calls = {c: functools.partial(run_trial, c, config, thresholds, keep_plot=c.key in want,
+                                  spec=specs[c.method]) for c in cells}
+    done: dict[Cell, tuple] = {}
     with Progress(len(cells), desc="trials", unit="trial", enabled=progress) as bar:
         try:
-            _run_cells(cells, [(config, thresholds, c.key in want, specs[c.method]) for c in cells],
-                       jobs, lambda c: (bar.update(), on_done and on_done(c)), done)
+            run_cells(calls, jobs, lambda c: (bar.update(), on_done and on_done(c)), done)
         except KeyboardInterrupt:
-            partial = _result(config, cells, done, thresholds, t0, jobs, t_cal)
+            partial = grid_result(config, cells, done, thresholds, t0, jobs, t_cal)
             raise Interrupted(partial, partial.partial_note) from None
-    return _result(config, cells, done, thresholds, t0, jobs, t_cal)
+    return grid_result(config, cells, done, thresholds, t0, jobs, t_cal)
 
-
-def _result(config: ReproduceConfig, cells: list[Cell], done: dict[tuple, tuple],
-            thresholds: dict[str, float], t0: float, jobs: int, t_cal: float) -> ReproduceResult:
-    """The run's result over the finished cells (all of them unless interrupted)."""
-    from .analysis.report import summarize
-
-    fin = [c for c in cells if c.key in done]
-    rows = sorted((r for c in fin for r in done[c.key][0]), key=_order)
-    plot_data = {c.key: done[c.key][1] for c in fin if done[c.key][1] is not None}
-    return ReproduceResult(config, rows, summarize(rows), thresholds, plot_data,
-                           time.perf_counter() - t0, jobs, calibration_wall_s=t_cal,
-                           trials_planned=len(cells), trials_finished=len(fin))

@@ -29,7 +29,7 @@ from .report import (SUCCESS_CAPTION, SUMMARY_COLUMNS, bars_caption, discussion_
                      setup_lines, trial_caption, write_csv, zoom_caption)
 from .trial import RESULT_COLUMNS, TrialRow
 
-__all__ = ["ReproduceResult", "write_outputs", "trial_plot", "paper_part", "trial_outcome"]
+__all__ = ["ReproduceResult", "write_outputs", "trial_plot", "paper_part", "not_the_papers", "trial_outcome"]
 
 
 @dataclass
@@ -150,6 +150,30 @@ def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str 
     return paths
 
 
+def not_the_papers(config: Any) -> list[str]:
+    """What in a run is not the paper's: its own bottles, drop or pour (empty: all the paper's).
+
+    ``config`` is a :class:`slipreflex.experiments.ReproduceConfig`.
+
+    Examples
+    --------
+    >>> from slipreflex.experiments import ReproduceConfig
+    >>> not_the_papers(ReproduceConfig())
+    []
+    >>> not_the_papers(ReproduceConfig(drop_mass_kg=0.02))
+    ['drop (20 g from 2 cm)']
+    """
+    from ..sim import BOTTLES, PAPER_DROP, PAPER_POUR
+
+    out = [f"bottle {b}" for b in config.bottles if b not in BOTTLES or config.bottle(b) != BOTTLES[b]]
+    drop, pour = config.drop, config.pour
+    if "drop" in config.experiments and drop != PAPER_DROP:
+        out.append(f"drop ({1e3 * drop.mass_kg:g} g from {1e2 * drop.height_m:g} cm)")
+    if "pour" in config.experiments and pour != PAPER_POUR:
+        out.append(f"pour ({pour.volume_ml:g} ml at {pour.rate_l_min:g} L/min)")
+    return out
+
+
 def paper_part(result: ReproduceResult) -> tuple[ReproduceResult, list[dict[str, Any]], str]:
     """The run restricted to the paper's bottles and loads, the other summary rows, and a notice.
 
@@ -163,13 +187,16 @@ def paper_part(result: ReproduceResult) -> tuple[ReproduceResult, list[dict[str,
     >>> paper_part(res)[2][:50]
     "Not the paper's objects: drop (20 g from 2 cm). Th"
     """
-    config = result.config
-    differ = config.not_the_papers() if hasattr(config, "not_the_papers") else []
+    differ = not_the_papers(result.config)
     if not differ:
         return result, [], ""
-    keep = [s for s in result.summary if config.comparable(s["experiment"], s["bottle"])]
-    others = [s for s in result.summary if not config.comparable(s["experiment"], s["bottle"])]
-    rows = [r for r in result.rows if config.comparable(r["experiment"], r["bottle"])]
+
+    def comparable(r: Any) -> bool:            # the paper's bottle under the paper's load
+        return f"bottle {r['bottle']}" not in differ and not any(d.startswith(r["experiment"]) for d in differ)
+
+    keep = [s for s in result.summary if comparable(s)]
+    others = [s for s in result.summary if not comparable(s)]
+    rows = [r for r in result.rows if comparable(r)]
     notice = ("Not the paper's objects: " + ", ".join(differ) + ". The paper's numbers are compared "
               "only where the bottle and its load are the paper's"
               + ("" if keep else " (none in this run)") + "; the other results are at the end, "

@@ -19,16 +19,33 @@ True
 
 from __future__ import annotations
 
+import zlib
 from dataclasses import dataclass
 
 from ..methods import DATH, FIXED, NMSD, SWT
 
 __all__ = ["Reported", "PAPER", "PAPER_SUCCESS", "PAPER_NOTES", "paper_value",
-           "EXPERIMENTS", "METRICS", "BOTTLE_ORDER"]
+           "EXPERIMENTS", "METRICS", "BOTTLE_ORDER", "bottle_key"]
 
 EXPERIMENTS: tuple[str, ...] = ("drop", "pour")
 METRICS: tuple[str, ...] = ("response_ms", "total_ms")
 BOTTLE_ORDER: tuple[str, ...] = ("TR", "DK", "TX")
+
+
+def bottle_key(bottle: str) -> int:
+    """A paper bottle's position in :data:`BOTTLE_ORDER`; another bottle's key from its name (never 0-2).
+
+    Keys the trial seeds of a bottle (:func:`slipreflex.experiments.trial_seed`) and the
+    order of results.csv, so neither depends on which other bottles run.
+
+    Examples
+    --------
+    >>> bottle_key("DK"), bottle_key("JAR") > 2
+    (1, True)
+    """
+    if bottle in BOTTLE_ORDER:
+        return BOTTLE_ORDER.index(bottle)
+    return (1 << 32) + zlib.crc32(bottle.encode())
 
 
 @dataclass(frozen=True, slots=True)
