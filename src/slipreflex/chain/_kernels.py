@@ -14,7 +14,7 @@ from numba import njit
 
 from ._layout import (FILTER_BUTTERWORTH, FILTER_MEAN, P_ACC_RESET, P_D, P_DATH, P_EVENT, P_FILTER,
                       P_FLOOR, P_HI, P_KI, P_KP, P_LEAK, P_LEAK_ON, P_LO, P_MEAN_M, P_N, P_NSEC,
-                      P_RESET_AFTER, P_SOS, P_THETA0, P_X0_GIVEN, S_ACC, S_CLOCK, S_COUNT, S_FILLED,
+                      P_M0, P_P0, P_RESET_AFTER, P_SOS, P_THETA0, P_X0, P_X0_GIVEN, S_ACC, S_CLOCK, S_COUNT, S_FILLED,
                       S_H, S_LAST_ACC, S_LAST_COUNT, S_LAST_EVENT, S_LAST_THETA, S_LAST_X, S_M,
                       S_MEAN_N, S_MEAN_POS, S_PBASE, S_PREV, S_REMAINING, S_SKIPPED, S_SLIDE,
                       S_SLIDE_POS, S_STARTED, S_THETA, S_ZEROS, S_ZI)
@@ -267,7 +267,16 @@ def chain_step(S, P, raw, position):
 
 @njit(cache=True)
 def chain_kernel(raw, S, P, x_out, events, acc_out, theta_out, counts, commands, sample_commands):
-    """chain_step over a whole recording, keeping its per-sample and per-window outputs."""
+    """chain_step over a whole recording, keeping its per-sample and per-window outputs.
+
+    From the initial state, a finite recording through the Butterworth (or no) filter and
+    the windowed MPI runs stage by stage (:func:`_staged_chain`): the same updates in the
+    same order per sample, so the same bits, with each stage's loop free of the others'
+    branches (about twice as fast). Anything else steps the composed chain.
+    """
+    if S[S_STARTED] == 0.0 and P[P_FILTER] != FILTER_MEAN and P[P_EVENT] == 0.0 and np.isfinite(raw).all():
+        _staged_chain(raw, P, x_out, events, acc_out, theta_out, counts, commands, sample_commands)
+        return
     n = int(P[P_N])
     for k in range(raw.size):
         _chain_step(S, P, raw[k], np.nan)
@@ -280,6 +289,45 @@ def chain_kernel(raw, S, P, x_out, events, acc_out, theta_out, counts, commands,
             z = (k + 1) // n - 1
             counts[z] = int(S[S_LAST_COUNT])
             commands[z] = S[S_M]
+
+
+@njit(cache=True)
+def _staged_chain(raw, P, x_out, events, acc_out, theta_out, counts, commands, sample_commands):
+    """chain_kernel's outputs from the initial state, one stage over the whole recording at a time."""
+    nsec, _slide, _mean = _offsets(P)
+    if P[P_FILTER] == FILTER_BUTTERWORTH:
+        z0 = P_SOS + 6 * nsec
+        sos = P[P_SOS:z0].reshape((nsec, 6))
+        zi = np.empty((nsec, 2))
+        for i in range(nsec):
+            zi[i, 0] = P[z0 + 2 * i] * raw[0]
+            zi[i, 1] = P[z0 + 2 * i + 1] * raw[0]
+        for k in range(raw.size):
+            x_out[k] = sos_update(sos, zi, raw[k])
+    else:
+        x_out[:] = raw
+    prev = x_out[0] if P[P_X0_GIVEN] == 0.0 else P[P_X0]
+    encode_kernel(x_out, prev, P[P_THETA0], P[P_DATH] != 0.0, int(P[P_D]), P[P_FLOOR], int(P[P_ACC_RESET]),
+                  P[P_LEAK], P[P_LEAK_ON] != 0.0, events, acc_out, theta_out)
+    n = int(P[P_N])
+    p_base = P[P_P0]
+    h = 0.0
+    m = P[P_M0]
+    zeros = 0
+    reset_after = int(P[P_RESET_AFTER])
+    for z in range(counts.size):
+        c = 0
+        for k in range(z * n, (z + 1) * n):
+            c += events[k]
+        counts[z] = c
+        m, p_base, h, zeros = mpi_update(float(c), p_base, h, m, zeros, P[P_KP], P[P_KI], reset_after,
+                                         P[P_LO], P[P_HI], np.nan)
+        commands[z] = m
+    m = P[P_M0]
+    for k in range(raw.size):
+        if (k + 1) % n == 0:
+            m = commands[(k + 1) // n - 1]
+        sample_commands[k] = m
 
 
 def empty_like_chain(k: int, n: int):
