@@ -29,14 +29,17 @@ Examples
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
 
+from .._slots import slot
 from ..errors import ParameterError
 from ..hardware import FINGER_MAX, FINGER_MIN
 from ..validation import instance, number, set_field
+from . import _layout as _L
 
 __all__ = ["CLOSE_S", "ClosingParams", "Closer", "closing_commands"]
 
@@ -104,6 +107,10 @@ class ClosingParams:
 class Closer:
     """Streaming closing rule: detections in, a ramp of position targets out.
 
+    Its state is a float64 vector and every call runs a compiled kernel of
+    :mod:`slipreflex.baselines._kernels`, the same arithmetic NMSD's and
+    SWT-SD's compiled step and :func:`closing_commands` run.
+
     Parameters
     ----------
     params : ClosingParams
@@ -130,8 +137,13 @@ class Closer:
     """
 
     def __init__(self, params: ClosingParams) -> None:
+        from ._layout import init_state, pack_closing
+
         self.params = instance("params", params, ClosingParams)
-        self.reset()
+        _load_kernels()
+        self._P = pack_closing(self.params)
+        self._S0 = init_state(self._P)
+        self._S = self._S0.copy()
 
     def reset(self) -> None:
         """Restore the initial state (target ``p0``, nothing to close).
@@ -141,11 +153,12 @@ class Closer:
         >>> c = Closer(ClosingParams(fs=10.0, speed=100.0)); c.trigger(); c.reset(); c.remaining
         0
         """
-        self.target = float(np.clip(self.params.p0, self.params.lo, self.params.hi))
-        self.remaining = 0
-        self.closing_samples = 0
-        self.triggers = 0
-        self._episode = 0
+        self._S[:] = self._S0
+
+    target = slot(_L.S_TARGET, float, "The current position target.")
+    remaining = slot(_L.S_REMAINING, int, "Closing samples still to run.")
+    closing_samples = slot(_L.S_CLOSING, int, "Closing samples generated since the last reset.")
+    triggers = slot(_L.S_TRIGGERS, int, "Closing quanta started since the last reset.")
 
     @property
     def closing(self) -> bool:
@@ -166,8 +179,7 @@ class Closer:
         >>> c = Closer(ClosingParams(fs=100.0, speed=100.0, close_s=0.05)); c.trigger(); c.remaining
         5
         """
-        self.remaining += self.params.samples_per_close
-        self.triggers += 1
+        _K.closer_feed(self._S, self._P, True, False)
 
     def feed(self, trig: bool, mode: TriggerMode = "events") -> None:
         """Apply one sample's detector output according to the trigger ``mode``.
@@ -181,8 +193,7 @@ class Closer:
         >>> c.feed(True, "hold"); c.feed(True, "hold"); c.remaining
         5
         """
-        if trig and (mode == "events" or self.remaining <= 0):
-            self.trigger()
+        _K.closer_feed(self._S, self._P, bool(trig), _hold(mode))
 
     def step(self, position: float | None = None) -> float | None:
         """Advance one sample; return the new target, or None when it does not change.
@@ -192,7 +203,7 @@ class Closer:
         position : float, optional
             The hand's measured position; when a closing episode starts, the
             ramp starts from ``max(target, position)`` so it never commands a
-            position behind the fingers.
+            position behind the fingers. None or NaN: unknown.
 
         Examples
         --------
@@ -200,17 +211,28 @@ class Closer:
         >>> c.step(), c.trigger(), c.step(position=200.0)
         (None, None, 201.0)
         """
-        if self.remaining <= 0:
-            return None
-        p = self.params
-        if position is not None and self._episode == 0:
-            self.target = float(np.clip(max(self.target, float(position)), p.lo, p.hi))
-        old = self.target
-        self.target = min(p.hi, self.target + p.step_size)
-        self.remaining -= 1
-        self.closing_samples += 1
-        self._episode = 0 if self.remaining == 0 else self._episode + 1
-        return self.target if self.target != old else None
+        u = _K.closer_step(self._S, self._P, math.nan if position is None else float(position))
+        return None if u != u else u
+
+
+def _hold(mode: str) -> bool:
+    """True for the "hold" trigger mode; a mode that is neither is refused."""
+    if mode not in ("events", "hold"):
+        raise ParameterError(f"mode must be 'events' or 'hold', got {mode!r}")
+    return mode == "hold"
+
+
+_K = None  # slipreflex.baselines._kernels, imported with the first Closer or tactile reflex
+
+
+def _load_kernels():
+    """Import the compiled kernels (numba) once, on first use; return the module."""
+    global _K
+    if _K is None:
+        from . import _kernels
+
+        _K = _kernels
+    return _K
 
 
 def closing_commands(triggers, params: ClosingParams, *, mode: TriggerMode = "events",
@@ -242,18 +264,14 @@ def closing_commands(triggers, params: ClosingParams, *, mode: TriggerMode = "ev
     trig = np.asarray(triggers, dtype=bool)
     if trig.ndim != 1:
         raise ParameterError(f"triggers must be one-dimensional, got shape {trig.shape}")
-    if mode not in ("events", "hold"):
-        raise ParameterError(f"mode must be 'events' or 'hold', got {mode!r}")
-    pos = None if positions is None else np.asarray(positions, dtype=np.float64)
-    if pos is not None and pos.shape != trig.shape:
+    hold = _hold(mode)
+    params = instance("params", params, ClosingParams)
+    pos = np.full(trig.shape, np.nan) if positions is None else np.asarray(positions, dtype=np.float64)
+    if pos.shape != trig.shape:
         raise ParameterError(f"positions must have shape {trig.shape}, got {pos.shape}")
-    closer = Closer(params)
-    out = np.full(trig.shape, np.nan)
-    for k, t in enumerate(trig):
-        closer.feed(bool(t), mode)
-        p = None if pos is None or np.isnan(pos[k]) else float(pos[k])
-        v = closer.step(p)
-        if v is not None:
-            out[k] = v
-    return out
+    from ._layout import init_state, pack_closing
 
+    P = pack_closing(params)
+    out = np.empty(trig.shape)
+    _load_kernels().closing_kernel(trig, np.ascontiguousarray(pos), hold, init_state(P), P, out)
+    return out

@@ -34,11 +34,12 @@ import numpy as np
 
 from ..hardware import NMSD_FS
 from ..validation import number
+from ._layout import KIND_NMSD
 from ._validate import as_frames
 from .closing import closing_commands
 from .shell import TactileParams, TactileReflex
 
-__all__ = ["NMSDParams", "NMSD", "NMSDDetector", "nmsd_statistic", "nmsd_detections", "nmsd_commands",
+__all__ = ["NMSDParams", "NMSD", "nmsd_statistic", "nmsd_detections", "nmsd_commands",
            "nmsd_rest_statistic"]
 
 
@@ -164,48 +165,13 @@ def nmsd_commands(frames, params: NMSDParams, positions=None) -> np.ndarray:
     return closing_commands(det, params.closing, mode="events", positions=positions)
 
 
-class NMSDDetector:
-    """NMSD's per-frame detector: change of the force derivative, rising edges over threshold.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> d = NMSDDetector(fs=260.0, threshold=50.0)
-    >>> [d.update(np.full(16, v))[1] for v in (0.0, 0.0, 0.0, -1.0)]
-    [False, False, False, True]
-    """
-
-    def __init__(self, fs: float, threshold: float) -> None:
-        self.fs, self.threshold = fs, threshold
-        self._prev: np.ndarray | None = None
-        self._prev_d: np.ndarray | None = None
-
-    def update(self, f: np.ndarray) -> tuple[float, bool]:
-        """One flat frame in; (largest ``|s_k|``, any taxel over threshold).
-
-        Examples
-        --------
-        >>> import numpy as np
-        >>> NMSDDetector(fs=1.0, threshold=1.0).update(np.zeros(2))
-        (0.0, False)
-        """
-        s = 0.0
-        if self._prev is not None:
-            d = (f - self._prev) * self.fs
-            if self._prev_d is not None:
-                s = float(np.max(np.abs(d - self._prev_d)))
-            self._prev_d = d
-        self._prev = f
-        return s, s > self.threshold
-
-
 class NMSD(TactileReflex):
     """Streaming NMSD reflex (implements :class:`slipreflex.interfaces.Reflex`).
 
     The shared :class:`~slipreflex.baselines.shell.TactileReflex` shell (its
-    parameters, attributes and diagnostics) with :class:`NMSDDetector`: a
-    detection is a rising edge of "any taxel over threshold", and every
-    detection adds ``close_s`` of closing. ``name`` is ``"nmsd"``, ``fs`` 260 Hz
+    parameters, attributes, diagnostics and compiled step) with NMSD's
+    detector: a detection is a rising edge of "any taxel over threshold"
+    (:func:`nmsd_detections`), and every detection adds ``close_s`` of closing. ``name`` is ``"nmsd"``, ``fs`` 260 Hz
     by default, and ``last_statistic`` the largest ``|s_k|`` over the taxels.
 
     Examples
@@ -222,6 +188,7 @@ class NMSD(TactileReflex):
     name = "nmsd"
     params_class = NMSDParams
     mode = "events"
+    kind = KIND_NMSD
 
-    def _detector(self) -> NMSDDetector:
-        return NMSDDetector(self.params.fs, self.params.threshold)
+    def _weights(self) -> np.ndarray:
+        return np.empty(0)

@@ -1,12 +1,17 @@
-"""The reflex shell NMSD and SWT-SD share: a detector object plus the closing rule.
+"""The reflex shell NMSD and SWT-SD share: one compiled step over a state vector.
 
 A tactile method differs from another only in its *detector*: what it
-computes on each frame and when that means slip. :class:`TactileReflex` does
-the rest once: it checks each frame against the method's frame shape, feeds
-the detector, hands its trigger to the :class:`~slipreflex.baselines.Closer`
-in the method's trigger mode, keeps the diagnostics of the
-:class:`~slipreflex.interfaces.Reflex` protocol, and resets everything. A
-method is a parameter class, a detector class and three class attributes.
+computes on each frame and when that means slip. Both detectors, the rising
+edge and the closing rule (:class:`~slipreflex.baselines.Closer`'s arithmetic)
+are one compiled function, ``tactile_step(S, P, frame, position)``
+(:mod:`slipreflex.baselines._kernels`, layout in
+:mod:`slipreflex.baselines._layout`). :class:`TactileReflex` holds the
+parameter vector ``P`` and the state vector ``S``, checks each frame against
+the method's frame shape before calling the step, reads the diagnostics of the
+:class:`~slipreflex.interfaces.Reflex` protocol out of ``S``, and resets it in
+place. :meth:`TactileReflex.compiled` hands the step and the live vectors to a
+compiled closed loop, which then advances the very state the object holds. A
+method is a parameter class and four class attributes.
 
 Examples
 --------
@@ -22,16 +27,19 @@ from __future__ import annotations
 import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
-from typing import Any, ClassVar, Protocol
+from typing import Any, ClassVar
 
 import numpy as np
 
 from ..hardware import FINGER_MAX, FINGER_MIN, NMSD_FS, TACTILE_SHAPE
 from ..validation import number, resolve_params, set_field
+from .._slots import slot
+from . import _layout as _L
 from ._validate import as_frame, frame_shape
-from .closing import CLOSE_S, Closer, ClosingParams, TriggerMode
+from . import closing as _closing
+from .closing import CLOSE_S, ClosingParams, TriggerMode, _load_kernels
 
-__all__ = ["TactileParams", "Detector", "TactileReflex"]
+__all__ = ["TactileParams", "TactileReflex"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -93,31 +101,12 @@ class TactileParams:
                              p0=self.p0, lo=self.lo, hi=self.hi)
 
 
-class Detector(Protocol):
-    """What a tactile method computes on each frame.
-
-    ``update(frame)`` takes one finite flat frame (float64, one value per taxel)
-    and returns ``(statistic, level)``: the largest statistic over the taxels,
-    and whether the method sees slip on this frame. The shell makes a
-    detection of every rising edge of ``level``; the closing rule reads the
-    detections (``"events"`` mode) or ``level`` itself (``"hold"`` mode).
-
-    Examples
-    --------
-    >>> from slipreflex.baselines.nmsd import NMSDDetector
-    >>> d = NMSDDetector(fs=10.0, threshold=1.0)
-    >>> [d.update(np.array([x]))[1] for x in (0.0, 0.0, 1.0)]
-    [False, False, True]
-    """
-
-    def update(self, frame: np.ndarray) -> tuple[float, bool]: ...
-
-
 class TactileReflex(ABC):
     """Streaming tactile reflex: frames in, closing-ramp targets out (a Reflex).
 
     Subclasses set :attr:`name`, :attr:`params_class` (a :class:`TactileParams`),
-    :attr:`mode`, and :meth:`_detector`.
+    :attr:`mode`, :attr:`kind` (which detector of the compiled step) and
+    :meth:`_weights`.
 
     Parameters
     ----------
@@ -151,20 +140,23 @@ class TactileReflex(ABC):
     name: ClassVar[str]
     params_class: ClassVar[type]
     mode: ClassVar[TriggerMode]
+    kind: ClassVar[float]
     input_kind: ClassVar[str] = "tactile"
 
     def __init__(self, params: Any = None, **kwargs: Any) -> None:
         self.params = resolve_params(self.params_class, params, kwargs)
         self.fs = self.params.fs
-        self._closer = Closer(self.params.closing)
-        self.reset()
+        self._P = _L.pack_params(self.params, self.kind, self.mode == "hold", self._weights())
+        self._S0 = _L.init_state(self._P)
+        self._S = self._S0.copy()
+        _load_kernels()
 
     @abstractmethod
-    def _detector(self) -> Detector:
-        """A fresh detector for this method's parameters."""
+    def _weights(self) -> np.ndarray:
+        """The detector's window weights, oldest sample first (empty for a detector without)."""
 
     def reset(self) -> None:
-        """Restore the initial state.
+        """Restore the initial state, in place (a compiled loop holding ``S`` sees it).
 
         Examples
         --------
@@ -172,15 +164,19 @@ class TactileReflex(ABC):
         >>> r = NMSD(threshold=1.0, speed=100.0); r.reset(); r.detections
         0
         """
-        self._det = self._detector()
-        self._closer.reset()
-        self.last_statistic = 0.0
-        self.last_event = False
-        self.last_level = False
-        self.last_filtered = math.nan
-        self.last_threshold = float(self.params.threshold)
-        self.last_count: int | None = None
-        self.detections = 0
+        self._S[:] = self._S0
+
+    last_statistic = slot(_L.S_STAT, float, "Largest statistic over the taxels at the last step.")
+    last_event = slot(_L.S_EVENT, bool, "The last step started a detection.")
+    last_level = slot(_L.S_LEVEL, bool, "The detector's level at the last step.")
+    detections = slot(_L.S_DETECTIONS, int, "Detections since the last reset.")
+    last_filtered = math.nan
+    last_count = None
+
+    @property
+    def last_threshold(self) -> float:
+        """The detection threshold (the method's statistic is compared with it)."""
+        return float(self.params.threshold)
 
     @property
     def closing_s(self) -> float:
@@ -192,7 +188,7 @@ class TactileReflex(ABC):
         >>> NMSD(threshold=1.0, speed=100.0).closing_s
         0.0
         """
-        return self._closer.closing_samples / self.fs
+        return float(self._S[_L.S_CLOSING]) / self.fs
 
     @property
     def closing(self) -> bool:
@@ -204,7 +200,27 @@ class TactileReflex(ABC):
         >>> NMSD(threshold=1.0, speed=100.0).closing
         False
         """
-        return self._closer.closing
+        return bool(self._S[_L.S_REMAINING] > 0.0)
+
+    def compiled(self) -> tuple[Any, np.ndarray, np.ndarray]:
+        """The compiled step and the live state: ``(tactile_step, S, P)``.
+
+        ``tactile_step(S, P, frame, position) -> float`` takes the frame's taxels
+        as a flat float64 array (row-major) and the measured slip-finger position
+        (NaN unknown) and returns the new target, or NaN; called from numba code
+        on this ``S``, it advances this object (``step`` goes on from there, and
+        ``reset`` restores ``S`` in place). A non-finite frame changes nothing.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from slipreflex.baselines import NMSD
+        >>> r = NMSD(threshold=50.0, speed=520.0)
+        >>> step, S, P = r.compiled()
+        >>> [step(S, P, np.full(16, v), np.nan) for v in (0.0, 0.0, 0.0, -1.0)][-1], r.detections
+        (2.0, 1)
+        """
+        return _load_kernels().tactile_step, self._S, self._P
 
     def step(self, frame, position: float | None = None) -> float | None:
         """Take one frame of the method's shape; return a new finger target or None.
@@ -222,9 +238,8 @@ class TactileReflex(ABC):
         (2.0, True)
         """
         f = as_frame("frame", frame, self.params.shape)
-        self.last_statistic, level = self._det.update(f)
-        self.last_event = level and not self.last_level
-        self.last_level = level
-        self.detections += self.last_event
-        self._closer.feed(self.last_event if self.mode == "events" else level, self.mode)
-        return self._closer.step(position)
+        u = _closing._K.tactile_step(self._S, self._P, f, _NAN if position is None else float(position))
+        return None if u != u else u
+
+
+_NAN = math.nan

@@ -42,11 +42,12 @@ import numpy as np
 
 from ..hardware import SWT_FS
 from ..validation import integer, number, set_field
+from ._layout import KIND_SWT
 from ._validate import as_frames
 from .closing import closing_commands
 from .shell import TactileParams, TactileReflex
 
-__all__ = ["SWTParams", "SWTSD", "SWTDetector", "swt_statistic", "swt_on", "swt_commands", "swt_kernel",
+__all__ = ["SWTParams", "SWTSD", "swt_statistic", "swt_on", "swt_commands", "swt_kernel",
            "swt_rest_statistic",
            "SWT_WINDOW", "SWT_LEVEL", "SWT_WAVELET"]
 
@@ -121,8 +122,15 @@ def swt_kernel() -> np.ndarray:
 
 
 def _apply(kernel: np.ndarray, windows: np.ndarray) -> np.ndarray:
-    """``sum_j kernel[j] * windows[..., j, :]``, rows added in order (same bits batch/stream)."""
-    return (kernel[:, None] * windows).sum(axis=-2)
+    """``sum_j kernel[j] * windows[..., j, :]``, rows added one by one from the oldest.
+
+    The order is written out (numpy's ``sum`` adds pairwise along a contiguous
+    axis, e.g. for one taxel), so it is the compiled step's order: same bits.
+    """
+    out = kernel[0] * windows[..., 0, :]
+    for j in range(1, kernel.size):
+        out = out + kernel[j] * windows[..., j, :]
+    return out
 
 
 def swt_statistic(frames) -> np.ndarray:
@@ -151,7 +159,7 @@ def swt_statistic(frames) -> np.ndarray:
     if k >= SWT_WINDOW:
         flat = f.reshape(k, -1)
         win = np.lib.stride_tricks.sliding_window_view(flat, SWT_WINDOW, axis=0)  # (k-7, taxels, 8)
-        win = np.ascontiguousarray(np.swapaxes(win, 1, 2))                         # (k-7, 8, taxels)
+        win = np.swapaxes(win, 1, 2)                                               # (k-7, 8, taxels)
         out[SWT_WINDOW - 1:] = _apply(_kernel(), win).reshape(-1, *f.shape[1:])
     return out
 
@@ -221,53 +229,13 @@ def swt_commands(frames, params: SWTParams, positions=None) -> np.ndarray:
     return closing_commands(on, params.closing, mode="hold", positions=positions)
 
 
-class SWTDetector:
-    """SWT-SD's per-frame detector: level-3 detail over the last 8 frames, persistence, ON/OFF.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> d = SWTDetector(threshold=0.1, persist=1, taxels=1)
-    >>> [d.update(np.array([1.0 if k >= 8 else 0.0]))[1] for k in range(11)][8:]
-    [False, True, True]
-    """
-
-    def __init__(self, threshold: float, persist: int, taxels: int) -> None:
-        self.threshold, self.persist = threshold, persist
-        self._kernel = _kernel()
-        self._win = np.zeros((SWT_WINDOW, taxels))
-        self._n = 0
-        self._run = np.zeros(taxels, dtype=np.int64)
-
-    def update(self, f: np.ndarray) -> tuple[float, bool]:
-        """One flat frame in; (largest ``|c_k|``, the ON/OFF signal).
-
-        Examples
-        --------
-        >>> import numpy as np
-        >>> SWTDetector(threshold=1.0, persist=0, taxels=2).update(np.zeros(2))
-        (0.0, False)
-        """
-        self._win[:-1] = self._win[1:]
-        self._win[-1] = f
-        self._n += 1
-        if self._n >= SWT_WINDOW:
-            c = _apply(self._kernel, self._win)
-            over = np.abs(c) > self.threshold
-            stat = float(np.max(np.abs(c)))
-        else:
-            over = np.zeros(self._win.shape[1], dtype=bool)
-            stat = 0.0
-        self._run = np.where(over, self._run + 1, 0)
-        return stat, bool((self._run > self.persist).any())
-
-
 class SWTSD(TactileReflex):
     """Streaming SWT-SD reflex (implements :class:`slipreflex.interfaces.Reflex`).
 
     The shared :class:`~slipreflex.baselines.shell.TactileReflex` shell (its
-    parameters, attributes and diagnostics) with :class:`SWTDetector`: the
-    fingers close while the ON/OFF signal is ON. ``name`` is ``"swt"``, ``fs``
+    parameters, attributes, diagnostics and compiled step) with SWT-SD's
+    detector (:func:`swt_on`, the weights of :func:`swt_kernel` over a ring of
+    the last 8 frames): the fingers close while the ON/OFF signal is ON. ``name`` is ``"swt"``, ``fs``
     380 Hz by default, ``last_statistic`` the largest ``|c_k|`` over the taxels,
     ``last_on`` the ON/OFF signal and ``last_event`` the start of an ON period.
 
@@ -287,9 +255,10 @@ class SWTSD(TactileReflex):
     name = "swt"
     params_class = SWTParams
     mode = "hold"
+    kind = KIND_SWT
 
-    def _detector(self) -> SWTDetector:
-        return SWTDetector(self.params.threshold, self.params.persist, int(np.prod(self.params.shape)))
+    def _weights(self) -> np.ndarray:
+        return _kernel()
 
     @property
     def last_on(self) -> bool:
