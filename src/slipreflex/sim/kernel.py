@@ -26,7 +26,7 @@ Model (one physics step of ``dt``, semi-implicit Euler):
     over ``t_heal`` and a logarithmic rate term,
     ``mu = mu_k + (mu_s - mu_k) phi + a ln(1 + w / v0)`` (``PC_A`` holds
     ``a`` in absolute units); see
-    :func:`_contact` (implicit return mapping, :func:`rs_slide_speed`);
+    :func:`_rs_contact` (implicit return mapping, :func:`rs_slide_speed`);
   - *Coulomb-Stribeck*: ``mu(w) = mu_k + (mu_s - mu_k) exp(-(w / v_s)^2)``,
     explicit, with the massless pad relaxing exactly toward ``F / k_t``.
 
@@ -49,6 +49,13 @@ Model (one physics step of ``dt``, semi-implicit Euler):
 
 Noise is counter-based (splitmix64 of a per-channel key and the sample
 index), so a trace does not depend on how the run is cut into calls.
+
+Speed: the per-step helpers (:func:`_rs_contact`, :func:`_coulomb_contact`,
+:func:`_coulomb_post`) take and return scalars and the step writes its output
+rows element by element. An inlined helper that takes an array, or a row view
+``daq_out[nd]``, costs numba an atomic incref/decref pair per call that its
+reference-count pruning does not remove: with them a held grasp took about
+160 ns per step, without them about 50 ns (``benchmarks/bench_sim.py``).
 """
 
 from __future__ import annotations
@@ -180,11 +187,10 @@ def _volts(P, track, keys, k, pos, fallen, q_mid):
 
 
 @njit(cache=True, inline="always")
-def _quant_g(val, P):
-    lsb = P[P_ACC_LSB]
+def _quant_g(val, lsb, full_range):
     c = np.floor(val / lsb + 0.5)
-    hi = np.floor(P[P_ACC_RANGE] / lsb + 0.5) - 1.0
-    lo = -np.floor(P[P_ACC_RANGE] / lsb + 0.5)
+    hi = np.floor(full_range / lsb + 0.5) - 1.0
+    lo = -np.floor(full_range / lsb + 0.5)
     if c > hi:
         c = hi
     elif c < lo:
@@ -192,44 +198,24 @@ def _quant_g(val, P):
     return c * lsb
 
 
-@njit(cache=True)
-def _water(W, t):
-    """Water mass in the bottle (kg), jet force (N) and litres through the flow sensor at ``t``."""
-    m = 0.0
-    jet = 0.0
+@njit(cache=True, inline="always")
+def _litres(W, t):
+    """Litres through the flow sensor at ``t`` (the pumps start at ``W_START``)."""
     litres = 0.0
     for p in range(W.shape[0]):
         st = W[p, W_START]
-        dur = W[p, W_DUR]
         if t > st:
-            tf = min(t - st, dur)
-            litres += W[p, W_RATE_L_S] * tf
-        ta = st + W[p, W_DELAY]
-        if t > ta:
-            tw = min(t - ta, dur)
-            m += W[p, W_RATE_KG_S] * tw
-            if t - ta < dur:
-                jet += W[p, W_JET_N]
-    return m, jet, litres
+            litres += W[p, W_RATE_L_S] * min(t - st, W[p, W_DUR])
+    return litres
 
 
 @njit(cache=True, inline="always")
-def rs_slide_speed(R, K, N, mu_st, a, v0, C, z_guess=0.0):
-    """Sliding speed ``w >= 0`` of a rate-state contact: ``R - K w = N (mu_st + a ln(1 + w / v0))``.
-
-    ``R`` is the trial (stuck) force magnitude, ``R > N mu_st``; ``K = k_t dt + c_t``.
-    Newton's method in ``z = ln(1 + w / v0)``, where the residual is concave and
-    decreasing, so Newton converges from any start (from the right of the root
-    monotonically; from the left its first step lands on the right). It starts
-    from ``z_guess`` (the previous step's ``z``) when positive, else from an
-    upper bound of the root. Returns ``(w, z)``. ``C[C_NITER]`` keeps the most
-    iterations one solve took and ``C[C_NFAIL]`` counts solves that did not
-    converge.
-    """
+def _rs_solve(R, K, N, mu_st, a, v0, z_guess):
+    """Scalar core of :func:`rs_slide_speed`: returns ``(w, z, iterations, converged)``."""
     rp = R - N * mu_st
     na = N * a
     if na <= 0.0:
-        return rp / K, np.log1p(rp / K / v0)
+        return rp / K, np.log1p(rp / K / v0), 0, True
     kv = K * v0
     if z_guess > 0.0:
         z = z_guess
@@ -247,99 +233,104 @@ def rs_slide_speed(R, K, N, mu_st, a, v0, C, z_guess=0.0):
         if abs(dz) <= 1e-7 * (1.0 + abs(z)):
             converged = True
             break
+    if z < 0.0:
+        z = 0.0
+    return v0 * np.expm1(z), z, it, converged
+
+
+@njit(cache=True, inline="always")
+def rs_slide_speed(R, K, N, mu_st, a, v0, C, z_guess=0.0):
+    """Sliding speed ``w >= 0`` of a rate-state contact: ``R - K w = N (mu_st + a ln(1 + w / v0))``.
+
+    ``R`` is the trial (stuck) force magnitude, ``R > N mu_st``; ``K = k_t dt + c_t``.
+    Newton's method in ``z = ln(1 + w / v0)``, where the residual is concave and
+    decreasing, so Newton converges from any start (from the right of the root
+    monotonically; from the left its first step lands on the right). It starts
+    from ``z_guess`` (the previous step's ``z``) when positive, else from an
+    upper bound of the root. Returns ``(w, z)``. ``C[C_NITER]`` keeps the most
+    iterations one solve took and ``C[C_NFAIL]`` counts solves that did not
+    converge.
+    """
+    w, z, it, converged = _rs_solve(R, K, N, mu_st, a, v0, z_guess)
     if it > C[C_NITER]:
         C[C_NITER] = it
     if not converged:
         C[C_NFAIL] += 1
-    if z < 0.0:
-        z = 0.0
-    return v0 * np.expm1(z), z
+    return w, z
 
 
 @njit(cache=True, inline="always")
-def _contact(S, P, C, i, x, v, nc, dt):
-    """Friction force (N, up on the bottle when positive) of contact ``i``; updates its state.
+def _rs_contact(kt, ct, s, mus, muk, phi, z_guess, a, v0, dc, heal_s, heal_decay, x, v, nc, dt):
+    """One step of a rate-state contact (implicit, return mapping); scalars in and out.
 
-    Rate-state law (implicit, return mapping): the contact sticks while the
-    trial force ``k_t (x - s + v dt) + c_t v`` stays within the static
-    threshold ``N (mu_k + (mu_s - mu_k) phi)``; beyond it the sliding speed
-    solves the force balance of pad and interface with the friction
-    ``N (mu_k + (mu_s - mu_k) phi + a ln(1 + w / v0))``. The state ``phi``
-    (1 = fully healed) decays over the slip distance ``D_c`` and heals over
-    ``t_heal``: ``dphi/dt = -phi w / D_c + (1 - phi) / t_heal``, integrated
-    exactly over the step. Coulomb-Stribeck law: explicit, finished by
-    :func:`_contact_post` after the bottle has moved.
+    The contact sticks while the trial force ``k_t (x - s + v dt) + c_t v``
+    stays within the static threshold ``N (mu_k + (mu_s - mu_k) phi)``;
+    beyond it the sliding speed solves the force balance of pad and interface
+    with the friction ``N (mu_k + (mu_s - mu_k) phi + a ln(1 + w / v0))``. The
+    state ``phi`` (1 = fully healed) decays over the slip distance ``D_c`` and
+    heals over ``t_heal``: ``dphi/dt = -phi w / D_c + (1 - phi) / t_heal``,
+    integrated exactly over the step. Returns ``(F, s, w, z, d, phi, it, ok)``:
+    the force on the bottle (up when positive), the new anchor, sliding speed,
+    solver variable (0 when stuck), direction (0 when stuck), state, and the
+    solver's iterations and convergence.
     """
-    bs = S_C0 + i * SC_SIZE
-    bp = P_C0 + i * PC_SIZE
-    kt = P[bp + PC_KT]
-    ct = P[bp + PC_CT]
-    s = S[bs + SC_S]
-    mus = P[bp + PC_MUS]
-    muk = P[bp + PC_MUK]
-    if P[bp + PC_LAW] == LAW_RATE_STATE:
-        phi = S[bs + SC_PHI]
-        mu_st = muk + (mus - muk) * phi
-        A = kt * (x - s + v * dt) + ct * v
-        R = abs(A)
-        w = 0.0
-        if R <= mu_st * nc:
-            F = A
-            S[bs + SC_STUCK] = 1.0
-            S[bs + SC_Z] = 0.0
-        else:
-            d = 1.0 if A > 0.0 else -1.0
-            K = kt * dt + ct
-            w, z = rs_slide_speed(R, K, nc, mu_st, P[bp + PC_A], P[bp + PC_V0], C, S[bs + SC_Z])
-            S[bs + SC_Z] = z
-            F = d * (R - K * w)
-            S[bs + SC_S] = s + d * w * dt
-            S[bs + SC_DIR] = d
-            S[bs + SC_STUCK] = 0.0
-        if w > 0.0:
-            heal = 1.0 / P[bp + PC_HEAL]
-            rate = w / P[bp + PC_DC] + heal
-            phi_ss = heal / rate
-            S[bs + SC_PHI] = phi_ss + (phi - phi_ss) * np.exp(-rate * dt)
-        elif phi < 1.0:
-            # stuck: heal toward 1 (the same update with w = 0, its factor precomputed)
-            S[bs + SC_PHI] = 1.0 - (1.0 - phi) * P[bp + PC_HEAL_DECAY]
-        S[bs + SC_W] = w
-        S[bs + SC_FT] = F
-        return F
-    fp = kt * (x - s) + ct * v
-    if S[bs + SC_STUCK] > 0.0 and abs(fp) > mus * nc:
-        S[bs + SC_STUCK] = 0.0
-        S[bs + SC_DIR] = 1.0 if fp > 0.0 else -1.0
-        S[bs + SC_W] = 0.0
-    if S[bs + SC_STUCK] > 0.0:
-        F = fp
+    mu_st = muk + (mus - muk) * phi
+    A = kt * (x - s + v * dt) + ct * v
+    R = abs(A)
+    w = 0.0
+    z = 0.0
+    d = 0.0
+    it = 0
+    ok = True
+    if R <= mu_st * nc:
+        F = A
     else:
-        wr = S[bs + SC_W] / P[bp + PC_VS]
-        F = S[bs + SC_DIR] * (muk + (mus - muk) * np.exp(-wr * wr)) * nc
-    S[bs + SC_FT] = F
-    return F
+        d = 1.0 if A > 0.0 else -1.0
+        K = kt * dt + ct
+        w, z, it, ok = _rs_solve(R, K, nc, mu_st, a, v0, z_guess)
+        F = d * (R - K * w)
+        s = s + d * w * dt
+    if w > 0.0:
+        heal = 1.0 / heal_s
+        rate = w / dc + heal
+        phi_ss = heal / rate
+        phi = phi_ss + (phi - phi_ss) * np.exp(-rate * dt)
+    elif phi < 1.0:
+        # stuck: heal toward 1 (the same update with w = 0, its factor precomputed)
+        phi = 1.0 - (1.0 - phi) * heal_decay
+    return F, s, w, z, d, phi, it, ok
 
 
 @njit(cache=True, inline="always")
-def _contact_post(S, P, i, x_old, x_new, dt):
+def _coulomb_contact(kt, ct, s, mus, muk, vs, stuck, d, w, x, v, nc):
+    """Coulomb-Stribeck contact before the bottle moves (explicit); returns ``(F, stuck, d, w)``.
+
+    ``mu(w) = mu_k + (mu_s - mu_k) exp(-(w / v_s)^2)``; finished by
+    :func:`_coulomb_post` after the bottle has moved.
+    """
+    fp = kt * (x - s) + ct * v
+    if stuck > 0.0 and abs(fp) > mus * nc:
+        stuck = 0.0
+        d = 1.0 if fp > 0.0 else -1.0
+        w = 0.0
+    if stuck > 0.0:
+        return fp, stuck, d, w
+    wr = w / vs
+    return d * (muk + (mus - muk) * np.exp(-wr * wr)) * nc, stuck, d, w
+
+
+@njit(cache=True, inline="always")
+def _coulomb_post(F, kt, decay, s, d, x_old, x_new, dt):
     """Coulomb-Stribeck contact after the bottle moved: the massless pad relaxes toward
-    ``F / k_t`` exactly, the anchor follows, and the contact sticks when it stops."""
-    bs = S_C0 + i * SC_SIZE
-    bp = P_C0 + i * PC_SIZE
-    if P[bp + PC_LAW] == LAW_RATE_STATE or S[bs + SC_STUCK] > 0.0:
-        return
-    s = S[bs + SC_S]
-    ueq = S[bs + SC_FT] / P[bp + PC_KT]
-    u = ueq + (x_old - s - ueq) * P[bp + PC_DECAY]
+    ``F / k_t`` exactly, the anchor follows, and the contact sticks when it stops.
+    Returns ``(s, stuck, w)``."""
+    ueq = F / kt
+    u = ueq + (x_old - s - ueq) * decay
     sn = x_new - u
     wn = (sn - s) / dt
-    if wn * S[bs + SC_DIR] <= 0.0:
-        S[bs + SC_STUCK] = 1.0
-        S[bs + SC_W] = 0.0
-    else:
-        S[bs + SC_S] = sn
-        S[bs + SC_W] = abs(wn)
+    if wn * d <= 0.0:
+        return s, 1.0, 0.0
+    return sn, 0.0, abs(wn)
 
 
 @njit(cache=True)
@@ -391,7 +382,14 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
         S[S_NC] = nc
         ntot = 3.0 * nc
         # ---- loads
-        mw, fjet, _l = _water(W, t0)
+        mw = 0.0
+        fjet = 0.0
+        for p in range(W.shape[0]):
+            ta = W[p, W_START] + W[p, W_DELAY]
+            if t0 > ta:
+                mw += W[p, W_RATE_KG_S] * min(t0 - ta, W[p, W_DUR])
+                if t0 - ta < W[p, W_DUR]:
+                    fjet += W[p, W_JET_N]
         x = S[S_X]
         v = S[S_V]
         x_old = x
@@ -437,9 +435,38 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
             # thumb and index pads with the same constants see the same x, v and N, so they
             # evolve identically: compute the thumb's and copy it (P_PADS_SAME)
             same = P[P_PADS_SAME] > 0.0
-            f0 = _contact(S, P, C, 0, x, v, nc, dt)
-            f1 = f0 if same else _contact(S, P, C, 1, x, v, nc, dt)
-            ftot = f0 + f1 + _contact(S, P, C, 2, x, v, nc, dt)
+            ftot = 0.0
+            for i in range(3):
+                bs = S_C0 + i * SC_SIZE
+                if i == 1 and same:
+                    ftot += S[S_C0 + SC_FT]
+                    continue
+                bp = P_C0 + i * PC_SIZE
+                if P[bp + PC_LAW] == LAW_RATE_STATE:
+                    F, s_new, w, z, d, phi, it, ok = _rs_contact(
+                        P[bp + PC_KT], P[bp + PC_CT], S[bs + SC_S], P[bp + PC_MUS], P[bp + PC_MUK], S[bs + SC_PHI],
+                        S[bs + SC_Z], P[bp + PC_A], P[bp + PC_V0], P[bp + PC_DC], P[bp + PC_HEAL],
+                        P[bp + PC_HEAL_DECAY], x, v, nc, dt)
+                    S[bs + SC_S] = s_new
+                    S[bs + SC_Z] = z
+                    if d != 0.0:
+                        S[bs + SC_DIR] = d
+                    S[bs + SC_STUCK] = 1.0 if d == 0.0 else 0.0
+                    S[bs + SC_PHI] = phi
+                    S[bs + SC_W] = w
+                    if it > C[C_NITER]:
+                        C[C_NITER] = it
+                    if not ok:
+                        C[C_NFAIL] += 1
+                else:
+                    F, stk, d, w = _coulomb_contact(P[bp + PC_KT], P[bp + PC_CT], S[bs + SC_S], P[bp + PC_MUS],
+                                                    P[bp + PC_MUK], P[bp + PC_VS], S[bs + SC_STUCK],
+                                                    S[bs + SC_DIR], S[bs + SC_W], x, v, nc)
+                    S[bs + SC_STUCK] = stk
+                    S[bs + SC_DIR] = d
+                    S[bs + SC_W] = w
+                S[bs + SC_FT] = F
+                ftot += F
             a = (wload - ftot) / m
             v += a * dt
             x += v * dt
@@ -450,9 +477,14 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
                 if i == 1 and same:
                     for j in range(SC_SIZE):
                         S[S_C0 + SC_SIZE + j] = S[S_C0 + j]
-                else:
-                    _contact_post(S, P, i, x_old, x, dt)
                 bs = S_C0 + i * SC_SIZE
+                bp = P_C0 + i * PC_SIZE
+                if not (i == 1 and same) and P[bp + PC_LAW] != LAW_RATE_STATE and S[bs + SC_STUCK] == 0.0:
+                    s_new, stk, w = _coulomb_post(S[bs + SC_FT], P[bp + PC_KT], P[bp + PC_DECAY], S[bs + SC_S],
+                                                  S[bs + SC_DIR], x_old, x, dt)
+                    S[bs + SC_S] = s_new
+                    S[bs + SC_STUCK] = stk
+                    S[bs + SC_W] = w
                 if S[bs + SC_STUCK] > 0.0:
                     sliding = False
                 s_mean += S[bs + SC_S] / 3.0
@@ -491,9 +523,11 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
         while C[C_ACC] * P[P_ACC_T] <= t1 + 1e-12:
             j = C[C_ACC]
             spec = 1.0 - S[S_AF] / g
-            S[S_AX] = _quant_g(P[P_TILT_X] * spec + P[P_ACC_NOISE] * normal(keys[1], 3 * j), P)
-            S[S_AY] = _quant_g(P[P_TILT_Y] * spec + P[P_ACC_NOISE] * normal(keys[1], 3 * j + 1), P)
-            S[S_AZ] = _quant_g(P[P_TILT_Z] * spec + P[P_ACC_NOISE] * normal(keys[1], 3 * j + 2), P)
+            lsb = P[P_ACC_LSB]
+            rng = P[P_ACC_RANGE]
+            S[S_AX] = _quant_g(P[P_TILT_X] * spec + P[P_ACC_NOISE] * normal(keys[1], 3 * j), lsb, rng)
+            S[S_AY] = _quant_g(P[P_TILT_Y] * spec + P[P_ACC_NOISE] * normal(keys[1], 3 * j + 1), lsb, rng)
+            S[S_AZ] = _quant_g(P[P_TILT_Z] * spec + P[P_ACC_NOISE] * normal(keys[1], 3 * j + 2), lsb, rng)
             S[S_AFRESH] = 1.0
             C[C_ACC] = j + 1
         # ---- DAQ ticks (slip sensor, flow, latest accel)
@@ -507,42 +541,40 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
             # the fingertip rolls and slides a little over the surface as it flexes past contact
             flex = S[S_Q0 + 2] - P[P_QC]
             spot = xk + (P[P_SPOT_K] * flex if flex > 0.0 else 0.0)
-            row = daq_out[nd]
-            row[O_T] = tk
-            row[O_VOLTS] = _volts(P, track, keys, k, spot, S[S_FALLEN] > 0.0, S[S_Q0 + 2])
-            row[O_AX] = S[S_AX]
-            row[O_AY] = S[S_AY]
-            row[O_AZ] = S[S_AZ]
-            row[O_AFRESH] = S[S_AFRESH]
+            daq_out[nd, O_T] = tk
+            daq_out[nd, O_VOLTS] = _volts(P, track, keys, k, spot, S[S_FALLEN] > 0.0, S[S_Q0 + 2])
+            daq_out[nd, O_AX] = S[S_AX]
+            daq_out[nd, O_AY] = S[S_AY]
+            daq_out[nd, O_AZ] = S[S_AZ]
+            daq_out[nd, O_AFRESH] = S[S_AFRESH]
             S[S_AFRESH] = 0.0
-            _m, _j, litres = _water(W, tk)
-            row[O_PULSES] = np.floor(P[P_FLOW_K] * litres + P[P_FLOW_PHASE]) if litres > 0.0 else 0.0
-            row[O_X] = xk
-            row[O_V] = v
-            row[O_S] = S[S_S]
-            row[O_STUCK] = S[S_STUCK]
-            row[O_NC] = nc
-            row[O_MASS] = S[S_MASS]
-            row[O_Q0] = S[S_Q0]
-            row[O_Q1] = S[S_Q0 + 1]
-            row[O_Q2] = S[S_Q0 + 2]
-            row[O_FALLEN] = S[S_FALLEN]
-            row[O_A] = a
+            litres = _litres(W, tk)
+            daq_out[nd, O_PULSES] = np.floor(P[P_FLOW_K] * litres + P[P_FLOW_PHASE]) if litres > 0.0 else 0.0
+            daq_out[nd, O_X] = xk
+            daq_out[nd, O_V] = v
+            daq_out[nd, O_S] = S[S_S]
+            daq_out[nd, O_STUCK] = S[S_STUCK]
+            daq_out[nd, O_NC] = nc
+            daq_out[nd, O_MASS] = S[S_MASS]
+            daq_out[nd, O_Q0] = S[S_Q0]
+            daq_out[nd, O_Q1] = S[S_Q0 + 1]
+            daq_out[nd, O_Q2] = S[S_Q0 + 2]
+            daq_out[nd, O_FALLEN] = S[S_FALLEN]
+            daq_out[nd, O_A] = a
             nd += 1
             C[C_DAQ] = k + 1
         # ---- tactile snapshots
         for si in range(nsamp):
             while tac_next[si] / tac_rates[si] <= t1 + 1e-12 and ntac < cap_tac:
-                row = tac_out[ntac]
-                row[T_ID] = si
-                row[T_IDX] = tac_next[si]
-                row[T_T] = tac_next[si] / tac_rates[si]
+                tac_out[ntac, T_ID] = si
+                tac_out[ntac, T_IDX] = tac_next[si]
+                tac_out[ntac, T_T] = tac_next[si] / tac_rates[si]
                 bc = S_C0 + tac_contact[si] * SC_SIZE
-                row[T_NC] = nc
-                row[T_FT] = S[bc + SC_FT]
-                row[T_S] = S[bc + SC_S]
-                row[T_FALLEN] = S[S_FALLEN]
-                row[T_W] = S[bc + SC_W] if S[bc + SC_STUCK] == 0.0 else 0.0
+                tac_out[ntac, T_NC] = nc
+                tac_out[ntac, T_FT] = S[bc + SC_FT]
+                tac_out[ntac, T_S] = S[bc + SC_S]
+                tac_out[ntac, T_FALLEN] = S[S_FALLEN]
+                tac_out[ntac, T_W] = S[bc + SC_W] if S[bc + SC_STUCK] == 0.0 else 0.0
                 ntac += 1
                 tac_next[si] += 1
         n += 1
