@@ -1,0 +1,60 @@
+"""Put a reproduction's report.md into docs/reproduce.md, between its two markers.
+
+Usage::
+
+    slipreflex reproduce --jobs 2 --out /tmp/repro
+    python scripts/splice_report.py /tmp/repro/report.md
+
+The report's sections go in one heading level down, without its title, its "Run"
+heading (the run's lines stay) and its figure list (the figures are not in the docs).
+Nothing of the report is edited: the docs' results are a run's output, regenerated
+whenever the code changes.
+"""
+
+from __future__ import annotations
+
+import re
+import sys
+from pathlib import Path
+
+DOCS = Path(__file__).resolve().parent.parent / "docs" / "reproduce.md"
+BEGIN, END = "<!-- report.md begins -->", "<!-- report.md ends -->"
+
+
+def sections(report: str) -> str:
+    """The report's text as docs/reproduce.md carries it."""
+    out: list[str] = []
+    skip = False
+    for line in report.splitlines():
+        if line.startswith("# "):
+            continue
+        if line.startswith("## "):
+            skip = line.strip() == "## Figures"
+            if line.strip() == "## Run":
+                continue
+        if not skip:
+            out.append("#" + line if line.startswith("## ") else line)
+    return "\n".join(out).strip("\n")
+
+
+def main(argv: list[str]) -> int:
+    if len(argv) != 1:
+        print(__doc__.strip().splitlines()[0], "\nusage: python scripts/splice_report.py OUT/report.md",
+              file=sys.stderr)
+        return 2
+    report = Path(argv[0])
+    if not report.is_file():
+        print(f"splice_report: {report}: no such report", file=sys.stderr)
+        return 2
+    docs = DOCS.read_text()
+    if docs.count(BEGIN) != 1 or docs.count(END) != 1:
+        print(f"splice_report: {DOCS} must hold each marker once ({BEGIN}, {END})", file=sys.stderr)
+        return 2
+    block = f"{BEGIN}\n\n{sections(report.read_text())}\n\n{END}"
+    DOCS.write_text(re.sub(re.escape(BEGIN) + ".*?" + re.escape(END), lambda _: block, docs, flags=re.S))
+    print(f"splice_report: {DOCS} now carries {report}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
