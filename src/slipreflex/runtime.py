@@ -158,6 +158,7 @@ class SampleRecord:
     Attributes
     ----------
     sample : DaqSample
+        The decoded sample.
     arrival : float
         Clock time at which its bytes were read from the port.
     age : float
@@ -371,6 +372,7 @@ def start_positions(p0: float | Mapping[Any, float], fingers: Sequence[Finger] =
     Returns
     -------
     dict of Finger to float
+        The start position of every finger of ``fingers``, in that order.
 
     Raises
     ------
@@ -487,6 +489,7 @@ def finger_offsets(reflex: Any, fingers: Sequence[Finger] = TRIPOD) -> dict[Fing
     Returns
     -------
     dict of Finger to float
+        Offset (units) of each finger of ``fingers`` that has one; empty for most reflexes.
 
     Raises
     ------

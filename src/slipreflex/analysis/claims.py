@@ -212,8 +212,11 @@ class Claim:
     Attributes
     ----------
     number : int
+        Its number in the paper's list of claims (SPEC 4.1).
     text : str
+        The claim in the paper's words.
     tolerance : str
+        How those words were made numbers.
     judge : callable
         ``judge(ClaimInput) -> (verdict, numbers)``.
 

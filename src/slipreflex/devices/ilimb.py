@@ -518,6 +518,8 @@ def tripod_grasp(hand: Any, contact_force: Callable[[], float], *,
     Returns
     -------
     GraspResult
+        The commanded positions where closing stopped and the tactile reading then
+        (``stable`` is None: the hardware cannot tell).
 
     Raises
     ------

@@ -123,6 +123,11 @@ assert PAYLOAD_LEN + _REFLEX.size + 4 == FRAME_LEN_REFLEX
 _LENGTHS = {VERSION: FRAME_LEN, VERSION_REFLEX: FRAME_LEN_REFLEX}
 
 
+def _bit(field_name: str, bit: int, doc: str) -> property:
+    """A read-only property: whether ``bit`` is set in the integer field ``field_name``."""
+    return property(lambda self: bool(getattr(self, field_name) & bit), doc=doc)
+
+
 @dataclass(frozen=True, slots=True)
 class ReflexFields:
     """What a board running the reflex reports with each sample (version-2 frames).
@@ -150,25 +155,11 @@ class ReflexFields:
     command: int
     x: int
 
-    @property
-    def spike(self) -> bool:
-        """The encoder fired on this sample."""
-        return bool(self.bits & REFLEX_SPIKE)
-
-    @property
-    def window(self) -> bool:
-        """This sample completed a window."""
-        return bool(self.bits & REFLEX_WINDOW)
-
-    @property
-    def fault(self) -> bool:
-        """The reading was skipped as out of range or stuck."""
-        return bool(self.bits & REFLEX_FAULT)
-
-    @property
-    def hand(self) -> bool:
-        """A hand packet was queued with this sample's command."""
-        return bool(self.bits & REFLEX_HAND)
+    # One property per bit of ``bits`` (REFLEX_*).
+    spike = _bit("bits", REFLEX_SPIKE, "The encoder fired on this sample.")
+    window = _bit("bits", REFLEX_WINDOW, "This sample completed a window.")
+    fault = _bit("bits", REFLEX_FAULT, "The reading was skipped as out of range or stuck.")
+    hand = _bit("bits", REFLEX_HAND, "A hand packet was queued with this sample's command.")
 
 
 def crc16(data: bytes | bytearray | memoryview, crc: int = 0xFFFF) -> int:
@@ -235,38 +226,28 @@ class Frame:
         if self.index == -1:
             object.__setattr__(self, "index", self.seq)
 
-    @property
-    def accel_fresh(self) -> bool:
-        """True when the accel fields hold a fresh reading.
+    # One property per bit of the flag byte (FLAG_*).
+    accel_fresh = _bit("flags", FLAG_ACCEL_FRESH, """True when the accel fields hold a fresh reading.
 
         Examples
         --------
         >>> decode_frame(encode_frame(seq=0, adc=0, accel=(1, 2, 3))).accel_fresh
         True
-        """
-        return bool(self.flags & FLAG_ACCEL_FRESH)
-
-    @property
-    def imu_error(self) -> bool:
-        """True when the firmware reports a failed MPU6050 transaction.
+        """)
+    imu_error = _bit("flags", FLAG_IMU_ERROR, """True when the firmware reports a failed MPU6050 transaction.
 
         Examples
         --------
         >>> decode_frame(encode_frame(seq=0, adc=0, flags=FLAG_IMU_ERROR)).imu_error
         True
-        """
-        return bool(self.flags & FLAG_IMU_ERROR)
-
-    @property
-    def overrun(self) -> bool:
-        """True when the firmware reports a missed deadline before this frame.
+        """)
+    overrun = _bit("flags", FLAG_OVERRUN, """True when the firmware reports a missed deadline before this frame.
 
         Examples
         --------
         >>> decode_frame(encode_frame(seq=0, adc=0)).overrun
         False
-        """
-        return bool(self.flags & FLAG_OVERRUN)
+        """)
 
     def to_sample(self) -> DaqSample:
         """Convert to a :class:`slipreflex.interfaces.DaqSample` in physical units.
@@ -362,6 +343,7 @@ def adc_from_volts(volts: float) -> int:
     Returns
     -------
     int
+        Counts, 0..1023.
 
     Raises
     ------
@@ -373,9 +355,7 @@ def adc_from_volts(volts: float) -> int:
     >>> adc_from_volts(2.5), adc_from_volts(-1.0), adc_from_volts(9.0)
     (512, 0, 1023)
     """
-    if math.isnan(volts):
-        raise ParameterError("volts must not be NaN")
-    return int(min(max(round(volts / hardware.ADC_LSB), 0), ADC_MAX))
+    return _quantize("volts", volts, hardware.ADC_LSB, 0, ADC_MAX)
 
 
 def accel_raw_from_g(g: float) -> int:
@@ -388,6 +368,7 @@ def accel_raw_from_g(g: float) -> int:
     Returns
     -------
     int
+        Counts, -32768..32767.
 
     Raises
     ------
@@ -399,9 +380,14 @@ def accel_raw_from_g(g: float) -> int:
     >>> accel_raw_from_g(1.0), accel_raw_from_g(-3.0)
     (16384, -32768)
     """
-    if math.isnan(g):
-        raise ParameterError("g must not be NaN")
-    return int(min(max(round(g * ACCEL_LSB_PER_G), -32768), 32767))
+    return _quantize("g", g, 1.0 / ACCEL_LSB_PER_G, -32768, 32767)   # a power of two: exact
+
+
+def _quantize(name: str, value: float, lsb: float, lo: int, hi: int) -> int:
+    """``value / lsb`` rounded and clipped to ``lo..hi``, as the board's converter would give it."""
+    if math.isnan(value):
+        raise ParameterError(f"{name} must not be NaN")
+    return int(min(max(round(value / lsb), lo), hi))
 
 
 def encode_sample(sample: DaqSample, flags: int = 0) -> bytes:

@@ -925,6 +925,8 @@ class Rig:
         Returns
         -------
         GraspResult
+            Where the fingers stopped, the contact force after settling, and whether the
+            bottle hangs still once its support is gone.
 
         Raises
         ------

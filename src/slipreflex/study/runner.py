@@ -207,6 +207,7 @@ class PlantOutcome:
     Attributes
     ----------
     plant : int
+        Its index in the study's design.
     values : dict
         Its uncertain constants.
     rows : list of dict
