@@ -368,7 +368,7 @@ def accel_raw_from_g(g: float) -> int:
     Returns
     -------
     int
-        Counts, -32768..32767.
+        Counts, -32768..32767 (:data:`ACCEL_LSB_PER_G` per g).
 
     Raises
     ------

@@ -43,6 +43,7 @@ from __future__ import annotations
 
 import bisect
 import math
+import operator
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
@@ -546,8 +547,8 @@ class Rig:
     Examples
     --------
     >>> rig = Rig("DK", seed=5)
-    >>> rig.t, rig.fallen
-    (0.0, False)
+    >>> rig.t, rig.fallen, rig.slipping
+    (0.0, False, False)
     >>> rig.displacement, rig.slip, rig.velocity, rig.normal_force, Rig("TR").load_mass
     (0.0, 0.0, 0.0, 0.0, 0.04)
     """
@@ -708,8 +709,9 @@ class Rig:
 
         Examples
         --------
-        >>> Rig("TR").next_daq_time
-        0.0
+        >>> rig = Rig("TR"); _ = rig.advance(0.01)
+        >>> round(rig.t, 6), round(rig.next_daq_time, 6)    # samples every 3 ms: 0, 3, 6, 9 ms made
+        (0.01, 0.012)
         """
         return int(self._C[K.C_DAQ]) * hw.DAQ_PERIOD_S
 
@@ -1046,28 +1048,8 @@ class Rig:
     velocity = slot(K.S_V, float, "Bottle velocity (m/s, down positive).")
     normal_force = slot(K.S_NC, float, "Normal force per contact (N).")
     load_mass = slot(K.S_MASS, float, "Bottle + water + landed masses (kg).")
-
-    @property
-    def slipping(self) -> bool:
-        """True while the contacts slide (or the bottle has fallen).
-
-        Examples
-        --------
-        >>> Rig("TR").slipping
-        False
-        """
-        return bool(self._S[K.S_STUCK] == 0.0)
-
-    @property
-    def fallen(self) -> bool:
-        """Whether the bottle has slid out of the grasp (see the module notes).
-
-        Examples
-        --------
-        >>> Rig("TR").fallen
-        False
-        """
-        return bool(self._S[K.S_FALLEN] > 0.0)
+    slipping = slot(K.S_STUCK, operator.not_, "True while the contacts slide (or the bottle has fallen).")
+    fallen = slot(K.S_FALLEN, bool, "Whether the bottle has slid out of the grasp (see the module notes).")
 
     @property
     def fall_time(self) -> float | None:

@@ -46,35 +46,6 @@ PAPER_LAYOUT: tuple[tuple[str, float], ...] = (("stand", 0.005), ("white", 0.010
 
 
 @dataclass(frozen=True)
-class ScanSummary:
-    """Numbers of one scan analysis (see :meth:`ScanResult.analyse`).
-
-    Attributes
-    ----------
-    ranges : dict
-        Region name -> (min, max) of the filtered volts inside that region
-        (2.5 mm in from its edges, clear of the spot's blur).
-    spikes : dict
-        Method ("fixed", "dath") -> spike count over the whole scan.
-    spikes_in : dict
-        (method, region) -> spike count inside that region.
-    min_spacing_mm : dict
-        (method, region) -> smallest distance between consecutive spikes
-        inside the region (mm), or None with fewer than two spikes.
-
-    Examples
-    --------
-    >>> ScanSummary({}, {}, {}, {}).spikes
-    {}
-    """
-
-    ranges: dict
-    spikes: dict
-    spikes_in: dict
-    min_spacing_mm: dict
-
-
-@dataclass(frozen=True)
 class ScanResult:
     """A characterization scan: time, sensor position along the surface, volts.
 
@@ -176,6 +147,35 @@ class ScanResult:
                 out[f"{meth}_threshold"] = tr.threshold
                 out[f"{meth}_spike"] = tr.events.astype(np.int64)
         return out
+
+
+@dataclass(frozen=True)
+class ScanSummary:
+    """Numbers of one scan analysis (see :meth:`ScanResult.analyse`).
+
+    Attributes
+    ----------
+    ranges : dict
+        Region name -> (min, max) of the filtered volts inside that region
+        (2.5 mm in from its edges, clear of the spot's blur).
+    spikes : dict
+        Method ("fixed", "dath") -> spike count over the whole scan.
+    spikes_in : dict
+        (method, region) -> spike count inside that region.
+    min_spacing_mm : dict
+        (method, region) -> smallest distance between consecutive spikes
+        inside the region (mm), or None with fewer than two spikes.
+
+    Examples
+    --------
+    >>> ScanSummary({}, {}, {}, {}).spikes
+    {}
+    """
+
+    ranges: dict
+    spikes: dict
+    spikes_in: dict
+    min_spacing_mm: dict
 
 
 def _sensor_params(sensor: SlipSensorParams, track: Track) -> np.ndarray:
