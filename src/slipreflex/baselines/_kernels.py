@@ -84,8 +84,10 @@ def swt_coefficient(S, P, oldest, t):
     taxels = int(P[P_TAXELS])
     w = int(P[P_WINDOW])
     c = P[P_WEIGHTS] * S[S_ARRAYS + oldest * taxels + t]
+    row = oldest
     for j in range(1, w):
-        c += P[P_WEIGHTS + j] * S[S_ARRAYS + ((oldest + j) % w) * taxels + t]
+        row = row + 1 if row + 1 < w else 0
+        c += P[P_WEIGHTS + j] * S[S_ARRAYS + row * taxels + t]
     return c
 
 
