@@ -24,7 +24,7 @@ import numpy as np
 
 from .hardware import Finger
 
-__all__ = ["DaqSample", "SampleSource", "Hand", "Reflex", "InputKind", "GraspResult", "Rig"]
+__all__ = ["DaqSample", "SampleSource", "Hand", "Reflex", "CompiledReflex", "InputKind", "GraspResult", "Rig"]
 
 #: What a reflex reads: the slip sensor (one float per sample) or the 4 x 4
 #: tactile array (one ``(4, 4)`` float array of newtons per sample).
@@ -161,6 +161,38 @@ class Reflex(Protocol):
     def step(self, sample: float | np.ndarray, position: float | None = None) -> float | None: ...
 
     def reset(self) -> None: ...
+
+
+@runtime_checkable
+class CompiledReflex(Protocol):
+    """A reflex whose ``step`` is also a numba function over its live state (optional).
+
+    ``compiled()`` returns ``(step, S, P)``: ``step`` a numba ``@njit`` function,
+    ``S`` the reflex's own state vector (float64, C-contiguous, the very array its
+    :meth:`Reflex.step` updates, not a copy) and ``P`` its parameter vector (float64,
+    read only). ``step(S, P, sample, position)`` does exactly what
+    ``reflex.step(sample, position)`` does and returns the new command, or NaN for
+    none; ``position`` is the measured slip-finger position (NaN if unknown).
+    ``sample`` is, for ``input_kind == "slip"``, the raw volts (float64); for
+    ``"tactile"``, the frame's taxels as a 1-D C-contiguous float64 array (the
+    frame flattened in C order). The compiled closed loop
+    (:func:`slipreflex.sim.run_closed_loop`) calls it from its own numba code, so
+    after the loop ``reflex.step`` continues from where the loop left ``S``; the
+    reflex must keep no other state that ``step`` changes. A reflex without
+    ``compiled`` runs in the Python loop.
+
+    Examples
+    --------
+    >>> from slipreflex.chain import SlipReflex
+    >>> r = SlipReflex(dath=True)
+    >>> isinstance(r, CompiledReflex)
+    True
+    >>> step, S, P = r.compiled()
+    >>> S is r.compiled()[1]
+    True
+    """
+
+    def compiled(self) -> tuple[Any, np.ndarray, np.ndarray]: ...
 
 
 @dataclass(frozen=True)

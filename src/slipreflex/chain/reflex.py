@@ -162,6 +162,23 @@ class SlipReflex:
         """Restore every stage to its initial state."""
         self._S[:] = self._S0
 
+    def compiled(self):
+        """The compiled step and this chain's live state: ``(chain_step, S, P)``.
+
+        :class:`slipreflex.interfaces.CompiledReflex`: ``chain_step(S, P, raw, position)``
+        is what :meth:`step` calls, on the very state vector ``S`` this object holds,
+        so a compiled closed loop that steps it leaves the object where the loop ended.
+
+        Examples
+        --------
+        >>> r = SlipReflex(threshold=0.008)
+        >>> step, S, P = r.compiled()
+        >>> import math
+        >>> math.isnan(step(S, P, 0.4, math.nan)), r.state[0]   # a first sample arrived
+        (True, 1.0)
+        """
+        return _chain_step, self._S, self._P
+
     def step(self, raw: float, position: float | None = None) -> float | None:
         """Feed one raw sample; return the new finger command when there is one.
 
