@@ -174,7 +174,7 @@ class SlipReflex:
         >>> r = SlipReflex(threshold=0.008)
         >>> step, S, P = r.compiled()
         >>> import math
-        >>> math.isnan(step(S, P, 0.4, math.nan)), r.state[0]   # a first sample arrived
+        >>> math.isnan(step(S, P, 0.4, math.nan)), float(r.state[0])   # a first sample arrived
         (True, 1.0)
         """
         return _chain_step, self._S, self._P

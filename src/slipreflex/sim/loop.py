@@ -272,27 +272,44 @@ def simulate_open_loop(rig: Rig, duration: float, *, tactile_fs: float | None = 
     return _trace(rig, t0, "open-loop", [], [], tac_t, tac)
 
 
-def _offset_command(command, fingers: tuple[Finger, ...], offsets):
-    """``command`` itself, or one that sends command + offset to the fingers a reflex offsets.
+def command_groups(fingers: tuple[Finger, ...], offsets) -> list[tuple[tuple[Finger, ...], float | None]]:
+    """How one command ``c`` goes to ``fingers``: ``(fingers, offset)`` pairs, offset None for ``c`` itself.
 
-    A reflex may declare ``finger_offsets`` ({finger: units}, e.g. the authors' rig code
-    sends the middle finger, the sensor's, 20 units further than the others).
+    A reflex may declare ``finger_offsets`` ({finger: units}): those fingers get
+    ``clip(c + offset, 0, 500)`` each, the others ``c`` (the Python loop and the
+    compiled one both split a command this way).
+
+    Examples
+    --------
+    >>> from slipreflex.hardware import TRIPOD
+    >>> command_groups(TRIPOD, {Finger.MIDDLE: 20.0})
+    [((<Finger.THUMB: 0>, <Finger.INDEX: 1>), None), ((<Finger.MIDDLE: 2>,), 20.0)]
+    >>> command_groups(TRIPOD, None)[0][1] is None
+    True
     """
-    offsets = {Finger(f): float(v) for f, v in (offsets or {}).items() if Finger(f) in fingers}
-    if not offsets:
+    offs = {Finger(f): float(v) for f, v in (offsets or {}).items() if Finger(f) in fingers}
+    if not offs:
+        return [(fingers, None)]
+    plain = tuple(f for f in fingers if f not in offs)
+    return ([(plain, None)] if plain else []) + [((f,), off) for f, off in offs.items()]
+
+
+def _offset_command(command, fingers: tuple[Finger, ...], offsets):
+    """``command`` itself, or one that sends each finger group its value (:func:`command_groups`)."""
+    split = command_groups(fingers, offsets)
+    if len(split) == 1 and split[0][1] is None:
         return command
-    plain = tuple(f for f in fingers if f not in offsets)
 
     def send(kind, _fingers, value, at):
-        if plain:
-            command(kind, plain, value, at=at)
-        for f, off in offsets.items():
-            command(kind, (f,), min(max(value + off, hw.FINGER_MIN), hw.FINGER_MAX), at=at)
+        for group, off in split:
+            command(kind, group, value if off is None else min(max(value + off, hw.FINGER_MIN), hw.FINGER_MAX),
+                    at=at)
     return send
 
 
 def run_closed_loop(rig: Rig, reflex: Reflex, duration: float, *,
-                    fingers: Sequence[Finger] = hw.TRIPOD, tactile_fs: float | None = None) -> SimTrace:
+                    fingers: Sequence[Finger] = hw.TRIPOD, tactile_fs: float | None = None,
+                    compiled: bool = True) -> SimTrace:
     """Run ``reflex`` on ``rig`` for ``duration`` seconds from the rig's current time.
 
     Parameters
@@ -309,6 +326,13 @@ def run_closed_loop(rig: Rig, reflex: Reflex, duration: float, *,
         Fingers that receive each command (default: the tripod).
     tactile_fs : float, optional
         For a slip reflex, also record tactile frames at this rate.
+    compiled : bool
+        Run the whole loop in one compiled function (:mod:`slipreflex.sim.closed`)
+        when the reflex has a compiled step
+        (:class:`~slipreflex.interfaces.CompiledReflex`), the fingers are tripod
+        fingers and no command for another finger is queued; the result is the
+        same, bit for bit, as the Python loop's, which ``compiled=False`` forces
+        (and which runs every other reflex).
 
     Returns
     -------
@@ -333,60 +357,81 @@ def run_closed_loop(rig: Rig, reflex: Reflex, duration: float, *,
     kind = getattr(reflex, "input_kind", None)
     if kind not in ("slip", "tactile"):
         raise ParameterError(f"reflex.input_kind must be 'slip' or 'tactile', got {kind!r}")
+    if not isinstance(compiled, bool):
+        raise ParameterError(f"compiled must be True or False, got {compiled!r}")
     fingers = tuple(Finger(f) for f in fingers)
     t0 = rig.t
     t_end = t0 + duration
-    lat = rig.hand.latency
-    cmd_t: list[float] = []
-    cmd_v: list[float] = []
-    eps = 1e-12
-    tac_s = None
-    if kind == "tactile":
-        tac_s = rig.tactile_sampler(float(reflex.fs), Finger.INDEX, keep=True)
-    elif tactile_fs:
-        tac_s = rig.tactile_sampler(float(tactile_fs), Finger.INDEX, keep=True)
+    fs = float(reflex.fs) if kind == "tactile" else tactile_fs
+    tac_s = rig.tactile_sampler(float(fs), Finger.INDEX, keep=True) if fs else None
     try:
-        if kind == "slip":
-            step = reflex.step
-            command = _offset_command(rig.hand.command, fingers, getattr(reflex, "finger_offsets", None))
-            dt = rig.physics.dt
-            while rig.next_daq_time <= t_end + eps:
-                horizon = min(t_end, max(rig.t + dt, rig.next_daq_time + lat))
-                times, volts_a, mids_a = rig.advance_slip(horizon)
-                volts = volts_a.tolist()
-                mids = np.rint(mids_a).tolist()
-                ts = times.tolist()
-                for v, pos, ts_k in zip(volts, mids, ts):
-                    c = step(v, position=pos)
-                    if c is not None:
-                        command(HandCommand.POSITION, fingers, float(c), at=ts_k)
-                        cmd_t.append(ts_k)
-                        cmd_v.append(float(c))
-                if rig.t >= t_end - eps and rig.next_daq_time > t_end + eps:
-                    break
+        from .closed import compilable, run_compiled
+
+        if compiled and compilable(rig, reflex, fingers):
+            reflex_sampler = tac_s if kind == "tactile" else None
+            cmd_t, cmd_v = run_compiled(rig, reflex, t_end, fingers, reflex_sampler,
+                                        getattr(reflex, "finger_offsets", None))
+            if reflex_sampler is not None:
+                reflex_sampler.read()     # the loop consumed them
+        elif kind == "slip":
+            cmd_t, cmd_v = _python_slip(rig, reflex, t_end, fingers)
         else:
             assert tac_s is not None
-            step = reflex.step
-            command = rig.hand.command
-            while tac_s.next_time <= t_end + eps:
-                horizon = min(t_end, max(rig.t + rig.physics.dt, tac_s.next_time + lat))
-                rig.advance_slip(horizon)
-                tt, frames = tac_s.read()
-                # measured middle position at each frame time: the latest DAQ-rate value
-                for k in range(tt.size):
-                    ts_k = float(tt[k])
-                    pos = float(round(rig.finger_position_at(ts_k, Finger.MIDDLE)))
-                    c = step(frames[k], position=pos)
-                    if c is not None:
-                        command(HandCommand.POSITION, fingers, float(c), at=ts_k)
-                        cmd_t.append(ts_k)
-                        cmd_v.append(float(c))
-                if rig.t >= t_end - eps and tac_s.next_time > t_end + eps:
-                    break
-        if rig.t < t_end - eps:
+            cmd_t, cmd_v = _python_tactile(rig, reflex, t_end, fingers, tac_s)
+        if rig.t < t_end - _EPS:
             rig.advance_block(t_end)
     finally:
         if tac_s is not None:
             tac_s.close()
     tac_t, tac = tac_s.history if tac_s is not None else (np.zeros(0), np.zeros((0,) + hw.TACTILE_SHAPE))
     return _trace(rig, t0, getattr(reflex, "name", type(reflex).__name__), cmd_t, cmd_v, tac_t, tac)
+
+
+_EPS = 1e-12
+
+
+def _python_slip(rig: Rig, reflex: Reflex, t_end: float, fingers: tuple[Finger, ...]):
+    """The Python loop for a slip reflex: one ``reflex.step`` per DAQ sample."""
+    cmd_t: list[float] = []
+    cmd_v: list[float] = []
+    step = reflex.step
+    command = _offset_command(rig.hand.command, fingers, getattr(reflex, "finger_offsets", None))
+    dt = rig.physics.dt
+    lat = rig.hand.latency
+    while rig.next_daq_time <= t_end + _EPS:
+        horizon = min(t_end, max(rig.t + dt, rig.next_daq_time + lat))
+        times, volts_a, mids_a = rig.advance_slip(horizon)
+        for v, pos, ts_k in zip(volts_a.tolist(), np.rint(mids_a).tolist(), times.tolist()):
+            c = step(v, position=pos)
+            if c is not None:
+                command(HandCommand.POSITION, fingers, float(c), at=ts_k)
+                cmd_t.append(ts_k)
+                cmd_v.append(float(c))
+        if rig.t >= t_end - _EPS and rig.next_daq_time > t_end + _EPS:
+            break
+    return cmd_t, cmd_v
+
+
+def _python_tactile(rig: Rig, reflex: Reflex, t_end: float, fingers: tuple[Finger, ...], tac_s):
+    """The Python loop for a tactile reflex: one ``reflex.step`` per frame of ``tac_s``."""
+    cmd_t: list[float] = []
+    cmd_v: list[float] = []
+    step = reflex.step
+    command = rig.hand.command
+    lat = rig.hand.latency
+    while tac_s.next_time <= t_end + _EPS:
+        horizon = min(t_end, max(rig.t + rig.physics.dt, tac_s.next_time + lat))
+        rig.advance_slip(horizon)
+        tt, frames = tac_s.read()
+        # measured middle position at each frame time: the latest DAQ-rate value
+        for k in range(tt.size):
+            ts_k = float(tt[k])
+            pos = float(round(rig.finger_position_at(ts_k, Finger.MIDDLE)))
+            c = step(frames[k], position=pos)
+            if c is not None:
+                command(HandCommand.POSITION, fingers, float(c), at=ts_k)
+                cmd_t.append(ts_k)
+                cmd_v.append(float(c))
+        if rig.t >= t_end - _EPS and tac_s.next_time > t_end + _EPS:
+            break
+    return cmd_t, cmd_v

@@ -60,8 +60,8 @@ from .objects import BOTTLES, WATER_DENSITY, Bottle, Drop, Pour, Surface
 from .params import FlowParams, HandParams, ImuParams, PhysicsParams, SlipSensorParams, TactileParams
 from .sensors import Track
 
-__all__ = ["Rig", "SimHand", "TactileSampler", "GraspResult", "DaqBlock", "SlipEvent", "seed_sequence",
-           "fill_slip_sensor_params"]
+__all__ = ["Rig", "SimHand", "TactileSampler", "GraspResult", "DaqBlock", "SlipEvent", "KernelArrays",
+           "seed_sequence", "fill_slip_sensor_params"]
 
 _CHUNK_S = 0.25  # longest stretch one kernel call covers (bounds the buffers)
 _ROUND = 1e-9
@@ -187,6 +187,31 @@ class DaqBlock:
 
 
 @dataclass(frozen=True)
+class KernelArrays:
+    """The rig's live kernel arrays (:meth:`Rig.kernel_arrays`); layouts in :mod:`slipreflex.sim.kernel`.
+
+    Examples
+    --------
+    >>> from slipreflex.sim import Rig
+    >>> Rig("TR").kernel_arrays().C.dtype
+    dtype('int64')
+    """
+
+    S: np.ndarray
+    C: np.ndarray
+    P: np.ndarray
+    keys: np.ndarray
+    D: np.ndarray
+    W: np.ndarray
+    track: np.ndarray
+    tac_rates: np.ndarray
+    tac_next: np.ndarray
+    tac_contact: np.ndarray
+    targets: np.ndarray
+    speeds: np.ndarray
+
+
+@dataclass(frozen=True)
 class SlipEvent:
     """One episode of sliding (truth), from the first stick -> slip transition
     after a quiet period to the last re-stick before the next quiet period.
@@ -254,6 +279,30 @@ class TactileSampler:
         self._state = np.full((2,) + hw.TACTILE_SHAPE, np.nan)   # the taxels' low-pass and play
         # the first frame strictly after now (a frame at the current instant was due in the past)
         self.next_index = 0 if rig.step_index == 0 else int(math.floor(rig.t * self.fs + 1e-9)) + 1
+
+    @property
+    def key(self) -> int:
+        """The noise stream key of this sampler's frames (a compiled loop builds frames with it).
+
+        Examples
+        --------
+        >>> from slipreflex.sim import Rig
+        >>> rig = Rig("TR"); rig.tactile_sampler(100.0).key == rig.tactile_sampler(100.0).key
+        False
+        """
+        return int(self._key)
+
+    @property
+    def filter_state(self) -> np.ndarray:
+        """A copy of the taxels' low-pass and play state ``(2, 4, 4)`` (NaN before the first frame).
+
+        Examples
+        --------
+        >>> from slipreflex.sim import Rig
+        >>> bool(np.isnan(Rig("TR").tactile_sampler(100.0).filter_state).all())
+        True
+        """
+        return self._state.copy()
 
     @property
     def next_time(self) -> float:
@@ -443,6 +492,32 @@ class SimHand:
         out = {f: float(round(q[i])) for i, f in enumerate(hw.TRIPOD)}
         out.update({f: float(round(v)) for f, v in self._others.items()})
         return dict(sorted(out.items()))
+
+    def queue(self) -> tuple[list[tuple[int, int, HandCommand, tuple[Finger, ...], float]], int]:
+        """The pending commands (due step, sequence number, kind, fingers, value), in order, and the next number.
+
+        Examples
+        --------
+        >>> from slipreflex.sim import Rig
+        >>> rig = Rig("TR"); rig.hand.set_positions({Finger.INDEX: 10})
+        >>> rig.hand.queue()
+        ([(100, 0, <HandCommand.POSITION: 3>, (<Finger.INDEX: 1>,), 10.0)], 1)
+        """
+        return list(self._pending), self._count
+
+    def restore_queue(self, pending: list[tuple[int, int, HandCommand, tuple[Finger, ...], float]],
+                      count: int) -> None:
+        """Replace the pending commands and the next sequence number (what a compiled loop hands back).
+
+        Examples
+        --------
+        >>> from slipreflex.sim import Rig
+        >>> rig = Rig("TR"); rig.hand.set_positions({Finger.INDEX: 10})
+        >>> rig.hand.restore_queue([], 1); rig.hand.next_due_step() is None
+        True
+        """
+        self._pending = sorted(pending)
+        self._count = int(count)
 
     def next_due_step(self) -> int | None:
         """Physics step at which the next queued command takes effect (None: nothing queued).
@@ -778,6 +853,54 @@ class Rig:
                 i = int(np.searchsorted(rows[:, K.O_T], t + 1e-12, side="right")) - 1
                 return float(rows[i, col])
         return float(self._S[K.S_Q0 + hw.TRIPOD.index(Finger(finger))])
+
+    def last_daq_position(self, finger: Finger = Finger.MIDDLE) -> float:
+        """Unrounded position of a tripod finger at the latest DAQ sample so far (NaN if none is kept).
+
+        Examples
+        --------
+        >>> rig = Rig("TR"); math.isnan(rig.last_daq_position())
+        True
+        >>> _ = rig.advance(0.01); rig.last_daq_position()
+        0.0
+        """
+        for rows in reversed(self._daq_chunks):
+            if rows.shape[0]:
+                return float(rows[-1, K.O_Q0 + hw.TRIPOD.index(Finger(finger))])
+        return math.nan
+
+    def kernel_arrays(self) -> "KernelArrays":
+        """The live arrays of the physics and the hand's servo targets, for a compiled loop.
+
+        A loop that advances them with :func:`slipreflex.sim.kernel.step_until`
+        hands back what it produced with :meth:`record` and the hand's queue with
+        :meth:`SimHand.restore_queue` (see :mod:`slipreflex.sim.closed`).
+
+        Examples
+        --------
+        >>> a = Rig("TR").kernel_arrays()
+        >>> a.S.shape == (K.S_SIZE,), a.targets is a.targets
+        (True, True)
+        """
+        return KernelArrays(S=self._S, C=self._C, P=self._P, keys=self._keys, D=self._D, W=self._W,
+                            track=self.track.rho, tac_rates=self._tac_rates, tac_next=self._tac_next,
+                            tac_contact=self._tac_contact, targets=self.hand.targets, speeds=self.hand.speeds)
+
+    def record(self, daq_rows: np.ndarray, events: np.ndarray, snapshots: np.ndarray) -> None:
+        """Take what a compiled loop produced on :meth:`kernel_arrays`: DAQ rows (kept as
+        history), physics events and tactile snapshots (turned into frames by each sampler).
+
+        Examples
+        --------
+        >>> rig = Rig("TR"); rig.record(np.zeros((0, K.O_SIZE)), np.zeros((0, 3)), np.zeros((0, K.T_SIZE)))
+        >>> rig.daq_history().t.size
+        0
+        """
+        if daq_rows.shape[0] and self.history:
+            self._daq_chunks.append(daq_rows)
+        if events.shape[0]:
+            self._events.append(events)
+        self._emit_tactile(snapshots)
 
     def _advance_rows(self, t: float) -> np.ndarray:
         """Advance to ``t``; return the new DAQ rows in the kernel's layout (fast path)."""

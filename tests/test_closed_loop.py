@@ -1,0 +1,213 @@
+"""The compiled closed loop (sim/closed.py) equals the Python loop: every command, every trace array,
+the reflex's state and the rig's, bit for bit (issue 10, item 4)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from numba import njit
+
+from slipreflex import hardware as hw
+from slipreflex import methods
+from slipreflex.errors import ParameterError
+from slipreflex.hardware import Finger, HandCommand
+from slipreflex.interfaces import CompiledReflex
+from slipreflex.sim import PAPER_DROP, Drop, Pour, Rig, closed, run_closed_loop
+
+CONTEXT = methods.MethodContext(thresholds={methods.NMSD: 0.3, methods.SWT: 0.02}, speed=500.0)
+SHORT_POUR = Pour(rate_l_min=1.0, volume_ml=150.0)
+# (experiment, bottle, seed): drops and pours, every bottle, several seeds
+CASES = [(PAPER_DROP, "TR", 1), (Drop(mass_kg=0.02, height_m=0.08), "TX", 2), (SHORT_POUR, "DK", 3),
+         (SHORT_POUR, "TR", 4)]
+
+
+def _compiled_methods() -> list[str]:
+    return [m for m in methods.names() if isinstance(methods.make(m, p0=100.0, context=CONTEXT), CompiledReflex)]
+
+
+COMPILED = _compiled_methods()
+
+
+def _run(method_or_factory, what, bottle, seed, compiled, **kw):
+    rig = Rig(bottle, seed=seed)
+    g = rig.grasp()
+    p0 = float(round(g.positions[hw.SLIP_FINGER]))
+    if callable(method_or_factory):
+        reflex = method_or_factory(p0)
+    else:
+        reflex = methods.make(method_or_factory, p0=p0, context=CONTEXT)
+    rig.perturb(what, at=rig.t + 0.2)
+    duration = 0.2 + (what.duration_s if isinstance(what, Pour) else 0.0) + 0.8
+    tr = run_closed_loop(rig, reflex, duration, compiled=compiled, **kw)
+    return rig, reflex, tr
+
+
+def _assert_same(a, b):
+    """Two (rig, reflex, trace) runs are the same, bit for bit, and so is what each leaves behind."""
+    (ra, fa, ta), (rb, fb, tb) = a, b
+    np.testing.assert_array_equal(ta.cmd_t, tb.cmd_t)
+    np.testing.assert_array_equal(ta.cmd_value, tb.cmd_value)
+    for name in ta.daq.__dataclass_fields__:
+        np.testing.assert_array_equal(getattr(ta.daq, name), getattr(tb.daq, name), err_msg=name)
+    np.testing.assert_array_equal(ta.tactile_t, tb.tactile_t)
+    np.testing.assert_array_equal(ta.tactile, tb.tactile)
+    np.testing.assert_array_equal(ta.onsets, tb.onsets)
+    assert ta.slip_events == tb.slip_events
+    assert (ta.fallen, ta.fall_time, ta.t_end) == (tb.fallen, tb.fall_time, tb.t_end)
+    np.testing.assert_array_equal(ra.events(), rb.events())
+    # what the objects hold afterwards: the reflex's state, the physics, the hand's queue and servos
+    if isinstance(fa, CompiledReflex):
+        np.testing.assert_array_equal(fa.compiled()[1], fb.compiled()[1])
+    ka, kb = ra.kernel_arrays(), rb.kernel_arrays()
+    for name in ka.__dataclass_fields__:
+        np.testing.assert_array_equal(getattr(ka, name), getattr(kb, name), err_msg=name)
+    assert ra.hand.queue() == rb.hand.queue()
+    assert [s.next_index for s in ra.samplers] == [s.next_index for s in rb.samplers]
+
+
+@pytest.mark.parametrize("what,bottle,seed", CASES, ids=["drop-TR", "drop-TX", "pour-DK", "pour-TR"])
+@pytest.mark.parametrize("method", COMPILED)
+def test_the_compiled_loop_equals_the_python_loop(method, what, bottle, seed):
+    a = _run(method, what, bottle, seed, compiled=True)
+    assert closed.compilable(a[0], a[1], hw.TRIPOD)
+    b = _run(method, what, bottle, seed, compiled=False)
+    _assert_same(a, b)
+    if method in (methods.DATH, methods.FIXED):
+        assert a[2].cmd_t.size > 0, "the case must make the method command something"
+
+
+def test_every_method_of_the_chain_has_a_compiled_step():
+    assert {methods.DATH, methods.FIXED, methods.AUTHORS_GUI, methods.AUTHORS_CHAIN, methods.DATH_EVENT,
+            methods.DATH_FLOOR, methods.DATH_LEAK} <= set(COMPILED)
+
+
+def test_finger_offsets_reach_the_offset_finger_only():
+    """authors-gui sends the middle finger 20 units further: the compiled loop splits commands alike."""
+    rig, reflex, tr = _run(methods.AUTHORS_GUI, SHORT_POUR, "TR", 4, compiled=True)
+    assert reflex.finger_offsets == {Finger.MIDDLE: 20.0} and tr.cmd_t.size
+    late = tr.t > tr.cmd_t[-1] + 1.0
+    if late.any():   # settled on the last command: the middle finger 20 units past the others' target
+        assert rig.hand.targets[2] == min(round(tr.cmd_value[-1]) + 20, hw.FINGER_MAX)
+        assert rig.hand.targets[1] == round(tr.cmd_value[-1])
+
+
+def test_the_reflex_and_the_rig_continue_where_the_compiled_loop_left_them():
+    """After the loop, reflex.step and the Python loop carry on exactly as after a Python loop."""
+    runs = []
+    for compiled in (True, False):
+        rig, reflex, tr = _run(methods.DATH, SHORT_POUR, "TR", 4, compiled=compiled)
+        tr2 = run_closed_loop(rig, reflex, 0.7, compiled=False)
+        runs.append((rig, reflex, tr2))
+    _assert_same(*runs)
+
+
+def test_a_recorded_tactile_stream_and_a_queued_command_are_kept():
+    """tactile_fs records frames; a command queued before the loop (a CLOSE) is applied in order."""
+    runs = []
+    for compiled in (True, False):
+        rig = Rig("TX", seed=5)
+        g = rig.grasp()
+        reflex = methods.make(methods.DATH, p0=g.positions[hw.SLIP_FINGER])
+        other = rig.tactile_sampler(100.0, Finger.THUMB, keep=True)   # a user's sampler stays fed
+        rig.hand.command(HandCommand.CLOSE, [Finger.THUMB], 100.0, at=rig.t)
+        rig.perturb(PAPER_DROP, at=rig.t + 0.1)
+        tr = run_closed_loop(rig, reflex, 0.6, tactile_fs=hw.NMSD_FS, compiled=compiled)
+        runs.append((rig, reflex, tr))
+        assert tr.tactile.shape[0] == pytest.approx(0.6 * hw.NMSD_FS, abs=1)
+        runs[-1] = runs[-1] + (other.read(),)
+    (*a, fa), (*b, fb) = runs
+    _assert_same(a, b)
+    np.testing.assert_array_equal(fa[1], fb[1])
+    assert fa[1].shape[0] == pytest.approx(0.6 * 100.0, abs=1)
+
+
+# --- a tactile reflex with a compiled step (what NMSD and SWT-SD implement) ------------------------
+
+@njit(cache=True)
+def _squeeze_step(S, P, frame, position):
+    """Close by P[0] units above the measured position whenever the frame's total falls below P[1]."""
+    S[1] += 1.0
+    if frame.sum() < P[1] and S[1] - S[0] > P[2]:
+        S[0] = S[1]
+        return position + P[0]
+    return np.nan
+
+
+class _Squeeze:
+    name, input_kind = "squeeze", "tactile"
+
+    def __init__(self, fs, gap=5.0):
+        self.fs = fs
+        self.S = np.zeros(2)
+        self.P = np.array([3.0, 1.6, gap])
+
+    def compiled(self):
+        return _squeeze_step, self.S, self.P
+
+    def step(self, frame, position=None):
+        c = _squeeze_step(self.S, self.P, np.ascontiguousarray(frame, dtype=float).ravel(),
+                          math.nan if position is None else float(position))
+        return None if c != c else c
+
+    def reset(self):
+        self.S[:] = 0.0
+
+
+@pytest.mark.parametrize("fs", [hw.NMSD_FS, hw.SWT_FS])
+@pytest.mark.parametrize("what,bottle,seed", CASES[:3], ids=["drop-TR", "drop-TX", "pour-DK"])
+def test_a_compiled_tactile_reflex_equals_its_python_loop(fs, what, bottle, seed):
+    a = _run(lambda p0: _Squeeze(fs), what, bottle, seed, compiled=True)
+    assert closed.compilable(a[0], a[1], hw.TRIPOD)
+    b = _run(lambda p0: _Squeeze(fs), what, bottle, seed, compiled=False)
+    _assert_same(a, b)
+    assert a[2].cmd_t.size > 0
+    assert a[2].tactile.shape[0] == pytest.approx((a[2].t_end - a[2].t_start) * fs, abs=1)
+
+
+# --- the fallback ----------------------------------------------------------------------------------
+
+class _Plain:
+    """A reflex without a compiled step: the Python loop runs it."""
+
+    name, input_kind, fs = "plain", "slip", hw.DAQ_FS
+
+    def __init__(self, p0):
+        self.inner = methods.make(methods.DATH, p0=p0)
+
+    def step(self, sample, position=None):
+        return self.inner.step(sample, position)
+
+    def reset(self):
+        self.inner.reset()
+
+
+def _no_compiled_loop(monkeypatch):
+    def fail(*args, **kwargs):
+        raise AssertionError("the compiled loop ran")
+    monkeypatch.setattr(closed, "run_compiled", fail)
+
+
+def test_a_reflex_without_a_compiled_step_runs_in_the_python_loop(monkeypatch):
+    b = _run(methods.DATH, SHORT_POUR, "TR", 4, compiled=True)
+    _no_compiled_loop(monkeypatch)
+    a = _run(_Plain, SHORT_POUR, "TR", 4, compiled=True)
+    assert not isinstance(a[1], CompiledReflex)
+    np.testing.assert_array_equal(a[2].cmd_value, b[2].cmd_value)
+    np.testing.assert_array_equal(a[2].daq.volts, b[2].daq.volts)
+
+
+def test_commands_to_other_fingers_run_in_the_python_loop(monkeypatch):
+    """The compiled loop drives the tripod only; a loop that also commands the ring finger falls back."""
+    fingers = hw.TRIPOD + (Finger.RING,)
+    _no_compiled_loop(monkeypatch)
+    a = _run(methods.DATH, SHORT_POUR, "TR", 4, compiled=True, fingers=fingers)
+    b = _run(methods.DATH, SHORT_POUR, "TR", 4, compiled=False, fingers=fingers)
+    _assert_same(a, b)
+
+
+def test_compiled_must_be_a_bool():
+    rig = Rig("TR")
+    with pytest.raises(ParameterError, match="compiled"):
+        run_closed_loop(rig, methods.make(methods.DATH), 0.1, compiled="yes")
