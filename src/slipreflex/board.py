@@ -37,6 +37,7 @@ from typing import Any
 import numpy as np
 
 from . import hardware as hw
+from .chain.encoder import dath_update
 from .errors import DataError, ParameterError
 from .validation import instance
 
@@ -368,13 +369,8 @@ class BoardChain:
         if y:
             self.acc = 0
         if p.dath:
-            if self.remaining > 0:
-                self.remaining -= 1
-                if self.remaining == 0:
-                    self.theta = p.theta0
-            elif y:
-                self.theta = max(abs(d), p.dath_floor)
-                self.remaining = p.dath_samples
+            self.remaining, self.theta = dath_update(self.remaining, self.theta, y, d, p.theta0, p.dath_floor,
+                                                     p.dath_samples)
         self.prev = x
         return y
 

@@ -131,8 +131,9 @@ class Activity:
 
     Examples
     --------
-    >>> Activity(1.0, 1.3, 4, 20.0).span
-    0.3
+    >>> a = Activity(first=1.0, last=1.3, n_increases=4, rise=20.0)
+    >>> a.span, a.closing_time(fs=40.0)
+    (0.3, 0.1)
     """
 
     first: float
@@ -143,6 +144,8 @@ class Activity:
     @property
     def span(self) -> float:
         """First to last change (s): the paper's total controller time.
+
+        NaN when the slip had no response.
 
         Examples
         --------

@@ -61,7 +61,10 @@ ONSET_K: float = 5.0
 
 @dataclass(frozen=True, slots=True)
 class OnsetParams:
-    """Parameters of the onset detector.
+    """Parameters of the onset detector (:func:`detect_onset`).
+
+    The defaults are the paper's recipe: a 30 Hz low-pass of the rectified signal,
+    a threshold of mean + 5 sd of the first 200 ms at rest.
 
     Parameters
     ----------
@@ -81,8 +84,13 @@ class OnsetParams:
 
     Examples
     --------
-    >>> OnsetParams().cutoff, OnsetParams().baseline_s
-    (30.0, 0.2)
+    >>> p = OnsetParams()
+    >>> p.cutoff, p.baseline_s, p.k
+    (30.0, 0.2, 5.0)
+    >>> OnsetParams(cutoff=0.0)
+    Traceback (most recent call last):
+    ...
+    slipreflex.errors.ParameterError: cutoff must be a finite number > 0, got 0.0
     """
 
     cutoff: float = 30.0

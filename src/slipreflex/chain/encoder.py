@@ -27,7 +27,7 @@ import numpy as np
 from ._checks import as_samples
 from .params import DEFAULT_THRESHOLD, EncoderParams
 
-__all__ = ["encode", "encode_trace", "EncoderTrace", "EventEncoder"]
+__all__ = ["encode", "encode_trace", "EncoderTrace", "EventEncoder", "dath_update"]
 
 
 class EncoderTrace(NamedTuple):
@@ -181,13 +181,32 @@ class EventEncoder:
                 acc = 0.0
         self.acc = acc
         if p.dath:
-            if self.remaining > 0:
-                self.remaining -= 1
-                if self.remaining == 0:
-                    self.threshold = p.threshold
-            elif event:
-                ad = abs(d)
-                self.threshold = ad if ad > p.dath_floor else p.dath_floor
-                self.remaining = p.dath_samples
+            self.remaining, self.threshold = dath_update(self.remaining, self.threshold, event, d, p.threshold,
+                                                         p.dath_floor, p.dath_samples)
         self._prev = x
         return event
+
+
+def dath_update(remaining: int, threshold, event: bool, d, rest, floor, samples: int) -> tuple:
+    """One sample of the DATH rule (Eq. 4): (samples it still holds, threshold for the next sample).
+
+    While ``remaining`` > 0 the raised threshold holds and counts down, back to ``rest``
+    (theta0) when it reaches 0; otherwise a spike (``event``) raises it to
+    ``max(|d|, floor)`` for ``samples`` samples. Only comparisons: the same rule runs on
+    floats (:class:`EventEncoder`) and on the board's Q16 integers
+    (:class:`slipreflex.board.BoardReflex`).
+
+    Examples
+    --------
+    >>> dath_update(0, 0.008, True, 0.03, 0.008, 0.0, 16)
+    (16, 0.03)
+    >>> dath_update(1, 0.03, False, 0.0, 0.008, 0.0, 16)
+    (0, 0.008)
+    """
+    if remaining > 0:
+        remaining -= 1
+        return remaining, (rest if remaining == 0 else threshold)
+    if event:
+        ad = abs(d)
+        return samples, (ad if ad > floor else floor)
+    return remaining, threshold
