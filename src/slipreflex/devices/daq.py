@@ -10,16 +10,8 @@ reads.
 
 Examples
 --------
->>> import serial
->>> from slipreflex.devices import wire
->>> loop = serial.serial_for_url("loop://")
->>> daq = SerialDaq(loop)
->>> _ = loop.write(b"noise" + wire.encode_frame(seq=0, adc=100) + wire.encode_frame(seq=2, adc=101))
->>> [s.seq for s in daq.read(0.1)]
-[0, 2]
->>> daq.stats.seq_gaps, daq.stats.garbage_bytes
-(1, 5)
->>> daq.close(); loop.close()
+:meth:`SerialDaq.read` reads a loopback port fed garbage, a sequence gap and a frame split
+across two reads.
 """
 
 from __future__ import annotations
@@ -106,13 +98,14 @@ class SerialDaq:
     Raises
     ------
     DeviceError
-        The port cannot be opened at construction.
+        The port cannot be opened at construction; the message gives the system's
+        reason (no such device, no permission).
 
     Examples
     --------
     >>> daq = SerialDaq("loop://")
-    >>> daq.read(0.0)
-    []
+    >>> daq.port_name, daq.last_frames, daq.read(0.0)
+    ('loop://', [], [])
     >>> daq.close()
     """
 
@@ -187,10 +180,14 @@ class SerialDaq:
         >>> loop = serial.serial_for_url("loop://")
         >>> daq = SerialDaq(loop)
         >>> frame = wire.encode_frame(seq=9, adc=1)
-        >>> _ = loop.write(frame[:5]); daq.read(0.0)
-        []
+        >>> _ = loop.write(b"noise" + wire.encode_frame(seq=7, adc=100) + frame[:5])
+        >>> [s.seq for s in daq.read(0.0)]          # garbage skipped, half a frame kept
+        [7]
         >>> _ = loop.write(frame[5:]); [s.seq for s in daq.read(0.0)]
         [9]
+        >>> daq.stats.seq_gaps, daq.stats.garbage_bytes    # seq 8 missing; 5 bytes of noise
+        (1, 5)
+        >>> daq.close(); loop.close()
         """
         import serial
 
