@@ -12,15 +12,16 @@ from numba import njit
 from slipreflex import hardware as hw
 from slipreflex import methods
 from slipreflex.errors import ParameterError
+from slipreflex.experiments import ReproduceConfig, calibrate
 from slipreflex.hardware import Finger, HandCommand
 from slipreflex.interfaces import CompiledReflex
-from slipreflex.sim import PAPER_DROP, Drop, Pour, Rig, closed, run_closed_loop
+from slipreflex.sim import PAPER_DROP, PAPER_POUR, Drop, Pour, Rig, closed, run_closed_loop
 
-CONTEXT = methods.MethodContext(thresholds={methods.NMSD: 0.3, methods.SWT: 0.02}, speed=500.0)
+CONTEXT = methods.MethodContext(thresholds=calibrate(ReproduceConfig(trials=1)), speed=500.0)
 SHORT_POUR = Pour(rate_l_min=1.0, volume_ml=150.0)
 # (experiment, bottle, seed): drops and pours, every bottle, several seeds
-CASES = [(PAPER_DROP, "TR", 1), (Drop(mass_kg=0.02, height_m=0.08), "TX", 2), (SHORT_POUR, "DK", 3),
-         (SHORT_POUR, "TR", 4)]
+CASES = [(PAPER_DROP, "TR", 1), (Drop(mass_kg=0.02, height_m=0.08), "TX", 2), (PAPER_POUR, "DK", 3),
+         (PAPER_POUR, "TR", 4)]
 
 
 def _compiled_methods() -> list[str]:

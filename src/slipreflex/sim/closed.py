@@ -11,9 +11,10 @@ compiled). The numba kernels below do what the Python loop in
   hand command at its due step exactly as :meth:`SimHand.apply_due` does;
 * feed every new input to the reflex's compiled step on the reflex's own state
   vector: a DAQ row's volts with the rounded middle-finger position, or a tactile
-  frame (built by :func:`~slipreflex.sim.kernel.tactile_frames` on a copy of the
-  sampler's filter state) with the middle-finger position of the latest DAQ row at
-  or before the frame (:meth:`Rig.finger_position_at`'s rule);
+  frame (built by :func:`~slipreflex.sim.kernel.tactile_frames` with the
+  sampler's key, gain and filter state, which the sampler then takes back) with
+  the middle-finger position of the latest DAQ row at or before the frame
+  (:meth:`Rig.finger_position_at`'s rule);
 * queue every command with the due step :meth:`SimHand.command` gives it
   (``max(ceil((t + latency) / dt - 1e-9), step now)``), split by finger offsets as
   the Python loop splits it.
@@ -443,7 +444,7 @@ def run_compiled(rig, reflex, t_end: float, fingers: tuple[Finger, ...], sampler
     cmd_off = np.array([0.0 if off is None else off for _, off in split])
     cmd_clip = np.array([off is not None for _, off in split], dtype=np.int64)
     n_tac = int(sum(span * fs + 4 for fs in A.tac_rates))
-    buf = _Buffers(daq=np.zeros((int(span * hw.DAQ_FS) + 16, K.O_SIZE)), ev=np.zeros((256, 3)),
+    buf = _Buffers(daq=np.zeros((int(span * hw.DAQ_FS) + 16, K.O_SIZE)), ev=np.zeros((4096, 3)),
                    tac=np.zeros((n_tac + 16, K.T_SIZE)), cmd_t=np.zeros(n_in), cmd_v=np.zeros(n_in),
                    q_i=q_i, q_v=q_v, frames=np.zeros((n_in if sampler is not None else 0,) + hw.TACTILE_SHAPE))
     cnt = np.zeros(N_SIZE, dtype=np.int64)
@@ -472,7 +473,8 @@ def run_compiled(rig, reflex, t_end: float, fingers: tuple[Finger, ...], sampler
     pending = [(int(s), int(c), HandCommand(int(k)), groups[int(g)], float(v))
                for (s, c, k, g), v in zip(buf.q_i[cnt[N_QHEAD]:cnt[N_QLEN]], buf.q_v[cnt[N_QHEAD]:cnt[N_QLEN]])]
     rig.hand.restore_queue(pending, int(cnt[N_COUNT]))
-    rig.record(buf.daq[:cnt[N_DAQ]].copy(), buf.ev[:cnt[N_EV]].copy(), buf.tac[:cnt[N_TAC]].copy())
+    built = None if sampler is None else (sampler, buf.frames[:cnt[N_FRAMES]].copy(), tstate)
+    rig.record(buf.daq[:cnt[N_DAQ]].copy(), buf.ev[:cnt[N_EV]].copy(), buf.tac[:cnt[N_TAC]].copy(), built)
     if status == _BAD_COMMAND:
         raise ParameterError(f"hand command value must be finite, got {buf.cmd_v[nc]!r}")
     return buf.cmd_t[:nc].copy(), buf.cmd_v[:nc].copy()

@@ -226,9 +226,7 @@ def _fmt(v: object) -> str:
 
 def _trace(rig: Rig, t0: float, method: str, cmd_t: list[float], cmd_v: list[float],
            tac_t: np.ndarray, tac: np.ndarray) -> SimTrace:
-    hist = rig.daq_history()
-    keep = hist.t >= t0 - 1e-12
-    d = DaqBlock(**{k: getattr(hist, k)[keep] for k in hist.__dataclass_fields__})
+    d = rig.daq_history(since=t0)
     ons = rig.onsets
     ev = [e for e in rig.slip_events() if e.onset >= t0 - 1e-12 or e.end is None or e.end >= t0]
     return SimTrace(daq=d, cmd_t=np.asarray(cmd_t, dtype=float), cmd_value=np.asarray(cmd_v, dtype=float),

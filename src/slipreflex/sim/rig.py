@@ -335,6 +335,22 @@ class TactileSampler:
                          params.drift_per_decade, self._state, out)
         self._push(snapshots[:, K.T_T].copy(), out)
 
+    def take(self, t: np.ndarray, frames: np.ndarray, state: np.ndarray) -> None:
+        """Queue frames built elsewhere from this sampler's snapshots (by a compiled loop, with
+        :func:`~slipreflex.sim.kernel.tactile_frames`, :attr:`key`, :attr:`gain` and
+        :attr:`filter_state`), and take the filter state they left: as if fed.
+
+        Examples
+        --------
+        >>> from slipreflex.sim import Rig
+        >>> s = Rig("TR").tactile_sampler(100.0)
+        >>> s.take(np.zeros(1), np.ones((1, 4, 4)), np.zeros((2, 4, 4)))
+        >>> float(s.read()[1].sum()), float(s.filter_state.sum())
+        (16.0, 0.0)
+        """
+        self._state[...] = state
+        self._push(t, frames)
+
     def _push(self, t: np.ndarray, frames: np.ndarray) -> None:
         self._t.append(t)
         self._f.append(frames)
@@ -886,9 +902,12 @@ class Rig:
                             track=self.track.rho, tac_rates=self._tac_rates, tac_next=self._tac_next,
                             tac_contact=self._tac_contact, targets=self.hand.targets, speeds=self.hand.speeds)
 
-    def record(self, daq_rows: np.ndarray, events: np.ndarray, snapshots: np.ndarray) -> None:
+    def record(self, daq_rows: np.ndarray, events: np.ndarray, snapshots: np.ndarray,
+               built: tuple["TactileSampler", np.ndarray, np.ndarray] | None = None) -> None:
         """Take what a compiled loop produced on :meth:`kernel_arrays`: DAQ rows (kept as
-        history), physics events and tactile snapshots (turned into frames by each sampler).
+        history), physics events and tactile snapshots (turned into frames by each sampler,
+        except ``built = (sampler, frames, filter state)``: the frames the loop built from
+        that sampler's snapshots, see :meth:`TactileSampler.take`).
 
         Examples
         --------
@@ -900,7 +919,7 @@ class Rig:
             self._daq_chunks.append(daq_rows)
         if events.shape[0]:
             self._events.append(events)
-        self._emit_tactile(snapshots)
+        self._emit_tactile(snapshots, built)
 
     def _advance_rows(self, t: float) -> np.ndarray:
         """Advance to ``t``; return the new DAQ rows in the kernel's layout (fast path)."""
@@ -960,11 +979,14 @@ class Rig:
         self._tac_next = np.array([s.next_index for s in self._samplers], dtype=np.int64)
         self._tac_contact = np.array([hw.TRIPOD.index(s.finger) for s in self._samplers], dtype=np.int64)
 
-    def _emit_tactile(self, snap: np.ndarray) -> None:
+    def _emit_tactile(self, snap: np.ndarray, built: tuple | None = None) -> None:
         for i, s in enumerate(self._samplers):
             rows = snap[snap[:, K.T_ID] == i]
             s.next_index = int(self._tac_next[i])
-            s.feed(rows, self.tactile_params)
+            if built is not None and s is built[0]:
+                s.take(rows[:, K.T_T].copy(), built[1], built[2])
+            else:
+                s.feed(rows, self.tactile_params)
 
     def tactile_sampler(self, fs: float, finger: Finger = Finger.INDEX, *, keep: bool = False) -> TactileSampler:
         """Start sampling a finger's 4 x 4 tactile array at ``fs`` Hz from now on.
@@ -1263,14 +1285,26 @@ class Rig:
                 out.append(SlipEvent(onset, None, self.displacement - s_on))
         return out
 
-    def daq_history(self) -> DaqBlock:
-        """Every DAQ sample (and truth) produced since the rig started (empty with ``history=False``).
+    def daq_history(self, since: float | None = None) -> DaqBlock:
+        """Every DAQ sample (and truth) produced since the rig started (empty with ``history=False``),
+        or only those at or after ``since`` (s).
 
         Examples
         --------
         >>> rig = Rig("TR"); _ = rig.advance(0.03)
         >>> rig.daq_history().t.size   # 0, 3, ..., 30 ms
         11
+        >>> b = rig.daq_history(since=0.02); b.seq.tolist(), b.t.size
+        ([7, 8, 9, 10], 4)
         """
-        rows = np.concatenate(self._daq_chunks) if self._daq_chunks else np.zeros((0, K.O_SIZE))
-        return DaqBlock.from_rows(rows, 0)
+        chunks = self._daq_chunks
+        skip = 0
+        if since is not None:
+            first = next((i for i, c in enumerate(chunks) if c[-1, K.O_T] >= since - 1e-12), len(chunks))
+            skip = sum(c.shape[0] for c in chunks[:first])
+            chunks = chunks[first:]
+        rows = np.concatenate(chunks) if chunks else np.zeros((0, K.O_SIZE))
+        if since is not None:
+            i = int(np.searchsorted(rows[:, K.O_T], since - 1e-12, side="left"))
+            rows, skip = rows[i:], skip + i
+        return DaqBlock.from_rows(rows, skip)
