@@ -11,7 +11,13 @@ See docs/study.md.
 Examples
 --------
 >>> from slipreflex.cli import main
->>> main(["study", "--plants", "2", "--trials", "1", "--out", "/tmp/s"])  # doctest: +SKIP
+>>> main(["study", "--plants", "2", "--trials", "1", "--workers", "0", "--out", "/tmp/s"])  # doctest: +SKIP
+claim  holds (95% CI)      not testable  text
+    1     0% (    0-66%)             0%  Scan: white about 0.3-0.5 V, black about 3.32-3.35 V
+...
+    8   100% (  34-100%)             0%  DATH responds in under 85 ms on every bottle and experiment
+...
+2 plants (2 computed now, 0 with errors) in 6.2 s on serial; wrote /tmp/s/{results.parquet, ...}
 """
 
 from __future__ import annotations
