@@ -11,6 +11,7 @@ from slipreflex.baselines import _kernels as K
 from slipreflex.baselines import _layout as L
 from slipreflex.errors import DataError
 from slipreflex.hardware import NMSD_FS, SWT_FS
+from slipreflex.interfaces import CompiledReflex
 
 
 @njit
@@ -107,6 +108,7 @@ def test_the_object_goes_on_from_where_the_compiled_loop_left_it_and_reset_resto
     rest, _, _ = _stream(r, frames[half:], positions[half:])
     np.testing.assert_array_equal(np.r_[out, rest], expect)
     assert np.isfinite(rest).any() and np.isfinite(out).any()
+    assert isinstance(r, CompiledReflex)
     r.reset()
     assert r.compiled()[1] is S                          # the live array, restored in place
     np.testing.assert_array_equal(S, initial)
