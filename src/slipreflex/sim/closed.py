@@ -96,12 +96,10 @@ class _StampedLocator(_caching.InTreeCacheLocator):
         return super().from_function(py_func, py_file)
 
 
-try:
-    if _StampedLocator not in _caching._CacheImpl._locator_classes:
-        _caching._CacheImpl._locator_classes.insert(0, _StampedLocator)
-    _CACHE = True
-except AttributeError:  # another numba: no cache rather than a stale one
-    _CACHE = False
+_LOCATORS = getattr(getattr(_caching, "CacheImpl", None), "_locator_classes", None)
+_CACHE = isinstance(_LOCATORS, list)   # another numba: no cache rather than a stale one
+if _CACHE and _StampedLocator not in _LOCATORS:
+    _LOCATORS.insert(0, _StampedLocator)
 
 _f1, _i1, _u1 = types.float64[::1], types.int64[::1], types.uint64[::1]
 _f2, _i2, _f3 = types.float64[:, ::1], types.int64[:, ::1], types.float64[:, :, ::1]
