@@ -152,38 +152,39 @@ def derive_key(key, i):
 
 
 @njit(cache=True, inline="always")
-def _volts(P, track, keys, k, pos, fallen, q_mid):
-    if fallen:
-        rho = 0.0
-    else:
-        fi = (pos + P[P_TRACK_OFF]) / P[P_TRACK_DX]
-        i = int(np.floor(fi))
-        nt = track.shape[0]
-        if i < 0:
-            i = 0
-            fi = 0.0
-        elif i > nt - 2:
-            i = nt - 2
-            fi = float(nt - 1)
-        fr = fi - i
-        rho = track[i] + fr * (track[i + 1] - track[i])
-        extra = (P[P_QC] - q_mid) * P[P_LAM]
-        if extra > 0.0:
-            r = extra / P[P_GAP]
-            rho = rho / (1.0 + r * r)
-    vlin = P[P_VCC] * (1.0 - rho)
-    z = (vlin - P[P_VSAT]) / P[P_KNEE]
+def _track_at(pos, off, dx, nt):
+    """Index ``i`` and fraction ``fr`` of surface position ``pos`` on a track of ``nt`` samples (clamped)."""
+    fi = (pos + off) / dx
+    i = int(np.floor(fi))
+    if i < 0:
+        i = 0
+        fi = 0.0
+    elif i > nt - 2:
+        i = nt - 2
+        fi = float(nt - 1)
+    return i, fi - i
+
+
+@njit(cache=True, inline="always")
+def _sensor_volts(rho, extra, gap, vcc, vsat, knee, vnoise, key, k, lsb, code_max):
+    """OPR5005 output (ADC volts) for reflectance ``rho`` with the finger ``extra`` metres further than
+    the gap (before contact), electrical noise number ``k`` of stream ``key``, 10-bit ADC."""
+    if extra > 0.0:
+        r = extra / gap
+        rho = rho / (1.0 + r * r)
+    vlin = vcc * (1.0 - rho)
+    z = (vlin - vsat) / knee
     if z > 0.0:
-        v = P[P_VSAT] + P[P_KNEE] * (z + np.log1p(np.exp(-z)))
+        v = vsat + knee * (z + np.log1p(np.exp(-z)))
     else:
-        v = P[P_VSAT] + P[P_KNEE] * np.log1p(np.exp(z))
-    v += P[P_VNOISE] * normal(keys[0], k)
-    code = np.floor(v / P[P_ADC_LSB])
+        v = vsat + knee * np.log1p(np.exp(z))
+    v += vnoise * normal(key, k)
+    code = np.floor(v / lsb)
     if code < 0.0:
         code = 0.0
-    elif code > P[P_ADC_MAX]:
-        code = P[P_ADC_MAX]
-    return code * P[P_ADC_LSB]
+    elif code > code_max:
+        code = code_max
+    return code * lsb
 
 
 @njit(cache=True, inline="always")
@@ -352,6 +353,8 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
     cap_tac = tac_out.shape[0]
     cap_ev = ev_out.shape[0]
     nsamp = tac_rates.shape[0]
+    key0 = keys[0]
+    key1 = keys[1]
     while n < n_end:
         if nev + 3 + D.shape[0] > cap_ev or nd + 2 > cap_daq:
             break
@@ -525,9 +528,9 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
             spec = 1.0 - S[S_AF] / g
             lsb = P[P_ACC_LSB]
             rng = P[P_ACC_RANGE]
-            S[S_AX] = _quant_g(P[P_TILT_X] * spec + P[P_ACC_NOISE] * normal(keys[1], 3 * j), lsb, rng)
-            S[S_AY] = _quant_g(P[P_TILT_Y] * spec + P[P_ACC_NOISE] * normal(keys[1], 3 * j + 1), lsb, rng)
-            S[S_AZ] = _quant_g(P[P_TILT_Z] * spec + P[P_ACC_NOISE] * normal(keys[1], 3 * j + 2), lsb, rng)
+            S[S_AX] = _quant_g(P[P_TILT_X] * spec + P[P_ACC_NOISE] * normal(key1, 3 * j), lsb, rng)
+            S[S_AY] = _quant_g(P[P_TILT_Y] * spec + P[P_ACC_NOISE] * normal(key1, 3 * j + 1), lsb, rng)
+            S[S_AZ] = _quant_g(P[P_TILT_Z] * spec + P[P_ACC_NOISE] * normal(key1, 3 * j + 2), lsb, rng)
             S[S_AFRESH] = 1.0
             C[C_ACC] = j + 1
         # ---- DAQ ticks (slip sensor, flow, latest accel)
@@ -542,7 +545,15 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
             flex = S[S_Q0 + 2] - P[P_QC]
             spot = xk + (P[P_SPOT_K] * flex if flex > 0.0 else 0.0)
             daq_out[nd, O_T] = tk
-            daq_out[nd, O_VOLTS] = _volts(P, track, keys, k, spot, S[S_FALLEN] > 0.0, S[S_Q0 + 2])
+            if S[S_FALLEN] > 0.0:
+                rho = 0.0
+                extra = 0.0
+            else:
+                ti, fr = _track_at(spot, P[P_TRACK_OFF], P[P_TRACK_DX], track.shape[0])
+                rho = track[ti] + fr * (track[ti + 1] - track[ti])
+                extra = (P[P_QC] - S[S_Q0 + 2]) * P[P_LAM]
+            daq_out[nd, O_VOLTS] = _sensor_volts(rho, extra, P[P_GAP], P[P_VCC], P[P_VSAT], P[P_KNEE],
+                                                 P[P_VNOISE], key0, k, P[P_ADC_LSB], P[P_ADC_MAX])
             daq_out[nd, O_AX] = S[S_AX]
             daq_out[nd, O_AY] = S[S_AY]
             daq_out[nd, O_AZ] = S[S_AZ]
@@ -644,4 +655,7 @@ def tactile_frames(snap, key, gain0, patch_sigma, shear_shift, noise, resolution
 def volts_along(P, track, keys, positions, out):
     """Slip-sensor volts at surface positions (sample k uses noise number k); for the scan."""
     for k in range(positions.shape[0]):
-        out[k] = _volts(P, track, keys, k, positions[k], False, 0.0)
+        ti, fr = _track_at(positions[k], P[P_TRACK_OFF], P[P_TRACK_DX], track.shape[0])
+        rho = track[ti] + fr * (track[ti + 1] - track[ti])
+        out[k] = _sensor_volts(rho, P[P_QC] * P[P_LAM], P[P_GAP], P[P_VCC], P[P_VSAT], P[P_KNEE],
+                               P[P_VNOISE], keys[0], k, P[P_ADC_LSB], P[P_ADC_MAX])
