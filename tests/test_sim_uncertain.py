@@ -56,7 +56,7 @@ def test_bottle_selectors_and_ratio_targets():
                                                        ("bottle[TX].mu_s",))}
     p = plant_from_values({"tx_only": 1.2, "pad_mu_k_ratio": 0.5}, table=table)
     assert p.bottles["TX"].mu_s == 1.2 and p.bottles["TR"].mu_s == BOTTLES["TR"].mu_s
-    assert p.bottles["TX"].mu_k == pytest.approx(0.6) and p.bottles["TR"].mu_k == pytest.approx(0.5 * 0.972)
+    assert p.bottles["TX"].mu_k == pytest.approx(0.6) and p.bottles["TR"].mu_k == pytest.approx(0.5 * BOTTLES["TR"].mu_s)
 
 
 def test_first_slip_target_recalibrates_the_pads():
@@ -111,7 +111,7 @@ def test_load_ranges_narrows_widens_and_fixes(tmp_path):
     assert t["hand_latency"].nominal == 0.012          # moved into the narrowed range
     assert t["wall_stiffness"].low == 100.0 and t["wall_stiffness"].nominal == UNCERTAIN["wall_stiffness"].nominal
     assert t["pad_mu_k_ratio"].fixed and t["pad_mu_k_ratio"].value_at(0.3) == 0.8
-    assert plant_from_values(nominal_values(t), table=t).bottles["TR"].mu_k == pytest.approx(0.8 * 0.972)
+    assert plant_from_values(nominal_values(t), table=t).bottles["TR"].mu_k == pytest.approx(0.8 * BOTTLES["TR"].mu_s)
     assert UNCERTAIN["hand_latency"].low != 0.012      # the package table is untouched
 
 

@@ -11,7 +11,8 @@ Data (frozen, validated; see :mod:`slipreflex.sim.objects`):
     "black"), :data:`PAPER_DROP`, :data:`PAPER_POUR`, :func:`load_objects`.
 Parameters (see :mod:`slipreflex.sim.params`):
     :class:`HandParams`, :class:`SlipSensorParams`, :class:`ImuParams`,
-    :class:`TactileParams`, :class:`FlowParams`, :class:`PhysicsParams`.
+    :class:`TactileParams`, :class:`FlowParams`, :class:`PhysicsParams`,
+    :class:`WaterParams` (the pour's splash and slosh).
 The rig (see :mod:`slipreflex.sim.rig`):
     :class:`Rig` (``advance``/``advance_to``/``advance_block``, ``hand``,
     ``grasp``, ``perturb``, ``tactile_sampler``, truth accessors),
@@ -39,7 +40,7 @@ True
 from .loop import TRACE_COLUMNS, SimTrace, run_closed_loop, simulate_open_loop
 from .objects import (BOTTLES, PAPER_DROP, PAPER_POUR, SURFACES, Bottle, Drop, Objects, Pour, Surface,
                       load_objects)
-from .params import FlowParams, HandParams, ImuParams, PhysicsParams, SlipSensorParams, TactileParams
+from .params import FlowParams, HandParams, ImuParams, PhysicsParams, SlipSensorParams, TactileParams, WaterParams
 from .rig import DaqBlock, GraspResult, Rig, SimHand, SlipEvent, TactileSampler
 from .scan import ScanResult, scan
 from .uncertain import UNCERTAIN, Plant, UncertainConstant, load_ranges, plant_from_values
@@ -47,7 +48,7 @@ from .uncertain import UNCERTAIN, Plant, UncertainConstant, load_ranges, plant_f
 __all__ = [
     "Bottle", "Surface", "Drop", "Pour", "Objects", "BOTTLES", "SURFACES", "PAPER_DROP", "PAPER_POUR",
     "load_objects", "HandParams", "SlipSensorParams", "ImuParams", "TactileParams", "FlowParams",
-    "PhysicsParams", "Rig", "SimHand", "TactileSampler", "DaqBlock", "GraspResult", "SlipEvent",
+    "PhysicsParams", "WaterParams", "Rig", "SimHand", "TactileSampler", "DaqBlock", "GraspResult", "SlipEvent",
     "SimTrace", "TRACE_COLUMNS", "run_closed_loop", "simulate_open_loop", "ScanResult", "scan",
     "UNCERTAIN", "UncertainConstant", "Plant", "plant_from_values", "load_ranges",
 ]

@@ -17,8 +17,8 @@ Examples
 >>> from slipreflex.sim.contacts import grip_gain, static_capacity
 >>> round(grip_gain(HandParams(), BOTTLES["TR"]), 3)       # N per position unit, per contact
 0.102
->>> round(static_capacity(BOTTLES["TR"], 1.0), 2)          # N, at 1 N per contact
-2.19
+>>> round(static_capacity(BOTTLES["TR"], 1.0), 3)          # N, at 1 N per contact
+2.195
 """
 
 from __future__ import annotations

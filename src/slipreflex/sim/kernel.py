@@ -76,12 +76,20 @@ S_AX, S_AY, S_AZ, S_AFRESH, S_MASS, S_A = 21, 22, 23, 24, 25, 26
 S_C0 = 27
 SC_S, SC_W, SC_STUCK, SC_DIR, SC_PHI, SC_FT, SC_Z = range(7)   # SC_Z: ln(1 + w / v0), the solver's variable
 SC_SIZE = 7
-S_SIZE = S_C0 + 3 * SC_SIZE
+# the water (WaterParams): bottle's sideways position and velocity, the slosh mass's, the bottle's sideways
+# acceleration and its DLPF, the splash noise at the two ends of the current 1 ms interval, the slosh mode's
+# k tanh(k h), mass m1, damping coefficient and jet participation, the axial load and the water's sideways
+# force on the bottle (truth)
+S_L0 = S_C0 + 3 * SC_SIZE
+(S_YB, S_VB, S_Y1, S_V1, S_ALAT, S_AFL, S_SPL0, S_SPL1, S_KTH, S_M1, S_C1, S_BETA, S_LOAD,
+ S_FWAT) = range(S_L0, S_L0 + 14)
+S_SIZE = S_L0 + 14
 
 # ---- counters C (int64) ---------------------------------------------------
 # C_NFAIL: implicit friction solves that did not converge; C_NITER: most iterations one took.
-C_N, C_DAQ, C_ACC, C_NFAIL, C_NITER = 0, 1, 2, 3, 4
-C_SIZE = 5
+# C_SPL: index j of the 1 ms splash-noise interval [j, j + 1) ms the values S_SPL0, S_SPL1 belong to.
+C_N, C_DAQ, C_ACC, C_NFAIL, C_NITER, C_SPL = 0, 1, 2, 3, 4, 5
+C_SIZE = 6
 
 # ---- parameters P ---------------------------------------------------------
 (P_DT, P_G, P_MB, P_KN, P_LAM, P_QC, P_KSERVO, P_STALL, P_GRIP,
@@ -92,10 +100,18 @@ C_SIZE = 5
 P_C0 = 31
 (PC_LAW, PC_MUS, PC_MUK, PC_VS, PC_A, PC_V0, PC_DC, PC_HEAL, PC_KT, PC_CT, PC_DECAY, PC_HEAL_DECAY) = range(12)
 PC_SIZE = 12
-P_SIZE = P_C0 + 3 * PC_SIZE
+# the water: splash rms (relative), noise grid (s), its one-pole factor and innovation, bottle radius, water's
+# kinematic viscosity, slosh damping factor, jet's mode participation J1(k r_j) / J1(1.8412), water density,
+# sideways stiffness and damping of the bottle in the grasp, 1 / noise grid
+P_L0 = P_C0 + 3 * PC_SIZE
+(P_SPL_RMS, P_SPL_DT, P_SPL_RHO, P_SPL_SIG, P_SLOSH_R, P_NU, P_DAMPF, P_PHIJ, P_RHO_W, P_KLAT,
+ P_CLAT, P_SPL_INV) = range(P_L0, P_L0 + 12)
+P_SIZE = P_L0 + 12
 #: Friction laws (PC_LAW): Coulomb with a Stribeck curve; slip weakening + healing + log rate.
 LAW_COULOMB, LAW_RATE_STATE = 0.0, 1.0
 _NEWTON_MAX = 60
+#: First zero of J1' (``params.SLOSH_ROOT``): the first antisymmetric slosh mode's k R.
+_XI = 1.8411837813406593
 
 # ---- drops D (one row per drop) -------------------------------------------
 D_REL, D_M, D_H0, D_KC, D_CC, D_ACT, D_Z, D_VZ, D_LANDED = range(9)
@@ -107,8 +123,8 @@ W_SIZE = 7
 
 # ---- DAQ output rows --------------------------------------------------------
 (O_T, O_VOLTS, O_AX, O_AY, O_AZ, O_AFRESH, O_PULSES, O_X, O_V, O_S, O_STUCK, O_NC, O_MASS,
- O_Q0, O_Q1, O_Q2, O_FALLEN, O_A) = range(18)
-O_SIZE = 18
+ O_Q0, O_Q1, O_Q2, O_FALLEN, O_A, O_ALAT, O_LOAD, O_FWAT) = range(21)
+O_SIZE = 21
 
 # ---- tactile snapshot rows --------------------------------------------------
 T_ID, T_IDX, T_T, T_NC, T_FT, T_S, T_FALLEN, T_W = range(8)
@@ -334,6 +350,36 @@ def _coulomb_post(F, kt, decay, s, d, x_old, x_new, dt):
     return sn, 0.0, abs(wn)
 
 
+@njit(cache=True, inline="always")
+def slosh_mode(mw, radius, rho, nu, g, damp_factor, phi_jet):
+    """First antisymmetric slosh mode of ``mw`` kg of water in an upright cylinder of ``radius``.
+
+    Returns ``(k tanh(k h), m1, zeta, beta)``: ``omega^2 = g k tanh(k h)`` with
+    ``k = 1.8412 / R`` and fill height ``h``; the slosh mass of the
+    equivalent spring-mass ``m1 = mw 2 tanh(k h) / ((xi^2 - 1) k h)``
+    (Abramson 1966; Dodge 2000); the damping ratio of Stephens et al. (1962)
+    times ``damp_factor`` (at most 1); and ``beta``, the modal force on the
+    slosh mass per newton of vertical force on the surface ``phi_jet = J1(k
+    r_j) / J1(xi)`` of the way out: the mode's elevation at the wall ``q`` and
+    the slosh mass's displacement ``y1`` share the mode's potential energy,
+    ``y1 = q (xi^2 - 1) / (2 xi tanh(k h))``, so ``beta = phi_jet 2 xi tanh(k h)
+    / (xi^2 - 1)``.
+    """
+    h = mw / (rho * np.pi * radius * radius)
+    k = _XI / radius
+    kh = k * h
+    th = np.tanh(kh)
+    m1 = mw * 2.0 * th / ((_XI * _XI - 1.0) * kh) if kh > 1e-9 else mw * 2.0 / (_XI * _XI - 1.0)
+    hr = h / radius
+    zeta = 1.0
+    if kh > 1e-9:
+        zeta = 0.79 * np.sqrt(nu / (np.sqrt(g) * radius ** 1.5)) * (
+            1.0 + 0.318 / np.sinh(_XI * hr) * (1.0 + (1.0 - hr) / np.cosh(_XI * hr))) * damp_factor
+        if zeta > 1.0:
+            zeta = 1.0
+    return k * th, m1, zeta, phi_jet * 2.0 * _XI * th / (_XI * _XI - 1.0)
+
+
 @njit(cache=True)
 def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_end, daq_out, tac_out, ev_out,
                counts):
@@ -355,6 +401,7 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
     nsamp = tac_rates.shape[0]
     key0 = keys[0]
     key1 = keys[1]
+    key5 = keys[5]
     while n < n_end:
         if nev + 3 + D.shape[0] > cap_ev or nd + 2 > cap_daq:
             break
@@ -393,6 +440,27 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
                 mw += W[p, W_RATE_KG_S] * min(t0 - ta, W[p, W_DUR])
                 if t0 - ta < W[p, W_DUR]:
                     fjet += W[p, W_JET_N]
+        # ---- the jet's splash: a one-pole (Ornstein-Uhlenbeck) noise drawn on a fixed 1 ms grid and
+        # interpolated, so it does not depend on dt; the grid (and the slosh mode's coefficients, which
+        # change with the fill) advances only while a jet flows, catching up on its first use
+        fspl = 0.0
+        if fjet > 0.0:
+            gdt = P[P_SPL_DT]
+            advanced = False
+            while (C[C_SPL] + 1) * gdt <= t0:
+                j = C[C_SPL] + 1
+                S[S_SPL0] = S[S_SPL1]
+                S[S_SPL1] = P[P_SPL_RHO] * S[S_SPL1] + P[P_SPL_SIG] * normal(key5, j + 1)
+                C[C_SPL] = j
+                advanced = True
+            fr = t0 * P[P_SPL_INV] - C[C_SPL]
+            fspl = P[P_SPL_RMS] * fjet * (S[S_SPL0] + fr * (S[S_SPL1] - S[S_SPL0]))
+            if advanced or S[S_M1] == 0.0:
+                kth, m1, zeta, beta = slosh_mode(mw, P[P_SLOSH_R], P[P_RHO_W], P[P_NU], g, P[P_DAMPF], P[P_PHIJ])
+                S[S_KTH] = kth
+                S[S_M1] = m1
+                S[S_C1] = 2.0 * zeta * m1 * np.sqrt(kth * g)
+                S[S_BETA] = beta
         x = S[S_X]
         v = S[S_V]
         x_old = x
@@ -424,7 +492,26 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
             fdrop += f
         m = P[P_MB] + mw
         S[S_MASS] = m + mland
-        wload = m * g + fjet + fdrop
+        wload = m * g + fjet + fspl + fdrop
+        S[S_LOAD] = wload
+        # ---- the slosh (sideways): slosh mass m1 on the spring m1 k tanh(k h) (g - a) and damper c1,
+        # tied to the bottle, which the grasp holds sideways; the jet's force drives the mode (equal and
+        # opposite on the bottle: a vertical jet gives the pair no sideways momentum)
+        if S[S_M1] > 0.0 and not fallen:
+            m1 = S[S_M1]
+            du = S[S_V1] - S[S_VB]
+            fs = m1 * S[S_KTH] * (g - S[S_A]) * (S[S_Y1] - S[S_YB]) + S[S_C1] * du
+            fq = S[S_BETA] * (fjet + fspl)
+            S[S_FWAT] = fs - fq
+            ab = (fs - fq - P[P_KLAT] * S[S_YB] - P[P_CLAT] * S[S_VB]) / (m + mland - m1)
+            S[S_V1] += (fq - fs) / m1 * dt
+            S[S_Y1] += S[S_V1] * dt
+            S[S_VB] += ab * dt
+            S[S_YB] += S[S_VB] * dt
+            S[S_ALAT] = ab
+        else:
+            S[S_ALAT] = 0.0
+            S[S_FWAT] = 0.0
         # ---- bottle
         a = 0.0
         if S[S_SUPPORTED] > 0.0:
@@ -522,13 +609,15 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
         S[S_V] = v
         S[S_A] = a
         S[S_AF] += (a - S[S_AF]) * P[P_ACC_ALPHA]
+        S[S_AFL] += (S[S_ALAT] - S[S_AFL]) * P[P_ACC_ALPHA]
         # ---- accelerometer ticks (own ODR)
         while C[C_ACC] * P[P_ACC_T] <= t1 + 1e-12:
             j = C[C_ACC]
             spec = 1.0 - S[S_AF] / g
             lsb = P[P_ACC_LSB]
             rng = P[P_ACC_RANGE]
-            S[S_AX] = _quant_g(P[P_TILT_X] * spec + P[P_ACC_NOISE] * normal(key1, 3 * j), lsb, rng)
+            # the slosh shakes the bottle sideways along the accelerometer's x axis (the jet's offset)
+            S[S_AX] = _quant_g(P[P_TILT_X] * spec + S[S_AFL] / g + P[P_ACC_NOISE] * normal(key1, 3 * j), lsb, rng)
             S[S_AY] = _quant_g(P[P_TILT_Y] * spec + P[P_ACC_NOISE] * normal(key1, 3 * j + 1), lsb, rng)
             S[S_AZ] = _quant_g(P[P_TILT_Z] * spec + P[P_ACC_NOISE] * normal(key1, 3 * j + 2), lsb, rng)
             S[S_AFRESH] = 1.0
@@ -572,6 +661,9 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
             daq_out[nd, O_Q2] = S[S_Q0 + 2]
             daq_out[nd, O_FALLEN] = S[S_FALLEN]
             daq_out[nd, O_A] = a
+            daq_out[nd, O_ALAT] = S[S_ALAT]
+            daq_out[nd, O_LOAD] = wload
+            daq_out[nd, O_FWAT] = S[S_FWAT]
             nd += 1
             C[C_DAQ] = k + 1
         # ---- tactile snapshots

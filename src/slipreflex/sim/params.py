@@ -33,7 +33,15 @@ from .. import hardware as hw
 from ..errors import ParameterError
 from ..validation import positive, set_field
 
-__all__ = ["HandParams", "SlipSensorParams", "ImuParams", "TactileParams", "FlowParams", "PhysicsParams"]
+__all__ = ["HandParams", "SlipSensorParams", "ImuParams", "TactileParams", "FlowParams", "PhysicsParams", "WaterParams",
+           "WATER_KINEMATIC_VISCOSITY", "SLOSH_ROOT"]
+
+
+#: Kinematic viscosity of water at 20 C (m^2/s): 1.004e-6 (CRC Handbook of Chemistry and Physics).
+WATER_KINEMATIC_VISCOSITY: float = 1.004e-6
+#: First zero of J1' (Abramowitz & Stegun, table 9.5): the first antisymmetric slosh mode of an
+#: upright cylinder of radius R has the wave number 1.8412 / R (Ibrahim 2005, Liquid Sloshing Dynamics, ch. 2).
+SLOSH_ROOT: float = 1.8411837813406593
 
 
 def _validate(obj: object, zero_ok: tuple[str, ...] = ()) -> None:
@@ -343,3 +351,70 @@ class PhysicsParams:
         _validate(self)
         if self.dt > 1e-3:
             raise ParameterError(f"PhysicsParams.dt must be <= 0.001, got {self.dt!r}")
+
+
+@dataclass(frozen=True, slots=True)
+class WaterParams:
+    """What the poured water does to the bottle besides its weight: the jet's splash and the slosh.
+
+    The jet's mean momentum flux ``rho Q v`` (``Pour``) is a steady push; a jet
+    plunging into water does not push steadily. Its impact force fluctuates
+    (``splash_rms``, ``splash_corner_hz``), along the bottle's axis. Landing
+    ``jet_offset_m`` off the axis, the jet also drives the first antisymmetric
+    slosh mode of the water column (wave number ``1.8412 / R``, frequency
+    ``sqrt(g k tanh(k h)) / 2 pi`` at fill height ``h``), whose sideways
+    reaction shakes the bottle in the fingers and reaches the accelerometer's
+    x axis. The slosh is the equivalent spring-mass of the mode (slosh mass
+    ``m1 = m_water 2 tanh(k h) / ((1.8412^2 - 1) k h)``; Abramson 1966, NASA
+    SP-106; Dodge 2000, SwRI), lightly damped (Stephens et al. 1962, NASA TN
+    D-1367: ``zeta = 0.79 sqrt(nu / (g^0.5 R^1.5)) [1 + 0.318 / sinh(1.84 h / R)
+    (1 + (1 - h / R) / cosh(1.84 h / R))]``, about 0.6 % in this bottle), its
+    stiffness scaled by the effective gravity ``g - a`` (the bottle's own axial
+    acceleration, parametric) and its base moved by the bottle's sideways
+    motion. See docs/simulator.md for the derivation of the jet's modal force.
+
+    Parameters
+    ----------
+    splash_rms : float
+        RMS of the impact force's fluctuation relative to the mean momentum
+        flux ``rho Q v``. Estimate 0.2: plunge-pool floor pressures under a
+        plunging water jet fluctuate with an rms of 5-30 % of the jet's
+        dynamic pressure (Ervine, Falvey & Withers 1997, J. Hydraul. Res.
+        35(2)); range 0.05-0.5.
+    splash_corner_hz : float
+        Corner (Hz) of the fluctuation's one-pole (Lorentzian) spectrum.
+        Estimate 30 Hz: a 4 mm jet at 1.4 m/s carries surface disturbances of
+        about Rayleigh's wavelength (4.5 d), 18 mm, i.e. ~80 Hz, and the
+        plunging cavity's air pockets break up more slowly; range 10-200 Hz.
+    jet_offset_m : float
+        Distance (m) from the bottle's axis at which the jet lands. Estimate
+        5 mm: a hand-held tube pours through a ~22 mm neck (28 mm PCO
+        finish); range 0-10 mm. Zero leaves the slosh unexcited by the jet.
+    slosh_damping_factor : float
+        Multiplier on the smooth-wall damping of Stephens et al. (1962):
+        estimate 1; range 0.7-3 (the formula's scatter, and the extra
+        contact-line dissipation of small containers).
+
+    Examples
+    --------
+    >>> WaterParams().splash_rms
+    0.2
+    >>> WaterParams(jet_offset_m=0.05)
+    Traceback (most recent call last):
+    ...
+    slipreflex.errors.ParameterError: WaterParams.jet_offset_m must be <= 0.02 m (inside a bottle's neck), got 0.05
+    """
+
+    splash_rms: float = 0.2
+    splash_corner_hz: float = 30.0
+    jet_offset_m: float = 5e-3
+    slosh_damping_factor: float = 1.0
+
+    def __post_init__(self) -> None:
+        _validate(self, zero_ok=("splash_rms", "jet_offset_m"))
+        if self.jet_offset_m > 0.02:
+            raise ParameterError(f"WaterParams.jet_offset_m must be <= 0.02 m (inside a bottle's neck), "
+                                 f"got {self.jet_offset_m!r}")
+        if self.splash_corner_hz > 400.0:
+            raise ParameterError(f"WaterParams.splash_corner_hz must be <= 400 Hz (the splash noise is drawn "
+                                 f"every 1 ms), got {self.splash_corner_hz!r}")

@@ -57,13 +57,15 @@ from ..interfaces import DaqSample, GraspResult
 from . import kernel as K
 from .contacts import fill_contact_params
 from .objects import BOTTLES, WATER_DENSITY, Bottle, Drop, Pour, Surface
-from .params import FlowParams, HandParams, ImuParams, PhysicsParams, SlipSensorParams, TactileParams
+from .params import (SLOSH_ROOT, WATER_KINEMATIC_VISCOSITY, FlowParams, HandParams, ImuParams, PhysicsParams, SlipSensorParams,
+                     TactileParams, WaterParams)
 from .sensors import Track
 
 __all__ = ["Rig", "SimHand", "TactileSampler", "GraspResult", "DaqBlock", "SlipEvent", "KernelArrays",
            "seed_sequence", "fill_slip_sensor_params"]
 
 _CHUNK_S = 0.25  # longest stretch one kernel call covers (bounds the buffers)
+_SPLASH_GRID_S = 1e-3  # the splash noise is drawn every 1 ms (independent of dt) and interpolated
 _ROUND = 1e-9
 
 
@@ -124,6 +126,15 @@ class DaqBlock:
         Finger positions (thumb, index, middle), i-Limb units.
     accel_true : ndarray
         Truth: bottle acceleration (m/s^2, down positive).
+    accel_lateral : ndarray
+        Truth: the bottle's sideways acceleration (m/s^2) from the water's slosh,
+        along the accelerometer's x axis.
+    load_force : ndarray
+        Truth: the axial load on the grasp (N): weight of bottle and water, the
+        jet's push and splash, a landing mass's contact force.
+    water_force_lateral : ndarray
+        Truth: the water's sideways force on the bottle (N): the slosh and the
+        jet's drive of it (see :class:`~slipreflex.sim.params.WaterParams`).
 
     Examples
     --------
@@ -148,6 +159,9 @@ class DaqBlock:
     load_mass: np.ndarray
     fingers: np.ndarray
     accel_true: np.ndarray
+    accel_lateral: np.ndarray
+    load_force: np.ndarray
+    water_force_lateral: np.ndarray
 
     @classmethod
     def from_rows(cls, rows: np.ndarray, seq0: int) -> "DaqBlock":
@@ -156,7 +170,7 @@ class DaqBlock:
         Examples
         --------
         >>> import numpy as np
-        >>> DaqBlock.from_rows(np.zeros((0, 18)), 0).t.size
+        >>> DaqBlock.from_rows(np.zeros((0, K.O_SIZE)), 0).t.size
         0
         """
         n = rows.shape[0]
@@ -167,7 +181,8 @@ class DaqBlock:
             displacement=rows[:, K.O_X].copy(), velocity=rows[:, K.O_V].copy(), slip=rows[:, K.O_S].copy(),
             stuck=rows[:, K.O_STUCK] > 0, fallen=rows[:, K.O_FALLEN] > 0, normal_force=rows[:, K.O_NC].copy(),
             load_mass=rows[:, K.O_MASS].copy(), fingers=rows[:, K.O_Q0:K.O_Q2 + 1].copy(),
-            accel_true=rows[:, K.O_A].copy())
+            accel_true=rows[:, K.O_A].copy(), accel_lateral=rows[:, K.O_ALAT].copy(),
+            load_force=rows[:, K.O_LOAD].copy(), water_force_lateral=rows[:, K.O_FWAT].copy())
 
     def samples(self) -> list[DaqSample]:
         """The block as :class:`~slipreflex.interfaces.DaqSample` objects.
@@ -627,7 +642,7 @@ class Rig:
     seed : int, SeedSequence or Generator, optional
         Seeds the surface texture and every noise stream (default 0). Same
         seed, bit-identical traces.
-    hand, slip_sensor, imu, tactile, flow, physics : parameter dataclasses, optional
+    hand, slip_sensor, imu, tactile, flow, physics, water : parameter dataclasses, optional
         See :mod:`slipreflex.sim.params`.
     history : bool
         Keep every DAQ row for :meth:`daq_history` (needed by
@@ -647,7 +662,8 @@ class Rig:
     def __init__(self, bottle: Bottle | str = "TR", seed: int | np.random.SeedSequence | np.random.Generator
                  | None = 0, *, hand: HandParams | None = None, slip_sensor: SlipSensorParams | None = None,
                  imu: ImuParams | None = None, tactile: TactileParams | None = None, flow: FlowParams | None = None,
-                 physics: PhysicsParams | None = None, history: bool = True) -> None:
+                 physics: PhysicsParams | None = None, water: WaterParams | None = None,
+                 history: bool = True) -> None:
         if isinstance(bottle, str):
             if bottle not in BOTTLES:
                 raise ParameterError(f"bottle: unknown bottle {bottle!r} (known: {', '.join(BOTTLES)})")
@@ -661,6 +677,10 @@ class Rig:
         self.tactile_params = tactile or TactileParams()
         self.flow = flow or FlowParams()
         self.physics = physics or PhysicsParams()
+        self.water = water or WaterParams()
+        if self.water.jet_offset_m >= bottle.diameter_m / 2.0:
+            raise ParameterError(f"WaterParams.jet_offset_m {self.water.jet_offset_m!r} m must be inside bottle "
+                                 f"{bottle.name}'s radius {bottle.diameter_m / 2.0!r} m")
         ss = seed_sequence(seed)
         self.seed = ss
         tex_ss, key_ss, flow_ss = ss.spawn(3)
@@ -683,6 +703,10 @@ class Rig:
         self._S[K.S_MASS] = bottle.mass_kg
         self._S[K.S_SPD0:K.S_SPD0 + 3] = self.hand_params.speed_units_s
         self._S[K.S_TFALL] = np.nan
+        # the splash noise starts stationary on its 1 ms grid (stream keys[5])
+        self._S[K.S_SPL0] = K.normal(self._keys[5], 0)
+        P = self._P
+        self._S[K.S_SPL1] = P[K.P_SPL_RHO] * self._S[K.S_SPL0] + P[K.P_SPL_SIG] * K.normal(self._keys[5], 1)
         self._C = np.zeros(K.C_SIZE, dtype=np.int64)
         self._D = np.zeros((0, K.D_SIZE))
         self._W = np.zeros((0, K.W_SIZE))
@@ -731,7 +755,31 @@ class Rig:
         fill_slip_sensor_params(P, s, self.track)
         P[K.P_FLOW_K] = flow_k
         P[K.P_FLOW_PHASE] = flow_phase
+        self._water_params(P)
         return P
+
+    def _water_params(self, P: np.ndarray) -> None:
+        """The water's splash and slosh constants (:class:`WaterParams`) and the grasp's sideways stiffness."""
+        from scipy.special import j1
+
+        w, r = self.water, self.bottle.diameter_m / 2.0
+        P[K.P_SPL_RMS] = w.splash_rms
+        P[K.P_SPL_DT] = _SPLASH_GRID_S
+        P[K.P_SPL_INV] = 1.0 / _SPLASH_GRID_S
+        rho = math.exp(-2.0 * math.pi * w.splash_corner_hz * _SPLASH_GRID_S)
+        P[K.P_SPL_RHO] = rho
+        P[K.P_SPL_SIG] = math.sqrt(1.0 - rho * rho)
+        P[K.P_SLOSH_R] = r
+        P[K.P_NU] = WATER_KINEMATIC_VISCOSITY
+        P[K.P_DAMPF] = w.slosh_damping_factor
+        P[K.P_PHIJ] = float(j1(SLOSH_ROOT * w.jet_offset_m / r) / j1(SLOSH_ROOT))
+        P[K.P_RHO_W] = WATER_DENSITY
+        # sideways, three contacts 120 degrees apart: their normal stiffness (k_n, mean cos^2 = 1/2) and
+        # their shear stiffness along the circumference (mean sin^2 = 1/2)
+        kt = sum(P[K.P_C0 + i * K.PC_SIZE + K.PC_KT] for i in range(3))
+        ct = sum(P[K.P_C0 + i * K.PC_SIZE + K.PC_CT] for i in range(3))
+        P[K.P_KLAT] = 1.5 * P[K.P_KN] + 0.5 * kt
+        P[K.P_CLAT] = 0.5 * ct
 
     # ------------------------------------------------------------------ time
     @property

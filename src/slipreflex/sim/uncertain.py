@@ -18,7 +18,7 @@ that they agree, so the table cannot drift from the model.
 
 How a constant maps onto the plant (``targets``): ``"hand.latency_s"`` sets a
 field of a parameter object (``hand``, ``slip_sensor``, ``imu``,
-``tactile``, ``flow``, ``physics``); ``"bottle.wall_stiffness_n_m"`` sets a
+``tactile``, ``flow``, ``physics``, ``water``); ``"bottle.wall_stiffness_n_m"`` sets a
 field of every paper bottle; ``"bottle[TR,DK].mu_s"`` only of those;
 ``"bottle.mu_k/mu_s"`` sets ``mu_k`` to the value times the bottle's
 (new) ``mu_s``; ``"calibration.first_slip_ml"`` is the open-loop target of
@@ -48,7 +48,7 @@ from typing import Any, Mapping
 
 from ..errors import ParameterError
 from .objects import BOTTLES, Bottle
-from .params import FlowParams, HandParams, ImuParams, PhysicsParams, SlipSensorParams, TactileParams
+from .params import FlowParams, HandParams, ImuParams, PhysicsParams, SlipSensorParams, TactileParams, WaterParams
 
 __all__ = ["UncertainConstant", "UNCERTAIN", "Plant", "plant_from_values", "load_ranges", "nominal_values",
            "DISTRIBUTIONS", "markdown_table"]
@@ -57,7 +57,7 @@ __all__ = ["UncertainConstant", "UNCERTAIN", "Plant", "plant_from_values", "load
 #: constants known to within a factor, such as stiffnesses and speeds).
 DISTRIBUTIONS: tuple[str, ...] = ("uniform", "loguniform")
 
-_SECTIONS = ("hand", "slip_sensor", "imu", "tactile", "flow", "physics")
+_SECTIONS = ("hand", "slip_sensor", "imu", "tactile", "flow", "physics", "water")
 
 
 @dataclass(frozen=True, slots=True)
@@ -148,6 +148,7 @@ _B = BOTTLES
 _H = HandParams()
 _T = TactileParams()
 _S = SlipSensorParams()
+_W = WaterParams()
 
 #: The table: every uncertain plant constant, by name. Nominal values are read from the
 #: parameter defaults (one definition); ranges and sources are documented in docs/simulator.md.
@@ -220,6 +221,18 @@ UNCERTAIN: Mapping[str, UncertainConstant] = MappingProxyType({c.name: c for c i
        "tactile.gain_sd"),
     _c("slip_sensor_noise", "V", _S.noise_v, 0.5e-3, 3e-3, "uniform",
        "paper: noise below the 2-LSB threshold; the value is an estimate", "slip_sensor.noise_v"),
+    _c("splash_rms", "1", _W.splash_rms, 0.05, 0.5, "uniform",
+       "estimate: plunge-pool floor pressures under a plunging water jet fluctuate by 5-30 % of its dynamic "
+       "pressure (Ervine, Falvey & Withers 1997); relative to the jet's momentum flux", "water.splash_rms"),
+    _c("splash_corner", "Hz", _W.splash_corner_hz, 10.0, 200.0, "loguniform",
+       "estimate: a 4 mm jet at 1.4 m/s carries disturbances of ~Rayleigh's wavelength (~80 Hz); the plunging "
+       "cavity's air pockets break up more slowly", "water.splash_corner_hz"),
+    _c("jet_offset", "m", _W.jet_offset_m, 0.0, 0.01, "uniform",
+       "estimate: a hand-held tube pours through the ~22 mm neck of a 28 mm PCO finish",
+       "water.jet_offset_m"),
+    _c("slosh_damping_factor", "1", _W.slosh_damping_factor, 0.7, 3.0, "loguniform",
+       "smooth-wall slosh damping of Stephens et al. 1962 (NASA TN D-1367), times 0.7-3: its scatter and the "
+       "contact-line dissipation of small containers (estimate)", "water.slosh_damping_factor"),
 )})
 
 
@@ -256,7 +269,7 @@ class Plant:
 
     Attributes
     ----------
-    hand, slip_sensor, imu, tactile, flow, physics : parameter dataclasses
+    hand, slip_sensor, imu, tactile, flow, physics, water : parameter dataclasses
     bottles : mapping of str to Bottle
         The paper's bottles with this plant's friction and wall.
     values : mapping of str to float
@@ -274,6 +287,7 @@ class Plant:
     tactile: TactileParams = field(default_factory=TactileParams)
     flow: FlowParams = field(default_factory=FlowParams)
     physics: PhysicsParams = field(default_factory=PhysicsParams)
+    water: WaterParams = field(default_factory=WaterParams)
     bottles: Mapping[str, Bottle] = field(default_factory=lambda: dict(BOTTLES))
     values: Mapping[str, float] = field(default_factory=nominal_values)
     first_slip_ml: float = 200.0
@@ -302,7 +316,7 @@ class Plant:
         Examples
         --------
         >>> sorted(Plant().rig_kwargs())
-        ['flow', 'hand', 'imu', 'physics', 'slip_sensor', 'tactile']
+        ['flow', 'hand', 'imu', 'physics', 'slip_sensor', 'tactile', 'water']
         """
         return {s: getattr(self, s) for s in _SECTIONS}
 
@@ -387,7 +401,7 @@ def plant_from_values(values: Mapping[str, float] | None = None, *,
         base = bottle_set[b].get(ratio_of, getattr(BOTTLES[b], ratio_of))
         bottle_set[b][fld] = val * base
     defaults = {"hand": HandParams, "slip_sensor": SlipSensorParams, "imu": ImuParams,
-                "tactile": TactileParams, "flow": FlowParams, "physics": PhysicsParams}
+                "tactile": TactileParams, "flow": FlowParams, "physics": PhysicsParams, "water": WaterParams}
     built: dict[str, Any] = dict(sections.pop("calibration"))
     for s, kw in sections.items():
         try:
