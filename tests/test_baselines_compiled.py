@@ -28,8 +28,9 @@ def _coefficients(S, P, frames, out):
     """SWT-SD's per-taxel coefficient after each frame, read from the state the step keeps."""
     for k in range(frames.shape[0]):
         K.tactile_step(S, P, frames[k], np.nan)
+        coef = L.S_ARRAYS + (int(P[L.P_WINDOW]) + 1) * frames.shape[1]     # layout: ring, run, c_k
         for t in range(frames.shape[1]):
-            out[k, t] = K.swt_coefficient(S, P, int(S[L.S_RING]), t)
+            out[k, t] = S[coef + t]
 
 
 def _frames(fs, shape, seed, nan_every=0):

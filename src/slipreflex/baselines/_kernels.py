@@ -79,40 +79,40 @@ def _nmsd_detect(S, P, frame):
 
 
 @njit(cache=True, inline="always")
-def swt_coefficient(S, P, oldest, t):
-    """SWT-SD's statistic of taxel ``t``: the window weights applied oldest first, added in order."""
-    taxels = int(P[P_TAXELS])
-    w = int(P[P_WINDOW])
-    c = P[P_WEIGHTS] * S[S_ARRAYS + oldest * taxels + t]
-    row = oldest
-    for j in range(1, w):
-        row = row + 1 if row + 1 < w else 0
-        c += P[P_WEIGHTS + j] * S[S_ARRAYS + row * taxels + t]
-    return c
-
-
-@njit(cache=True, inline="always")
 def _swt_detect(S, P, frame):
-    """SWT-SD on one flat frame: (largest |c_k|, some taxel over threshold for persist + 1 frames)."""
+    """SWT-SD on one flat frame: (largest |c_k|, some taxel over threshold for persist + 1 frames).
+
+    The coefficients ``c_k`` are the window weights applied to the ring oldest
+    first, row by row (each taxel's sum in the batch function's order), kept in
+    ``S``; they stay 0 until the window is full.
+    """
     taxels = int(P[P_TAXELS])
     w = int(P[P_WINDOW])
-    slot = int(S[S_RING])
-    for t in range(taxels):
-        S[S_ARRAYS + slot * taxels + t] = frame[t]
-    oldest = (slot + 1) % w
-    S[S_RING] = oldest
-    full = S[S_FRAMES] + 1.0 >= w
     run = S_ARRAYS + w * taxels
+    coef = run + taxels
+    slot = int(S[S_RING])
+    base = S_ARRAYS + slot * taxels
+    for t in range(taxels):
+        S[base + t] = frame[t]
+    row = slot + 1 if slot + 1 < w else 0
+    S[S_RING] = row
+    if S[S_FRAMES] + 1.0 >= w:
+        base = S_ARRAYS + row * taxels
+        for t in range(taxels):
+            S[coef + t] = P[P_WEIGHTS] * S[base + t]
+        for j in range(1, w):
+            row = row + 1 if row + 1 < w else 0
+            base = S_ARRAYS + row * taxels
+            weight = P[P_WEIGHTS + j]
+            for t in range(taxels):
+                S[coef + t] += weight * S[base + t]
     stat = 0.0
     level = False
     for t in range(taxels):
-        over = False
-        if full:
-            a = abs(swt_coefficient(S, P, oldest, t))
-            if a > stat:
-                stat = a
-            over = a > P[P_THRESHOLD]
-        r = S[run + t] + 1.0 if over else 0.0
+        a = abs(S[coef + t])
+        if a > stat:
+            stat = a
+        r = S[run + t] + 1.0 if a > P[P_THRESHOLD] else 0.0
         S[run + t] = r
         if r > P[P_PERSIST]:
             level = True

@@ -15,7 +15,7 @@ Examples
 >>> from slipreflex.baselines import SWTParams
 >>> P = pack_params(SWTParams(threshold=0.1, speed=380.0, p0=120.0), KIND_SWT, True, np.ones(8))
 >>> S = init_state(P)
->>> int(P[P_TAXELS]), int(P[P_SPC]), float(S[S_TARGET]), S.size == S_ARRAYS + 9 * 16
+>>> int(P[P_TAXELS]), int(P[P_SPC]), float(S[S_TARGET]), S.size == S_ARRAYS + 10 * 16
 (16, 17, 120.0, True)
 """
 
@@ -46,7 +46,8 @@ __all__ = ["pack_closing", "pack_params", "init_state"]
 #                 samples still to run, closing samples run, quanta started, samples into the episode
 #   S_RING        SWT-SD: ring slot the next frame goes to
 #   then from S_ARRAYS: NMSD the previous frame (T) and the previous derivative (T);
-#                       SWT-SD the window ring (W rows of T) and each taxel's over-threshold run (T).
+#                       SWT-SD the window ring (W rows of T), each taxel's over-threshold run (T)
+#                       and each taxel's last coefficient c_k (T; 0 until the window is full).
 
 (P_KIND, P_TAXELS, P_THRESHOLD, P_FS, P_PERSIST, P_HOLD, P_SPC, P_STEP, P_LO, P_HI, P_TARGET0,
  P_WINDOW, P_WEIGHTS) = range(13)
@@ -86,7 +87,7 @@ def pack_params(params, kind: float, hold: bool, weights: np.ndarray) -> np.ndar
 def init_state(P: np.ndarray) -> np.ndarray:
     """The initial state ``S`` for the parameter vector ``P`` (what ``reset`` restores)."""
     taxels = int(P[P_TAXELS])
-    rows = int(P[P_WINDOW]) + 1 if P[P_KIND] == KIND_SWT else 2 if P[P_KIND] == KIND_NMSD else 0
+    rows = int(P[P_WINDOW]) + 2 if P[P_KIND] == KIND_SWT else 2 if P[P_KIND] == KIND_NMSD else 0
     S = np.zeros(S_ARRAYS + rows * taxels)
     S[S_TARGET] = P[P_TARGET0]
     return S
