@@ -108,3 +108,19 @@ def test_parallel_and_serial_runs_give_the_same_rows():
             x, y = ra[k], rb[k]
             assert x == y or (isinstance(x, float) and np.isnan(x) and np.isnan(y)), k
     assert a.thresholds == b.thresholds
+
+
+def test_a_trial_from_a_kept_grasp_equals_one_from_its_own_grasp():
+    """The methods of a paired trial start from copies of one grasp: the same bits as their own."""
+    from slipreflex.experiments import Cell, ReproduceConfig, run_trial, trial_seed
+    from slipreflex.sim import variations
+
+    cfg = ReproduceConfig(trials=1)
+    cell = Cell("pour", "DK", "dath", 0, trial_seed(cfg.seed, "pour", "DK", 0))
+    variations._GRASPED.clear()
+    cold = run_trial(cell, cfg, {})[0]
+    assert len(variations._GRASPED) == 1
+    warm = run_trial(cell, cfg, {})[0]           # from a copy of the kept grasp, which must be untouched
+    assert [repr(r) for r in warm] == [repr(r) for r in cold]
+    other = run_trial(Cell("pour", "DK", "fixed", 0, cell.seed), cfg, {})[0]
+    assert len(variations._GRASPED) == 1 and other[0].grasp_position == cold[0].grasp_position

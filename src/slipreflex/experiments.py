@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import itertools
 import math
 import os
 import time
@@ -348,6 +349,13 @@ def method_context(config: ReproduceConfig, thresholds: dict[str, float]) -> met
                                  options={"swt_persist": config.swt_persist})
 
 
+def _run_paired(cells: tuple[Cell, ...], config: ReproduceConfig, thresholds: dict[str, float],
+                keep_plot: frozenset, specs: dict[str, methods.MethodSpec]) -> dict[Cell, tuple]:
+    """run_trial for the methods of one trial seed, in one process (so one grasp, copied)."""
+    return {c: run_trial(c, config, thresholds, keep_plot=c.key in keep_plot, spec=specs[c.method])
+            for c in cells}
+
+
 def run_trial(cell: Cell, config: ReproduceConfig, thresholds: dict[str, float], *,
               keep_plot: bool = False, spec: methods.MethodSpec | None = None):
     """Run and analyse one trial: grasp, rest, perturb, closed loop, metrics.
@@ -372,13 +380,13 @@ def run_trial(cell: Cell, config: ReproduceConfig, thresholds: dict[str, float],
     from .analysis.trial import TrialStreams, analyse_trial
     from .hardware import SLIP_FINGER
     from .sim import run_closed_loop
-    from .sim.variations import VariationSpread, trial_rig
+
+    from .sim.variations import VariationSpread, grasped_rig
 
     plant = {} if config.plant is None else {"rig_kwargs": config.plant.rig_kwargs(),
                                              "bottles": dict(config.plant.bottles)}
-    rig = trial_rig(cell.bottle, cell.seed, spread=None if config.variations else VariationSpread.none(),
-                    **plant)
-    grasp = rig.grasp(config.grasp_force_n)
+    rig, grasp = grasped_rig(cell.bottle, cell.seed, config.grasp_force_n,
+                             spread=None if config.variations else VariationSpread.none(), **plant)
     p0 = float(round(grasp.positions[SLIP_FINGER]))
     spec = spec or methods.get(cell.method)
     reflex = spec.build(p0, dataclasses.replace(method_context(config, thresholds), method=spec.name))
@@ -468,14 +476,25 @@ def run_reproduce(config: ReproduceConfig | None = None, *, jobs: int | None = N
     cells = config.cells()
     plot_method = methods.DATH if methods.DATH in config.methods else config.methods[0]
     want = {c.key for c in cells if plots and c.trial == 0 and c.method == plot_method}
-    calls = {c: functools.partial(run_trial, c, config, thresholds, keep_plot=c.key in want,
-                                  spec=specs[c.method]) for c in cells}
-    done: dict[Cell, tuple] = {}
+    # the methods of one trial seed (consecutive cells) run in one call and share its grasp
+    groups = [tuple(g) for _, g in itertools.groupby(cells, lambda c: (c.experiment, c.bottle, c.trial, c.seed))]
+    calls = {g: functools.partial(_run_paired, g, config, thresholds, frozenset(want), specs) for g in groups}
+    done: dict[tuple, dict] = {}
+
+    def finished(group: tuple) -> None:
+        bar.update(len(group))
+        for c in group if on_done else ():
+            on_done(c)
+
     with Progress(len(cells), desc="trials", unit="trial", enabled=progress) as bar:
         try:
-            run_cells(calls, jobs, lambda c: (bar.update(), on_done and on_done(c)), done)
+            run_cells(calls, jobs, finished, done)
         except KeyboardInterrupt:
-            partial = grid_result(config, cells, done, thresholds, t0, jobs, t_cal)
+            partial = grid_result(config, cells, _by_cell(done), thresholds, t0, jobs, t_cal)
             raise Interrupted(partial, partial.partial_note) from None
-    return grid_result(config, cells, done, thresholds, t0, jobs, t_cal)
+    return grid_result(config, cells, _by_cell(done), thresholds, t0, jobs, t_cal)
+
+
+def _by_cell(done: dict[tuple, dict]) -> dict[Cell, tuple]:
+    return {c: r for results in done.values() for c, r in results.items()}
 
