@@ -299,10 +299,9 @@ def _seed63(ss: np.random.SeedSequence) -> int:
 
 #: Simulated seconds per wall second of one trial (simulation, reflex, analysis) on one
 #: worker, for the run-time estimate printed before a reproduction starts.
-#: ``python benchmarks/bench_reproduce.py --jobs 2`` prints it as simulated s per CPU s
-#: (514 and 562 for the default grid's 4200 simulated s with the compiled closed loop, on
-#: the development machine, an AMD EPYC core, at load average 2.9-3.8); 450 leaves a margin.
-#: A busy machine runs slower, and the progress lines say so.
+#: ``python benchmarks/bench_reproduce.py --jobs 2`` prints it as simulated s per CPU s (514, 562
+#: for the default grid with the compiled closed loop, an AMD EPYC core, load average 2.9-3.8);
+#: 450 leaves a margin. A busy machine runs slower, and the progress lines say so.
 TRIAL_SIM_SPEED: float = 450.0
 #: Wall seconds before the first trial: imports, threshold calibration, worker start.
 STARTUP_S: float = 3.0
