@@ -466,8 +466,8 @@ def run_reproduce(config: ReproduceConfig | None = None, *, jobs: int | None = N
     if jobs < 1:
         raise ParameterError(f"jobs must be >= 1, got {jobs}")
     t0 = time.perf_counter()
+    import scipy.signal  # noqa: F401  (once, here: forked workers inherit it; each took ~1 s to import it)
     from .sim.calibration import check_grasp
-
     for b in config.bottles:                    # a grasp that cannot hold a bottle fails here, at once
         check_grasp(config.bottle(b), config.grasp_force_n)
     thresholds = calibrate(config) if set(config.methods) & set(methods.calibrated()) else {}

@@ -46,6 +46,7 @@ Examples
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -479,10 +480,16 @@ def judge_run(rows: Sequence[Any], *, seed: int = 0, plant: Any = None) -> list[
     >>> [r.verdict for r in judge_run([], seed=0)][2]
     'not testable here'
     """
+    sensor = None if plant is None else plant.slip_sensor
+    return judge(rows, _scan_analysis(seed, sensor))
+
+
+@functools.lru_cache(maxsize=4)
+def _scan_analysis(seed: int, sensor: Any):
+    """The analysed characterization scan of a run (kept: the report and the terminal both judge it)."""
     from ..sim import scan
 
-    sensor = None if plant is None else plant.slip_sensor
-    return judge(rows, scan(seed=seed, sensor=sensor).analyse())
+    return scan(seed=seed, sensor=sensor).analyse()
 
 
 def claims_section(results: Sequence[ClaimResult], items: Sequence[Contradiction] | None = None, *,

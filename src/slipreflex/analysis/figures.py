@@ -126,7 +126,7 @@ def plot_trial(p: TrialPlot, path: str | Path) -> Path:
         ax = axes.pop(0)
         ax.plot(p.load_t, p.load, color="tab:cyan", lw=1)
         ax.set_ylabel(p.load_label, fontsize=8)
-        ax.set_title(f"{next(letters)}) {p.load_label}", loc="left", fontsize=8)
+        ax.set_title(f"{next(letters)}) {p.load_label}", loc="left", fontsize=8, y=1.0)
     ax_acc, ax_sen, ax_ev, ax_cmd = axes
     ax_acc.plot(p.accel_t, p.accel, color="0.4", lw=0.6, label="raw")
     if p.envelope is not None:
@@ -138,19 +138,19 @@ def plot_trial(p: TrialPlot, path: str | Path) -> Path:
         ax2.tick_params(labelsize=7)
         every.append(ax2)
     ax_acc.set_ylabel("g", fontsize=8)
-    ax_acc.set_title(f"{next(letters)}) {p.accel_label}", loc="left", fontsize=8)
+    ax_acc.set_title(f"{next(letters)}) {p.accel_label}", loc="left", fontsize=8, y=1.0)
     if p.sensor is not None:
         ax_sen.plot(p.sensor_t, p.sensor, color="tab:blue", lw=0.8)
-    ax_sen.set_title(f"{next(letters)}) {p.sensor_label}", loc="left", fontsize=8)
+    ax_sen.set_title(f"{next(letters)}) {p.sensor_label}", loc="left", fontsize=8, y=1.0)
     ev = np.asarray([] if p.event_t is None else p.event_t, dtype=float)
     if ev.size:
         ax_ev.vlines(ev, 0, 1, color="k", lw=0.7)
     ax_ev.set_yticks([])
-    ax_ev.set_title(f"{next(letters)}) {p.event_label} ({ev.size})", loc="left", fontsize=8)
+    ax_ev.set_title(f"{next(letters)}) {p.event_label} ({ev.size})", loc="left", fontsize=8, y=1.0)
     if p.cmd_t is not None and len(p.cmd_t):
         ax_cmd.step(p.cmd_t, p.cmd_v, where="post", color="tab:green", lw=1.0)
     ax_cmd.set_ylabel("position", fontsize=8)
-    ax_cmd.set_title(f"{next(letters)}) commanded finger position", loc="left", fontsize=8)
+    ax_cmd.set_title(f"{next(letters)}) commanded finger position", loc="left", fontsize=8, y=1.0)
     ax_cmd.set_xlabel("time (s)")
     for ax in (ax_acc, ax_sen, ax_ev, ax_cmd):
         _mark(ax, p.onsets, "tab:red", "I onset" if ax is ax_acc else None)
@@ -177,7 +177,7 @@ def plot_trial(p: TrialPlot, path: str | Path) -> Path:
 def _stack_layout(fig, n: int, title_lines: int) -> None:
     """Margins of ``n`` stacked panels in inches (tight_layout would measure every label: slow)."""
     w, h = fig.get_figwidth(), fig.get_figheight()
-    top = 0.2 + 0.17 * title_lines
+    top = 0.42 + 0.15 * title_lines            # the suptitle's lines, then the first panel's title
     fig.subplots_adjust(left=0.75 / w, right=1 - 0.62 / w, top=1 - top / h, bottom=0.72 / h,
                         hspace=0.3 / ((h - top - 0.72) / n - 0.3))
 
