@@ -340,7 +340,7 @@ class _Buffers:
     def grow(self) -> None:
         """Double every buffer (their filled parts kept)."""
         for name, a in vars(self).items():
-            b = np.zeros((2 * a.shape[0] + 16,) + a.shape[1:], dtype=a.dtype)
+            b = np.empty((2 * a.shape[0] + 16,) + a.shape[1:], dtype=a.dtype)
             b[:a.shape[0]] = a
             setattr(self, name, b)
 
@@ -442,9 +442,9 @@ def run_compiled(rig, reflex, t_end: float, fingers: tuple[Finger, ...], sampler
     cmd_off = np.array([0.0 if off is None else off for _, off in split])
     cmd_clip = np.array([off is not None for _, off in split], dtype=np.int64)
     n_tac = int(sum(span * fs + 4 for fs in A.tac_rates))
-    buf = _Buffers(daq=np.zeros((int(span * hw.DAQ_FS) + 16, K.O_SIZE)), ev=np.zeros((4096, 3)),
-                   tac=np.zeros((n_tac + 16, K.T_SIZE)), cmd_t=np.zeros(n_in), cmd_v=np.zeros(n_in),
-                   q_i=q_i, q_v=q_v, frames=np.zeros((n_in if sampler is not None else 0,) + hw.TACTILE_SHAPE))
+    buf = _Buffers(daq=np.empty((int(span * hw.DAQ_FS) + 16, K.O_SIZE)), ev=np.empty((4096, 3)),
+                   tac=np.empty((n_tac + 16, K.T_SIZE)), cmd_t=np.empty(n_in), cmd_v=np.empty(n_in),
+                   q_i=q_i, q_v=q_v, frames=np.empty((n_in if sampler is not None else 0,) + hw.TACTILE_SHAPE))
     cnt = np.zeros(N_SIZE, dtype=np.int64)
     cnt[N_QLEN], cnt[N_COUNT], cnt[N_POSPTR] = q_len, count, -1
     cfg = _cfg(rig, t_end, sampler)
@@ -471,8 +471,8 @@ def run_compiled(rig, reflex, t_end: float, fingers: tuple[Finger, ...], sampler
     pending = [(int(s), int(c), HandCommand(int(k)), groups[int(g)], float(v))
                for (s, c, k, g), v in zip(buf.q_i[cnt[N_QHEAD]:cnt[N_QLEN]], buf.q_v[cnt[N_QHEAD]:cnt[N_QLEN]])]
     rig.hand.restore_queue(pending, int(cnt[N_COUNT]))
-    built = None if sampler is None else (sampler, buf.frames[:cnt[N_FRAMES]].copy(), tstate)
-    rig.record(buf.daq[:cnt[N_DAQ]].copy(), buf.ev[:cnt[N_EV]].copy(), buf.tac[:cnt[N_TAC]].copy(), built)
+    built = None if sampler is None else (sampler, buf.frames[:cnt[N_FRAMES]], tstate)
+    rig.record(buf.daq[:cnt[N_DAQ]], buf.ev[:cnt[N_EV]].copy(), buf.tac[:cnt[N_TAC]], built)   # views: kept
     if status == _BAD_COMMAND:
         raise ParameterError(f"hand command value must be finite, got {buf.cmd_v[nc]!r}")
     return buf.cmd_t[:nc].copy(), buf.cmd_v[:nc].copy()

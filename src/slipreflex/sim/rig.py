@@ -1351,7 +1351,7 @@ class Rig:
             first = next((i for i, c in enumerate(chunks) if c[-1, K.O_T] >= since - 1e-12), len(chunks))
             skip = sum(c.shape[0] for c in chunks[:first])
             chunks = chunks[first:]
-        rows = np.concatenate(chunks) if chunks else np.zeros((0, K.O_SIZE))
+        rows = (chunks[0] if len(chunks) == 1 else np.concatenate(chunks)) if chunks else np.zeros((0, K.O_SIZE))
         if since is not None:
             i = int(np.searchsorted(rows[:, K.O_T], since - 1e-12, side="left"))
             rows, skip = rows[i:], skip + i
