@@ -823,6 +823,11 @@ class BoardSource:
             self.reflex.take_frames(self.daq.last_frames)
         return samples
 
+    def drop_buffered(self) -> int:
+        """Drop nothing: the twin must see every frame from the board's seq 0 (``run_loop``
+        calls this before its clock starts; the reader's own would bypass the twin)."""
+        return 0
+
     def close(self) -> None:
         """Close the reader."""
         self.daq.close()

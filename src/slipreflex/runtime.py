@@ -249,6 +249,9 @@ class RunResult:
         Holds (STOP) sent by the watchdog, its re-sends and the stall guard.
     stale_samples : int
         Samples older than the watchdog when processed (their commands were held back).
+    dropped_at_start : int
+        Frames the source buffered while the run set up (warm-up, safe start), dropped
+        before the clock started (the source's optional ``drop_buffered()``).
     saturated_at : float or None
         Board time (s) at which the command first reached the finger maximum (500).
     saturated_windows : int
@@ -277,6 +280,7 @@ class RunResult:
     initial_command: str = ""
     holds_sent: int = 0
     stale_samples: int = 0
+    dropped_at_start: int = 0
     saturated_at: float | None = None
     saturated_windows: int = 0
 
@@ -322,7 +326,10 @@ class RunResult:
                          f"{self.saturated_windows} later windows with spikes could not raise the command")
         kinds = collections.Counter(f.kind for f in self.faults)
         lines.append("faults: " + (", ".join(f"{k} x{n}" for k, n in kinds.items()) or "none")
-                     + (f"; holds sent {self.holds_sent}" if self.holds_sent else ""))
+                     + (f"; holds sent {self.holds_sent}" if self.holds_sent else "")
+                     + (f"; stale samples {self.stale_samples}" if self.stale_samples else "")
+                     + (f"; {self.dropped_at_start} frames from before the start dropped"
+                        if self.dropped_at_start else ""))
         if self.recording_error:
             lines.append(f"recording stopped early: {self.recording_error}")
         return "\n".join(lines)
@@ -338,7 +345,7 @@ class RunResult:
         out = {"samples": self.samples, "commands": self.commands, "commands_sent": self.commands_sent,
                "events": self.events, "duration_s": f"{self.duration:.3f}",
                "faults": len(self.faults), "holds_sent": self.holds_sent,
-               "stale_samples": self.stale_samples,
+               "stale_samples": self.stale_samples, "dropped_at_start": self.dropped_at_start,
                "saturated_at": "" if self.saturated_at is None else f"{self.saturated_at:.6f}",
                "saturated_windows": self.saturated_windows}
         for since, key in (("read", "latency"), ("frame", "frame_latency")):
@@ -528,8 +535,10 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
     ----------
     source : SampleSource
         ``read(timeout) -> list[DaqSample]``; may raise :class:`~slipreflex.errors.DeviceError`
-        (recorded, the loop goes on). Optional ``last_arrival`` (``perf_counter`` of the read)
-        and ``stats`` (``to_dict()``: recorded, returned, increases become fault events).
+        (recorded, the loop goes on). Optional ``last_arrival`` (``perf_counter`` of the read),
+        ``stats`` (``to_dict()``: recorded, returned, increases become fault events) and
+        ``drop_buffered()``, called once just before the clock starts: the frames that arrived
+        during the set-up are from before the run (else a stale backlog at the start).
     hand : Hand
         ``set_positions(targets)``; optional ``hold(fingers)``.
     reflex : Reflex
@@ -604,6 +613,7 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
         start, start_error = safe_start(hand, given, fingers), None
     except DeviceError as err:  # the STOP did not go out: the fingers stay as the grasp left them
         start, start_error = given, err
+    dropped = source.drop_buffered() if hasattr(source, "drop_buffered") else 0
     loop = _Loop(source, hand, reflex, start=start,
                  ref0=float(ref0) if ref_ok else start.get(SLIP_FINGER, next(iter(start.values()))),
                  recorder=recorder, duration=duration, watchdog=watchdog, poll=poll, stop=stop,
@@ -611,6 +621,7 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
     if start_error is not None:
         loop.fault("hold-failed", f"safe start: {start_error}", "fingers stay where the grasp left them; "
                    "the watchdog holds again if samples stop")
+    loop.res.dropped_at_start = dropped
     return loop.run(guard)
 
 

@@ -214,6 +214,44 @@ class SerialDaq:
         self.last_frames = self._parser.feed(data)
         return [f.to_sample() for f in self.last_frames]
 
+    def drop_buffered(self) -> int:
+        """Read and drop the frames the port holds now; the parser keeps its place and counts.
+
+        ``run_loop`` calls this once just before its clock starts: what arrived
+        while the run set up (the port opened, the chain warmed up, the safe
+        start's STOP) is from before the run, like what pyserial's ``open()``
+        flushes, and would otherwise be processed as a stale backlog. A frame
+        cut at the end stays in the parser and completes on the next read.
+
+        Returns
+        -------
+        int
+            Frames dropped (0 while the port is gone; a failure shows on the next read).
+
+        Examples
+        --------
+        >>> from serial import serial_for_url
+        >>> from slipreflex.devices.wire import encode_frame
+        >>> loop = serial_for_url("loop://"); daq = SerialDaq(loop)
+        >>> _ = loop.write(encode_frame(seq=3, adc=1) + encode_frame(seq=4, adc=1))
+        >>> daq.drop_buffered(), daq.read(0.0), daq.stats.frames
+        (2, [], 2)
+        >>> _ = loop.write(encode_frame(seq=5, adc=1)); [s.seq for s in daq.read(0.0)]
+        [5]
+        >>> daq.stats.seq_gaps                         # dropped, not lost: no gap
+        0
+        >>> daq.close(); loop.close()
+        """
+        import serial
+
+        ser, dropped = self._port.serial, 0
+        try:
+            while ser is not None and (waiting := ser.in_waiting):
+                dropped += len(self._parser.feed(ser.read(waiting)))
+        except (serial.SerialException, OSError):
+            pass  # the next read() reports it and reconnects
+        return dropped
+
     def close(self) -> None:
         """Close the port if this reader opened it.
 
