@@ -49,8 +49,8 @@ def main() -> None:
     print("  fill    f_slosh  slosh mass  zeta    jet factor beta")
     for ml in (30, 100, 200, 300, 500):
         mw = ml * 1e-6 * WATER_DENSITY
-        kth, m1, zeta, beta = K.slosh_mode(mw, r, WATER_DENSITY, WATER_KINEMATIC_VISCOSITY, hw.GRAVITY,
-                                           w.slosh_damping_factor, phi)
+        zeta0 = K.slosh_zeta0(r, WATER_KINEMATIC_VISCOSITY, hw.GRAVITY, w.slosh_damping_factor)
+        kth, m1, zeta, beta = K.slosh_mode(mw, r, WATER_DENSITY, zeta0, phi)
         f = math.sqrt(hw.GRAVITY * kth) / (2.0 * math.pi)
         print(f"  {ml:3d} ml  {f:5.2f} Hz  {m1 * 1e3:6.1f} g   {zeta * 100:5.2f} %  {beta:.3f}")
     q = PAPER_POUR.rate_l_min / 60.0 * 1e-3 * WATER_DENSITY

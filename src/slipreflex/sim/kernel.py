@@ -100,13 +100,13 @@ C_SIZE = 6
 P_C0 = 31
 (PC_LAW, PC_MUS, PC_MUK, PC_VS, PC_A, PC_V0, PC_DC, PC_HEAL, PC_KT, PC_CT, PC_DECAY, PC_HEAL_DECAY) = range(12)
 PC_SIZE = 12
-# the water: splash rms (relative), noise grid (s), its one-pole factor and innovation, bottle radius, water's
-# kinematic viscosity, slosh damping factor, jet's mode participation J1(k r_j) / J1(1.8412), water density,
+# the water: splash rms (relative), noise grid (s), its one-pole factor and innovation, bottle radius, the slosh's
+# deep-fill damping ratio (slosh_zeta0), jet's mode participation J1(k r_j) / J1(1.8412), water density,
 # sideways stiffness and damping of the bottle in the grasp, 1 / noise grid
 P_L0 = P_C0 + 3 * PC_SIZE
-(P_SPL_RMS, P_SPL_DT, P_SPL_RHO, P_SPL_SIG, P_SLOSH_R, P_NU, P_DAMPF, P_PHIJ, P_RHO_W, P_KLAT,
- P_CLAT, P_SPL_INV) = range(P_L0, P_L0 + 12)
-P_SIZE = P_L0 + 12
+(P_SPL_RMS, P_SPL_DT, P_SPL_RHO, P_SPL_SIG, P_SLOSH_R, P_ZETA0, P_PHIJ, P_RHO_W, P_KLAT,
+ P_CLAT, P_SPL_INV) = range(P_L0, P_L0 + 11)
+P_SIZE = P_L0 + 11
 #: Friction laws (PC_LAW): Coulomb with a Stribeck curve; slip weakening + healing + log rate.
 LAW_COULOMB, LAW_RATE_STATE = 0.0, 1.0
 _NEWTON_MAX = 60
@@ -351,33 +351,47 @@ def _coulomb_post(F, kt, decay, s, d, x_old, x_new, dt):
 
 
 @njit(cache=True, inline="always")
-def slosh_mode(mw, radius, rho, nu, g, damp_factor, phi_jet):
+def slosh_mode(mw, radius, rho, zeta0, phi_jet):
     """First antisymmetric slosh mode of ``mw`` kg of water in an upright cylinder of ``radius``.
 
     Returns ``(k tanh(k h), m1, zeta, beta)``: ``omega^2 = g k tanh(k h)`` with
     ``k = 1.8412 / R`` and fill height ``h``; the slosh mass of the
     equivalent spring-mass ``m1 = mw 2 tanh(k h) / ((xi^2 - 1) k h)``
-    (Abramson 1966; Dodge 2000); the damping ratio of Stephens et al. (1962)
-    times ``damp_factor`` (at most 1); and ``beta``, the modal force on the
-    slosh mass per newton of vertical force on the surface ``phi_jet = J1(k
-    r_j) / J1(xi)`` of the way out: the mode's elevation at the wall ``q`` and
-    the slosh mass's displacement ``y1`` share the mode's potential energy,
+    (Abramson 1966; Dodge 2000); the damping ratio of Stephens et al. (1962),
+    ``zeta0 [1 + 0.318 / sinh(k h) (1 + (1 - h / R) / cosh(k h))]`` with the
+    deep-fill ratio ``zeta0 = 0.79 sqrt(nu / (g^0.5 R^1.5))`` times the damping
+    factor (:func:`slosh_zeta0`), at most 1; and ``beta``, the modal force on
+    the slosh mass per newton of vertical force on the surface ``phi_jet =
+    J1(k r_j) / J1(xi)`` of the way out: the mode's elevation at the wall ``q``
+    and the slosh mass's displacement ``y1`` share the mode's potential energy,
     ``y1 = q (xi^2 - 1) / (2 xi tanh(k h))``, so ``beta = phi_jet 2 xi tanh(k h)
-    / (xi^2 - 1)``.
+    / (xi^2 - 1)``. (``k h = xi h / R``: one exponential gives all three
+    hyperbolic functions.)
     """
     h = mw / (rho * np.pi * radius * radius)
-    k = _XI / radius
-    kh = k * h
-    th = np.tanh(kh)
-    m1 = mw * 2.0 * th / ((_XI * _XI - 1.0) * kh) if kh > 1e-9 else mw * 2.0 / (_XI * _XI - 1.0)
-    hr = h / radius
-    zeta = 1.0
-    if kh > 1e-9:
-        zeta = 0.79 * np.sqrt(nu / (np.sqrt(g) * radius ** 1.5)) * (
-            1.0 + 0.318 / np.sinh(_XI * hr) * (1.0 + (1.0 - hr) / np.cosh(_XI * hr))) * damp_factor
-        if zeta > 1.0:
-            zeta = 1.0
-    return k * th, m1, zeta, phi_jet * 2.0 * _XI * th / (_XI * _XI - 1.0)
+    kh = _XI * h / radius
+    if kh <= 1e-9:
+        return 0.0, mw * 2.0 / (_XI * _XI - 1.0), 1.0, 0.0
+    e = np.exp(min(kh, 300.0))
+    sh = 0.5 * (e - 1.0 / e)
+    ch = 0.5 * (e + 1.0 / e)
+    th = sh / ch
+    m1 = mw * 2.0 * th / ((_XI * _XI - 1.0) * kh)
+    zeta = zeta0 * (1.0 + 0.318 / sh * (1.0 + (1.0 - h / radius) / ch))
+    if zeta > 1.0:
+        zeta = 1.0
+    return _XI / radius * th, m1, zeta, phi_jet * 2.0 * _XI * th / (_XI * _XI - 1.0)
+
+
+def slosh_zeta0(radius, nu, g, damp_factor=1.0):
+    """Deep-fill damping ratio of the first slosh mode, Stephens et al. (1962): ``0.79 sqrt(nu / (g^0.5 R^1.5))``.
+
+    Examples
+    --------
+    >>> round(slosh_zeta0(0.0325, 1.004e-6, 9.81), 4)
+    0.0058
+    """
+    return 0.79 * (nu / (g ** 0.5 * radius ** 1.5)) ** 0.5 * damp_factor
 
 
 @njit(cache=True)
@@ -402,6 +416,24 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
     key0 = keys[0]
     key1 = keys[1]
     key5 = keys[5]
+    # loop invariants and the states every step reads, kept in locals (numba cannot tell that the
+    # output arrays do not alias S and P, so it would reload them from memory every step)
+    kservo = P[P_KSERVO]
+    stall = P[P_STALL]
+    qc = P[P_QC]
+    lam = P[P_LAM]
+    kn = P[P_KN]
+    mb = P[P_MB]
+    acc_alpha = P[P_ACC_ALPHA]
+    klat = P[P_KLAT]
+    clat = P[P_CLAT]
+    x = S[S_X]
+    v = S[S_V]
+    a_prev = S[S_A]
+    yb = S[S_YB]
+    vb = S[S_VB]
+    y1 = S[S_Y1]
+    v1 = S[S_V1]
     while n < n_end:
         if nev + 3 + D.shape[0] > cap_ev or nd + 2 > cap_daq:
             break
@@ -413,22 +445,22 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
             q = S[S_Q0 + i]
             tg = S[S_TGT0 + i]
             e = tg - q
-            r = P[P_KSERVO] * e
+            r = kservo * e
             sp = S[S_SPD0 + i]
             if r > sp:
                 r = sp
             elif r < -sp:
                 r = -sp
-            if r > 0.0 and nc_prev >= P[P_STALL]:
+            if r > 0.0 and nc_prev >= stall:
                 r = 0.0
             qn = q + r * dt
             if (tg - qn) * e < 0.0:
                 qn = tg
             S[S_Q0 + i] = qn
         qbar = (S[S_Q0] + S[S_Q0 + 1] + S[S_Q0 + 2]) / 3.0
-        pen = (qbar - P[P_QC]) * P[P_LAM]
+        pen = (qbar - qc) * lam
         fallen = S[S_FALLEN] > 0.0
-        nc = P[P_KN] * pen if (pen > 0.0 and not fallen) else 0.0
+        nc = kn * pen if (pen > 0.0 and not fallen) else 0.0
         S[S_NC] = nc
         ntot = 3.0 * nc
         # ---- loads
@@ -456,13 +488,11 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
             fr = t0 * P[P_SPL_INV] - C[C_SPL]
             fspl = P[P_SPL_RMS] * fjet * (S[S_SPL0] + fr * (S[S_SPL1] - S[S_SPL0]))
             if advanced or S[S_M1] == 0.0:
-                kth, m1, zeta, beta = slosh_mode(mw, P[P_SLOSH_R], P[P_RHO_W], P[P_NU], g, P[P_DAMPF], P[P_PHIJ])
+                kth, m1, zeta, beta = slosh_mode(mw, P[P_SLOSH_R], P[P_RHO_W], P[P_ZETA0], P[P_PHIJ])
                 S[S_KTH] = kth
                 S[S_M1] = m1
                 S[S_C1] = 2.0 * zeta * m1 * np.sqrt(kth * g)
                 S[S_BETA] = beta
-        x = S[S_X]
-        v = S[S_V]
         x_old = x
         fdrop = 0.0
         mland = 0.0
@@ -490,7 +520,7 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
             D[d, D_VZ] += (g - f / D[d, D_M]) * dt
             D[d, D_Z] += D[d, D_VZ] * dt
             fdrop += f
-        m = P[P_MB] + mw
+        m = mb + mw
         S[S_MASS] = m + mland
         wload = m * g + fjet + fspl + fdrop
         S[S_LOAD] = wload
@@ -499,15 +529,19 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
         # opposite on the bottle: a vertical jet gives the pair no sideways momentum)
         if S[S_M1] > 0.0 and not fallen:
             m1 = S[S_M1]
-            du = S[S_V1] - S[S_VB]
-            fs = m1 * S[S_KTH] * (g - S[S_A]) * (S[S_Y1] - S[S_YB]) + S[S_C1] * du
+            du = v1 - vb
+            fs = m1 * S[S_KTH] * (g - a_prev) * (y1 - yb) + S[S_C1] * du
             fq = S[S_BETA] * (fjet + fspl)
             S[S_FWAT] = fs - fq
-            ab = (fs - fq - P[P_KLAT] * S[S_YB] - P[P_CLAT] * S[S_VB]) / (m + mland - m1)
-            S[S_V1] += (fq - fs) / m1 * dt
-            S[S_Y1] += S[S_V1] * dt
-            S[S_VB] += ab * dt
-            S[S_YB] += S[S_VB] * dt
+            ab = (fs - fq - klat * yb - clat * vb) / (m + mland - m1)
+            v1 += (fq - fs) / m1 * dt
+            y1 += v1 * dt
+            vb += ab * dt
+            yb += vb * dt
+            S[S_V1] = v1
+            S[S_Y1] = y1
+            S[S_VB] = vb
+            S[S_YB] = yb
             S[S_ALAT] = ab
         else:
             S[S_ALAT] = 0.0
@@ -608,8 +642,13 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
         S[S_X] = x
         S[S_V] = v
         S[S_A] = a
-        S[S_AF] += (a - S[S_AF]) * P[P_ACC_ALPHA]
-        S[S_AFL] += (S[S_ALAT] - S[S_AFL]) * P[P_ACC_ALPHA]
+        a_prev = a
+        # the IMU's DLPF states; flushed to zero below 1e-200 m/s^2 (they decay toward an exact zero at rest
+        # and would otherwise sit in the subnormal range, where every step's arithmetic is slow)
+        af = S[S_AF] + (a - S[S_AF]) * acc_alpha
+        S[S_AF] = af if abs(af) > 1e-200 else 0.0
+        afl = S[S_AFL] + (S[S_ALAT] - S[S_AFL]) * acc_alpha
+        S[S_AFL] = afl if abs(afl) > 1e-200 else 0.0
         # ---- accelerometer ticks (own ODR)
         while C[C_ACC] * P[P_ACC_T] <= t1 + 1e-12:
             j = C[C_ACC]
@@ -668,7 +707,7 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
             C[C_DAQ] = k + 1
         # ---- tactile snapshots
         for si in range(nsamp):
-            while tac_next[si] / tac_rates[si] <= t1 + 1e-12 and ntac < cap_tac:
+            while tac_next[si] <= (t1 + 1e-12) * tac_rates[si] and ntac < cap_tac:
                 tac_out[ntac, T_ID] = si
                 tac_out[ntac, T_IDX] = tac_next[si]
                 tac_out[ntac, T_T] = tac_next[si] / tac_rates[si]

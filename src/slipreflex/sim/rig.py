@@ -770,8 +770,7 @@ class Rig:
         P[K.P_SPL_RHO] = rho
         P[K.P_SPL_SIG] = math.sqrt(1.0 - rho * rho)
         P[K.P_SLOSH_R] = r
-        P[K.P_NU] = WATER_KINEMATIC_VISCOSITY
-        P[K.P_DAMPF] = w.slosh_damping_factor
+        P[K.P_ZETA0] = K.slosh_zeta0(r, WATER_KINEMATIC_VISCOSITY, hw.GRAVITY, w.slosh_damping_factor)
         P[K.P_PHIJ] = float(j1(SLOSH_ROOT * w.jet_offset_m / r) / j1(SLOSH_ROOT))
         P[K.P_RHO_W] = WATER_DENSITY
         # sideways, three contacts 120 degrees apart: their normal stiffness (k_n, mean cos^2 = 1/2) and
