@@ -120,9 +120,10 @@ def test_capacity_under_slow_loading_is_pads_static_plus_cuff_kinetic():
 def test_the_paper_bottles_are_calibrated_to_the_first_pour_slip():
     for name in ("TR", "TX"):
         assert first_slip_ml(BOTTLES[name]) == pytest.approx(PAPER_FIRST_SLIP_ML, abs=3.0)
-    # the stored constant is what the calibration computes (objects.PAPER_PAD_MU_S, rounded to 4 decimals)
+    # the stored constant is what the calibration computes (objects.PAPER_PAD_MU_S), to the iteration's
+    # tolerance (1 ml, about 0.005 in mu_s)
     c = calibrate_bottle(BOTTLES["DK"])
-    assert c.mu_s == pytest.approx(BOTTLES["DK"].mu_s, abs=1e-3)
+    assert c.mu_s == pytest.approx(BOTTLES["DK"].mu_s, abs=0.005)
     assert first_slip_ml(BOTTLES["DK"]) == pytest.approx(c.first_slip_ml, abs=0.5)
 
 

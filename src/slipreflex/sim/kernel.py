@@ -163,6 +163,16 @@ def normal(key, i):
 
 
 @njit(cache=True)
+def normal_pair(key, i):
+    """Standard normal numbers ``2 i`` and ``2 i + 1`` of the stream ``key``: both of one Box-Muller pair
+    (the uniforms ``2 i``, ``2 i + 1``; ``normal(key, i)`` is the first of them)."""
+    u1 = _uniform(key, 2 * i)
+    u2 = _uniform(key, 2 * i + 1)
+    r = np.sqrt(-2.0 * np.log(u1))
+    return r * np.cos(2.0 * np.pi * u2), r * np.sin(2.0 * np.pi * u2)
+
+
+@njit(cache=True)
 def derive_key(key, i):
     """A new stream key from ``key`` and a small integer (wrap-around arithmetic)."""
     return _mix(key ^ (np.uint64(i) * _GOLDEN))
@@ -750,10 +760,19 @@ def tactile_frames(snap, key, gain0, patch_sigma, shear_shift, noise, resolution
     array's sensitivity ``gain0``): a
     first-order low-pass (``alpha`` per frame), a play of half-width
     ``hyst`` (hysteresis), a creep gain ``1 + drift log10(1 + t)``, noise
-    (stream ``key``, counter = frame index), quantization and clipping at 0.
+    (stream ``key``, eight Box-Muller pairs per frame index), quantization and
+    clipping at 0.
     ``state`` (2, 4, 4) holds the low-pass and play outputs between calls
     (NaN: start from the first frame).
     """
+    inv2s2 = 1.0 / (2.0 * patch_sigma * patch_sigma)
+    ex = np.empty(4)   # the patch is separable: its profile across the axis does not move
+    ey = np.empty(4)
+    sx = 0.0
+    for a in range(4):
+        ex[a] = np.exp(-(a - 1.5) * (a - 1.5) * inv2s2)
+        sx += ex[a]
+    inv_res = 1.0 / resolution if resolution > 0.0 else 0.0
     for r in range(snap.shape[0]):
         nc = snap[r, T_NC]
         idx = np.int64(snap[r, T_IDX])
@@ -763,35 +782,36 @@ def tactile_frames(snap, key, gain0, patch_sigma, shear_shift, noise, resolution
         else:
             tot = 0.0
             cy = 1.5
-        wsum = 0.0
-        for a in range(4):
-            for b in range(4):
-                dxa = a - 1.5
-                dyb = b - cy
-                wgt = np.exp(-(dxa * dxa + dyb * dyb) / (2.0 * patch_sigma * patch_sigma))
-                out[r, b, a] = wgt
-                wsum += wgt
+        sy = 0.0
+        for b in range(4):
+            ey[b] = np.exp(-(b - cy) * (b - cy) * inv2s2)
+            sy += ey[b]
+        scale = tot / (sx * sy)
         gain = gain0 * (1.0 + drift * np.log10(1.0 + snap[r, T_T]))
-        for a in range(4):
-            for b in range(4):
-                f = tot * out[r, b, a] / wsum
-                if np.isnan(state[0, b, a]):
-                    state[0, b, a] = f
-                    state[1, b, a] = f
-                lp = state[0, b, a] + alpha * (f - state[0, b, a])
-                hy = state[1, b, a]
-                if hy < lp - hyst:
-                    hy = lp - hyst
-                elif hy > lp + hyst:
-                    hy = lp + hyst
-                state[0, b, a] = lp
-                state[1, b, a] = hy
-                y = hy * gain + noise * normal(key, idx * 16 + b * 4 + a)
-                if resolution > 0.0:
-                    y = np.floor(y / resolution + 0.5) * resolution
-                if y < 0.0:
-                    y = 0.0
-                out[r, b, a] = y
+        for b in range(4):
+            for a2 in range(2):
+                # one Box-Muller pair (stream key, pair idx * 8 + b * 2 + a2) serves two taxels
+                n0, n1 = normal_pair(key, idx * 8 + b * 2 + a2)
+                for k in range(2):
+                    a = 2 * a2 + k
+                    f = scale * ex[a] * ey[b]
+                    if np.isnan(state[0, b, a]):
+                        state[0, b, a] = f
+                        state[1, b, a] = f
+                    lp = state[0, b, a] + alpha * (f - state[0, b, a])
+                    hy = state[1, b, a]
+                    if hy < lp - hyst:
+                        hy = lp - hyst
+                    elif hy > lp + hyst:
+                        hy = lp + hyst
+                    state[0, b, a] = lp
+                    state[1, b, a] = hy
+                    y = hy * gain + noise * (n0 if k == 0 else n1)
+                    if resolution > 0.0:
+                        y = np.floor(y * inv_res + 0.5) * resolution
+                    if y < 0.0:
+                        y = 0.0
+                    out[r, b, a] = y
 
 
 @njit(cache=True)
