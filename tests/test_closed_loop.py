@@ -229,3 +229,56 @@ def test_the_loop_kernels_cache_goes_stale_when_the_physics_changes(tmp_path, mo
     before = locator.get_source_stamp()
     physics.write_text(physics.read_text() + "\n# a changed constant\n")
     assert locator.get_source_stamp() != before
+
+
+def test_a_tactile_reflex_for_other_frames_fails_as_in_the_python_loop():
+    """NMSD set up for a 7-channel sensor: both loops refuse the rig's 4 x 4 frames with the same error."""
+    from slipreflex.errors import DataError
+
+    for compiled in (True, False):
+        rig = Rig("TR")
+        rig.grasp()
+        reflex = methods.make(methods.NMSD, p0=100.0, context=CONTEXT, shape=(7,))
+        with pytest.raises(DataError, match="shape"):
+            run_closed_loop(rig, reflex, 0.1, compiled=compiled)
+
+
+@njit(cache=True)
+def _fail_step(S, P, raw, position):
+    S[0] += 1.0
+    if S[0] > P[0]:
+        raise ValueError("the reflex failed")
+    return position + S[0]   # a command on every sample: some are still queued when it fails
+
+
+class _Failing:
+    name, input_kind, fs = "failing", "slip", hw.DAQ_FS
+
+    def __init__(self, after):
+        self.S, self.P = np.zeros(1), np.array([float(after)])
+
+    def compiled(self):
+        return _fail_step, self.S, self.P
+
+    def step(self, sample, position=None):
+        c = _fail_step(self.S, self.P, float(sample), math.nan if position is None else float(position))
+        return None if c != c else c
+
+    def reset(self):
+        self.S[:] = 0.0
+
+
+def test_a_step_that_raises_leaves_the_rig_as_the_python_loop_leaves_it():
+    runs = []
+    for compiled in (True, False):
+        rig = Rig("TR", seed=2)
+        rig.grasp()
+        reflex = _Failing(102)
+        with pytest.raises(ValueError, match="the reflex failed"):
+            run_closed_loop(rig, reflex, 1.0, compiled=compiled)
+        runs.append((rig, reflex))
+    (ra, fa), (rb, fb) = runs
+    np.testing.assert_array_equal(fa.S, fb.S)
+    assert ra.t == rb.t and ra.hand.queue() == rb.hand.queue() and ra.hand.queue()[0]
+    for name in ra.daq_history().__dataclass_fields__:
+        np.testing.assert_array_equal(getattr(ra.daq_history(), name), getattr(rb.daq_history(), name))

@@ -348,8 +348,9 @@ class _Buffers:
 def compilable(rig, reflex, fingers: tuple[Finger, ...]) -> bool:
     """Whether the compiled loop can run ``reflex`` on ``rig`` (else the Python loop does).
 
-    It needs a reflex with ``compiled()``, commands for tripod fingers only, and
-    no queued hand command for a finger outside the tripod.
+    It needs a reflex with ``compiled()``, commands for tripod fingers only, no
+    queued hand command for a finger outside the tripod, and for a tactile reflex
+    that declares ``params.shape``, the rig's 4 x 4 frames.
 
     Examples
     --------
@@ -362,6 +363,9 @@ def compilable(rig, reflex, fingers: tuple[Finger, ...]) -> bool:
         return False
     if not all(f in hw.TRIPOD for f in fingers):
         return False
+    shape = getattr(getattr(reflex, "params", None), "shape", hw.TACTILE_SHAPE)
+    if getattr(reflex, "input_kind", None) == "tactile" and tuple(shape) != hw.TACTILE_SHAPE:
+        return False   # frames of another shape: the Python loop reports the mismatch as the reflex does
     pending, _ = rig.hand.queue()
     return all(f in hw.TRIPOD for entry in pending for f in entry[3])
 
@@ -455,24 +459,33 @@ def run_compiled(rig, reflex, t_end: float, fingers: tuple[Finger, ...], sampler
     s_n = np.zeros(3, dtype=np.int64)
     tstate = sampler.filter_state.copy() if sampler is not None else None
     key = np.uint64(sampler.key) if sampler is not None else None
-    while True:
-        common = (RS, RP, A.S, A.C, A.P, A.keys, A.D, A.W, A.track, A.tac_rates, A.tac_next, A.tac_contact,
-                  A.targets, A.speeds, buf.q_i, buf.q_v, masks, cmd_g, cmd_off, cmd_clip, cfg, cnt, buf.daq,
-                  buf.ev, buf.tac, buf.cmd_t, buf.cmd_v, s_daq, s_ev, s_tac, s_n)
-        if sampler is None:
-            status = _kernel(kind)(step, *common)
-        else:
-            status = _kernel(kind)(step, *common, key, tstate, buf.frames,
-                                   buf.frames.reshape(buf.frames.shape[0], -1))
-        if status != _GROW:
-            break
-        buf.grow()
+    status = _GROW
+    try:
+        while status == _GROW:
+            common = (RS, RP, A.S, A.C, A.P, A.keys, A.D, A.W, A.track, A.tac_rates, A.tac_next, A.tac_contact,
+                      A.targets, A.speeds, buf.q_i, buf.q_v, masks, cmd_g, cmd_off, cmd_clip, cfg, cnt, buf.daq,
+                      buf.ev, buf.tac, buf.cmd_t, buf.cmd_v, s_daq, s_ev, s_tac, s_n)
+            if sampler is None:
+                status = _kernel(kind)(step, *common)
+            else:
+                status = _kernel(kind)(step, *common, key, tstate, buf.frames,
+                                       buf.frames.reshape(buf.frames.shape[0], -1))
+            if status == _GROW:
+                buf.grow()
+    finally:   # also when the reflex's step raised: the rig then stands where the Python loop's would
+        _hand_back(rig, buf, cnt, groups, None if sampler is None else (sampler, tstate))
     nc = int(cnt[N_CMD])
-    pending = [(int(s), int(c), HandCommand(int(k)), groups[int(g)], float(v))
-               for (s, c, k, g), v in zip(buf.q_i[cnt[N_QHEAD]:cnt[N_QLEN]], buf.q_v[cnt[N_QHEAD]:cnt[N_QLEN]])]
-    rig.hand.restore_queue(pending, int(cnt[N_COUNT]))
-    built = None if sampler is None else (sampler, buf.frames[:cnt[N_FRAMES]], tstate)
-    rig.record(buf.daq[:cnt[N_DAQ]], buf.ev[:cnt[N_EV]].copy(), buf.tac[:cnt[N_TAC]], built)   # views: kept
     if status == _BAD_COMMAND:
         raise ParameterError(f"hand command value must be finite, got {buf.cmd_v[nc]!r}")
     return buf.cmd_t[:nc].copy(), buf.cmd_v[:nc].copy()
+
+
+def _hand_back(rig, buf: _Buffers, cnt: np.ndarray, groups: list, built) -> None:
+    """Give the hand its pending commands and the rig what the kernels produced."""
+    head, end = int(cnt[N_QHEAD]), int(cnt[N_QLEN])
+    pending = [(int(s), int(c), HandCommand(int(k)), groups[int(g)], float(v))
+               for (s, c, k, g), v in zip(buf.q_i[head:end], buf.q_v[head:end])]
+    rig.hand.restore_queue(pending, int(cnt[N_COUNT]))
+    if built is not None:
+        built = (built[0], buf.frames[:cnt[N_FRAMES]], built[1])
+    rig.record(buf.daq[:cnt[N_DAQ]], buf.ev[:cnt[N_EV]].copy(), buf.tac[:cnt[N_TAC]], built)   # views: kept
