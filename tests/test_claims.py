@@ -202,3 +202,33 @@ def test_missing_counts_do_not_break_the_judge():
     rows = [{**r, "n_events": "", "event": None} if r["experiment"] == "pour" else r for r in paper_like()]
     res = {r.number: r for r in C.judge(rows)}
     assert res[6].verdict == C.FAILS and "0% of" in res[6].numbers   # no slip counts: no two-slip pours
+
+
+def test_claims_command_judges_a_written_results_table_as_the_run_did(tmp_path, capsys):
+    from slipreflex.analysis.claims import claims_terminal, judge_run
+    from slipreflex.analysis.outputs import write_outputs
+    from slipreflex.cli import main
+    from slipreflex.experiments import ReproduceConfig, run_reproduce
+
+    cfg = ReproduceConfig(trials=1, bottles=("TX",), methods=("fixed", "dath"), experiments=("drop",))
+    res = run_reproduce(cfg, jobs=1, progress=False, plots=False)
+    write_outputs(res, tmp_path)
+    capsys.readouterr()
+    assert main(["claims", str(tmp_path / "results.csv"), "--seed", str(cfg.seed)]) == 0
+    out = capsys.readouterr().out
+    assert claims_terminal(judge_run(res.rows, seed=cfg.seed)) in out
+
+
+def test_claims_command_refuses_what_is_not_a_results_table(tmp_path, capsys):
+    from slipreflex.cli import main
+
+    (tmp_path / "summary.csv").write_text("experiment,bottle,method\ndrop,TR,dath\n")
+    assert main(["claims", str(tmp_path / "summary.csv")]) == 2
+    err = capsys.readouterr().err
+    assert "summary.csv: not a results table: no column trial" in err and len(err.strip().splitlines()) == 1
+    assert main(["claims", str(tmp_path / "none.csv")]) == 2
+    assert "none.csv: no such results file" in capsys.readouterr().err
+    bad = "experiment,bottle,method,trial,event,n_events,response_ms,total_ms,success\ndrop,TR,dath,x,0,1,5,5,True\n"
+    (tmp_path / "bad.csv").write_text(bad)
+    assert main(["claims", str(tmp_path / "bad.csv")]) == 2
+    assert "bad.csv, data line 2" in capsys.readouterr().err

@@ -1,0 +1,72 @@
+"""``slipreflex claims``: the paper's claims judged on a results table.
+
+Reads a ``results.csv`` (written by ``slipreflex reproduce``, by an older version of it,
+or by your own analysis with the same columns: see
+:data:`slipreflex.analysis.trial.RESULT_COLUMNS`) and prints the claims table that
+``reproduce`` prints: each of the paper's claims (SPEC 4.1) as *holds*, *fails* or *not
+testable here*, with the numbers behind the verdict. Claims 1-2 are judged on a
+characterization scan of the simulated slip sensor seeded with ``--seed``.
+
+Examples (shell)::
+
+    slipreflex claims out/reproduce/results.csv
+    slipreflex claims old-run/results.csv --seed 20191215
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+from pathlib import Path
+
+NAME = "claims"
+HELP = "judge the paper's claims on a results.csv (yours, or an earlier run's)"
+ORDER = 47
+
+#: Columns the claims read; a table without them cannot be judged.
+NEEDED = ("experiment", "bottle", "method", "trial", "event", "n_events", "response_ms", "total_ms", "success")
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Command-line options of ``slipreflex claims``."""
+    from ..experiments import ReproduceConfig
+
+    parser.add_argument("results", type=Path, help="a results.csv (one row per trial and slip event)")
+    parser.add_argument("--seed", type=int, default=ReproduceConfig().seed,
+                        help="seed of the slip-sensor scan behind claims 1-2 (default: reproduce's master seed)")
+
+
+def read_rows(path: Path) -> list:
+    """The rows of a results table as :class:`~slipreflex.analysis.trial.TrialRow` s.
+
+    Raises :class:`~slipreflex.errors.ParameterError` naming the file (and line) when it
+    is missing, lacks a column the claims read, or holds a value that does not parse.
+    """
+    from ..analysis.trial import TrialRow
+    from ..errors import ParameterError
+
+    if not path.is_file():
+        raise ParameterError(f"{path}: no such results file")
+    with path.open(newline="") as fh:
+        lines = [line for line in fh if not line.startswith("#")]
+    reader = csv.DictReader(lines)
+    missing = [c for c in NEEDED if c not in (reader.fieldnames or ())]
+    if missing:
+        raise ParameterError(f"{path}: not a results table: no column {', '.join(missing)}")
+    rows = []
+    for i, d in enumerate(reader, start=2):
+        try:
+            rows.append(TrialRow.from_dict(d))
+        except (ValueError, TypeError) as e:
+            raise ParameterError(f"{path}, data line {i}: {e}") from None
+    return rows
+
+
+def run(args: argparse.Namespace) -> int:
+    """Print the claims table of ``args.results``."""
+    from ..analysis.claims import claims_terminal, judge_run
+
+    rows = read_rows(args.results)
+    print(f"{len(rows)} rows of {args.results}")
+    print(claims_terminal(judge_run(rows, seed=args.seed)))
+    return 0
