@@ -282,3 +282,14 @@ def test_a_step_that_raises_leaves_the_rig_as_the_python_loop_leaves_it():
     assert ra.t == rb.t and ra.hand.queue() == rb.hand.queue() and ra.hand.queue()[0]
     for name in ra.daq_history().__dataclass_fields__:
         np.testing.assert_array_equal(getattr(ra.daq_history(), name), getattr(rb.daq_history(), name))
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+@pytest.mark.parametrize("method", [methods.DATH, methods.NMSD])
+def test_a_zero_length_run_from_the_start_returns(method, compiled):
+    """From t = 0 no step is left before t_end: both loops return at once (the Python loop used to spin)."""
+    rig = Rig("TR")
+    tr = run_closed_loop(rig, methods.make(method, context=CONTEXT), 0.0, compiled=compiled)
+    assert rig.t == 0.0 and tr.t.size == 0 and tr.cmd_t.size == 0
+    tr = run_closed_loop(rig, methods.make(method, context=CONTEXT), 0.01, compiled=compiled)
+    assert tr.t.size == 4 and tr.t[0] == 0.0

@@ -242,6 +242,8 @@ def _closed_slip(step, RS, RP, S, C, P, keys, D, W, track, tac_rates, tac_next, 
     while C[K.C_DAQ] * daq_t <= t_end + _EPS:
         t = C[K.C_N] * dt
         horizon = min(t_end, max(t + dt, C[K.C_DAQ] * daq_t + cfg[CF_LAT]))
+        if np.ceil(horizon / dt - _ROUND) <= C[K.C_N]:
+            return _DONE   # no step left before t_end (a zero-length run from t = 0)
         if not _room(C, D, tac_rates, cfg, cnt, q_i, q_v, daq, ev, tac, cmd_t, cmd_g.shape[0], horizon,
                      1.0 / daq_t):
             return _GROW
@@ -271,6 +273,8 @@ def _closed_tactile(step, RS, RP, S, C, P, keys, D, W, track, tac_rates, tac_nex
     while tac_next[si] / fs <= t_end + _EPS:
         t = C[K.C_N] * dt
         horizon = min(t_end, max(t + dt, tac_next[si] / fs + cfg[CF_LAT]))
+        if np.ceil(horizon / dt - _ROUND) <= C[K.C_N]:
+            return _DONE
         if not (_room(C, D, tac_rates, cfg, cnt, q_i, q_v, daq, ev, tac, cmd_t, cmd_g.shape[0], horizon, fs)
                 and cnt[N_FRAMES] + (horizon - t) * fs + 4.0 <= frames2.shape[0]):
             return _GROW

@@ -398,6 +398,8 @@ def _python_slip(rig: Rig, reflex: Reflex, t_end: float, fingers: tuple[Finger, 
     lat = rig.hand.latency
     while rig.next_daq_time <= t_end + _EPS:
         horizon = min(t_end, max(rig.t + dt, rig.next_daq_time + lat))
+        if math.ceil(horizon / dt - 1e-9) <= rig.step_index:
+            break   # no step left before t_end (a zero-length run from t = 0)
         times, volts_a, mids_a = rig.advance_slip(horizon)
         for v, pos, ts_k in zip(volts_a.tolist(), np.rint(mids_a).tolist(), times.tolist()):
             c = step(v, position=pos)
@@ -419,6 +421,8 @@ def _python_tactile(rig: Rig, reflex: Reflex, t_end: float, fingers: tuple[Finge
     lat = rig.hand.latency
     while tac_s.next_time <= t_end + _EPS:
         horizon = min(t_end, max(rig.t + rig.physics.dt, tac_s.next_time + lat))
+        if math.ceil(horizon / rig.physics.dt - 1e-9) <= rig.step_index:
+            break
         rig.advance_slip(horizon)
         tt, frames = tac_s.read()
         # measured middle position at each frame time: the latest DAQ-rate value
