@@ -221,11 +221,11 @@ def test_the_loop_kernels_cache_goes_stale_when_the_physics_changes(tmp_path, mo
     from slipreflex.sim import kernel
 
     locator = closed._closed_slip._cache._impl.locator
-    assert isinstance(locator, closed._StampedLocator)
+    assert isinstance(locator, closed._Stamped)
     assert kernel.__file__ in locator._deps and closed.__file__ in locator._deps
     physics = tmp_path / "kernel.py"
     physics.write_text(Path(kernel.__file__).read_text())
-    monkeypatch.setattr(closed._StampedLocator, "_deps", (closed.__file__, str(physics), hw.__file__))
+    monkeypatch.setattr(closed._Stamped, "_deps", (closed.__file__, str(physics), hw.__file__))
     before = locator.get_source_stamp()
     physics.write_text(physics.read_text() + "\n# a changed constant\n")
     assert locator.get_source_stamp() != before

@@ -71,13 +71,14 @@ _GROW, _DONE, _BAD_COMMAND = 1, 0, 2
 
 
 
-class _StampedLocator(_caching.InTreeCacheLocator):
+class _Stamped:
     """This module's cache goes stale when this file OR a file whose code its kernels inline changes.
 
     numba stamps a cached kernel with its own source file only, but the loop kernels
     compile :func:`slipreflex.sim.kernel.step_until` (and the hardware constants) into
     themselves: without this, an edited physics would keep running from a stale cache.
     The reflex's step is not inlined (a first-class function), so it is not listed.
+    Mixed into numba's locators (their order kept) for this module's functions only.
     """
 
     _deps = (__file__, K.__file__, hw.__file__)
@@ -98,8 +99,10 @@ class _StampedLocator(_caching.InTreeCacheLocator):
 
 _LOCATORS = getattr(getattr(_caching, "CacheImpl", None), "_locator_classes", None)
 _CACHE = isinstance(_LOCATORS, list)   # another numba: no cache rather than a stale one
-if _CACHE and _StampedLocator not in _LOCATORS:
-    _LOCATORS.insert(0, _StampedLocator)
+if _CACHE and not any(issubclass(c, _Stamped) for c in _LOCATORS):
+    _LOCATORS[:0] = [type(f"_Stamped{base.__name__}", (_Stamped, base), {})
+                     for base in (_caching.UserProvidedCacheLocator, _caching.InTreeCacheLocator,
+                                  _caching.UserWideCacheLocator)]
 
 _f1, _i1, _u1 = types.float64[::1], types.int64[::1], types.uint64[::1]
 _f2, _i2, _f3 = types.float64[:, ::1], types.int64[:, ::1], types.float64[:, :, ::1]
