@@ -218,6 +218,9 @@ class PlantOutcome:
         ``""``, or the exception (type and message) that stopped the plant.
     trials : int
         Closed-loop trials it ran.
+    calibration : dict
+        What its calibration found (calibrated ``mu_s`` and first slip per
+        bottle, the calibration's note); empty without calibration.
 
     Examples
     --------
@@ -231,19 +234,39 @@ class PlantOutcome:
     claims: list
     error: str
     trials: int
+    calibration: dict = field(default_factory=dict)
 
 
-def _calibrated(plant: Any) -> tuple[Any, dict[str, float]]:
-    """The plant with its pads calibrated to its open-loop first slip, and the calibrated mu_s.
+def _calibrated(plant: Any, table: Mapping) -> tuple[Any, dict[str, Any]]:
+    """The plant with its pads calibrated to its open-loop first slip, and what the calibration found.
 
-    One seed first; where its stick-slip jumps leave no friction within the
-    calibration's tolerance, the reproduce default's seeds (averaged) are tried.
+    One seed first; where the first slip jumps over the target (see
+    :func:`~slipreflex.sim.calibration.calibrate_bottle`), the reproduce
+    default's seeds (averaged), whose steps are finer; where the target is
+    still inside a jump, the nearest edge whose volume lies in the table's
+    ``first_slip_ml`` range (the paper's "about 200 ml") is taken. Columns:
+    ``calibrated_mu_s_<bottle>``, ``calibrated_first_slip_ml_<bottle>`` and
+    ``calibration_note`` (``""``, or the jumps the calibration fell back on).
     """
-    try:
-        plant = plant.calibrated(seeds=CALIBRATION_SEEDS)
-    except ParameterError:
-        plant = plant.calibrated()
-    return plant, {f"calibrated_mu_s_{name}": float(b.mu_s) for name, b in plant.bottles.items()}
+    from dataclasses import replace
+    from types import MappingProxyType
+
+    from ..sim.calibration import CALIBRATION_SEEDS as DEFAULT_SEEDS, calibrate_bottle
+
+    c = table["first_slip_ml"]
+    kw = plant.rig_kwargs()
+    cals = {}
+    for name, bottle in plant.bottles.items():
+        try:
+            cals[name] = calibrate_bottle(bottle, plant.first_slip_ml, rig_kwargs=kw, seeds=CALIBRATION_SEEDS)
+        except ParameterError:
+            cals[name] = calibrate_bottle(bottle, plant.first_slip_ml, rig_kwargs=kw, seeds=DEFAULT_SEEDS,
+                                          band_ml=(c.low, c.high))
+    plant = replace(plant, bottles=MappingProxyType({n: k.bottle for n, k in cals.items()}))
+    extra: dict[str, Any] = {f"calibrated_mu_s_{n}": float(k.mu_s) for n, k in cals.items()}
+    extra.update({f"calibrated_first_slip_ml_{n}": float(k.first_slip_ml) for n, k in cals.items()})
+    extra["calibration_note"] = "; ".join(k.note for k in cals.values() if k.note)
+    return plant, extra
 
 
 def run_plant(index: int, values: Mapping[str, float], config: StudyConfig) -> PlantOutcome:
@@ -265,9 +288,9 @@ def run_plant(index: int, values: Mapping[str, float], config: StudyConfig) -> P
     values = {k: float(v) for k, v in values.items()}
     try:
         plant = plant_from_values(values, table=config.table)
-        extra: dict[str, float] = {}
+        extra: dict[str, Any] = {}
         if config.calibrate:
-            plant, extra = _calibrated(plant)
+            plant, extra = _calibrated(plant, config.table)
         rc = config.reproduce_config(plant)
         from .. import methods
 
@@ -278,7 +301,7 @@ def run_plant(index: int, values: Mapping[str, float], config: StudyConfig) -> P
         judged = judge_run(rows, seed=config.seed, plant=plant) if config.scan else judge(rows)
         verdicts = [(r.number, r.verdict, r.numbers) for r in judged]
         out_rows = [{"plant": index, **values, **extra, "error": "", **dict(r)} for r in rows]
-        return PlantOutcome(index, values, out_rows, verdicts, "", len(rc.cells()))
+        return PlantOutcome(index, values, out_rows, verdicts, "", len(rc.cells()), extra)
     except Exception as err:   # a plant that raises is recorded, the study goes on
         last = traceback.extract_tb(err.__traceback__)[-1]
         msg = f"{type(err).__name__}: {err} ({Path(last.filename).name}:{last.lineno})"
@@ -311,7 +334,8 @@ def write_part(out: Path, outcome: PlantOutcome, fingerprint: str) -> Path:
 
     table = _arrow_table(outcome.rows)
     meta = {"fingerprint": fingerprint, "plant": outcome.plant, "error": outcome.error,
-            "claims": outcome.claims, "trials": outcome.trials, "values": outcome.values}
+            "claims": outcome.claims, "trials": outcome.trials, "values": outcome.values,
+            "calibration": outcome.calibration}
     table = table.replace_schema_metadata({_META_KEY: json.dumps(meta).encode()})
     path = part_path(out, outcome.plant)
     path.parent.mkdir(parents=True, exist_ok=True)
