@@ -293,3 +293,20 @@ def test_a_zero_length_run_from_the_start_returns(method, compiled):
     assert rig.t == 0.0 and tr.t.size == 0 and tr.cmd_t.size == 0
     tr = run_closed_loop(rig, methods.make(method, context=CONTEXT), 0.01, compiled=compiled)
     assert tr.t.size == 4 and tr.t[0] == 0.0
+
+
+def test_a_compiled_tactile_reflex_beside_another_sampler():
+    """With a user's thumb sampler open, the loop builds the reflex's frames among the other rows."""
+    runs = []
+    for compiled in (True, False):
+        rig = Rig("TX", seed=2)
+        rig.grasp()
+        other = rig.tactile_sampler(100.0, Finger.THUMB, keep=True)
+        rig.perturb(PAPER_DROP, at=rig.t + 0.1)
+        reflex = _Squeeze(hw.SWT_FS)
+        tr = run_closed_loop(rig, reflex, 0.8, compiled=compiled)
+        runs.append(((rig, reflex, tr), other.read()))
+    (a, fa), (b, fb) = runs
+    _assert_same(a, b)
+    assert a[2].cmd_t.size > 0 and fa[1].shape[0] > 0
+    np.testing.assert_array_equal(fa[1], fb[1])

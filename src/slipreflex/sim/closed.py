@@ -285,12 +285,18 @@ def _closed_tactile(step, RS, RP, S, C, P, keys, D, W, track, tac_rates, tac_nex
         _advance(horizon, S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, tgt, spd, q_i, q_v,
                  masks, cfg, cnt, daq, ev, tac, s_daq, s_ev, s_tac, s_n)
         n = C[K.C_N]
-        for r in range(r0, cnt[N_TAC]):
+        r1 = cnt[N_TAC]
+        f0 = cnt[N_FRAMES]
+        if tac_rates.shape[0] == 1 and r1 > r0:   # the reflex's sampler alone: its frames in one call
+            K.tactile_frames(tac[r0:r1], tkey, cfg[CF_GAIN], cfg[CF_SIGMA], cfg[CF_SHIFT], cfg[CF_NOISE],
+                             cfg[CF_RES], cfg[CF_ALPHA], cfg[CF_HYST], cfg[CF_DRIFT], tstate, frames3[f0:f0 + r1 - r0])
+        for r in range(r0, r1):
             if tac[r, K.T_ID] != si:
                 continue
             f = cnt[N_FRAMES]
-            K.tactile_frames(tac[r:r + 1], tkey, cfg[CF_GAIN], cfg[CF_SIGMA], cfg[CF_SHIFT], cfg[CF_NOISE],
-                             cfg[CF_RES], cfg[CF_ALPHA], cfg[CF_HYST], cfg[CF_DRIFT], tstate, frames3[f:f + 1])
+            if tac_rates.shape[0] > 1:
+                K.tactile_frames(tac[r:r + 1], tkey, cfg[CF_GAIN], cfg[CF_SIGMA], cfg[CF_SHIFT], cfg[CF_NOISE],
+                                 cfg[CF_RES], cfg[CF_ALPHA], cfg[CF_HYST], cfg[CF_DRIFT], tstate, frames3[f:f + 1])
             cnt[N_FRAMES] = f + 1
             ts = tac[r, K.T_T]
             p = cnt[N_POSPTR]
