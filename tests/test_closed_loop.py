@@ -310,3 +310,14 @@ def test_a_compiled_tactile_reflex_beside_another_sampler():
     _assert_same(a, b)
     assert a[2].cmd_t.size > 0 and fa[1].shape[0] > 0
     np.testing.assert_array_equal(fa[1], fb[1])
+
+
+def test_a_compiled_method_that_is_not_numba_is_refused_before_the_run():
+    class Fake(_Plain):
+        def compiled(self):
+            return (lambda S, P, raw, position: np.nan), np.zeros(1), np.zeros(1)
+
+    rig = Rig("TR")
+    with pytest.raises(ParameterError, match=r"Fake.compiled\(\) must return a numba @njit step"):
+        run_closed_loop(rig, Fake(100.0), 0.1)
+    assert rig.t == 0.0
