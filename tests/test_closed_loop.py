@@ -321,3 +321,20 @@ def test_a_compiled_method_that_is_not_numba_is_refused_before_the_run():
     with pytest.raises(ParameterError, match=r"Fake.compiled\(\) must return a numba @njit step"):
         run_closed_loop(rig, Fake(100.0), 0.1)
     assert rig.t == 0.0
+
+
+@pytest.mark.parametrize("latency,dt", [(0.0123, 7e-5), (0.0005, 2.5e-4)])
+@pytest.mark.parametrize("method", [methods.DATH, methods.AUTHORS_GUI, methods.NMSD])
+def test_the_loops_agree_off_the_default_latency_and_time_step(method, latency, dt):
+    """A latency off the step grid (or shorter than a DAQ period) and another dt: same due steps, same bits."""
+    from slipreflex.sim import HandParams, PhysicsParams
+
+    runs = []
+    for compiled in (True, False):
+        rig = Rig("DK", seed=5, hand=HandParams(latency_s=latency), physics=PhysicsParams(dt=dt))
+        g = rig.grasp()
+        reflex = methods.make(method, p0=float(round(g.positions[hw.SLIP_FINGER])), context=CONTEXT)
+        rig.perturb(PAPER_DROP, at=rig.t + 0.3)
+        runs.append((rig, reflex, run_closed_loop(rig, reflex, 1.5, compiled=compiled)))
+    _assert_same(*runs)
+    assert runs[0][2].cmd_t.size > 0
