@@ -10,6 +10,14 @@ reaches the fingers after the hand's latency; the physics is advanced in
 stretches that never pass a time a pending command could still change, so
 the result is the same as stepping sample by sample.
 
+A reflex with a compiled step (:class:`slipreflex.interfaces.CompiledReflex`:
+every method on the paper's chain, NMSD, SWT-SD) runs this same loop inside
+one numba function (:mod:`slipreflex.sim.closed`), 2 to 4 times faster and
+with the same bits; ``run_closed_loop(..., compiled=False)`` forces the Python
+loop, which every other reflex runs. The tripod fingers all get the command
+(plus a reflex's declared ``finger_offsets``): a documented limit of the
+simulated hand rule, the same in both loops.
+
 :class:`SimTrace` holds every stream of the run as arrays.
 
 Examples
