@@ -105,7 +105,7 @@ def test_the_reflex_and_the_rig_continue_where_the_compiled_loop_left_them():
 
 
 def test_a_recorded_tactile_stream_and_a_queued_command_are_kept():
-    """tactile_fs records frames; a command queued before the loop (a CLOSE) is applied in order."""
+    """tactile_fs records frames; commands queued before the loop (CLOSE, STOP, OPEN) are applied in order."""
     runs = []
     for compiled in (True, False):
         rig = Rig("TX", seed=5)
@@ -113,6 +113,8 @@ def test_a_recorded_tactile_stream_and_a_queued_command_are_kept():
         reflex = methods.make(methods.DATH, p0=g.positions[hw.SLIP_FINGER])
         other = rig.tactile_sampler(100.0, Finger.THUMB, keep=True)   # a user's sampler stays fed
         rig.hand.command(HandCommand.CLOSE, [Finger.THUMB], 100.0, at=rig.t)
+        rig.hand.command(HandCommand.STOP, [Finger.THUMB, Finger.INDEX], at=rig.t + 0.05)
+        rig.hand.command(HandCommand.OPEN, [Finger.INDEX], 297.0, at=rig.t + 0.3)   # due after some commands
         rig.perturb(PAPER_DROP, at=rig.t + 0.1)
         tr = run_closed_loop(rig, reflex, 0.6, tactile_fs=hw.NMSD_FS, compiled=compiled)
         runs.append((rig, reflex, tr))
