@@ -8,8 +8,9 @@ default reproduction's drop and pour, bottle TR), the trial is set up exactly as
 the median over ``--repeat`` runs of simulated seconds per CPU second of this
 process (the steadier measure of one core on a shared machine; wall-clock figures
 beside it). Then the loop's own cost: the same held grasp through the paper's pour
-advanced open loop (physics and sensors alone) and closed by a compiled reflex
-that never commands (the compiled loop's overhead is the difference).
+advanced open loop (physics and sensors alone, also with a 260 Hz and a 380 Hz
+tactile stream, the tactile methods' floor) and closed by a compiled reflex that
+never commands (the compiled loop's overhead is the difference).
 
 Run: ``python benchmarks/bench_closed_loop.py`` (``--methods dath,nmsd``,
 ``--repeat 5``). Issue 10's target: 1500 simulated s per CPU s or more for every
@@ -29,7 +30,7 @@ from numba import njit
 from slipreflex import hardware as hw
 from slipreflex import methods
 from slipreflex.experiments import ReproduceConfig, calibrate, method_context, trial_seed
-from slipreflex.sim import PAPER_POUR, Rig, run_closed_loop
+from slipreflex.sim import PAPER_POUR, Rig, run_closed_loop, simulate_open_loop
 from slipreflex.sim.variations import VariationSpread, trial_rig
 
 
@@ -73,17 +74,18 @@ class Never:
         self.S[:] = 0.0
 
 
-def held(closed: bool, duration: float = 40.0) -> tuple[float, float, float]:
-    """The paper's pour on a grasp squeezed 40 units firmer (it holds throughout), open or closed loop."""
+def held(closed: bool, duration: float = 40.0, tactile_fs: float | None = None) -> tuple[float, float, float]:
+    """The paper's pour on a grasp squeezed 40 units firmer (it holds throughout), open or closed loop,
+    optionally with a tactile stream at ``tactile_fs`` (what a tactile method adds to the physics)."""
     rig = Rig("TR", seed=1)
     g = rig.grasp()
     rig.hand.set_positions({f: g.positions[f] + 40 for f in hw.TRIPOD})
     rig.perturb(PAPER_POUR, at=rig.t + 0.5)
     w0, c0 = time.perf_counter(), time.process_time()
     if closed:
-        run_closed_loop(rig, Never(), duration)
+        run_closed_loop(rig, Never(), duration, tactile_fs=tactile_fs)
     else:
-        rig.advance_block(rig.t + duration)
+        simulate_open_loop(rig, duration, tactile_fs=tactile_fs)
     return duration, time.perf_counter() - w0, time.process_time() - c0
 
 
@@ -110,11 +112,12 @@ def main() -> None:
             slow = median_rate(trial, args.repeat, config, thresholds, method, experiment, False)
             print(f"{method:14s} {experiment:10s} {config.duration(experiment):6.1f}   "
                   f"{fast[0]:8.0f} ({fast[1]:6.0f})   {slow[0]:8.0f} ({slow[1]:6.0f})   {fast[0] / slow[0]:7.1f}x")
-    phys = median_rate(held, args.repeat, False)
-    loop = median_rate(held, args.repeat, True)
-    print(f"held pour, physics + sensors alone (open loop): {phys[0]:8.0f} sim-s per CPU-s ({phys[1]:.0f} wall)")
-    print(f"held pour, compiled loop, a reflex that never commands: {loop[0]:8.0f} sim-s per CPU-s "
-          f"({loop[1]:.0f} wall): the loop's own cost is {100 * (phys[0] / loop[0] - 1):.0f}% of the physics'")
+    for fs, what in ((None, ""), (hw.NMSD_FS, ", 260 Hz tactile"), (hw.SWT_FS, ", 380 Hz tactile")):
+        phys = median_rate(held, args.repeat, False, 40.0, fs)
+        loop = median_rate(held, args.repeat, True, 40.0, fs)
+        print(f"held pour{what}: open loop (physics + sensors alone) {phys[0]:5.0f} sim-s per CPU-s; closed by a "
+              f"compiled reflex that never commands {loop[0]:5.0f} (the loop's own cost: "
+              f"{100 * (phys[0] / loop[0] - 1):.0f}%)")
 
 
 if __name__ == "__main__":
