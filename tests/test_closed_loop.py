@@ -340,3 +340,38 @@ def test_the_loops_agree_off_the_default_latency_and_time_step(method, latency, 
         runs.append((rig, reflex, run_closed_loop(rig, reflex, 1.5, compiled=compiled)))
     _assert_same(*runs)
     assert runs[0][2].cmd_t.size > 0
+
+
+class _Checked(_Failing):
+    """A compiled reflex with the Reflex diagnostics, for slipreflex.testing.check_reflex."""
+
+    last_event, last_filtered, last_threshold, last_count = False, math.nan, None, None
+
+    def __init__(self):
+        super().__init__(1e9)
+
+
+def test_check_reflex_holds_a_compiled_step_to_step():
+    from slipreflex.testing import ContractError, check_reflex
+
+    assert check_reflex(_Checked()).commands > 0
+
+    class Copied(_Checked):
+        def compiled(self):
+            return _fail_step, self.S.copy(), self.P
+
+    with pytest.raises(ContractError, match="live state"):
+        check_reflex(Copied())
+
+    class Other(_Checked):
+        def compiled(self):
+            return _never_step, self.S, self.P
+
+    with pytest.raises(ContractError, match="compiled step on its state disagrees"):
+        check_reflex(Other())
+
+
+@njit(cache=True)
+def _never_step(S, P, raw, position):
+    S[0] += 1.0
+    return np.nan

@@ -15,7 +15,10 @@ slip) and checks the :class:`slipreflex.interfaces.Reflex` contract:
 * a non-finite sample is handled: it is skipped or refused with
   :class:`~slipreflex.errors.DataError` (any other exception fails), it never
   yields a command below the hand's measured position or the last command (a
-  fault never opens the hand), and the reflex still answers the slip after it.
+  fault never opens the hand), and the reflex still answers the slip after it;
+* a :class:`~slipreflex.interfaces.CompiledReflex`: ``compiled()`` returns the
+  live state, and its step on that state gives ``step``'s commands and
+  diagnostics bit for bit (what the compiled closed loop relies on).
 
 :func:`reflex_for_check` builds any registered method ready for the check
 (thresholds of calibrated methods from the synthetic rest recording, by the
@@ -237,6 +240,26 @@ def _first_difference(a: list[tuple], b: list[tuple]) -> int:
     return next((k for k, (u, v) in enumerate(zip(a, b)) if u != v), min(len(a), len(b)))
 
 
+def _check_compiled(reflex: Any, x: np.ndarray, reference: list[tuple]) -> None:
+    """A :class:`~slipreflex.interfaces.CompiledReflex`: its step on its live state is ``step`` itself."""
+    if not callable(getattr(reflex, "compiled", None)):
+        return
+    reflex.reset()
+    step, S, P = reflex.compiled()
+    if reflex.compiled()[1] is not S:
+        _fail(reflex, "compiled() must return the reflex's own live state vector, not a copy")
+    trace = []
+    for k, sample in enumerate(x):
+        pos = CHECK_P0 + 0.01 * k if k % 4 == 0 else math.nan
+        inp = (np.ascontiguousarray(sample, dtype=np.float64).reshape(-1) if reflex.input_kind == "tactile"
+               else float(sample))
+        out = float(step(S, P, inp, pos))
+        trace.append((_command(reflex, None if out != out else out, k), _diagnostics(reflex)))
+    if trace != reference:
+        _fail(reflex, f"its compiled step on its state disagrees with step (first difference at sample "
+                      f"{_first_difference(reference, trace)}): the compiled closed loop would run another reflex")
+
+
 def _check_non_finite(reflex: Any, x: np.ndarray, k_bad: int, k_rest: int, reference: list[tuple]) -> None:
     """A NaN sample at ``k_bad`` is skipped or refused, never opens the hand, and the reflex goes on."""
     reflex.reset()
@@ -317,6 +340,7 @@ def check_reflex(reflex: Any, *, shape: tuple[int, ...] | None = None, seed: int
     twin.reset()
     if _run(twin, x) != first:
         _fail(reflex, "a copy of the fresh reflex gives other bits on the same input")
+    _check_compiled(reflex, x, first)
     _check_non_finite(reflex, x, k_rest // 2, k_rest, first)
     reflex.reset()
     return CheckReport(samples=len(x), commands=sum(c is not None for c, _ in first),
