@@ -65,6 +65,11 @@ def test_slide_speed_solver_converges_and_solves_the_balance():
         assert w >= 0.0
         resid = r - k * w - n * (mu + a * math.log1p(w / v0))
         assert abs(resid) <= 1e-9 * r
+        # the kernel's start for the next step: a Newton step off this (z, w), after the load moved a little
+        r2 = r * (1.0 + 1e-5 * rng.standard_normal())
+        if w > 0.0 and r2 > n * mu:
+            w2, _, it2, ok2 = K._rs_solve(r2, k, n, mu, a, v0, z, w)
+            assert ok2 and it2 <= 3 and w2 == pytest.approx(K.rs_slide_speed(r2, k, n, mu, a, v0, C)[0], rel=1e-9)
     assert C[K.C_NFAIL] == 0 and C[K.C_NITER] < 60
 
 

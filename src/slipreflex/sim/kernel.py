@@ -74,9 +74,8 @@ S_NC, S_FT, S_AF, S_SUPPORTED, S_FALLEN, S_TFALL = 15, 16, 17, 18, 19, 20
 S_AX, S_AY, S_AZ, S_AFRESH, S_MASS, S_A = 21, 22, 23, 24, 25, 26
 # per contact (thumb, index, middle): block of SC_SIZE starting at S_C0 + i * SC_SIZE
 S_C0 = 27
-# SC_Z: ln(1 + w / v0), the solver's variable; SC_ZP: its value one step earlier (the solver extrapolates)
-SC_S, SC_W, SC_STUCK, SC_DIR, SC_PHI, SC_FT, SC_Z, SC_ZP = range(8)
-SC_SIZE = 8
+SC_S, SC_W, SC_STUCK, SC_DIR, SC_PHI, SC_FT, SC_Z = range(7)   # SC_Z: ln(1 + w / v0), the solver's variable
+SC_SIZE = 7
 # the water (WaterParams): bottle's sideways position and velocity, the slosh mass's, the bottle's sideways
 # acceleration and its DLPF, the splash noise at the two ends of the current 1 ms interval, the slosh mode's
 # k tanh(k h), mass m1, damping coefficient and jet participation, the axial load and the water's sideways
@@ -238,14 +237,25 @@ def _litres(W, t):
 
 
 @njit(cache=True, inline="always")
-def _rs_solve(R, K, N, mu_st, a, v0, z_guess):
-    """Scalar core of :func:`rs_slide_speed`: returns ``(w, z, iterations, converged)``."""
+def _rs_solve(R, K, N, mu_st, a, v0, z_guess, w_guess=-1.0):
+    """Scalar core of :func:`rs_slide_speed`: returns ``(w, z, iterations, converged)``.
+
+    With ``w_guess >= 0`` (the sliding speed that goes with ``z_guess``, i.e. the previous
+    step's), the start is one Newton step from ``z_guess`` taken with ``exp(z_guess) = 1 +
+    w_guess / v0``, which costs no exponential: under a load that changes from step to step
+    (the pour's splash) the solve then usually converges in one more step.
+    """
     rp = R - N * mu_st
     na = N * a
     if na <= 0.0:
         return rp / K, np.log1p(rp / K / v0), 0, True
     kv = K * v0
-    if z_guess > 0.0:
+    if z_guess > 0.0 and w_guess >= 0.0:
+        e = 1.0 + w_guess / v0
+        z = z_guess + (rp - kv * (e - 1.0) - na * z_guess) / (kv * e + na)
+        if z <= 0.0:
+            z = min(rp / na, np.log1p(rp / kv))
+    elif z_guess > 0.0:
         z = z_guess
     else:
         z = min(rp / na, np.log1p(rp / kv))
@@ -294,7 +304,7 @@ def rs_slide_speed(R, K, N, mu_st, a, v0, C, z_guess=0.0):
 
 
 @njit(cache=True, inline="always")
-def _rs_contact(kt, ct, s, mus, muk, phi, z_prev, z_prev2, a, v0, dc, heal_s, heal_decay, x, v, nc, dt):
+def _rs_contact(kt, ct, s, mus, muk, phi, z_prev, w_prev, a, v0, dc, heal_s, heal_decay, x, v, nc, dt):
     """One step of a rate-state contact (implicit, return mapping); scalars in and out.
 
     The contact sticks while the trial force ``k_t (x - s + v dt) + c_t v``
@@ -303,9 +313,9 @@ def _rs_contact(kt, ct, s, mus, muk, phi, z_prev, z_prev2, a, v0, dc, heal_s, he
     with the friction ``N (mu_k + (mu_s - mu_k) phi + a ln(1 + w / v0))``. The
     state ``phi`` (1 = fully healed) decays over the slip distance ``D_c`` and
     heals over ``t_heal``: ``dphi/dt = -phi w / D_c + (1 - phi) / t_heal``,
-    integrated exactly over the step. The solve starts from the solver variable
-    extrapolated from the two previous steps (``z_prev``, ``z_prev2``) while
-    the contact keeps sliding, so one Newton step usually converges. Returns
+    integrated exactly over the step. While the contact keeps sliding the solve
+    starts from a Newton step off the previous step's ``z_prev`` and ``w_prev``
+    (see :func:`_rs_solve`), so one more Newton step usually converges. Returns
     ``(F, s, w, z, d, phi, it, ok)``:
     the force on the bottle (up when positive), the new anchor, sliding speed,
     solver variable (0 when stuck), direction (0 when stuck), state, and the
@@ -324,8 +334,7 @@ def _rs_contact(kt, ct, s, mus, muk, phi, z_prev, z_prev2, a, v0, dc, heal_s, he
     else:
         d = 1.0 if A > 0.0 else -1.0
         K = kt * dt + ct
-        z_guess = 2.0 * z_prev - z_prev2 if (z_prev > 0.0 and z_prev2 > 0.0) else z_prev
-        w, z, it, ok = _rs_solve(R, K, nc, mu_st, a, v0, z_guess)
+        w, z, it, ok = _rs_solve(R, K, nc, mu_st, a, v0, z_prev, w_prev)
         F = d * (R - K * w)
         s = s + d * w * dt
     if w > 0.0:
@@ -591,10 +600,9 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
                 if P[bp + PC_LAW] == LAW_RATE_STATE:
                     F, s_new, w, z, d, phi, it, ok = _rs_contact(
                         P[bp + PC_KT], P[bp + PC_CT], S[bs + SC_S], P[bp + PC_MUS], P[bp + PC_MUK], S[bs + SC_PHI],
-                        S[bs + SC_Z], S[bs + SC_ZP], P[bp + PC_A], P[bp + PC_V0], P[bp + PC_DC], P[bp + PC_HEAL],
+                        S[bs + SC_Z], S[bs + SC_W], P[bp + PC_A], P[bp + PC_V0], P[bp + PC_DC], P[bp + PC_HEAL],
                         P[bp + PC_HEAL_DECAY], x, v, nc, dt)
                     S[bs + SC_S] = s_new
-                    S[bs + SC_ZP] = S[bs + SC_Z]
                     S[bs + SC_Z] = z
                     if d != 0.0:
                         S[bs + SC_DIR] = d
