@@ -112,7 +112,7 @@ _COMMON = (_f1, _f1, _f1, _i1, _f1, _u1, _f2, _f2, _f1, _f1, _i1, _i1,  # RS RP 
            _f1, _i1, _f2, _f2, _f2, _f1, _f1, _f2, _f2, _f2, _i1)     # cfg cnt daq ev tac cmd_t cmd_v s_daq s_ev s_tac s_n
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _apply_due(n, S, tgt, spd, q_i, q_v, masks, cnt, speed):
     """SimHand.apply_due(n) on the array queue, then the rig's copy into S."""
     head = cnt[N_QHEAD]
@@ -142,7 +142,7 @@ def _apply_due(n, S, tgt, spd, q_i, q_v, masks, cnt, speed):
         S[K.S_SPD0 + i] = spd[i]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _enqueue(q_i, q_v, cnt, step, kind, group, value):
     """bisect.insort by (due step, sequence number), as SimHand.command queues."""
     count = cnt[N_COUNT]
@@ -162,7 +162,7 @@ def _enqueue(q_i, q_v, cnt, step, kind, group, value):
     cnt[N_QLEN] += 1
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _command(c, ts, n, cfg, q_i, q_v, cnt, cmd_g, cmd_off, cmd_clip, cmd_t, cmd_v):
     """The loop's ``command(POSITION, fingers, c, at=ts)`` (split by finger offsets) and its record."""
     step = np.int64(np.ceil((ts + cfg[CF_LAT]) / cfg[CF_DT] - _ROUND))
@@ -179,7 +179,7 @@ def _command(c, ts, n, cfg, q_i, q_v, cnt, cmd_g, cmd_off, cmd_clip, cmd_t, cmd_
     cnt[N_CMD] = k + 1
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _room(C, D, tac_rates, cfg, cnt, q_i, q_v, daq, ev, tac, cmd_t, n_groups, horizon, fs_in):
     """Whether every output can take what advancing to ``horizon`` may produce (else the caller grows them)."""
     dt = cfg[CF_DT]
@@ -205,7 +205,16 @@ def _room(C, D, tac_rates, cfg, cnt, q_i, q_v, daq, ev, tac, cmd_t, n_groups, ho
             and cnt[N_QLEN] + inputs * n_groups <= q_i.shape[0])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
+def _append(out, filled, rows, n):
+    """Copy the first ``n`` rows of ``rows`` after the ``filled`` rows of ``out``; the new fill."""
+    for r in range(n):
+        for j in range(rows.shape[1]):
+            out[filled + r, j] = rows[r, j]
+    return filled + n
+
+
+@njit(cache=True, inline="always")
 def _advance(horizon, S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, tgt, spd, q_i, q_v,
              masks, cfg, cnt, daq, ev, tac, s_daq, s_ev, s_tac, s_n):
     """Rig._advance_rows(horizon): apply due commands, run the physics to the next due step or the end."""
@@ -226,13 +235,9 @@ def _advance(horizon, S, C, P, keys, D, W, track, tac_rates, tac_next, tac_conta
             part = min(stop, C[K.C_N] + chunk)
             K.step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, part, s_daq, s_tac,
                          s_ev, s_n)
-            nd, nt, ne = s_n[0], s_n[1], s_n[2]
-            daq[cnt[N_DAQ]:cnt[N_DAQ] + nd] = s_daq[:nd]
-            tac[cnt[N_TAC]:cnt[N_TAC] + nt] = s_tac[:nt]
-            ev[cnt[N_EV]:cnt[N_EV] + ne] = s_ev[:ne]
-            cnt[N_DAQ] += nd
-            cnt[N_TAC] += nt
-            cnt[N_EV] += ne
+            cnt[N_DAQ] = _append(daq, cnt[N_DAQ], s_daq, s_n[0])
+            cnt[N_TAC] = _append(tac, cnt[N_TAC], s_tac, s_n[1])
+            cnt[N_EV] = _append(ev, cnt[N_EV], s_ev, s_n[2])
 
 
 @njit(cache=_CACHE)
