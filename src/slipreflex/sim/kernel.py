@@ -34,7 +34,13 @@ Model (one physics step of ``dt``, semi-implicit Euler):
 * **Loads**: gravity on bottle + water (+ landed masses, through their
   contact springs); a dropped mass is a second body with a compliant,
   damped contact on the bottom; a pour adds water at a constant rate after
-  the jet's fall time and pushes with the jet's momentum flux.
+  the jet's fall time and pushes with the jet's momentum flux, plus its
+  splash (a one-pole noise on a fixed 1 ms grid, stream ``keys[5]``).
+* **Slosh** (sideways, ``WaterParams``): the first antisymmetric mode of the
+  water as a spring-mass (:func:`slosh_mode`) on the bottle, which the grasp
+  holds sideways; driven by the jet landing off the axis and by the bottle's
+  own motion (its axial acceleration scales the mode's gravity). The
+  accelerometer's x axis reads the bottle's sideways acceleration.
 * **Fallen out**: once the bottle has moved ``grip_travel`` below the
   fingertips the contacts reach the shoulder and are lost; the bottle then
   falls freely.
