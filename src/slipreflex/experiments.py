@@ -299,10 +299,10 @@ def _seed63(ss: np.random.SeedSequence) -> int:
 
 #: Simulated seconds per wall second of one trial (simulation, reflex, analysis) on one
 #: worker, for the run-time estimate printed before a reproduction starts.
-#: ``python benchmarks/bench_reproduce.py --jobs 2`` prints it as simulated s per CPU s (514, 562
-#: for the default grid with the compiled closed loop, an AMD EPYC core, load average 2.9-3.8);
-#: 450 leaves a margin. A busy machine runs slower, and the progress lines say so.
-TRIAL_SIM_SPEED: float = 450.0
+#: ``python benchmarks/bench_reproduce.py --jobs 2`` prints it as simulated s per CPU s (798 at load
+#: average 1.4, 514-562 at 2.9-3.8, default grid, compiled closed loop, an AMD EPYC core); 600
+#: leaves a margin. A busy machine runs slower, and the progress lines say so.
+TRIAL_SIM_SPEED: float = 600.0
 #: Wall seconds before the first trial: imports, threshold calibration, worker start.
 STARTUP_S: float = 3.0
 
