@@ -338,11 +338,17 @@ def _kernel(kind: str):
     Its compilation is then disabled, so every reflex's step is passed as a
     first-class function of that signature: one machine code for every method.
     """
-    disp = _closed_slip if kind == "slip" else _closed_tactile
-    if not disp.signatures:
-        disp.compile(_SIGNATURES[kind])
-        disp.disable_compile()
+    disp = _READY.get(kind)
+    if disp is None:
+        disp = _closed_slip if kind == "slip" else _closed_tactile
+        if not disp.signatures:
+            disp.compile(_SIGNATURES[kind])
+            disp.disable_compile()
+        _READY[kind] = disp
     return disp
+
+
+_READY: dict = {}   # kind -> its kernel, compiled
 
 
 @dataclass
@@ -396,7 +402,8 @@ def _typed_step(reflex, kind: str):
     sig = SLIP_STEP if kind == "slip" else TACTILE_STEP
     if not hasattr(step, "compile"):
         raise ParameterError(f"{type(reflex).__name__}.compiled() must return a numba @njit step, got {step!r}")
-    step.compile(sig.args)
+    if sig.args not in getattr(step, "overloads", {}):
+        step.compile(sig.args)
     for name, a in (("S", RS), ("P", RP)):
         if not (isinstance(a, np.ndarray) and a.dtype == np.float64 and a.ndim == 1 and a.flags.c_contiguous):
             raise ParameterError(f"{type(reflex).__name__}.compiled(): {name} must be a 1-D C-contiguous "
