@@ -1,0 +1,29 @@
+"""scripts/readme_results.py builds the README's results table from a run's summary."""
+
+import runpy
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+SCRIPT = runpy.run_path(str(ROOT / "scripts" / "readme_results.py"))
+
+
+def _row(e, b, m, resp, total, rate, n):
+    return {"experiment": e, "bottle": b, "method": m, "response_mean_ms": resp, "total_mean_ms": total,
+            "success_rate": rate, "success_n": n}
+
+
+def test_table_reads_dath_cells_and_pools_success_over_bottles():
+    summary = [_row("drop", "TR", "dath", "61.4", "80", "1.0", "10"),
+               _row("drop", "TX", "dath", "40", "", "0.5", "10"),
+               _row("drop", "TR", "fixed", "70", "90", "0.0", "5"),
+               _row("drop", "TX", "fixed", "70", "90", "1.0", "15")]
+    text = SCRIPT["table"](summary, {"TR": 199.6, "TX": 201.2})
+    assert "| drop response, ms (TR / TX) | 61 / 40 | 50 / 31.3 |" in text
+    assert "| drop total controller time, ms (TR / TX) | 80 / - |" in text
+    assert "| 75 / 75 % |" in text                      # DATH 15 of 20, fixed 15 of 20 pooled
+    assert "| 200 / 201 | ~200 |" in text
+
+
+def test_readme_holds_each_marker_once():
+    readme = (ROOT / "README.md").read_text()
+    assert readme.count(SCRIPT["BEGIN"]) == 1 and readme.count(SCRIPT["END"]) == 1
