@@ -198,3 +198,16 @@ def test_paper_table_is_complete():
     assert len(PAPER) == 32
     assert paper_value("pour", "response_ms", "DK", "swt").mean == 73.0
     assert paper_value("drop", "total_ms", "TX", "dath").note == "also 274.4"
+
+
+def test_a_detected_onset_belongs_to_the_slip_under_way_not_to_the_nearest_in_time():
+    """A creeping pour slip detected 1.3 s late is matched to its own start, never to the next slip."""
+    from slipreflex.analysis.trial import EARLY_DETECTION_S, true_onset_for
+
+    truth = np.array([2.0, 14.689, 16.117, 28.568])
+    assert true_onset_for(truth, 15.963, 3.0, 30.5) == 14.689          # nearest-in-time would say 16.117
+    assert true_onset_for(truth, 16.2, 3.0, 30.5) == 16.117
+    assert true_onset_for(truth, 28.568 - EARLY_DETECTION_S / 2, 3.0, 34.0) == 28.568   # fired a bit early
+    assert np.isnan(true_onset_for(truth, 2.5, 3.0, 34.0))              # before the induction: no slip of it
+    assert np.isnan(true_onset_for(np.array([]), 5.0, 3.0, 34.0))
+    assert true_onset_for(truth, float("nan"), 3.0, 34.0) == 14.689

@@ -54,3 +54,18 @@ def test_prose_from_rows_read_back_from_csv_is_the_same(tmp_path):
     back = ReproduceResult(res.config, read_csv(write_csv(tmp_path / "r.csv", res.rows, RESULT_COLUMNS)),
                            res.summary, res.thresholds, {}, 1.0, 1)
     assert discussion_text(back) == discussion_text(res)
+
+
+def test_pour_responses_say_none_for_a_method_that_never_responded_and_explain_only_what_happened():
+    import dataclasses
+
+    rows = [dataclasses.replace(r, response_ms=float("nan")) if (r.experiment, r.method) == ("pour", "swt") else r
+            for r in _rows()]
+    res = ReproduceResult(ReproduceConfig(), rows, summarize(rows), {"nmsd": 12.0, "swt": 0.02}, {}, 1.0, 1)
+    text = " ".join(discussion_text(res))
+    assert "SWT-SD none (never responded)" in text and "nan" not in text
+    assert "NMSD commands on the very sample" not in text        # NMSD was not faster here
+    fast = [dataclasses.replace(r, response_ms=10.0) if (r.experiment, r.method) == ("pour", "nmsd") else r
+            for r in rows]
+    res = ReproduceResult(ReproduceConfig(), fast, summarize(fast), {"nmsd": 12.0, "swt": 0.02}, {}, 1.0, 1)
+    assert "NMSD commands on the very sample" in " ".join(discussion_text(res))

@@ -823,12 +823,16 @@ def _pour_response_sentences(d: _Rows) -> list[str]:
     from .. import hardware as hw
 
     ran = [m for m in methods.names() if d.sel(experiment="pour", method=m)]
-    resp = ", ".join(f"{_label(m)} {_median(r.response_ms for r in d.sel(experiment='pour', method=m)):.0f} ms"
+    med = {m: _median(r.response_ms for r in d.sel(experiment="pour", method=m)) for m in ran}
+    resp = ", ".join(f"{_label(m)} " + (f"{med[m]:.0f} ms" if _finite(med[m]) else "none (never responded)")
                      for m in ran)
-    out = [f"Median pour response: {resp}. NMSD commands on the very sample that detects "
-           f"({hw.NMSD_FS:g} Hz) and keeps closing at the hand's full speed, while the MPI raises the "
-           f"command only at the end of a {_window_ms():.0f} ms window, to P0 + Kp v + Ki h, so against "
-           "a fast slip the paper's controller is at a disadvantage in the simulator."]
+    out = [f"Median pour response: {resp}."]
+    mpi = [med[m] for m in (methods.DATH, methods.FIXED) if m in med and _finite(med[m])]
+    if methods.NMSD in med and _finite(med[methods.NMSD]) and mpi and med[methods.NMSD] < min(mpi):
+        out.append(f"NMSD commands on the very sample that detects ({hw.NMSD_FS:g} Hz) and keeps closing at "
+                   f"the hand's full speed, while the MPI raises the command only at the end of a "
+                   f"{_window_ms():.0f} ms window, to P0 + Kp v + Ki h, so against a fast slip the paper's "
+                   "controller is at a disadvantage in the simulator.")
     pre = {m: sum(1 for r in d.sel(experiment="pour", method=m) if r.n_events == 0 and r.n_increases > 0)
            for m in ran}
     if any(pre.values()):
