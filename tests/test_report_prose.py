@@ -69,3 +69,17 @@ def test_pour_responses_say_none_for_a_method_that_never_responded_and_explain_o
             for r in rows]
     res = ReproduceResult(ReproduceConfig(), fast, summarize(fast), {"nmsd": 12.0, "swt": 0.02}, {}, 1.0, 1)
     assert "NMSD commands on the very sample" in " ".join(discussion_text(res))
+
+
+def test_onset_paragraph_reports_each_experiment_and_explains_late_pour_onsets_only_when_there_are_some():
+    import dataclasses
+
+    text = " ".join(discussion_text(_result()))
+    assert "drop: median absolute error 2.0 ms" in text and "0 of 8 found more than 100 ms after" in text
+    assert "creeps before it accelerates" not in text
+    rows = [dataclasses.replace(r, onset_error_ms=1274.0) if (r.experiment, r.trial) == ("pour", 0) else r
+            for r in _rows()]
+    res = ReproduceResult(ReproduceConfig(), rows, summarize(rows), {"nmsd": 12.0, "swt": 0.02}, {}, 1.0, 1)
+    late = " ".join(discussion_text(res))
+    assert "pour: median absolute error 1274.0 ms, largest 1274 ms, 8 of 8 found more than 100 ms" in late
+    assert "creeps before it accelerates" in late
