@@ -141,3 +141,15 @@ def test_load_ranges_missing_file_and_directory(tmp_path):
 def test_plant_is_frozen():
     with pytest.raises(dataclasses.FrozenInstanceError):
         Plant().hand = None
+
+
+def test_a_reproduction_on_a_drawn_plant_runs_in_worker_processes_as_in_one():
+    """A Plant pickles (its mappings are read-only proxies), so reproduce --jobs 2 runs on it, same rows."""
+    from slipreflex.experiments import ReproduceConfig, run_reproduce
+    from slipreflex.sim.uncertain import plant_from_values
+
+    plant = plant_from_values({"spot_travel_per_unit": 0.0})
+    cfg = ReproduceConfig(trials=1, bottles=("TX",), methods=("dath",), experiments=("drop",), plant=plant)
+    one = run_reproduce(cfg, jobs=1, progress=False, plots=False)
+    two = run_reproduce(cfg, jobs=2, progress=False, plots=False)
+    assert [repr(r) for r in one.rows] == [repr(r) for r in two.rows] and one.rows

@@ -41,7 +41,7 @@ from __future__ import annotations
 
 import math
 import tomllib
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Mapping
@@ -292,6 +292,21 @@ class Plant:
     values: Mapping[str, float] = field(default_factory=nominal_values)
     first_slip_ml: float = 200.0
 
+    def __reduce__(self):
+        """Pickle with plain dicts (a read-only mappingproxy does not pickle): worker processes get plants.
+
+        Examples
+        --------
+        >>> import pickle
+        >>> p = plant_from_values({"hand_latency": 0.02})
+        >>> q = pickle.loads(pickle.dumps(p))
+        >>> q == p, type(q.bottles).__name__
+        (True, 'mappingproxy')
+        """
+        state = {f.name: getattr(self, f.name) for f in fields(self)}
+        state.update(bottles=dict(self.bottles), values=dict(self.values))
+        return (_unpickle_plant, (state,))
+
     def calibrated(self, seeds: tuple[int, ...] | None = None) -> "Plant":
         """This plant with every bottle's pad friction calibrated to :attr:`first_slip_ml`.
 
@@ -335,6 +350,12 @@ class Plant:
                 raise ParameterError(f"bottle: unknown bottle {bottle!r} (known: {', '.join(self.bottles)})")
             bottle = self.bottles[bottle]
         return Rig(bottle, seed, **self.rig_kwargs(), **kwargs)
+
+
+def _unpickle_plant(state: dict[str, Any]) -> Plant:
+    """A pickled :class:`Plant` with its mappings read-only again."""
+    return Plant(**{**state, "bottles": MappingProxyType(state["bottles"]),
+                    "values": MappingProxyType(state["values"])})
 
 
 def _parse_target(target: str) -> tuple[str, tuple[str, ...] | None, str, str | None]:
