@@ -375,3 +375,38 @@ def test_check_reflex_holds_a_compiled_step_to_step():
 def _never_step(S, P, raw, position):
     S[0] += 1.0
     return np.nan
+
+
+# --- the tripod is never opened by a reflex's command ----------------------------------------------
+
+@pytest.mark.parametrize("method", [methods.DATH, methods.AUTHORS_GUI, methods.NMSD])
+def test_no_finger_target_drops_below_its_start_in_a_closed_loop_pour(method, monkeypatch):
+    """The grasp stops each finger at its own position (here the thumb 2 units further closed than
+    the middle finger the reflex starts from): no target any finger gets is below its start, in either
+    loop, so no finger ever opens (as runtime.run_loop's per-finger floor)."""
+    from slipreflex.experiments import trial_seed
+    from slipreflex.sim.variations import grasped_rig
+
+    seed = trial_seed(ReproduceConfig().seed, "pour", "DK", 0)
+    runs, sent = [], []
+    for compiled in (True, False):
+        rig, g = grasped_rig("DK", seed, hw.CONTACT_FORCE_N)
+        start = rig.hand.positions()
+        assert start[Finger.THUMB] > start[Finger.MIDDLE], "the case needs a thumb that stopped further closed"
+        reflex = methods.make(method, p0=start[hw.SLIP_FINGER], context=CONTEXT)
+        if not compiled:   # the Python loop sends every target through the hand's command: keep them
+            command = rig.hand.command
+            monkeypatch.setattr(rig.hand, "command", lambda kind, fingers, value=0.0, at=None: (
+                sent.extend((f, value) for f in fingers), command(kind, fingers, value, at=at))[1])
+        rig.perturb(PAPER_POUR, at=rig.t + 0.2)
+        tr = run_closed_loop(rig, reflex, 0.2 + PAPER_POUR.duration_s + 1.0, compiled=compiled)
+        assert tr.cmd_t.size > 0
+        if method != methods.AUTHORS_GUI:   # (its preset starts above p0) the command alone would open the thumb
+            assert tr.cmd_value.min() < start[Finger.THUMB]
+        for i, f in enumerate(hw.TRIPOD):
+            assert np.rint(tr.daq.fingers[:, i]).min() >= start[f], f"{method}: {f.name} opened"
+            assert rig.hand.targets[i] >= start[f]
+        runs.append((rig, reflex, tr))
+    _assert_same(*runs)
+    assert {f for f, _ in sent} == set(hw.TRIPOD)
+    assert all(value >= start[f] for f, value in sent), [(f.name, v) for f, v in sent if v < start[f]][:3]

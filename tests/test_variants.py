@@ -329,17 +329,17 @@ def test_window_mpi_without_reset_matches_oracle_and_stream():
 
 def test_closed_loop_sends_the_middle_finger_its_offset():
     from slipreflex.hardware import TRIPOD, Finger, HandCommand
-    from slipreflex.sim.loop import _offset_command
+    from slipreflex.sim.loop import _finger_command, command_groups
 
     sent = []
     record = lambda kind, fingers, value, at=None: sent.append((tuple(fingers), value))  # noqa: E731
     reflex = SlipReflex.from_preset("authors-gui")
-    send = _offset_command(record, TRIPOD, reflex.finger_offsets)
+    send = _finger_command(record, command_groups(TRIPOD, reflex.finger_offsets))
     send(HandCommand.POSITION, TRIPOD, 150.0, at=0.0)
     send(HandCommand.POSITION, TRIPOD, 495.0, at=0.1)
     assert sent == [((Finger.THUMB, Finger.INDEX), 150.0), ((Finger.MIDDLE,), 170.0),
                     ((Finger.THUMB, Finger.INDEX), 495.0), ((Finger.MIDDLE,), 500.0)]
-    assert _offset_command(record, TRIPOD, SlipReflex(dath=True).finger_offsets) is record
+    assert command_groups(TRIPOD, SlipReflex(dath=True).finger_offsets) == [(TRIPOD, 0.0, 0.0)]
 
 
 def test_registered_variants_build_their_chains():

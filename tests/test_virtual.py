@@ -112,8 +112,9 @@ def test_run_over_virtual_devices_suppresses_slip_like_the_in_process_simulation
     sim.rig.hand.command = record
     with VirtualDevices(sim, link_dir=str(tmp_path)) as dev:
         with SerialDaq(dev.daq_path) as daq, ILimb(dev.hand_path) as hand:
-            # The in-process loop sends every finger the middle finger's p0 at its first window
-            # (the thumb stopped one unit further closed); give the fingers the same start here,
+            # run_loop sends each finger the MPI's rise over its own start (the thumb may stop a unit
+            # further closed), the in-process loop the command itself, floored at each finger's
+            # start: the same targets when every finger starts at p0. Give them that start here,
             # and let them get there before run_loop's safe start STOPs them where they are.
             hand.set_positions({f: p0 for f in TRIPOD})
             _await(lambda: all(sim.rig.hand.positions()[f] == p0 for f in TRIPOD))

@@ -15,8 +15,9 @@
   the middle-finger position of the latest DAQ row at or before the frame
   (:meth:`Rig.finger_position_at`'s rule);
 * queue every command with the due step :meth:`SimHand.command` gives it
-  (``max(ceil((t + latency) / dt - 1e-9), step now)``), split by finger offsets as
-  the Python loop splits it.
+  (``max(ceil((t + latency) / dt - 1e-9), step now)``), split into finger groups
+  with their offsets and start floors as the Python loop splits it
+  (:func:`~slipreflex.sim.loop.command_groups`, :func:`~slipreflex.sim.loop.finger_target`).
 
 Afterwards :func:`run_compiled` hands back to the rig and the hand what their
 Python objects own (DAQ history, events, tactile snapshots for every open
@@ -47,7 +48,6 @@ from .. import hardware as hw
 from ..errors import ParameterError
 from ..hardware import Finger, HandCommand
 from . import kernel as K
-from .loop import command_groups
 
 __all__ = ["SLIP_STEP", "TACTILE_STEP", "run_compiled", "compilable"]
 
@@ -111,7 +111,7 @@ _f1, _i1, _u1 = types.float64[::1], types.int64[::1], types.uint64[::1]
 _f2, _i2, _f3 = types.float64[:, ::1], types.int64[:, ::1], types.float64[:, :, ::1]
 # the arguments every kernel shares: physics, hand, queue, outputs, scratch
 _COMMON = (_f1, _f1, _f1, _i1, _f1, _u1, _f2, _f2, _f1, _f1, _i1, _i1,  # RS RP | S C P keys D W track rates next contact
-           _f1, _f1, _i2, _f1, _i1, _i1, _f1, _i1,                    # tgt spd q_i q_v masks cmd_g cmd_off cmd_clip
+           _f1, _f1, _i2, _f1, _i1, _i1, _f1, _f1,                    # tgt spd q_i q_v masks cmd_g cmd_off cmd_floor
            _f1, _i1, _f2, _f2, _f2, _f1, _f1, _f2, _f2, _f2, _i1)     # cfg cnt daq ev tac cmd_t cmd_v s_daq s_ev s_tac s_n
 
 
@@ -166,15 +166,13 @@ def _enqueue(q_i, q_v, cnt, step, kind, group, value):
 
 
 @njit(cache=True, inline="always")
-def _command(c, ts, n, cfg, q_i, q_v, cnt, cmd_g, cmd_off, cmd_clip, cmd_t, cmd_v):
-    """The loop's ``command(POSITION, fingers, c, at=ts)`` (split by finger offsets) and its record."""
+def _command(c, ts, n, cfg, q_i, q_v, cnt, cmd_g, cmd_off, cmd_floor, cmd_t, cmd_v):
+    """The loop's ``command(POSITION, fingers, c, at=ts)`` (each finger group its finger_target) and its record."""
     step = np.int64(np.ceil((ts + cfg[CF_LAT]) / cfg[CF_DT] - _ROUND))
     if step < n:
         step = n
     for g in range(cmd_g.shape[0]):
-        v = c + cmd_off[g]
-        if cmd_clip[g]:
-            v = min(max(v, _FMIN), _FMAX)
+        v = min(max(c + cmd_off[g], cmd_floor[g]), _FMAX)   # sim/loop.py's finger_target
         _enqueue(q_i, q_v, cnt, step, _POS, cmd_g[g], v)
     k = cnt[N_CMD]
     cmd_t[k] = ts
@@ -245,7 +243,7 @@ def _advance(horizon, S, C, P, keys, D, W, track, tac_rates, tac_next, tac_conta
 
 @njit(cache=_CACHE)
 def _closed_slip(step, RS, RP, S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, tgt, spd, q_i, q_v,
-                 masks, cmd_g, cmd_off, cmd_clip, cfg, cnt, daq, ev, tac, cmd_t, cmd_v, s_daq, s_ev, s_tac, s_n):
+                 masks, cmd_g, cmd_off, cmd_floor, cfg, cnt, daq, ev, tac, cmd_t, cmd_v, s_daq, s_ev, s_tac, s_n):
     """The slip-sensor closed loop: one compiled step per DAQ row. Returns _DONE, _GROW or _BAD_COMMAND."""
     t_end = cfg[CF_TEND]
     dt = cfg[CF_DT]
@@ -268,13 +266,13 @@ def _closed_slip(step, RS, RP, S, C, P, keys, D, W, track, tac_rates, tac_next, 
                 if not np.isfinite(c):
                     cmd_v[cnt[N_CMD]] = c
                     return _BAD_COMMAND
-                _command(c, daq[k, K.O_T], n, cfg, q_i, q_v, cnt, cmd_g, cmd_off, cmd_clip, cmd_t, cmd_v)
+                _command(c, daq[k, K.O_T], n, cfg, q_i, q_v, cnt, cmd_g, cmd_off, cmd_floor, cmd_t, cmd_v)
     return _DONE
 
 
 @njit(cache=_CACHE)
 def _closed_tactile(step, RS, RP, S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, tgt, spd, q_i,
-                    q_v, masks, cmd_g, cmd_off, cmd_clip, cfg, cnt, daq, ev, tac, cmd_t, cmd_v, s_daq, s_ev, s_tac,
+                    q_v, masks, cmd_g, cmd_off, cmd_floor, cfg, cnt, daq, ev, tac, cmd_t, cmd_v, s_daq, s_ev, s_tac,
                     s_n, tkey, tstate, frames3, frames2):
     """The tactile closed loop: one compiled step per frame of sampler ``cfg[CF_SI]``."""
     t_end = cfg[CF_TEND]
@@ -322,7 +320,7 @@ def _closed_tactile(step, RS, RP, S, C, P, keys, D, W, track, tac_rates, tac_nex
                 if not np.isfinite(c):
                     cmd_v[cnt[N_CMD]] = c
                     return _BAD_COMMAND
-                _command(c, ts, n, cfg, q_i, q_v, cnt, cmd_g, cmd_off, cmd_clip, cmd_t, cmd_v)
+                _command(c, ts, n, cfg, q_i, q_v, cnt, cmd_g, cmd_off, cmd_floor, cmd_t, cmd_v)
     return _DONE
 
 
@@ -443,11 +441,13 @@ def _cfg(rig, t_end: float, sampler) -> np.ndarray:
     return cfg
 
 
-def run_compiled(rig, reflex, t_end: float, fingers: tuple[Finger, ...], sampler,
-                 offsets) -> tuple[np.ndarray, np.ndarray]:
+def run_compiled(rig, reflex, t_end: float, split: list[tuple[tuple[Finger, ...], float, float]],
+                 sampler) -> tuple[np.ndarray, np.ndarray]:
     """Run the closed loop to ``t_end`` in the compiled kernels; return (command times, values).
 
-    ``sampler`` is the tactile reflex's :class:`TactileSampler` (None for a slip
+    ``split`` is how a command goes to the tripod fingers
+    (:func:`~slipreflex.sim.loop.command_groups`: finger groups, offsets, start
+    floors); ``sampler`` is the tactile reflex's :class:`TactileSampler` (None for a slip
     reflex). The rig, its hand and samplers are left as the Python loop leaves
     them (before its last open-loop stretch to ``t_end``, which the caller runs).
     :func:`~slipreflex.sim.run_closed_loop` calls it; call that instead.
@@ -456,23 +456,24 @@ def run_compiled(rig, reflex, t_end: float, fingers: tuple[Finger, ...], sampler
     --------
     >>> from slipreflex.sim import Rig
     >>> from slipreflex.chain import SlipReflex
+    >>> from slipreflex.sim.loop import command_groups
     >>> rig = Rig("TR", seed=1); g = rig.grasp()
-    >>> t, c = run_compiled(rig, SlipReflex(p0=g.position), rig.t + 0.2, hw.TRIPOD, None, None)
+    >>> split = command_groups(hw.TRIPOD, None)
+    >>> t, c = run_compiled(rig, SlipReflex(p0=g.position), rig.t + 0.2, split, None)
     >>> t.size, bool((c == g.position).all())    # a command per 16-sample window, no slip
     (4, True)
     """
     kind = "tactile" if sampler is not None else "slip"
     step, RS, RP = _typed_step(reflex, kind)
-    split = command_groups(fingers, offsets if kind == "slip" else None)
-    groups = [g for g, _ in split]
+    groups = [g for g, _, _ in split]
     A = rig.kernel_arrays()
     span = max(t_end - rig.t, 0.0) + 0.05
     n_in = int(span * (hw.DAQ_FS if sampler is None else sampler.fs)) + 16
     q_i, q_v, q_len, count = _queue_arrays(rig, groups, 8 * len(split) + 64)
     masks = np.array([sum(1 << hw.TRIPOD.index(f) for f in g) for g in groups], dtype=np.int64)
     cmd_g = np.arange(len(split), dtype=np.int64)
-    cmd_off = np.array([0.0 if off is None else off for _, off in split])
-    cmd_clip = np.array([off is not None for _, off in split], dtype=np.int64)
+    cmd_off = np.array([off for _, off, _ in split], dtype=np.float64)
+    cmd_floor = np.array([low for _, _, low in split], dtype=np.float64)
     n_tac = int(sum(span * fs + 4 for fs in A.tac_rates))
     buf = _Buffers(daq=np.empty((int(span * hw.DAQ_FS) + 16, K.O_SIZE)), ev=np.empty((4096, 3)),
                    tac=np.empty((n_tac + 16, K.T_SIZE)), cmd_t=np.empty(n_in), cmd_v=np.empty(n_in),
@@ -491,7 +492,7 @@ def run_compiled(rig, reflex, t_end: float, fingers: tuple[Finger, ...], sampler
     try:
         while status == _GROW:
             common = (RS, RP, A.S, A.C, A.P, A.keys, A.D, A.W, A.track, A.tac_rates, A.tac_next, A.tac_contact,
-                      A.targets, A.speeds, buf.q_i, buf.q_v, masks, cmd_g, cmd_off, cmd_clip, cfg, cnt, buf.daq,
+                      A.targets, A.speeds, buf.q_i, buf.q_v, masks, cmd_g, cmd_off, cmd_floor, cfg, cnt, buf.daq,
                       buf.ev, buf.tac, buf.cmd_t, buf.cmd_v, s_daq, s_ev, s_tac, s_n)
             if sampler is None:
                 status = _kernel(kind)(step, *common)

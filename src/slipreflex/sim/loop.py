@@ -14,9 +14,17 @@ A reflex with a compiled step (:class:`slipreflex.interfaces.CompiledReflex`:
 every method on the paper's chain, NMSD, SWT-SD) runs this same loop inside
 one numba function (:mod:`slipreflex.sim.closed`), 2 to 4 times faster and
 with the same bits; ``run_closed_loop(..., compiled=False)`` forces the Python
-loop, which every other reflex runs. The tripod fingers all get the command
-(plus a reflex's declared ``finger_offsets``): a documented limit of the
-simulated hand rule, the same in both loops.
+loop, which every other reflex runs.
+
+Every finger the loop drives gets the command (plus a reflex's declared
+``finger_offsets``), never below where that finger stood when the loop started:
+its target is ``clip(max(c + offset, start), 0, 500)``, ``start`` its position
+then, rounded to whole units as the hand reports it (:func:`start_floors`). The
+grasp stops each finger at its own position (the thumb often a unit further
+closed than the middle finger, whose position the reflex starts from), so
+without the floor the reflex's first command would open the thumb a little; the
+real-rig loop (:func:`slipreflex.runtime.run_loop`) never sends a finger a target
+below its start either. Both loops apply the same rule.
 
 :class:`SimTrace` holds every stream of the run as arrays.
 
@@ -278,38 +286,68 @@ def simulate_open_loop(rig: Rig, duration: float, *, tactile_fs: float | None = 
     return _trace(rig, t0, "open-loop", [], [], tac_t, tac)
 
 
-def command_groups(fingers: tuple[Finger, ...], offsets) -> list[tuple[tuple[Finger, ...], float | None]]:
-    """How one command ``c`` goes to ``fingers``: ``(fingers, offset)`` pairs, offset None for ``c`` itself.
+def start_floors(rig: Rig, fingers: Sequence[Finger]) -> dict[Finger, float]:
+    """Where each of ``fingers`` stands now, rounded to whole units as the hand reports it.
 
-    A reflex may declare ``finger_offsets`` ({finger: units}): those fingers get
-    ``clip(c + offset, 0, 500)`` each, the others ``c`` (the Python loop and the
-    compiled one both split a command this way).
+    The closed loop never sends a finger a target below this (:func:`command_groups`).
+
+    Examples
+    --------
+    >>> from slipreflex.sim import Rig
+    >>> rig = Rig("TR", seed=1); g = rig.grasp()
+    >>> floors = start_floors(rig, hw.TRIPOD)
+    >>> floors == {f: float(round(g.positions[f])) for f in hw.TRIPOD}
+    True
+    """
+    pos = rig.hand.positions()
+    return {Finger(f): pos[Finger(f)] for f in fingers}
+
+
+def command_groups(fingers: tuple[Finger, ...], offsets,
+                   floors: dict[Finger, float] | None = None) -> list[tuple[tuple[Finger, ...], float, float]]:
+    """How one command ``c`` goes to ``fingers``: ``(fingers, offset, floor)`` triples.
+
+    Each group of fingers gets ``min(max(c + offset, floor), 500)``
+    (:func:`finger_target`): ``offset`` from a reflex's declared
+    ``finger_offsets`` ({finger: units}, 0 for the others), ``floor`` from
+    ``floors`` (a finger's start, :func:`start_floors`; 0 if not given).
+    Fingers with the same offset and floor share a group, in the order of
+    ``fingers`` (the Python loop and the compiled one both split a command this way).
 
     Examples
     --------
     >>> from slipreflex.hardware import TRIPOD
     >>> command_groups(TRIPOD, {Finger.MIDDLE: 20.0})
-    [((<Finger.THUMB: 0>, <Finger.INDEX: 1>), None), ((<Finger.MIDDLE: 2>,), 20.0)]
-    >>> command_groups(TRIPOD, None)[0][1] is None
-    True
+    [((<Finger.THUMB: 0>, <Finger.INDEX: 1>), 0.0, 0.0), ((<Finger.MIDDLE: 2>,), 20.0, 0.0)]
+    >>> command_groups(TRIPOD, None, {Finger.THUMB: 148.0, Finger.INDEX: 147.0, Finger.MIDDLE: 147.0})
+    [((<Finger.THUMB: 0>,), 0.0, 148.0), ((<Finger.INDEX: 1>, <Finger.MIDDLE: 2>), 0.0, 147.0)]
     """
-    offs = {Finger(f): float(v) for f, v in (offsets or {}).items() if Finger(f) in fingers}
-    if not offs:
-        return [(fingers, None)]
-    plain = tuple(f for f in fingers if f not in offs)
-    return ([(plain, None)] if plain else []) + [((f,), off) for f, off in offs.items()]
+    offs = {Finger(f): float(v) for f, v in (offsets or {}).items()}
+    lows = {Finger(f): float(v) for f, v in (floors or {}).items()}
+    groups: dict[tuple[float, float], list[Finger]] = {}
+    for f in fingers:
+        groups.setdefault((offs.get(f, 0.0), lows.get(f, float(hw.FINGER_MIN))), []).append(f)
+    return [(tuple(fs), off, low) for (off, low), fs in groups.items()]
 
 
-def _offset_command(command, fingers: tuple[Finger, ...], offsets):
-    """``command`` itself, or one that sends each finger group its value (:func:`command_groups`)."""
-    split = command_groups(fingers, offsets)
-    if len(split) == 1 and split[0][1] is None:
-        return command
+def finger_target(c: float, offset: float, floor: float) -> float:
+    """A finger's target for command ``c``: ``min(max(c + offset, floor), 500)`` (see :func:`command_groups`).
 
+    Examples
+    --------
+    >>> finger_target(147.0, 0.0, 148.0), finger_target(160.0, 0.0, 148.0), finger_target(495.0, 20.0, 0.0)
+    (148.0, 160.0, 500.0)
+    """
+    return min(max(c + offset, floor), float(hw.FINGER_MAX))
+
+
+def _finger_command(command, groups: list[tuple[tuple[Finger, ...], float, float]]):
+    """A ``command(kind, fingers, c, at)`` that sends each group of ``groups`` its :func:`finger_target`."""
     def send(kind, _fingers, value, at):
-        for group, off in split:
-            command(kind, group, value if off is None else min(max(value + off, hw.FINGER_MIN), hw.FINGER_MAX),
-                    at=at)
+        if not math.isfinite(value):   # checked before any finger gets it, as the compiled loop does
+            raise ParameterError(f"hand command value must be finite, got {value!r}")
+        for group, off, low in groups:
+            command(kind, group, finger_target(value, off, low), at=at)
     return send
 
 
@@ -329,7 +367,8 @@ def run_closed_loop(rig: Rig, reflex: Reflex, duration: float, *,
     duration : float
         Seconds to run.
     fingers : sequence of Finger
-        Fingers that receive each command (default: the tripod).
+        Fingers that receive each command (default: the tripod), each never
+        below where it stands when the loop starts (:func:`command_groups`).
     tactile_fs : float, optional
         For a slip reflex, also record tactile frames at this rate.
     compiled : bool
@@ -366,6 +405,8 @@ def run_closed_loop(rig: Rig, reflex: Reflex, duration: float, *,
     if not isinstance(compiled, bool):
         raise ParameterError(f"compiled must be True or False, got {compiled!r}")
     fingers = tuple(Finger(f) for f in fingers)
+    offsets = getattr(reflex, "finger_offsets", None) if kind == "slip" else None
+    groups = command_groups(fingers, offsets, start_floors(rig, fingers))
     t0 = rig.t
     t_end = t0 + duration
     fs = float(reflex.fs) if kind == "tactile" else tactile_fs
@@ -375,15 +416,14 @@ def run_closed_loop(rig: Rig, reflex: Reflex, duration: float, *,
 
         if compiled and compilable(rig, reflex, fingers):
             reflex_sampler = tac_s if kind == "tactile" else None
-            cmd_t, cmd_v = run_compiled(rig, reflex, t_end, fingers, reflex_sampler,
-                                        getattr(reflex, "finger_offsets", None))
+            cmd_t, cmd_v = run_compiled(rig, reflex, t_end, groups, reflex_sampler)
             if reflex_sampler is not None:
                 reflex_sampler.read()     # the loop consumed them
         elif kind == "slip":
-            cmd_t, cmd_v = _python_slip(rig, reflex, t_end, fingers)
+            cmd_t, cmd_v = _python_slip(rig, reflex, t_end, fingers, groups)
         else:
             assert tac_s is not None
-            cmd_t, cmd_v = _python_tactile(rig, reflex, t_end, fingers, tac_s)
+            cmd_t, cmd_v = _python_tactile(rig, reflex, t_end, fingers, groups, tac_s)
         if rig.t < t_end - _EPS:
             rig.advance_block(t_end)
     finally:
@@ -396,12 +436,12 @@ def run_closed_loop(rig: Rig, reflex: Reflex, duration: float, *,
 _EPS = 1e-12
 
 
-def _python_slip(rig: Rig, reflex: Reflex, t_end: float, fingers: tuple[Finger, ...]):
+def _python_slip(rig: Rig, reflex: Reflex, t_end: float, fingers: tuple[Finger, ...], groups):
     """The Python loop for a slip reflex: one ``reflex.step`` per DAQ sample."""
     cmd_t: list[float] = []
     cmd_v: list[float] = []
     step = reflex.step
-    command = _offset_command(rig.hand.command, fingers, getattr(reflex, "finger_offsets", None))
+    command = _finger_command(rig.hand.command, groups)
     dt = rig.physics.dt
     lat = rig.hand.latency
     while rig.next_daq_time <= t_end + _EPS:
@@ -420,12 +460,12 @@ def _python_slip(rig: Rig, reflex: Reflex, t_end: float, fingers: tuple[Finger, 
     return cmd_t, cmd_v
 
 
-def _python_tactile(rig: Rig, reflex: Reflex, t_end: float, fingers: tuple[Finger, ...], tac_s):
+def _python_tactile(rig: Rig, reflex: Reflex, t_end: float, fingers: tuple[Finger, ...], groups, tac_s):
     """The Python loop for a tactile reflex: one ``reflex.step`` per frame of ``tac_s``."""
     cmd_t: list[float] = []
     cmd_v: list[float] = []
     step = reflex.step
-    command = rig.hand.command
+    command = _finger_command(rig.hand.command, groups)
     lat = rig.hand.latency
     while tac_s.next_time <= t_end + _EPS:
         horizon = min(t_end, max(rig.t + rig.physics.dt, tac_s.next_time + lat))
