@@ -410,3 +410,19 @@ def test_no_finger_target_drops_below_its_start_in_a_closed_loop_pour(method, mo
     _assert_same(*runs)
     assert {f for f, _ in sent} == set(hw.TRIPOD)
     assert all(value >= start[f] for f, value in sent), [(f.name, v) for f, v in sent if v < start[f]][:3]
+
+
+def test_the_floor_keeps_each_fingers_own_range():
+    """The thumb rotator (0..750) still gets a command above 500; a tripod finger is capped at 500."""
+    class Once:
+        name, input_kind, fs = "once", "slip", hw.DAQ_FS
+
+        def step(self, sample, position=None):
+            return 600.0
+
+        def reset(self):
+            pass
+
+    rig = Rig("TR")
+    run_closed_loop(rig, Once(), 0.1, fingers=(Finger.THUMB_ROTATOR, Finger.INDEX))
+    assert rig.hand.positions()[Finger.THUMB_ROTATOR] == 600.0 and rig.hand.targets[1] == hw.FINGER_MAX

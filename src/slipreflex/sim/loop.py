@@ -307,10 +307,11 @@ def command_groups(fingers: tuple[Finger, ...], offsets,
                    floors: dict[Finger, float] | None = None) -> list[tuple[tuple[Finger, ...], float, float]]:
     """How one command ``c`` goes to ``fingers``: ``(fingers, offset, floor)`` triples.
 
-    Each group of fingers gets ``min(max(c + offset, floor), 500)``
+    Each group of fingers gets ``min(max(c + offset, floor), top)``
     (:func:`finger_target`): ``offset`` from a reflex's declared
     ``finger_offsets`` ({finger: units}, 0 for the others), ``floor`` from
-    ``floors`` (a finger's start, :func:`start_floors`; 0 if not given).
+    ``floors`` (a finger's start, :func:`start_floors`; 0 if not given), ``top``
+    the finger's range (500; the thumb rotator, in a group of its own, 750).
     Fingers with the same offset and floor share a group, in the order of
     ``fingers`` (the Python loop and the compiled one both split a command this way).
 
@@ -326,19 +327,20 @@ def command_groups(fingers: tuple[Finger, ...], offsets,
     lows = {Finger(f): float(v) for f, v in (floors or {}).items()}
     groups: dict[tuple[float, float], list[Finger]] = {}
     for f in fingers:
-        groups.setdefault((offs.get(f, 0.0), lows.get(f, float(hw.FINGER_MIN))), []).append(f)
-    return [(tuple(fs), off, low) for (off, low), fs in groups.items()]
+        key = (offs.get(f, 0.0), lows.get(f, float(hw.FINGER_MIN)), f == Finger.THUMB_ROTATOR)
+        groups.setdefault(key, []).append(f)
+    return [(tuple(fs), off, low) for (off, low, _), fs in groups.items()]
 
 
-def finger_target(c: float, offset: float, floor: float) -> float:
-    """A finger's target for command ``c``: ``min(max(c + offset, floor), 500)`` (see :func:`command_groups`).
+def finger_target(c: float, offset: float, floor: float, top: float = hw.FINGER_MAX) -> float:
+    """A finger's target for command ``c``: ``min(max(c + offset, floor), top)`` (see :func:`command_groups`).
 
     Examples
     --------
     >>> finger_target(147.0, 0.0, 148.0), finger_target(160.0, 0.0, 148.0), finger_target(495.0, 20.0, 0.0)
     (148.0, 160.0, 500.0)
     """
-    return min(max(c + offset, floor), float(hw.FINGER_MAX))
+    return min(max(c + offset, floor), float(top))
 
 
 def _finger_command(command, groups: list[tuple[tuple[Finger, ...], float, float]]):
@@ -347,7 +349,8 @@ def _finger_command(command, groups: list[tuple[tuple[Finger, ...], float, float
         if not math.isfinite(value):   # checked before any finger gets it, as the compiled loop does
             raise ParameterError(f"hand command value must be finite, got {value!r}")
         for group, off, low in groups:
-            command(kind, group, finger_target(value, off, low), at=at)
+            top = hw.THUMB_ROTATOR_MAX if group == (Finger.THUMB_ROTATOR,) else hw.FINGER_MAX
+            command(kind, group, finger_target(value, off, low, top), at=at)
     return send
 
 
