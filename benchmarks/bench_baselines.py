@@ -21,23 +21,12 @@ Run: python benchmarks/bench_baselines.py [--frames N] [--repeats R] [--stream-o
 from __future__ import annotations
 
 import argparse
-import os
-import platform
 import statistics
 import time
 
 import numpy as np
 
-
-def _machine() -> str:
-    cpu = platform.processor() or platform.machine()
-    try:
-        with open("/proc/cpuinfo") as fh:
-            cpu = next(line.split(":", 1)[1].strip() for line in fh if line.startswith("model name"))
-    except (OSError, StopIteration):
-        pass
-    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
-    return f"{cpu}, {os.cpu_count()} cores, Python {platform.python_version()}, load {load:.2f}"
+from machine import describe  # benchmarks/machine.py: run as python benchmarks/NAME.py
 
 
 def _frames(n: int, fs: float) -> np.ndarray:
@@ -99,7 +88,7 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--stream-only", action="store_true", help="time the streaming objects only")
     args = ap.parse_args()
-    print(f"machine: {_machine()}")
+    print(f"machine: {describe()}")
     for label, make in _reflexes():
         fs = make().fs
         frames = _frames(max(args.frames, args.compiled_frames), fs)

@@ -13,22 +13,12 @@ Run: python benchmarks/bench_chain.py [--samples N] [--repeats R]
 from __future__ import annotations
 
 import argparse
-import os
-import platform
 import statistics
 import time
 
 import numpy as np
 
-
-def _machine() -> str:
-    cpu = platform.processor() or platform.machine()
-    try:
-        with open("/proc/cpuinfo") as fh:
-            cpu = next(line.split(":", 1)[1].strip() for line in fh if line.startswith("model name"))
-    except (OSError, StopIteration):
-        pass
-    return f"{cpu}, {os.cpu_count()} cores, Python {platform.python_version()}"
+from machine import describe  # benchmarks/machine.py: run as python benchmarks/NAME.py
 
 
 def main() -> None:
@@ -44,7 +34,7 @@ def main() -> None:
 
     rng = np.random.default_rng(0)
     raw = 0.4 + np.cumsum(rng.normal(0, 0.002, args.samples))
-    print(f"machine: {_machine()}")
+    print(f"machine: {describe()}")
 
     # Streaming: the object a real-time loop calls once per sample.
     chunk = raw[: args.stream_samples].tolist()
