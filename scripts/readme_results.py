@@ -15,7 +15,6 @@ summary (DATH unless the row says otherwise), the paper's column from
 from __future__ import annotations
 
 import csv
-import re
 import sys
 from pathlib import Path
 
@@ -79,12 +78,13 @@ def main(argv: list[str]) -> int:
     if "--write" not in argv:
         print(text)
         return 0
-    readme = README.read_text()
-    if readme.count(BEGIN) != 1 or readme.count(END) != 1:
-        print(f"readme_results: README.md must hold each marker once ({BEGIN}, {END})", file=sys.stderr)
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from splice_report import replace_marked
+
+    error = replace_marked(README, BEGIN, END, text)
+    if error:
+        print(f"readme_results: {error}", file=sys.stderr)
         return 2
-    block = f"{BEGIN}\n{text}\n{END}"
-    README.write_text(re.sub(re.escape(BEGIN) + ".*?" + re.escape(END), lambda _: block, readme, flags=re.S))
     print(f"readme_results: README.md's table now comes from {args[0]}")
     return 0
 

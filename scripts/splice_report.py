@@ -46,14 +46,22 @@ def main(argv: list[str]) -> int:
     if not report.is_file():
         print(f"splice_report: {report}: no such report", file=sys.stderr)
         return 2
-    docs = DOCS.read_text()
-    if docs.count(BEGIN) != 1 or docs.count(END) != 1:
-        print(f"splice_report: {DOCS} must hold each marker once ({BEGIN}, {END})", file=sys.stderr)
+    error = replace_marked(DOCS, BEGIN, END, f"\n{sections(report.read_text())}\n")
+    if error:
+        print(f"splice_report: {error}", file=sys.stderr)
         return 2
-    block = f"{BEGIN}\n\n{sections(report.read_text())}\n\n{END}"
-    DOCS.write_text(re.sub(re.escape(BEGIN) + ".*?" + re.escape(END), lambda _: block, docs, flags=re.S))
     print(f"splice_report: {DOCS} now carries {report}")
     return 0
+
+
+def replace_marked(path: Path, begin: str, end: str, body: str) -> str:
+    """Put ``body`` between the markers ``begin`` and ``end`` of ``path``; an error message, or "" when done."""
+    text = path.read_text()
+    if text.count(begin) != 1 or text.count(end) != 1:
+        return f"{path} must hold each marker once ({begin}, {end})"
+    block = f"{begin}\n{body}\n{end}"
+    path.write_text(re.sub(re.escape(begin) + ".*?" + re.escape(end), lambda _: block, text, flags=re.S))
+    return ""
 
 
 if __name__ == "__main__":
