@@ -196,9 +196,17 @@ def plot_trial_runs(trial, runs: Sequence[MethodRun], path: str | Path, *, calib
     plt = _plt()
     t = trial.t
     cal_end = float(t[0] + calibration_s)
-    rows = list(dict.fromkeys(r.key for r in runs))
-    fig = plt.figure(figsize=(11, 4.2 + 0.24 * len(rows)))
-    gs = fig.add_gridspec(3, 1, height_ratios=[2.2, 1.6, 0.26 * len(rows) + 0.6], hspace=0.12)
+    rows, same = [], {}
+    for key in dict.fromkeys(r.key for r in runs):
+        r = next(r for r in runs if r.key == key)
+        twin = next((k for k in rows if k.endswith("@" + r.rate)
+                     and np.array_equal(next(q for q in runs if q.key == k).detections, r.detections)), None)
+        if twin is None:
+            rows.append(key)
+        else:
+            same.setdefault(twin, []).append(r.label)
+    fig = plt.figure(figsize=(11, 4.2 + 0.3 * len(rows)))
+    gs = fig.add_gridspec(3, 1, height_ratios=[2.2, 1.6, 0.32 * len(rows) + 0.6], hspace=0.12)
     ax0 = fig.add_subplot(gs[0])
     ax1 = fig.add_subplot(gs[1], sharex=ax0)
     ax2 = fig.add_subplot(gs[2], sharex=ax0)
@@ -238,14 +246,20 @@ def plot_trial_runs(trial, runs: Sequence[MethodRun], path: str | Path, *, calib
     labels = []
     for key in reversed(rows):
         r = next(r for r in runs if r.key == key)
-        labels.append(f"{r.label} @ {r.fs:.0f} Hz" + ("" if r.rate == "data" else " (resampled)"))
+        twins = sorted(set(same.get(key, [])))
+        labels.append(f"{r.label} @ {r.fs:.0f} Hz" + ("" if r.rate == "data" else " (resampled)")
+                      + (f"\n= {', '.join(twins)}" if twins else ""))
     ax2.set_yticklabels(labels, fontsize=7)
     ax2.set_ylim(-0.6, len(rows) - 0.4)
     ax2.set_xlabel("time (s)")
-    ax2.set_title("detections (tick), first detection during the labelled slip (dot)", fontsize=8, loc="left")
+    ax2.set_title("detections (tick), first detection during the labelled slip (dot); "
+                  "'= X': X detects the same", fontsize=8, loc="left")
     for ax in (ax0, ax1):
         ax.tick_params(labelbottom=False)
         ax.grid(alpha=0.25)
+    if onset is not None:
+        for ax in (ax0, ax1, ax2):
+            ax.axvline(onset, color="#d62728", lw=0.8, ls="--")
     ax2.set_xlim(t[0], t[-1])
     path = Path(path)
     fig.savefig(path, dpi=110, bbox_inches="tight")
