@@ -40,7 +40,13 @@ def _r(x: float, nd: int = 4) -> float:
 
 
 def write_runs(runs: Sequence[MethodRun], path: str | Path) -> Path:
-    """``benchmark.csv``: one row per trial, method and rate (:data:`RUN_COLUMNS`)."""
+    """``benchmark.csv``: one row per trial, method and rate (:data:`RUN_COLUMNS`).
+
+    Examples
+    --------
+    >>> write_runs([], __import__("tempfile").mkdtemp() + "/b.csv").read_text()
+    'trial,method,rate,fs_hz,threshold,slips,onset_t,detection_t,latency_ms,false_alarms,scored_s,false_alarm_rate_per_min,detections\\n'
+    """
     cols: dict[str, list[Any]] = {c: [] for c in RUN_COLUMNS}
     for r in runs:
         s = r.score
@@ -103,7 +109,13 @@ def summarize(runs: Sequence[MethodRun]) -> list[dict[str, Any]]:
 
 
 def write_summary(summary: Sequence[dict[str, Any]], path: str | Path) -> Path:
-    """``summary.csv`` (:data:`SUMMARY_COLUMNS`)."""
+    """``summary.csv`` (:data:`SUMMARY_COLUMNS`).
+
+    Examples
+    --------
+    >>> write_summary([], __import__("tempfile").mkdtemp() + "/s.csv").read_text().startswith("method,label,rate")
+    True
+    """
     path = Path(path)
     write_columns(path, {c: [s[c] for s in summary] for c in SUMMARY_COLUMNS})
     return path
@@ -190,6 +202,16 @@ def plot_trial_runs(trial, runs: Sequence[MethodRun], path: str | Path, *, calib
     array). Middle: the channel the chain methods read. Bottom: one row per method and rate,
     a tick per detection, a dot at the first detection during the labelled slip. The
     labelled slip is shaded red, the calibration span grey.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from slipreflex.benchmark import read_folder, shipped_dataset, run_trial, BenchmarkConfig
+    >>> tr = read_folder(shipped_dataset())[-1]
+    >>> runs = run_trial(tr, BenchmarkConfig(methods=("dath", "nmsd"), rates=("data",)))
+    >>> plot_trial_runs(tr, runs, tempfile.mkdtemp() + "/t.png", calibration_s=1.0,
+    ...                 reduction="z-sum").stat().st_size > 10_000
+    True
     """
     from .run import reduce_channels
 

@@ -133,6 +133,13 @@ class MethodRun:
     trace, trace_label : numpy.ndarray, str
         What it read (its low-passed channel, or the arrays' total normal force).
     score : Score
+
+    Examples
+    --------
+    >>> from slipreflex.benchmark import read_folder, shipped_dataset
+    >>> (r,) = run_trial(read_folder(shipped_dataset())[0], BenchmarkConfig(methods=("swt",), rates=("data",)))
+    >>> r.key, r.params["persist"], len(r.t) == len(r.detections)
+    ('swt@data', 1, True)
     """
 
     trial: str
@@ -156,7 +163,13 @@ class MethodRun:
 
 @dataclass(frozen=True)
 class Skipped:
-    """A method that does not apply to the data, and why."""
+    """A method that does not apply to the data, and why.
+
+    Examples
+    --------
+    >>> Skipped("dath-board", "runs on volts").method
+    'dath-board'
+    """
 
     method: str
     reason: str
@@ -247,7 +260,7 @@ def to_rate(t: np.ndarray, x: np.ndarray, fs_target: float) -> tuple[np.ndarray,
     >>> t = np.arange(60) / 60.0
     >>> t2, x2, fs2 = to_rate(t, np.sin(2 * np.pi * 2 * t), 240.0)
     >>> fs2, len(t2), round(float(np.abs(x2[8:-8] - np.sin(2 * np.pi * 2 * t2[8:-8])).max()), 2) < 0.05
-    (240.0, 240, True)
+    (240.0, 237, True)
     """
     from scipy.signal import resample_poly
 
@@ -410,11 +423,28 @@ def plan(trials: Sequence[RecordedTrial], cfg: BenchmarkConfig = BenchmarkConfig
         _check_calibration(tr, cfg)
     names = cfg.methods or registry.names()
     reasons = {n: [applicable(n, tr) for tr in trials] for n in names}
+    if "data" in cfg.rates:
+        _check_data_rate([n for n, rs in reasons.items() if not all(rs)], trials)
     skipped = [Skipped(n, next(r for r in rs if r)) for n, rs in reasons.items() if rs and all(rs)]
     if cfg.methods is not None and skipped:
         s = skipped[0]
         raise ParameterError(f"--methods: {s.method} does not apply to this data: it {s.reason}")
     return [n for n in names if n not in {s.method for s in skipped}], skipped
+
+
+def _check_data_rate(names: Sequence[str], trials: Sequence[RecordedTrial]) -> None:
+    """Every chain method's parameters are valid at every trial's own rate (its low-pass below Nyquist)."""
+    for name in names:
+        spec = registry.get(name)
+        if spec.input_kind != "slip":
+            continue
+        base = _trial_reflex(name)
+        for tr in trials:
+            try:
+                dataclasses.replace(base.params, fs=tr.fs, **_scaled(base, spec.fs, tr.fs))
+            except ParameterError as err:
+                raise DataError(f"{tr.path}: {name} cannot run at the data's {tr.fs:.3g} Hz ({err}); "
+                                "pass --rates method") from None
 
 
 def run_benchmark(trials: Sequence[RecordedTrial], cfg: BenchmarkConfig = BenchmarkConfig()

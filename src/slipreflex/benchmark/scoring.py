@@ -16,7 +16,7 @@ calibration span (the threshold was set from the samples before it):
 Examples
 --------
 >>> import numpy as np
->>> t = np.arange(10) * 0.1
+>>> t = np.arange(10) / 10
 >>> slip = np.array([0, 0, 0, 0, 0, 0, 1, 1, 0, 0])
 >>> det = np.zeros(10, bool); det[[1, 3, 7, 9]] = True
 >>> s = score(t, slip, det, calibration_end=0.2)

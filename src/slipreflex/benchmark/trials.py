@@ -15,10 +15,11 @@ Examples
 --------
 >>> import tempfile, pathlib
 >>> p = pathlib.Path(tempfile.mkdtemp()) / "trial.csv"
->>> _ = p.write_text("# layout: 1x2\\nt,a,b,slip\\n0.0,1,2,0\\n0.1,1,3,0\\n0.2,2,3,1\\n")
+>>> rows = "".join(f"{k / 10},{k},{2 * k},{int(k >= 6)}\\n" for k in range(8))
+>>> _ = p.write_text("# layout: 1x2\\nt,a,b,slip\\n" + rows)
 >>> tr = read_trial(p)
 >>> tr.name, tr.layout.shape, tr.onset_t, tr.normal_frames().shape
-('trial', (1, 1, 2, 1), 0.2, (3, 1, 2))
+('trial', (1, 1, 2, 1), 0.6, (8, 1, 2))
 """
 
 from __future__ import annotations

@@ -73,6 +73,12 @@ class Comparison:
     curves : dict
         What the figure draws: per source, lists of (time from onset, normalised total force)
         and the taxel noise spectra.
+
+    Examples
+    --------
+    >>> c = Comparison(("simulated pour",), {"simulated pour": {"noise": 0.005}}, 60.0, {})
+    >>> c.rows["simulated pour"]["noise"]
+    0.005
     """
 
     sources: tuple[str, ...]
@@ -203,7 +209,14 @@ def compare(trials: Sequence, *, calibration_s: float = 1.0, rest_k: float = RES
 
 
 def write_comparison(c: Comparison, path: str | Path) -> Path:
-    """``vs_sim.csv``: one row per measure, one column per source."""
+    """``vs_sim.csv``: one row per measure, one column per source.
+
+    Examples
+    --------
+    >>> c = Comparison(("a b",), {"a b": {k: 1.0 for k, _ in MEASURES}}, 60.0, {})
+    >>> write_comparison(c, __import__("tempfile").mkdtemp() + "/v.csv").read_text().splitlines()[0]
+    'measure,description,a_b'
+    """
     path = Path(path)
     cols = {"measure": [k for k, _ in MEASURES], "description": [d for _, d in MEASURES]}
     for s in c.sources:
@@ -237,7 +250,14 @@ def format_comparison(c: Comparison, *, markdown: bool = False) -> str:
 
 
 def plot_comparison(c: Comparison, path: str | Path) -> Path:
-    """Left: the total normal force around the onset in units of its noise; right: the noise spectra."""
+    """Left: the total normal force around the onset in units of its noise; right: the noise spectra.
+
+    Examples
+    --------
+    >>> c = Comparison(("simulated pour",), {}, 60.0, {"simulated pour": {"onset": [], "spectrum": []}})
+    >>> plot_comparison(c, __import__("tempfile").mkdtemp() + "/v.png").suffix
+    '.png'
+    """
     from .report import _plt
 
     plt = _plt()
@@ -256,13 +276,15 @@ def plot_comparison(c: Comparison, path: str | Path) -> Path:
     a.axhspan(-3, 3, color="0.9", lw=0)
     a.set_ylabel("change / (taxel noise x sqrt(taxels)), symlog")
     a.set_title("total normal force at slip, in units of its noise", fontsize=10)
-    a.legend(fontsize=8)
+    if a.get_legend_handles_labels()[0]:
+        a.legend(fontsize=8)
     a.grid(alpha=0.3)
     b.set_xlabel("frequency (Hz)")
     b.set_ylabel("taxel spectrum / its mean (median over taxels)")
     b.set_title(f"taxels over the calibration span, trend removed ({c.fs:.0f} Hz; white noise is flat)",
                 fontsize=10)
-    b.legend(fontsize=8)
+    if b.get_legend_handles_labels()[0]:
+        b.legend(fontsize=8)
     b.grid(alpha=0.3, which="both")
     fig.tight_layout()
     path = Path(path)
