@@ -258,3 +258,21 @@ def test_vs_sim_measures_every_source():
             if not (s == "real, controls" and k.startswith("slip")):
                 assert math.isfinite(c.rows[s][k]), (s, k)
     assert c.rows["simulated pour"]["repeated_frames"] == 0.0
+
+
+def test_benchmark_table_script_markers_and_compact_table():
+    import runpy
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent.parent
+    script = runpy.run_path(str(root / "scripts" / "benchmark_table.py"))
+    for key, (begin, end) in script["MARKS"].items():
+        text = (root / ("README.md" if key == "readme" else "docs/benchmark.md")).read_text()
+        assert text.count(begin) == 1 and text.count(end) == 1, key
+    row = {"label": "x", "detected": 2, "slip_trials": 3, "median_latency_ms": float("nan"),
+           "false_alarms_per_min": 12.4, "pre_onset_false_alarms": 0}
+    summary = [{**row, "method": "dath", "rate": "data", "same_detections_as": ""},
+               {**row, "method": "dath", "rate": "method", "same_detections_as": "", "detected": 3},
+               {**row, "method": "dath-event", "rate": "data", "same_detections_as": "dath"}]
+    table = script["compact"](summary)
+    assert table.splitlines()[2] == "| DATH | 2 / 3 | - / - | 12 / 12 |" and len(table.splitlines()) == 3
