@@ -194,6 +194,26 @@ def _shade(ax, t: np.ndarray, slip: np.ndarray, cal_end: float) -> None:
     ax.axvspan(t[0], cal_end, color="0.85", alpha=0.5, lw=0)
 
 
+def _raster(ax, runs: Sequence[MethodRun], rows: list[str], same: dict) -> None:
+    """One row of detection ticks per method and rate, a dot at the first detection during the slip."""
+    for i, key in enumerate(rows):
+        r = next(r for r in runs if r.key == key)
+        y = len(rows) - 1 - i
+        color = registry.get(r.method).color
+        ax.vlines(r.t[r.detections], y - 0.35, y + 0.35, color=color, lw=0.9)
+        if r.score.detected:
+            ax.plot([r.score.detection_t], [y], "o", color=color, ms=5, mec="k", mew=0.6)
+    labels = []
+    for key in reversed(rows):
+        r = next(r for r in runs if r.key == key)
+        twins = sorted(set(same.get(key, [])))
+        labels.append(f"{r.label} @ {r.fs:.0f} Hz" + ("" if r.rate == "data" else " (resampled)")
+                      + (f"\n= {', '.join(twins)}" if twins else ""))
+    ax.set_yticks(range(len(rows)))
+    ax.set_yticklabels(labels, fontsize=7)
+    ax.set_ylim(-0.6, len(rows) - 0.4)
+
+
 def plot_trial_runs(trial, runs: Sequence[MethodRun], path: str | Path, *, calibration_s: float,
                     reduction: str) -> Path:
     """One trial: its taxels, the chain's channel, and every method's detections against the label.
@@ -255,24 +275,8 @@ def plot_trial_runs(trial, runs: Sequence[MethodRun], path: str | Path, *, calib
     _shade(ax1, t, trial.slip, cal_end)
     ax1.set_ylabel("chain input")
     ax1.legend(loc="upper left", fontsize=7)
-    for i, key in enumerate(rows):
-        r = next(r for r in runs if r.key == key)
-        y = len(rows) - 1 - i
-        color = registry.get(r.method).color
-        d = r.t[r.detections]
-        ax2.vlines(d, y - 0.35, y + 0.35, color=color, lw=0.9)
-        if r.score.detected:
-            ax2.plot([r.score.detection_t], [y], "o", color=color, ms=5, mec="k", mew=0.6)
+    _raster(ax2, runs, rows, same)
     _shade(ax2, t, trial.slip, cal_end)
-    ax2.set_yticks(range(len(rows)))
-    labels = []
-    for key in reversed(rows):
-        r = next(r for r in runs if r.key == key)
-        twins = sorted(set(same.get(key, [])))
-        labels.append(f"{r.label} @ {r.fs:.0f} Hz" + ("" if r.rate == "data" else " (resampled)")
-                      + (f"\n= {', '.join(twins)}" if twins else ""))
-    ax2.set_yticklabels(labels, fontsize=7)
-    ax2.set_ylim(-0.6, len(rows) - 0.4)
     ax2.set_xlabel("time (s)")
     ax2.set_title("detections (tick), first detection during the labelled slip (dot); "
                   "'= X': X detects the same", fontsize=8, loc="left")

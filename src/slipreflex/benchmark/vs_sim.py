@@ -37,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from ..baselines.calibration import REST_K
+from ..methods import NMSD, SWT
 from ..csvfiles import write_columns
 
 __all__ = ["Comparison", "compare", "write_comparison", "format_comparison", "plot_comparison",
@@ -125,9 +126,9 @@ def _measures_of(frames: np.ndarray, fs: float, onset_index: int | None, calibra
         tot = f.sum(axis=1)
         out["slip_force_ratio"] = float(np.max(np.abs(tot[w] - tot[onset_index])) / total_noise)
         s = np.abs(nmsd_statistic(f, fs)).max(axis=1)
-        out["slip_nmsd_ratio"] = float(s[w].max() / rest_threshold(cal, "nmsd", fs, k=rest_k))
+        out["slip_nmsd_ratio"] = float(s[w].max() / rest_threshold(cal, NMSD, fs, k=rest_k))
         c = np.abs(swt_statistic(f)).max(axis=1)
-        out["slip_swt_ratio"] = float(c[w].max() / rest_threshold(cal, "swt", fs, k=rest_k))
+        out["slip_swt_ratio"] = float(c[w].max() / rest_threshold(cal, SWT, fs, k=rest_k))
     return out
 
 
