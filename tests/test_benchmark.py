@@ -276,3 +276,37 @@ def test_benchmark_table_script_markers_and_compact_table():
                {**row, "method": "dath-event", "rate": "data", "same_detections_as": "dath"}]
     table = script["compact"](summary)
     assert table.splitlines()[2] == "| DATH | 2 / 3 | - / - | 12 / 12 |" and len(table.splitlines()) == 3
+
+
+def test_ctrl_c_keeps_the_finished_trials(tmp_path, monkeypatch, capsys):
+    import slipreflex.benchmark.run as run_mod
+
+    folder = tmp_path / "set"
+    folder.mkdir()
+    for name in ("a", "b", "c"):
+        _write(folder / f"{name}.csv", ["t", "x", "slip"], [[r[0], r[1], r[-1]] for r in _trial_rows()])
+    real = run_mod.run_trial
+
+    def stop_at_b(trial, *args, **kwargs):
+        if trial.name == "b":
+            raise KeyboardInterrupt
+        return real(trial, *args, **kwargs)
+
+    monkeypatch.setattr(run_mod, "run_trial", stop_at_b)
+    out = tmp_path / "out"
+    assert main(["benchmark", str(folder), "--methods", "fixed", "--rates", "data", "--out", str(out)]) == 130
+    with open(out / "benchmark.csv", newline="") as fh:
+        assert [r["trial"] for r in csv.DictReader(fh)] == ["a"]
+    assert (out / "a.png").is_file() and not (out / "b.png").exists()
+    assert "interrupted; 1 finished trial(s) kept" in capsys.readouterr().out
+
+
+def test_shear_reduction_runs_and_needs_two_tangential_components(tmp_path):
+    trial = read_folder(shipped_dataset())[-1]
+    (run,) = run_trial(trial, BenchmarkConfig(methods=("fixed",), rates=("data",), reduction="shear-norm"))
+    assert run.score.slips and run.threshold > 0
+    folder = tmp_path / "n"
+    folder.mkdir()
+    p = _write(folder / "n.csv", ["t", "a", "b", "c", "d", "slip"], _trial_rows(), (("layout", "1x2x2"),))
+    with pytest.raises(DataError, match="shear-norm needs two tangential components per taxel"):
+        reduce_channels(read_trial(p), "shear-norm")

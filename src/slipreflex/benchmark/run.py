@@ -302,6 +302,7 @@ def _chain_run(name: str, trial: RecordedTrial, cfg: BenchmarkConfig, rate: str)
     base = _trial_reflex(name)
     outs = []
     for ch_name, x in reduce_channels(trial, cfg.reduction):
+        step = _quantum(x[trial.t < trial.t[0] + cfg.calibration_s])      # the recorded channel's step
         if rate == "data":
             t, fs = trial.t, trial.fs
             over = {"fs": fs, **_scaled(base, spec.fs, fs)}
@@ -309,7 +310,7 @@ def _chain_run(name: str, trial: RecordedTrial, cfg: BenchmarkConfig, rate: str)
             t, x, fs = to_rate(trial.t, x, spec.fs)
             over = {"fs": fs}
         if base.params.dath_floor > 0:
-            over["dath_floor"] = _quantum(x[t < t[0] + cfg.calibration_s]) or base.params.dath_floor
+            over["dath_floor"] = step or base.params.dath_floor
         cal = t < t[0] + cfg.calibration_s
         filtered = run_chain(x[cal], dataclasses.replace(base.params, **over)).filtered
         sd = float(np.std(filtered))

@@ -10,6 +10,8 @@ The same measures on both, at the data's rate, from the normal component of ever
   and the fraction of frames identical to the one before (a stream that repeats frames);
 * **load drift**: the sd of the arrays' total normal force over the calibration span over its
   own white noise (1 when the span is at rest and the noise white);
+* **noise under load**: the taxel noise between the calibration span and the onset (to the
+  end for a control: the arm moving, or the bottle filling) over that in the span;
 * **tails**: excess kurtosis of NMSD's statistic over the calibration span (0 for Gaussian);
 * **slip**: over the first 0.25 s after the onset, the largest change of the total normal
   force over its noise, and the largest NMSD and SWT-SD statistic over their thresholds
@@ -53,6 +55,7 @@ MEASURES: tuple[tuple[str, str], ...] = (
     ("zero_steps", "fraction of zero changes per taxel"),
     ("repeated_frames", "fraction of frames identical to the previous one"),
     ("drift_ratio", "total normal force: sd over the calibration span / its white noise"),
+    ("load_noise_ratio", "taxel noise after the calibration span, before any slip / in it"),
     ("nmsd_kurtosis", "NMSD statistic: excess kurtosis over the calibration span"),
     ("slip_force_ratio", "slip: largest change of total normal force in 0.25 s / its noise"),
     ("slip_nmsd_ratio", "slip: largest NMSD statistic in 0.25 s / NMSD threshold"),
@@ -118,6 +121,7 @@ def _measures_of(frames: np.ndarray, fs: float, onset_index: int | None, calibra
         "zero_steps": float(np.mean(d == 0)),
         "repeated_frames": float(np.mean(np.all(np.diff(f, axis=0) == 0, axis=1))),
         "drift_ratio": float(total.std() / total_noise) if total_noise > 0 else float("nan"),
+        "load_noise_ratio": _load_noise_ratio(f, len(cal), onset_index, noise),
         "nmsd_kurtosis": float(kurtosis(s_cal)),
         "slip_force_ratio": float("nan"), "slip_nmsd_ratio": float("nan"), "slip_swt_ratio": float("nan"),
     }
@@ -130,6 +134,14 @@ def _measures_of(frames: np.ndarray, fs: float, onset_index: int | None, calibra
         c = np.abs(swt_statistic(f)).max(axis=1)
         out["slip_swt_ratio"] = float(c[w].max() / rest_threshold(cal, SWT, fs, k=rest_k))
     return out
+
+
+def _load_noise_ratio(f: np.ndarray, n_cal: int, onset_index: int | None, noise: float) -> float:
+    """Taxel noise between the calibration span and the onset (or the end) over the span's."""
+    later = f[n_cal:onset_index]
+    if len(later) < 8 or not noise > 0:
+        return float("nan")
+    return float(np.median(np.diff(later, axis=0).std(axis=0)) / math.sqrt(2.0) / noise)
 
 
 def _spectrum(frames: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray]:
