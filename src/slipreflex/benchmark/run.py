@@ -65,6 +65,8 @@ RATES: tuple[str, ...] = ("data", "method")
 #: Parameters that are lengths in samples at the method's own rate (converted at the data's).
 SAMPLE_FIELDS: dict[str, int] = {"n": 1, "dath_samples": 1, "mean_samples": 1, "acc_reset": 1,
                                  "persist": 0, "acc_leak": -1}
+#: Largest denominator of the resampling ratio: puts the achieved rate within about 0.01 % of the
+#: method's (259.98-260.02 Hz on the shipped set) while keeping the polyphase filter short.
 _MAX_DENOMINATOR = 64
 
 
