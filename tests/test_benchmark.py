@@ -181,7 +181,7 @@ def test_a_users_folder_without_layout_runs_the_chain_methods_only(tmp_path, cap
         rows = _trial_rows(onset=onset)
         _write(folder / f"{name}.csv", ["t", "x", "slip"], [[r[0], r[1], r[-1]] for r in rows])
     out = tmp_path / "out"
-    assert main(["benchmark", str(folder), "--methods", "fixed", "dath", "--no-figures", "--out", str(out)]) == 0
+    assert main(["benchmark", str(folder), "--methods", "fixed,DATH", "--no-figures", "--out", str(out)]) == 0
     with open(out / "benchmark.csv", newline="") as fh:
         rows = list(csv.DictReader(fh))
     assert len(rows) == 2 * 2 * 2                                   # trials x methods x rates

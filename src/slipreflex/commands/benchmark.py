@@ -25,7 +25,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("folder", type=Path, nargs="?", default=None,
                    help="folder of trial CSV files (docs/benchmark.md; default: the shipped imanlab-slip set)")
     p.add_argument("--methods", nargs="+", default=None,
-                   help="registered methods to run (default: every one that applies to the data)")
+                   help="registered methods to run, space- or comma-separated, any case (default: every "
+                        "one that applies to the data)")
     p.add_argument("--rates", nargs="+", default=list(RATES), choices=RATES,
                    help="run each method at the data's rate, resampled to its own, or both (default: both)")
     p.add_argument("--reduction", choices=REDUCTIONS, default="z-sum",
@@ -51,7 +52,8 @@ def run(args: argparse.Namespace) -> int:
     from ..benchmark.run import plan, run_trial
     from ..paths import output_dir
 
-    cfg = BenchmarkConfig(methods=tuple(args.methods) if args.methods else None,
+    names = [m for item in args.methods or () for m in item.split(",") if m.strip()]
+    cfg = BenchmarkConfig(methods=tuple(names) if names else None,
                           calibration_s=args.calibration_s, rest_k=args.rest_k,
                           reduction=args.reduction, rates=tuple(dict.fromkeys(args.rates)))
     folder = args.folder if args.folder is not None else shipped_dataset()
