@@ -61,7 +61,9 @@ if [ ! -x .venv/bin/python ]; then
   "$PYTHON" -m venv .venv
 fi
 VPY=.venv/bin/python
-"$VPY" -m pip install -q --disable-pip-version-check -e ".[test]"
+# Every extra pyproject.toml declares (test, study, dev, ...), read from it so a new extra needs no edit here.
+extras=$("$VPY" -c 'import tomllib; t = tomllib.load(open("pyproject.toml", "rb")); print(",".join(t.get("project", {}).get("optional-dependencies", {})))')
+"$VPY" -m pip install -q --disable-pip-version-check -e ".${extras:+[$extras]}"
 echo "bootstrap.sh: slipreflex is installed in .venv; to use it later: source .venv/bin/activate"
 export PATH="$PWD/.venv/bin:$PATH"
 
