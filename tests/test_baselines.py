@@ -28,6 +28,7 @@ def _synthetic(fs: float, seconds: float, seed: int, noise: float = 0.005) -> np
     return f
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_nmsd_streaming_equals_batch(seed, stream, assert_same_commands):
     frames = _synthetic(NMSD_FS, 2.0, seed)

@@ -39,8 +39,9 @@ gen = _load("slipreflex_fw_gen_board_vectors", FIRMWARE / "test" / "gen_board_ve
 
 
 @pytest.fixture(scope="module")
-def host_build(tmp_path_factory):
+def host_build(tmp_path_factory, tools):
     """The two host builds of the core's vector checker (right and wrong rounding)."""
+    tools("make", "cc")
     out = tmp_path_factory.mktemp("board") / "build"
     targets = [f"{out}/test_board_vectors", f"{out}/test_board_vectors-wrong-rounding"]
     proc = subprocess.run(["make", "-C", str(FIRMWARE), f"BUILD={out}", *targets],
@@ -107,6 +108,7 @@ def test_twin_reproduces_every_vector():
     assert ":500" in text and "f" in "".join(r["E"] for r in recs)
 
 
+@pytest.mark.slow
 def test_c_core_reproduces_every_vector(host_build):
     proc = _run_c(host_build / "test_board_vectors", VECTORS)
     assert proc.returncode == 0, proc.stdout + proc.stderr
@@ -263,6 +265,7 @@ def test_integral_saturation_is_output_neutral():
     assert c.h == board.H_MAX and c.command == hardware.FINGER_MAX
 
 
+@pytest.mark.slow
 def test_agrees_with_float_chain_on_quantised_signals():
     rng = np.random.default_rng(5)
     for dath in (False, True):
@@ -320,6 +323,7 @@ def test_bad_input_is_named():
     assert math.isfinite(board.volts_to_q16(0.0))
 
 
+@pytest.mark.slow
 def test_board_methods_run_in_reproduce_beside_the_float_chain():
     from slipreflex import methods
     from slipreflex.experiments import ReproduceConfig, run_reproduce

@@ -49,6 +49,7 @@ def test_a_target_inside_a_jump_of_the_first_slip_is_reported_or_met_at_the_near
     assert abs(on_step.first_slip_ml - below) <= 0.02 * below and on_step.note == ""
 
 
+@pytest.mark.slow
 def test_a_study_plant_inside_a_jump_runs_at_the_nearest_edge_or_is_recorded(tmp_path):
     tr = plant_from_values(STAIRS).bottles["TR"]
     kw = plant_from_values(STAIRS).rig_kwargs()

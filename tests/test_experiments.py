@@ -97,6 +97,7 @@ def test_a_drop_trial_is_deterministic_and_complete():
     assert plot is not None and len(plot.cmd_t) > 0
 
 
+@pytest.mark.slow
 def test_parallel_and_serial_runs_give_the_same_rows():
     cfg = ReproduceConfig(trials=2, bottles=("TR", "TX"), methods=("fixed", "nmsd"),
                           experiments=("drop",), calibration_s=1.0)

@@ -49,6 +49,7 @@ def test_steady_sliding_speed_under_a_constant_excess_load_is_the_laws():
     assert tr.daq.velocity[-1] == pytest.approx(expected, rel=0.01)
 
 
+@pytest.mark.slow
 def test_slide_speed_solver_converges_and_solves_the_balance():
     C = np.zeros(K.C_SIZE, dtype=np.int64)
     rng = np.random.default_rng(0)
