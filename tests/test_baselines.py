@@ -6,8 +6,20 @@ import numpy as np
 import pytest
 
 from slipreflex.baselines import (
-    NMSD, SWTSD, ClosingParams, NMSDParams, SWTParams, closing_commands, nmsd_commands,
-    nmsd_detections, nmsd_statistic, rest_threshold, swt_commands, swt_on, swt_statistic)
+    NMSD,
+    SWTSD,
+    ClosingParams,
+    NMSDParams,
+    SWTParams,
+    closing_commands,
+    nmsd_commands,
+    nmsd_detections,
+    nmsd_statistic,
+    rest_threshold,
+    swt_commands,
+    swt_on,
+    swt_statistic,
+)
 from slipreflex.errors import DataError, ParameterError
 from slipreflex.hardware import NMSD_FS, SWT_FS
 from slipreflex.interfaces import Reflex

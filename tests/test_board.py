@@ -56,11 +56,11 @@ def _run_c(exe: Path, vectors: Path) -> subprocess.CompletedProcess:
 
 
 def _read_vectors(path: Path) -> list[dict]:
-    lines = [l for l in path.read_text().splitlines() if l and not l.startswith("#")]
+    lines = [ln for ln in path.read_text().splitlines() if ln and not ln.startswith("#")]
     out = []
     for i in range(0, len(lines), 7):
-        rec = {l[0]: l[2:] for l in lines[i:i + 7]}
-        assert "".join(l[0] for l in lines[i:i + 7]) == "VPIQXEW"
+        rec = {ln[0]: ln[2:] for ln in lines[i:i + 7]}
+        assert "".join(ln[0] for ln in lines[i:i + 7]) == "VPIQXEW"
         out.append(rec)
     return out
 
@@ -119,14 +119,14 @@ def test_negative_control_wrong_rounding_is_rejected(host_build):
     """The core built with truncation instead of round-half-up fails the same checker."""
     proc = _run_c(host_build / "test_board_vectors-wrong-rounding", VECTORS)
     assert proc.returncode == 1, proc.stdout
-    fails = [l for l in proc.stdout.splitlines() if l.startswith("FAIL")]
-    assert len(fails) >= 10 and all(" x " in l for l in fails), proc.stdout
+    fails = [ln for ln in proc.stdout.splitlines() if ln.startswith("FAIL")]
+    assert len(fails) >= 10 and all(" x " in ln for ln in fails), proc.stdout
 
 
 @pytest.mark.parametrize("line, mutate", [("X", "x"), ("E", "event"), ("W", "command")])
 def test_c_checker_catches_a_wrong_vector(host_build, tmp_path, line, mutate):
     lines = VECTORS.read_text().splitlines()
-    i = next(i for i, l in enumerate(lines) if l == "V walk_dath") + "VPIQXEW".index(line)
+    i = next(i for i, ln in enumerate(lines) if ln == "V walk_dath") + "VPIQXEW".index(line)
     if mutate == "x":
         vals = lines[i][2:].split(",")
         vals[700] = str(int(vals[700]) + 1)

@@ -15,10 +15,11 @@ from pathlib import Path
 import pytest
 import serial
 
-from slipreflex import board, hardware as hw
+from slipreflex import board
+from slipreflex import hardware as hw
 from slipreflex.cli import main
-from slipreflex.devices.daq import SerialDaq
 from slipreflex.devices import wire
+from slipreflex.devices.daq import SerialDaq
 from slipreflex.recording import METADATA_NAME, Recorder, read_recording, replay
 from slipreflex.runtime import run_loop
 

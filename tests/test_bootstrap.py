@@ -8,7 +8,6 @@ asked (the real Debian packages are checked by ``scripts/fresh_debian_check.sh``
 runs the whole bootstrap in a freshly debootstrapped Debian 12).
 """
 
-import os
 import stat
 import subprocess
 import sys
@@ -148,7 +147,8 @@ def test_bootstrap_with_the_system_python_makes_and_uses_dot_venv(standin):
 def test_bootstrap_installs_python3_venv_when_ensurepip_is_missing(standin, tmp_path):
     """Debian's python3 without python3-venv: bootstrap asks apt for it, then makes the venv."""
     proj, shims, log = standin
-    real = subprocess.run([str(SYSTEM_PYTHON), "-c", "import sys; print(f'{sys.version_info[0]}.{sys.version_info[1]}')"],
+    version = "import sys; print(f'{sys.version_info[0]}.{sys.version_info[1]}')"
+    real = subprocess.run([str(SYSTEM_PYTHON), "-c", version],
                           capture_output=True, text=True, check=True).stdout.strip()
     mark = tmp_path / "venv-installed"
     _script(shims / "python3", f"""

@@ -406,7 +406,7 @@ def test_no_finger_target_drops_below_its_start_in_a_closed_loop_pour(method, mo
         reflex = methods.make(method, p0=start[hw.SLIP_FINGER], context=_context())
         if not compiled:   # the Python loop sends every target through the hand's command: keep them
             command = rig.hand.command
-            monkeypatch.setattr(rig.hand, "command", lambda kind, fingers, value=0.0, at=None: (
+            monkeypatch.setattr(rig.hand, "command", lambda kind, fingers, value=0.0, at=None, command=command: (
                 sent.extend((f, value) for f in fingers), command(kind, fingers, value, at=at))[1])
         rig.perturb(PAPER_POUR, at=rig.t + 0.2)
         tr = run_closed_loop(rig, reflex, 0.2 + PAPER_POUR.duration_s + 1.0, compiled=compiled)

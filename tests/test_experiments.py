@@ -12,8 +12,17 @@ from slipreflex.baselines import NMSD, SWTSD
 from slipreflex.chain import SlipReflex
 from slipreflex.errors import ParameterError
 from slipreflex.experiments import (
-    RESULTS_CSV_COLUMNS, Cell, ReproduceConfig, calibrate, calibration_seed, closing_speed,
-    method_context, run_reproduce, run_trial, trial_seed)
+    RESULTS_CSV_COLUMNS,
+    Cell,
+    ReproduceConfig,
+    calibrate,
+    calibration_seed,
+    closing_speed,
+    method_context,
+    run_reproduce,
+    run_trial,
+    trial_seed,
+)
 from slipreflex.sim import PAPER_DROP, PAPER_POUR, HandParams
 
 

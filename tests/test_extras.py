@@ -66,7 +66,8 @@ def test_the_base_install_and_the_other_commands_load_no_study_package(tmp_path)
 def test_study_without_its_extra_is_a_one_line_error_naming_it(tmp_path):
     code = WITHOUT_EXTRA + (
         "from slipreflex.cli import main\n"
-        f"sys.exit(main(['study', '--plants', '2', '--trials', '1', '--workers', '0', '--out', {str(tmp_path / 's')!r}]))\n")
+        "sys.exit(main(['study', '--plants', '2', '--trials', '1', '--workers', '0', "
+        f"'--out', {str(tmp_path / 's')!r}]))\n")
     res = _python(code)
     assert res.returncode == 2, res.stdout + res.stderr
     lines = res.stderr.strip().splitlines()

@@ -111,15 +111,15 @@ def test_c_encoder_passes_shared_vectors(build):
 def test_c_vector_test_catches_a_wrong_vector(build, tmp_path, mutate):
     lines = VECTORS.read_text().splitlines()
     if mutate == "field":      # a good frame whose decoded adc is off by one
-        i = next(i for i, l in enumerate(lines) if l.startswith("F basic "))
+        i = next(i for i, ln in enumerate(lines) if ln.startswith("F basic "))
         parts = lines[i].split(" ")
         parts[5] = str(int(parts[5]) + 1)
     elif mutate == "reason":   # a bad-CRC frame declared truncated
-        i = next(i for i, l in enumerate(lines) if l.startswith("B crc_low_bit "))
+        i = next(i for i, ln in enumerate(lines) if ln.startswith("B crc_low_bit "))
         parts = lines[i].split(" ")
         parts[3] = "truncated"
     else:                      # a good frame with one bit flipped in its bytes
-        i = next(i for i, l in enumerate(lines) if l.startswith("F zero "))
+        i = next(i for i, ln in enumerate(lines) if ln.startswith("F zero "))
         parts = lines[i].split(" ")
         parts[2] = parts[2][:10] + ("1" if parts[2][10] != "1" else "0") + parts[2][11:]
     lines[i] = " ".join(parts)
@@ -150,11 +150,11 @@ def test_decoded_samples_carry_injected_values(good_capture):
     parser = wire.FrameParser()
     samples = [f.to_sample() for f in parser.feed((good_capture / "uart.bin").read_bytes())]
     events = (good_capture / "events.txt").read_text().splitlines()
-    counts = [int(l.split()[2]) for l in events if l.startswith("A ")][: len(samples)]
+    counts = [int(ln.split()[2]) for ln in events if ln.startswith("A ")][: len(samples)]
     np.testing.assert_allclose([s.slip_volts for s in samples],
                                np.array(counts) * hardware.ADC_LSB)
     assert samples[-1].t == pytest.approx((len(samples) - 1) * hardware.DAQ_PERIOD_S)
-    first = next(l for l in events if l.startswith("I ")).split()[2:]
+    first = next(ln for ln in events if ln.startswith("I ")).split()[2:]
     fresh = next(s for s in samples if s.accel_g is not None)
     assert fresh.accel_g == tuple(int(v) / wire.ACCEL_LSB_PER_G for v in first)
 
@@ -196,7 +196,7 @@ def test_negative_control_corrupted_capture_is_rejected(good_capture, tmp_path, 
     elif damage in ("value", "accel", "pulse"):  # the log disagrees with what came back
         ev = (out / "events.txt").read_text().splitlines()
         kind = {"value": "A ", "accel": "I ", "pulse": "P "}[damage]
-        i = [j for j, l in enumerate(ev) if l.startswith(kind)][1234]
+        i = [j for j, ln in enumerate(ev) if ln.startswith(kind)][1234]
         parts = ev[i].split(" ")
         if damage == "pulse":    # one pulse the firmware counted never happened
             del ev[i]
@@ -235,7 +235,7 @@ def test_imu_plugged_in_later_is_configured_and_read(build, tmp_path):
     plug = round(1.0 / hardware.DAQ_PERIOD_S)
     assert all(f.imu_error and not f.accel_fresh for f in frames[:plug])
     assert all(f.accel_fresh and not f.imu_error for f in frames[plug + 5:])
-    writes = [l.split() for l in (tmp_path / "events.txt").read_text().splitlines()
-              if l.startswith("W ")]
+    writes = [ln.split() for ln in (tmp_path / "events.txt").read_text().splitlines()
+              if ln.startswith("W ")]
     assert [(int(r), int(v)) for _, _, r, v in writes] == list(checker.IMU_CONFIG.items())
     assert all(int(c) > hardware.F_CPU for _, c, _, _ in writes)

@@ -166,7 +166,7 @@ def _reproduce_then_signal(tmp_path, send):
     except subprocess.TimeoutExpired:
         os.killpg(proc.pid, sig.SIGKILL)
         proc.communicate()
-        raise AssertionError("reproduce did not stop after the signal")
+        raise AssertionError("reproduce did not stop after the signal") from None
     return proc.returncode, "".join(err) + rest, out
 
 
@@ -253,8 +253,8 @@ def test_reproduce_estimates_its_run_time_before_starting(tmp_path, capsys, monk
     monkeypatch.setattr(ex, "run_reproduce", stop)
     assert main(["reproduce", "--out", str(tmp_path), "--trials", "3000", "--jobs", "2"]) == 2
     err = capsys.readouterr().err.splitlines()
-    from slipreflex.progress import format_duration
     from slipreflex.commands.reproduce import LONG_RUN_S
+    from slipreflex.progress import format_duration
 
     est = ex.estimate_wall_s(ex.ReproduceConfig(trials=3000), 2)
     assert est > LONG_RUN_S
@@ -315,7 +315,8 @@ def test_own_objects_names_are_checked_before_any_work(tmp_path, capsys):
     for argv, says in [
         (["reproduce", "--drop", "HEAVY"], "--drop HEAVY: no such drop (give --objects FILE.toml)"),
         (["reproduce", "--objects", str(objs), "--pour", "SLOW"], f"--pour SLOW: no such pour ({objs} has FAST)"),
-        (["reproduce", "--objects", str(objs), "--bottles", "JAR,XX"], "bottles: unknown 'XX' (known: TR, DK, TX, JAR)"),
+        (["reproduce", "--objects", str(objs), "--bottles", "JAR,XX"],
+         "bottles: unknown 'XX' (known: TR, DK, TX, JAR)"),
         (["reproduce", "--objects", str(tmp_path)], f"{tmp_path}: is a directory, not a TOML file"),
         (["virtual-rig", "--objects", str(objs), "--bottle", "POT"], "--bottle POT: unknown (known: TR, DK, TX, JAR)"),
         (["virtual-rig", "--objects", str(objs), "--drop", "NOPE"], f"--drop NOPE: no such drop ({objs} has HEAVY)"),

@@ -8,15 +8,19 @@ import io
 import json
 import os
 import subprocess
-import threading
 import sys
 import textwrap
+import threading
 import time
 
 import pytest
 
 from slipreflex.recording import (
-    METADATA_NAME, TOPICS, Recorder, RecordingError, read_recording,
+    METADATA_NAME,
+    TOPICS,
+    Recorder,
+    RecordingError,
+    read_recording,
 )
 
 

@@ -12,7 +12,6 @@ import subprocess
 import sys
 import threading
 
-
 import pytest
 from mcap.reader import NonSeekingReader, make_reader
 

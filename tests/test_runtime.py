@@ -5,12 +5,10 @@ from __future__ import annotations
 import contextlib
 import errno
 import io
-import os
 import signal
 import subprocess
-import threading
 import sys
-import time
+import threading
 
 import numpy as np
 import pytest
@@ -20,10 +18,10 @@ from slipreflex import hardware as hw
 from slipreflex.chain import SlipReflex
 from slipreflex.cli import main
 from slipreflex.csvfiles import read_slip_csv
+from slipreflex.devices import wire
 from slipreflex.devices.daq import SerialDaq
 from slipreflex.devices.ilimb import ILimb, PacketParser
 from slipreflex.devices.virtual import VirtualDevices
-from slipreflex.devices import wire
 from slipreflex.interfaces import DaqSample
 from slipreflex.recording import METADATA_NAME, Recorder, read_recording, replay
 from slipreflex.runtime import run_loop

@@ -10,10 +10,10 @@ from slipreflex.chain import SlipReflex
 from slipreflex.cli import main
 from slipreflex.devices.simrig import SimRig
 from slipreflex.devices.virtual import VirtualDevices
+from slipreflex.errors import ParameterError
 from slipreflex.hardware import DAQ_PERIOD_S, TRIPOD, Finger
 from slipreflex.recording import METADATA_NAME, read_recording
 from slipreflex.runtime import run_loop, safe_start, start_positions
-from slipreflex.errors import ParameterError
 
 
 class _RigSource:

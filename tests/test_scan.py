@@ -1,4 +1,5 @@
-"""The characterization scan matches the paper's numbers (levels, DATH > fixed, ~0.09 mm spacing) and the CLI writes its files."""
+"""The characterization scan matches the paper's numbers (levels, DATH > fixed, ~0.09 mm spacing)
+and the CLI writes its files."""
 
 import numpy as np
 import pytest

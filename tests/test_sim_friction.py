@@ -11,8 +11,13 @@ import slipreflex
 from slipreflex import hardware as hw
 from slipreflex.sim import BOTTLES, Drop, HandParams, PhysicsParams, Pour, Rig, run_closed_loop, simulate_open_loop
 from slipreflex.sim import kernel as K
-from slipreflex.sim.calibration import (PAPER_FIRST_SLIP_ML, calibrate_bottle, drop_fall_capacity, drop_falls,
-                                        first_slip_ml)
+from slipreflex.sim.calibration import (
+    PAPER_FIRST_SLIP_ML,
+    calibrate_bottle,
+    drop_fall_capacity,
+    drop_falls,
+    first_slip_ml,
+)
 from slipreflex.sim.contacts import static_capacity
 
 G = hw.GRAVITY

@@ -50,9 +50,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``slipreflex study``."""
     from .. import methods
     from ..experiments import BOTTLE_NAMES, EXPERIMENTS
-    from ..study import DEFAULT_PLANTS, DEFAULT_TRIALS, DESIGNS
-
     from ..experiments import DEFAULT_SEED as seed
+    from ..study import DEFAULT_PLANTS, DEFAULT_TRIALS, DESIGNS
     p.add_argument("--plants", type=int, default=DEFAULT_PLANTS,
                    help=f"plants to draw (default {DEFAULT_PLANTS}; saltelli rounds up to B(D+2))")
     p.add_argument("--design", choices=DESIGNS, default="sobol", help="design over the constants (default sobol)")
