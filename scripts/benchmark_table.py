@@ -83,9 +83,11 @@ def compact(summary) -> str:
     for m, r in by.items():
         if all(x["same_detections_as"] for x in r.values()):
             continue
-        d, p = r.get("data"), r.get("method")
-        pair = lambda k, nd=0: " / ".join(_cell(x[k], nd) if isinstance(x[k], float) else str(x[k])  # noqa: E731
-                                          for x in (d, p) if x is not None)
+        both = [x for x in (r.get("data"), r.get("method")) if x is not None]
+
+        def pair(k, both=both):
+            return " / ".join(_cell(x[k]) if isinstance(x[k], float) else str(x[k]) for x in both)
+
         rows.append(f"| {label(m)} | {pair('detected')} | {pair('median_latency_ms')} | "
                     f"{pair('false_alarms_per_min')} |")
     return "\n".join([head, *rows])
@@ -95,7 +97,6 @@ def why(trials) -> str:
     """Two checks behind the prose: the authors' preset without its accumulator reset, and how
     much of the time some taxel is over NMSD's threshold (data rate, k = 5)."""
     import dataclasses
-    import functools
 
     import numpy as np
 

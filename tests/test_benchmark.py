@@ -8,8 +8,15 @@ import math
 import numpy as np
 import pytest
 
-from slipreflex.benchmark import (BenchmarkConfig, read_folder, read_trial, run_benchmark, run_trial, score,
-                                  shipped_dataset)
+from slipreflex.benchmark import (
+    BenchmarkConfig,
+    read_folder,
+    read_trial,
+    run_benchmark,
+    run_trial,
+    score,
+    shipped_dataset,
+)
 from slipreflex.benchmark.run import applicable, reduce_channels, to_rate
 from slipreflex.benchmark.trials import Layout
 from slipreflex.cli import main
@@ -151,7 +158,8 @@ def test_one_trial_scored_by_hand(tmp_path):
     assert np.flatnonzero(run.detections).tolist() == [25, 43, 55]
     s = run.score
     assert s.detection_t == pytest.approx(4.3) and s.latency_ms == pytest.approx(300.0)
-    assert s.false_alarms == 1 and s.scored_s == pytest.approx(2.0) and s.false_alarm_rate_per_min == pytest.approx(30.0)
+    assert s.false_alarms == 1 and s.scored_s == pytest.approx(2.0)
+    assert s.false_alarm_rate_per_min == pytest.approx(30.0)
     assert s.detections == 3
 
 

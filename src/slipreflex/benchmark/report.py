@@ -257,7 +257,8 @@ def plot_trial_runs(trial, runs: Sequence[MethodRun], path: str | Path, *, calib
         z = z - z[0]
         for a in range(z.shape[1]):
             ax0.plot(t, z[:, a, :], lw=0.6, color=f"C{a}", alpha=0.7)
-            ax0.plot([], [], color=f"C{a}", label=f"array {a + 1}: normal ({trial.layout.components[trial.layout.normal]}) per taxel")
+            normal = trial.layout.components[trial.layout.normal]
+            ax0.plot([], [], color=f"C{a}", label=f"array {a + 1}: normal ({normal}) per taxel")
         ax0.set_ylabel("change (channel units)")
     else:
         ch = trial.channels - trial.channels[0]

@@ -43,6 +43,7 @@ import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
 from fractions import Fraction
+from typing import Any
 
 import numpy as np
 
@@ -177,7 +178,7 @@ class Skipped:
     reason: str
 
 
-def _trial_reflex(name: str):
+def _trial_reflex(name: str) -> Any:
     """The method's reflex as registered (default parameters), for its params and type."""
     spec = registry.get(name)
     if spec.input_kind == "tactile":
@@ -276,7 +277,7 @@ def to_rate(t: np.ndarray, x: np.ndarray, fs_target: float) -> tuple[np.ndarray,
     return t_new, y[keep], float(fs * up / down)
 
 
-def _scaled(reflex, native_fs: float, fs: float) -> dict:
+def _scaled(reflex: Any, native_fs: float, fs: float) -> dict[str, Any]:
     """Sample-count parameters of ``reflex`` converted from ``native_fs`` to ``fs`` (same times)."""
     out = {}
     p = reflex.params
@@ -302,12 +303,14 @@ def _chain_run(name: str, trial: RecordedTrial, cfg: BenchmarkConfig, rate: str)
 
     spec = registry.get(name)
     base = _trial_reflex(name)
+    detect = spec.detections
+    assert detect is not None                                  # applicable() checked it
     outs = []
     for ch_name, x in reduce_channels(trial, cfg.reduction):
         step = _quantum(x[trial.t < trial.t[0] + cfg.calibration_s])      # the recorded channel's step
         if rate == "data":
             t, fs = trial.t, trial.fs
-            over = {"fs": fs, **_scaled(base, spec.fs, fs)}
+            over: dict[str, Any] = {"fs": fs, **_scaled(base, spec.fs, fs)}
         else:
             t, x, fs = to_rate(trial.t, x, spec.fs)
             over = {"fs": fs}
@@ -321,7 +324,7 @@ def _chain_run(name: str, trial: RecordedTrial, cfg: BenchmarkConfig, rate: str)
                             f"{cfg.calibration_s:g} s: no threshold for {name}")
         over["threshold"] = cfg.rest_k * sd
         reflex = registry.make(name, **over)
-        det = spec.detections(reflex, x)
+        det = detect(reflex, x)
         outs.append((t, fs, over, det))
     t, fs, over, det = outs[0]
     events = np.logical_or.reduce([o[3].events for o in outs])
@@ -335,6 +338,8 @@ def _tactile_run(name: str, trial: RecordedTrial, cfg: BenchmarkConfig, rate: st
 
     spec = registry.get(name)
     base = _trial_reflex(name)
+    detect = spec.detections
+    assert detect is not None                                  # applicable() checked it
     frames = trial.normal_frames()
     frames = frames - frames[0]
     if rate == "data":
@@ -346,7 +351,7 @@ def _tactile_run(name: str, trial: RecordedTrial, cfg: BenchmarkConfig, rate: st
     cal = t < t[0] + cfg.calibration_s
     over["threshold"] = rest_threshold(frames[cal], name, fs, k=cfg.rest_k)
     reflex = registry.make(name, context=registry.MethodContext(speed=1.0), fs=fs, **over)
-    det = spec.detections(reflex, frames)
+    det = detect(reflex, frames)
     return t, fs, over["threshold"], {"fs": fs, **over}, det.events, det.sensor, det.sensor_label
 
 

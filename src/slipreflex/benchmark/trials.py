@@ -85,7 +85,7 @@ class Layout:
 
     @classmethod
     def parse(cls, text: str, *, components: str | None, normal: str | None, channels: int,
-              where: str) -> "Layout":
+              where: str) -> Layout:
         """Read ``# layout`` (with ``# components`` and ``# normal``) and check it against the columns.
 
         Raises

@@ -39,8 +39,8 @@ from pathlib import Path
 import numpy as np
 
 from ..baselines.calibration import REST_K
-from ..methods import NMSD, SWT
 from ..csvfiles import write_columns
+from ..methods import NMSD, SWT
 
 __all__ = ["Comparison", "compare", "write_comparison", "format_comparison", "plot_comparison",
            "MEASURES", "SLIP_WINDOW_S"]
@@ -207,7 +207,8 @@ def compare(trials: Sequence, *, calibration_s: float = 1.0, rest_k: float = RES
             curves[name]["spectrum"].append(_spectrum(fr[: int(calibration_s * tr.fs)], tr.fs))
             if on is not None:
                 tot = fr.reshape(len(fr), -1).sum(axis=1)
-                curves[name]["onset"].append(((tr.t - tr.t[on]), (tot - tot[on]) / (m["noise"] * math.sqrt(fr[0].size))))
+                scale = m["noise"] * math.sqrt(fr[0].size)
+                curves[name]["onset"].append((tr.t - tr.t[on], (tot - tot[on]) / scale))
         rows[name] = {k: float(np.nanmedian([p[k] for p in per])) if per and not all(
             math.isnan(p[k]) for p in per) else float("nan") for k, _ in MEASURES}
     for kind in ("pour", "drop"):
@@ -216,9 +217,10 @@ def compare(trials: Sequence, *, calibration_s: float = 1.0, rest_k: float = RES
         m = _measures_of(frames, fs, on, calibration_s, rest_k)
         rows[name] = m
         curves[name] = {"onset": [], "spectrum": [_spectrum(frames[: int(calibration_s * fs)], fs)]}
-        if on is not None:
+        if on is not None and t is not None:
             tot = frames.reshape(len(frames), -1).sum(axis=1)
-            curves[name]["onset"].append((t - t[on], (tot - tot[on]) / (m["noise"] * math.sqrt(frames[0].size))))
+            scale = m["noise"] * math.sqrt(frames[0].size)
+            curves[name]["onset"].append((t - t[on], (tot - tot[on]) / scale))
     return Comparison(tuple(rows), rows, fs, curves)
 
 
@@ -232,7 +234,7 @@ def write_comparison(c: Comparison, path: str | Path) -> Path:
     'measure,description,a_b'
     """
     path = Path(path)
-    cols = {"measure": [k for k, _ in MEASURES], "description": [d for _, d in MEASURES]}
+    cols: dict[str, list] = {"measure": [k for k, _ in MEASURES], "description": [d for _, d in MEASURES]}
     for s in c.sources:
         cols[s.replace(", ", "_").replace(" ", "_")] = [float(f"{c.rows[s][k]:.4g}") for k, _ in MEASURES]
     write_columns(path, cols)
@@ -252,7 +254,7 @@ def format_comparison(c: Comparison, *, markdown: bool = False) -> str:
     >>> format_comparison(c, markdown=True).splitlines()[2].startswith("| taxel noise")
     True
     """
-    head = ["measure (at %.0f Hz)" % c.fs, *c.sources]
+    head = [f"measure (at {c.fs:.0f} Hz)", *c.sources]
     rows = [[d, *(_cell(c.rows[s][k]) for s in c.sources)] for k, d in MEASURES]
     if markdown:
         out = ["| " + " | ".join(head) + " |", "|" + "|".join("---" for _ in head) + "|"]

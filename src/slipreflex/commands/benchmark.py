@@ -47,8 +47,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Read and check every trial, run the methods, write and print the results."""
     from ..benchmark import BenchmarkConfig, read_folder, shipped_dataset
-    from ..benchmark.report import (format_table, plot_trial_runs, summarize, write_runs,
-                                    write_summary)
+    from ..benchmark.report import format_table, plot_trial_runs, summarize, write_runs, write_summary
     from ..benchmark.run import plan, run_trial
     from ..paths import output_dir
 
