@@ -82,6 +82,7 @@ def test_calibration_span_past_the_onset_is_an_error(tmp_path, capsys):
     assert "reaches past the labelled slip onset at 0.5 s" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_data_too_slow_for_the_chains_low_pass_is_an_error_before_work(tmp_path, capsys):
     folder = tmp_path / "slow"
     folder.mkdir()
@@ -163,6 +164,7 @@ def test_one_trial_scored_by_hand(tmp_path):
     assert s.detections == 3
 
 
+@pytest.mark.slow
 def test_the_hand_trial_through_the_command(tmp_path, capsys):
     folder = tmp_path / "mine"
     folder.mkdir()
@@ -256,6 +258,7 @@ def test_config_rejects_unknown_names():
         BenchmarkConfig(methods=("nope",))
 
 
+@pytest.mark.slow
 def test_vs_sim_measures_every_source():
     from slipreflex.benchmark.vs_sim import MEASURES, compare
 
@@ -286,6 +289,7 @@ def test_benchmark_table_script_markers_and_compact_table():
     assert table.splitlines()[2] == "| DATH | 2 / 3 | - / - | 12 / 12 |" and len(table.splitlines()) == 3
 
 
+@pytest.mark.slow
 def test_ctrl_c_keeps_the_finished_trials(tmp_path, monkeypatch, capsys):
     import slipreflex.benchmark.run as run_mod
 
