@@ -94,7 +94,10 @@ def convert_trial(folder: Path, out: Path, commit: str) -> dict[str, object]:
     from slipreflex.csvfiles import write_columns
 
     write_columns(out / f"{name}.csv", columns, preamble=preamble)
-    return {"trial": name, "samples": len(t), "slip_samples": int(slip.sum()), "peak_speed_m_s": speed}
+    v = np.hypot(rs[:, rs_head.index("v_x")], rs[:, rs_head.index("v_y")])
+    moving = float(t[np.argmax(v > 0.005)])                # first commanded speed above 5 mm/s
+    return {"trial": name, "samples": len(t), "slip_samples": int(slip.sum()), "peak_speed_m_s": speed,
+            "moving_from_s": moving}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -111,7 +114,7 @@ def main(argv: list[str] | None = None) -> int:
     for folder in folders:
         info = convert_trial(folder, args.out, args.commit)
         print(f"{info['trial']}: {info['samples']} samples, {info['slip_samples']} labelled slip, "
-              f"peak speed {info['peak_speed_m_s']:.3f} m/s")
+              f"peak speed {info['peak_speed_m_s']:.3f} m/s, moving from {info['moving_from_s']:.2f} s")
     return 0
 
 

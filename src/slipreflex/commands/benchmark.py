@@ -59,7 +59,12 @@ def run(args: argparse.Namespace) -> int:
     trials = read_folder(folder)
     names, skipped = plan(trials, cfg)
     out = output_dir(args.out, "--out")
+    import numpy as np
+
+    fs = [tr.fs for tr in trials]
+    steps = np.concatenate([np.diff(tr.t) for tr in trials]) * 1e3
     print(f"benchmark: {len(trials)} trial(s) in {folder} ({sum(tr.slips for tr in trials)} with labelled slip), "
+          f"{min(fs):.1f}-{max(fs):.1f} Hz (time steps {steps.min():.0f}-{steps.max():.0f} ms), "
           f"{len(names)} method(s) at rate(s) {', '.join(cfg.rates)}")
     for s in skipped:
         print(f"  not run: {s.method}: {s.reason}")
