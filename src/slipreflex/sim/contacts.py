@@ -24,6 +24,7 @@ Examples
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -32,7 +33,7 @@ from .objects import Bottle
 from .params import HandParams
 
 __all__ = ["CONTACT_NAMES", "contact_normal_stiffness", "normal_stiffness", "grip_gain", "static_capacity",
-           "fill_contact_params"]
+           "fill_contact_params", "GripCurve", "grip_curve"]
 
 #: The contacts in kernel order (thumb, index, middle).
 CONTACT_NAMES: tuple[str, ...] = ("thumb pad", "index pad", "middle cuff")
@@ -77,6 +78,84 @@ def grip_gain(hand: HandParams, bottle: Bottle) -> float:
     True
     """
     return normal_stiffness(hand, bottle) * hand.travel_per_unit_m
+
+
+@dataclass(frozen=True, slots=True)
+class GripCurve:
+    """The normal force per contact against the mean fingertip travel past contact: three straight pieces.
+
+    The wall follows its linear law up to the dent ``wall_linear_range_m``
+    (force ``n1``, travel ``pen1``), then ovalizes with the softer stiffness
+    ``(1 - wall_softening) k_w`` up to the dent ``wall_collapse_m`` (force
+    ``n2``, travel ``pen2``), then is rigid; pad (or cuff) and finger stay
+    linear throughout, in series. Every contact carries the same force, so
+    the mean travel is ``N mean(1/k_surface + 1/k_finger) + d_wall(N)``,
+    which inverts piece by piece.
+
+    Parameters
+    ----------
+    k1, k2, k3 : float
+        Slopes (N/m) of the three pieces.
+    pen1, pen2 : float
+        Mean travel (m) where the pieces meet.
+    n1, n2 : float
+        Force (N) per contact there.
+
+    Examples
+    --------
+    >>> from slipreflex.sim import BOTTLES
+    >>> c = grip_curve(HandParams(), BOTTLES["TR"])
+    >>> round(c.n1, 2), round(c.force(0.5 * c.pen1) / c.n1, 3)
+    (1.8, 0.5)
+    """
+
+    k1: float
+    k2: float
+    k3: float
+    pen1: float
+    pen2: float
+    n1: float
+    n2: float
+
+    def force(self, pen: float) -> float:
+        """Normal force (N) per contact at mean travel ``pen`` (m) past contact (0 before contact).
+
+        Examples
+        --------
+        >>> from slipreflex.sim import BOTTLES
+        >>> grip_curve(HandParams(), BOTTLES["TR"]).force(-1e-3)
+        0.0
+        """
+        if pen <= 0.0:
+            return 0.0
+        if pen <= self.pen1:
+            return self.k1 * pen
+        if pen <= self.pen2:
+            return self.n1 + self.k2 * (pen - self.pen1)
+        return self.n2 + self.k3 * (pen - self.pen2)
+
+
+def grip_curve(hand: HandParams, bottle: Bottle) -> GripCurve:
+    """The normal force per contact against the mean fingertip travel (:class:`GripCurve`).
+
+    Examples
+    --------
+    >>> from slipreflex.sim import BOTTLES
+    >>> c = grip_curve(HandParams(), BOTTLES["TR"])
+    >>> round(c.k1) == round(normal_stiffness(HandParams(), BOTTLES["TR"])), round(c.k3)
+    (True, 3462)
+    """
+    kw = bottle.wall_stiffness_n_m
+    # the contacts' own series compliance (pad or cuff, and finger), averaged over the three
+    ch = sum(1.0 / k for k in (hand.pad_normal_stiffness_n_m, hand.pad_normal_stiffness_n_m,
+                               hand.cuff_normal_stiffness_n_m)) / 3.0 + 1.0 / hand.finger_stiffness_n_m
+    kw2 = (1.0 - bottle.wall_softening) * kw
+    n1 = kw * bottle.wall_linear_range_m
+    pen1 = n1 * (ch + 1.0 / kw)
+    n2 = n1 + kw2 * (bottle.wall_collapse_m - bottle.wall_linear_range_m)
+    pen2 = pen1 + (n2 - n1) * (ch + 1.0 / kw2)
+    return GripCurve(k1=1.0 / (ch + 1.0 / kw), k2=1.0 / (ch + 1.0 / kw2), k3=1.0 / ch, pen1=pen1, pen2=pen2,
+                     n1=n1, n2=n2)
 
 
 def static_capacity(bottle: Bottle, normal_force: float) -> float:
@@ -124,6 +203,13 @@ def fill_contact_params(P: np.ndarray, hand: HandParams, bottle: Bottle, dt: flo
         P[b + K.PC_DECAY] = math.exp(-dt * kt / ct)
         P[b + K.PC_HEAL_DECAY] = math.exp(-dt / bottle.heal_s)
     P[K.P_KN] = normal_stiffness(hand, bottle)
+    curve = grip_curve(hand, bottle)
+    P[K.P_WALL_PEN1] = curve.pen1
+    P[K.P_WALL_PEN2] = curve.pen2
+    P[K.P_WALL_N1] = curve.n1
+    P[K.P_WALL_N2] = curve.n2
+    P[K.P_WALL_K2] = curve.k2
+    P[K.P_WALL_K3] = curve.k3
     pads = P[K.P_C0:K.P_C0 + 2 * K.PC_SIZE].reshape(2, K.PC_SIZE)
     P[K.P_PADS_SAME] = 1.0 if np.array_equal(pads[0], pads[1]) else 0.0
     return P

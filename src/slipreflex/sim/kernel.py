@@ -8,14 +8,18 @@ few arguments.
 Model (one physics step of ``dt``, semi-implicit Euler):
 
 * **Fingers** (thumb, index, middle): first-order position servo
-  ``dq/dt = clip(K (target - q), -speed, speed)``; a finger does not advance
-  while its contact force exceeds the stall force.
+  ``dq/dt = clip(K (target - q), -speed, speed)``; closing, the speed limit
+  falls along the DC motor's torque-speed line, ``speed (1 - droop N_c /
+  stall)``, and a finger does not advance while its contact force exceeds
+  the stall force (non-back-drivable: it holds its position under load).
 * **Normal force**: the three fingertips sit 120 degrees apart around the
   bottle, which is free to shift sideways; three radial forces at 120 degrees
   balance only when equal, so every contact carries the same normal force
   ``N_c = k_n * travel * max(0, mean(q) - q_contact)`` with ``k_n`` three
   over the sum of the contacts' compliances (each: pad or cuff, finger and
-  bottle wall in series).
+  bottle wall in series), up to the wall's linear range; beyond it the wall
+  ovalizes (softer) and then, folded flat, is rigid
+  (:func:`slipreflex.sim.contacts.grip_curve`, :func:`_grip_force`).
 * **Friction, per contact** (thumb and index through their silicone pads,
   the middle finger through the rigid cuff of the slip sensor), each with
   its own law and constants. A contact's tangential compliance ``k_t``
@@ -112,7 +116,11 @@ PC_SIZE = 12
 P_L0 = P_C0 + 3 * PC_SIZE
 (P_SPL_RMS, P_SPL_DT, P_SPL_RHO, P_SPL_SIG, P_SLOSH_R, P_ZETA0, P_PHIJ, P_RHO_W, P_KLAT,
  P_CLAT, P_SPL_INV) = range(P_L0, P_L0 + 11)
-P_SIZE = P_L0 + 11
+# the bounded grip (contacts.grip_curve, HandParams.motor_droop): the normal force's three pieces past contact
+# (travel and force where they meet, the slopes of the second and third) and the motor's droop toward stall
+P_B0 = P_L0 + 11
+(P_WALL_PEN1, P_WALL_PEN2, P_WALL_N1, P_WALL_N2, P_WALL_K2, P_WALL_K3, P_DROOP) = range(P_B0, P_B0 + 7)
+P_SIZE = P_B0 + 7
 #: Friction laws (PC_LAW): Coulomb with a Stribeck curve; slip weakening + healing + log rate.
 LAW_COULOMB, LAW_RATE_STATE = 0.0, 1.0
 _NEWTON_MAX = 60
@@ -229,6 +237,19 @@ def _quant_g(val, lsb, full_range):
     elif c < lo:
         c = lo
     return c * lsb
+
+
+@njit(cache=True, inline="always")
+def _grip_force(pen, kn, pen1, pen2, n1, n2, k2, k3):
+    """Normal force per contact at mean travel ``pen`` past contact: three straight pieces
+    (:class:`slipreflex.sim.contacts.GripCurve`)."""
+    if pen <= 0.0:
+        return 0.0
+    if pen <= pen1:
+        return kn * pen
+    if pen <= pen2:
+        return n1 + k2 * (pen - pen1)
+    return n2 + k3 * (pen - pen2)
 
 
 @njit(cache=True, inline="always")
@@ -459,6 +480,9 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
     qc = P[P_QC]
     lam = P[P_LAM]
     kn = P[P_KN]
+    pen1, pen2, n1w, n2w = P[P_WALL_PEN1], P[P_WALL_PEN2], P[P_WALL_N1], P[P_WALL_N2]
+    k2w, k3w = P[P_WALL_K2], P[P_WALL_K3]
+    droop = P[P_DROOP] / stall
     mb = P[P_MB]
     acc_alpha = P[P_ACC_ALPHA]
     klat = P[P_KLAT]
@@ -483,8 +507,11 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
             e = tg - q
             r = kservo * e
             sp = S[S_SPD0 + i]
-            if r > sp:
-                r = sp
+            if r > 0.0:
+                # closing against the load: the DC motor's torque-speed line
+                spc = sp * (1.0 - droop * nc_prev)
+                if r > spc:
+                    r = spc if spc > 0.0 else 0.0
             elif r < -sp:
                 r = -sp
             if r > 0.0 and nc_prev >= stall:
@@ -496,7 +523,7 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
         qbar = (S[S_Q0] + S[S_Q0 + 1] + S[S_Q0 + 2]) / 3.0
         pen = (qbar - qc) * lam
         fallen = S[S_FALLEN] > 0.0
-        nc = kn * pen if (pen > 0.0 and not fallen) else 0.0
+        nc = _grip_force(pen, kn, pen1, pen2, n1w, n2w, k2w, k3w) if not fallen else 0.0
         S[S_NC] = nc
         # ---- loads
         mw = 0.0

@@ -69,9 +69,9 @@ __all__ = [
 WATER_DENSITY: float = 1000.0
 #: The pads' static friction on the paper's bottles: calibrated so that the open-loop first pour slip
 #: (0.8 N grasp, no reflex, rig seeds 0-2) comes at the paper's 200 ml, by
-#: ``slipreflex calibrate --first-slip-ml 200`` (:func:`slipreflex.sim.calibration.calibrate_bottle`
-#: gives 0.98476), rounded to 4 decimals.
-PAPER_PAD_MU_S: float = 0.9848
+#: ``slipreflex calibrate --first-slip-ml 200`` (:func:`slipreflex.sim.calibration.calibrate_bottle`;
+#: 0.973 puts each seed's first slip at 199.9 ml), rounded to 4 decimals.
+PAPER_PAD_MU_S: float = 0.973
 #: Fields a bottle from a TOML file must give (mass, size, friction, surface).
 BOTTLE_REQUIRED: tuple[str, ...] = ("mass_kg", "diameter_m", "mu_s", "mu_k", "surface")
 #: Friction laws a contact can have (see :class:`Bottle`).
@@ -264,6 +264,26 @@ class Bottle:
     grip_travel_m : float
         How far (m) the bottle can slide down before the fingertips reach the
         shoulder and lose contact ("fallen out").
+    wall_linear_range_m : float
+        Dent (m) of the wall under one fingertip up to which it follows the
+        linear law ``wall_stiffness_n_m``: estimate 3 mm (about ten wall
+        thicknesses of a 0.25 mm PET wall, where a point-loaded thin shell's
+        response stops being linear; 1.8 N per contact at 600 N/m).
+    wall_softening : float
+        Beyond the linear range the section ovalizes into three lobes and the
+        wall's stiffness falls to ``(1 - wall_softening) wall_stiffness_n_m``:
+        the ring's three-lobe bending stiffness, ``W / delta = E t^3 b / (12
+        x 0.0159 R^3)`` (a ring under three equal radial loads: the Fourier
+        series of the inextensible ring, ``delta = (3 / pi) sum over m = 3, 6,
+        ... of W R^3 / (E I (m^2 - 1)^2)``), is 420 N/m for a 0.25 mm PET
+        wall (E 2.7 GPa) over a band one diameter wide (b = 65 mm, R = 32.5
+        mm), so 1 - 420 / 600 = 0.3 (estimate); 0 keeps the linear law.
+    wall_collapse_m : float
+        Dent (m) at which the lobes fold against each other and back the
+        wall: beyond it the wall is rigid and only pad and finger yield.
+        Estimate: the inextensible section folds into three lobes that meet
+        near the axis; 0.8 of the radius (26 mm) leaves the wall's and the
+        pads' thickness and the folds' bend radius.
 
     Examples
     --------
@@ -282,6 +302,9 @@ class Bottle:
     stribeck_velocity_m_s: float = 1e-3
     wall_stiffness_n_m: float = 600.0
     grip_travel_m: float = 0.03
+    wall_linear_range_m: float = 3e-3
+    wall_softening: float = 0.3
+    wall_collapse_m: float = 0.026
     friction_law: str = "rate-state"
     rate_a: float = 0.04
     rate_v0_m_s: float = 1e-6
@@ -306,6 +329,12 @@ class Bottle:
         _check("Bottle", "stribeck_velocity_m_s", self.stribeck_velocity_m_s, lo=0.0, lo_open=True)
         _check("Bottle", "wall_stiffness_n_m", self.wall_stiffness_n_m, lo=0.0, lo_open=True)
         _check("Bottle", "grip_travel_m", self.grip_travel_m, lo=0.0, lo_open=True, hi=0.09)
+        _check("Bottle", "wall_linear_range_m", self.wall_linear_range_m, lo=0.0, lo_open=True, hi=0.05)
+        _check("Bottle", "wall_softening", self.wall_softening, lo=0.0, hi=0.99)
+        _check("Bottle", "wall_collapse_m", self.wall_collapse_m, lo=0.0, lo_open=True, hi=0.06)
+        if self.wall_collapse_m < self.wall_linear_range_m:
+            raise ParameterError(f"Bottle.wall_collapse_m must be >= wall_linear_range_m, got "
+                                 f"{self.wall_collapse_m!r} < {self.wall_linear_range_m!r}")
         for f in ("friction_law", "cuff_friction_law"):
             if getattr(self, f) not in FRICTION_LAWS:
                 raise ParameterError(f"Bottle.{f} must be one of {', '.join(FRICTION_LAWS)}, got {getattr(self, f)!r}")

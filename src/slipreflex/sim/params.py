@@ -106,8 +106,16 @@ class HandParams:
         from the cuff's contact, so ~19 um per unit.
     stall_force_n : float
         Normal force (N) at which a digit's motor stalls and stops advancing:
-        estimate 25 N per digit (i-Limb hands reach ~100 N+ power grip with
-        five digits).
+        the i-Limb's whole-hand grip is 100-136 N (Belter et al. 2013, J
+        Rehabil Res Dev 50(5)), the thumb against four fingers, so 25-34 N
+        per finger digit; 25 N.
+    motor_droop : float
+        The digit's DC motor slows as it loads (its torque-speed line): the
+        closing speed limit is ``speed (1 - motor_droop N / stall_force_n)``,
+        so a closing digit approaches its stall force exponentially instead
+        of at full speed. 1 is the DC motor's straight line (a brushed DC
+        motor's speed falls linearly from no-load to stall at constant
+        voltage); 0 keeps full speed up to the stall.
     grasp_speed_units_s : float
         Closing speed (units/s) of the grasp routine's approach: a slow
         "close" (about 30 % PWM) so the 0.8 N stop does not overshoot much;
@@ -139,12 +147,15 @@ class HandParams:
     cuff_shear_damping_n_s_m: float = 1.0
     spot_travel_per_unit_m: float = 19e-6
     stall_force_n: float = 25.0
+    motor_droop: float = 1.0
     grasp_speed_units_s: float = 150.0
     grasp_poll_fs: float = 100.0
     settle_s: float = 0.5
 
     def __post_init__(self) -> None:
-        _validate(self, zero_ok=("latency_s", "settle_s", "spot_travel_per_unit_m"))
+        _validate(self, zero_ok=("latency_s", "settle_s", "spot_travel_per_unit_m", "motor_droop"))
+        if self.motor_droop > 1.0:
+            raise ParameterError(f"HandParams.motor_droop must be in [0, 1], got {self.motor_droop!r}")
 
 
 @dataclass(frozen=True, slots=True)

@@ -750,6 +750,7 @@ class Rig:
         P[K.P_QC] = (h.aperture_radius_m - b.diameter_m / 2.0) / h.travel_per_unit_m
         P[K.P_KSERVO] = h.servo_gain
         P[K.P_STALL] = h.stall_force_n
+        P[K.P_DROOP] = h.motor_droop
         P[K.P_GRIP] = b.grip_travel_m
         P[K.P_DAQ_T] = hw.DAQ_PERIOD_S
         P[K.P_ACC_T] = 1.0 / imu.fs

@@ -187,6 +187,22 @@ UNCERTAIN: Mapping[str, UncertainConstant] = MappingProxyType({c.name: c for c i
     _c("wall_stiffness", "N/m", _B["TR"].wall_stiffness_n_m, 300.0, 1500.0, "loguniform",
        "estimate: a thin 500 ml PET bottle dents 0.7-3 mm under a 1 N fingertip push",
        "bottle.wall_stiffness_n_m"),
+    _c("wall_softening", "1", _B["TR"].wall_softening, 0.0, 0.67, "uniform",
+       "absent (0: the linear law) to 0.67; beyond its linear range the section ovalizes into three lobes with the "
+       "ring's bending stiffness E t^3 b / (12 x 0.0159 R^3): 200-1000 N/m for 0.2-0.3 mm PET (E 2-4 GPa) over a "
+       "band one diameter wide, estimate", "bottle.wall_softening"),
+    _c("wall_linear_range", "m", _B["TR"].wall_linear_range_m, 1.5e-3, 6e-3, "uniform",
+       "estimate: a point-loaded thin shell leaves its linear law at deflections of several wall thicknesses "
+       "(6-24 x 0.25 mm)", "bottle.wall_linear_range_m"),
+    _c("wall_collapse", "m", _B["TR"].wall_collapse_m, 0.013, 0.03, "uniform",
+       "estimate: the three lobes fold against each other at 0.4-0.9 of the radius; no 'absent' value (without "
+       "it the fingertips would pass the axis)", "bottle.wall_collapse_m"),
+    _c("stall_force", "N", _H.stall_force_n, 20.0, 34.0, "uniform",
+       "i-Limb whole-hand grip 100-136 N (Belter et al. 2013), the thumb against four fingers: 25-34 N per digit; "
+       "20 N for a worn or low-battery hand (estimate)", "hand.stall_force_n"),
+    _c("motor_droop", "1", _H.motor_droop, 0.0, 1.0, "uniform",
+       "absent (0: full speed up to the stall) to 1: a brushed DC motor's speed falls linearly from no load to "
+       "stall at constant voltage", "hand.motor_droop"),
     _c("hand_latency", "s", _H.latency_s, 0.005, 0.030, "uniform",
        "estimate: 15-byte packet at 115200 baud (1.3 ms) plus control unit and digit controller",
        "hand.latency_s"),
