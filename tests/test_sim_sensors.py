@@ -152,8 +152,8 @@ def test_texture_shows_slow_and_fast_slips(name):
         assert slipreflex.encode(x, dath=True)[30:].sum() >= 3, speed
 
 
-def _squeeze(hand):
-    rig = Rig("TX", seed=6, hand=hand)
+def _squeeze(hand, sensor=None):
+    rig = Rig("TX", seed=6, hand=hand, slip_sensor=sensor)
     rig.grasp()
     pos = rig.hand.positions()[hw.SLIP_FINGER]
     rig.hand.set_positions({f: pos + 40 for f in hw.TRIPOD})
@@ -166,7 +166,36 @@ def _squeeze(hand):
 def test_squeezing_moves_the_sensor_spot_only_through_the_fingertip_own_motion():
     from slipreflex.sim import HandParams
 
-    # without the fingertip's rolling the signal does not move when nothing slides ...
-    assert _squeeze(HandParams(spot_travel_per_unit_m=0.0)) == 0
-    # ... with it, closing 40 units sweeps the spot 0.76 mm over the texture: the chain sees its own action
-    assert _squeeze(HandParams()) > 0
+    from slipreflex.sim import SlipSensorParams
+
+    # without the fingertip's rolling and the gap's opening the signal does not move when nothing slides ...
+    assert _squeeze(HandParams(spot_travel_per_unit_m=0.0), SlipSensorParams(gap_dent_fraction=0.0)) == 0
+    # ... with the rolling, closing 40 units sweeps the spot ~0.7 mm over the texture: the chain sees its own action
+    assert _squeeze(HandParams(), SlipSensorParams(gap_dent_fraction=0.0)) > 0
+
+
+def test_the_gap_opens_with_the_wall_dent_under_the_cuff():
+    """Closed form on an untextured surface: the sensor sees rho / (1 + (f d / gap)^2) of the light, with
+    d the wall's dent under the normal force (the bounded grip's three pieces) and f the gap fraction."""
+    from slipreflex.sim import Bottle, HandParams, SlipSensorParams
+    from slipreflex.sim.objects import Surface
+
+    flat = Bottle("FLAT", surface=Surface("flat", reflectance=0.3, texture=0.0))
+    sensor = SlipSensorParams(noise_v=0.0, gap_dent_fraction=0.09)
+    rig = Rig(flat, seed=0, hand=HandParams(spot_travel_per_unit_m=0.0), slip_sensor=sensor)
+    rig.grasp()
+    b = rig.bottle
+    kw2 = (1 - b.wall_softening) * b.wall_stiffness_n_m
+    n1 = b.wall_stiffness_n_m * b.wall_linear_range_m
+    for q in (None, 230, 300):
+        if q is not None:
+            rig.hand.set_positions({f: q for f in hw.TRIPOD})
+        blk = rig.advance_block(rig.t + 0.8)
+        n = float(blk.normal_force[-1])
+        dent = n / b.wall_stiffness_n_m if n <= n1 else min(b.wall_linear_range_m + (n - n1) / kw2,
+                                                             b.wall_collapse_m)
+        extra = sensor.gap_dent_fraction * dent
+        v = float(opr5005_volts(0.3 / (1 + (extra / sensor.gap_m) ** 2), sensor))
+        # the 10-bit ADC truncates: the reading is the closed form's code
+        assert float(blk.volts[-1]) == pytest.approx(np.floor(v / hw.ADC_LSB) * hw.ADC_LSB, abs=1e-9), q
+    assert dent == b.wall_collapse_m      # the last grip has folded the wall

@@ -210,6 +210,12 @@ def fill_contact_params(P: np.ndarray, hand: HandParams, bottle: Bottle, dt: flo
     P[K.P_WALL_N2] = curve.n2
     P[K.P_WALL_K2] = curve.k2
     P[K.P_WALL_K3] = curve.k3
+    kw = bottle.wall_stiffness_n_m
+    P[K.P_WALL_KW_INV] = 1.0 / kw
+    P[K.P_WALL_KW2_INV] = 1.0 / ((1.0 - bottle.wall_softening) * kw)
+    P[K.P_WALL_DLIN] = bottle.wall_linear_range_m
+    P[K.P_WALL_DCOL] = bottle.wall_collapse_m
+    P[K.P_CUFF_INV] = 1.0 / hand.cuff_normal_stiffness_n_m
     pads = P[K.P_C0:K.P_C0 + 2 * K.PC_SIZE].reshape(2, K.PC_SIZE)
     P[K.P_PADS_SAME] = 1.0 if np.array_equal(pads[0], pads[1]) else 0.0
     return P

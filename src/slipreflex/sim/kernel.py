@@ -51,8 +51,9 @@ Model (one physics step of ``dt``, semi-implicit Euler):
 * **Sensors** sampled inside the loop on their own clocks: the OPR5005 slip
   sensor (track interpolation at the surface position under the sensor,
   which moves with the bottle and with the middle fingertip's own rolling as
-  it flexes past contact, ``P_SPOT_K`` metres per position unit,
-  transfer curve, electrical noise, 10-bit ADC) and flow pulses at the DAQ's
+  it advances into the wall, ``P_SPOT_K`` metres per position unit of the
+  tip's advance (the cuff's compression and the wall's dent), the gap
+  opening by ``P_DENT_FRAC`` of the dent, transfer curve, electrical noise, 10-bit ADC) and flow pulses at the DAQ's
   333.33 Hz; the MPU6050 at its own ODR through its DLPF. Tactile snapshots
   (normal and tangential force, slip distance) at each requested tactile
   rate; frames are built by :func:`tactile_frames`.
@@ -120,7 +121,11 @@ P_L0 = P_C0 + 3 * PC_SIZE
 # (travel and force where they meet, the slopes of the second and third) and the motor's droop toward stall
 P_B0 = P_L0 + 11
 (P_WALL_PEN1, P_WALL_PEN2, P_WALL_N1, P_WALL_N2, P_WALL_K2, P_WALL_K3, P_DROOP) = range(P_B0, P_B0 + 7)
-P_SIZE = P_B0 + 7
+# the middle fingertip under the slip sensor: the wall's dent law (1 / k_w, 1 / ((1 - softening) k_w), linear
+# range, collapse), the cuff's normal compliance, and the fraction of the dent that opens the sensor's gap
+P_R0 = P_B0 + 7
+(P_WALL_KW_INV, P_WALL_KW2_INV, P_WALL_DLIN, P_WALL_DCOL, P_CUFF_INV, P_DENT_FRAC) = range(P_R0, P_R0 + 6)
+P_SIZE = P_R0 + 6
 #: Friction laws (PC_LAW): Coulomb with a Stribeck curve; slip weakening + healing + log rate.
 LAW_COULOMB, LAW_RATE_STATE = 0.0, 1.0
 _NEWTON_MAX = 60
@@ -250,6 +255,16 @@ def _grip_force(pen, kn, pen1, pen2, n1, n2, k2, k3):
     if pen <= pen2:
         return n1 + k2 * (pen - pen1)
     return n2 + k3 * (pen - pen2)
+
+
+@njit(cache=True, inline="always")
+def _wall_dent(nc, n1, n2, kw_inv, kw2_inv, dlin, dcol):
+    """The wall's dent (m) under one fingertip pressing with ``nc`` (the inverse of its three pieces)."""
+    if nc <= n1:
+        return nc * kw_inv
+    if nc <= n2:
+        return dlin + (nc - n1) * kw2_inv
+    return dcol
 
 
 @njit(cache=True, inline="always")
@@ -732,9 +747,16 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
             if frac < 0.0:
                 frac = 0.0
             xk = x_old + frac * (x - x_old)
-            # the fingertip rolls and slides a little over the surface as it flexes past contact
-            flex = S[S_Q0 + 2] - P[P_QC]
-            spot = xk + (P[P_SPOT_K] * flex if flex > 0.0 else 0.0)
+            # in contact the middle fingertip turns as far as it advances into the wall (the cuff's
+            # compression and the wall's dent under N), rolling the spot over the surface, and the dent
+            # opens the sensor's gap where the spot sits beside the cuff's contact
+            spot = xk
+            extra = (P[P_QC] - S[S_Q0 + 2]) * P[P_LAM]
+            if nc > 0.0:
+                dent = _wall_dent(nc, n1w, n2w, P[P_WALL_KW_INV], P[P_WALL_KW2_INV], P[P_WALL_DLIN],
+                                  P[P_WALL_DCOL])
+                spot += P[P_SPOT_K] * (nc * P[P_CUFF_INV] + dent) / lam
+                extra = P[P_DENT_FRAC] * dent
             daq_out[nd, O_T] = tk
             if S[S_FALLEN] > 0.0:
                 rho = 0.0
@@ -742,7 +764,6 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
             else:
                 ti, fr = _track_at(spot, P[P_TRACK_OFF], P[P_TRACK_DX], track.shape[0])
                 rho = track[ti] + fr * (track[ti + 1] - track[ti])
-                extra = (P[P_QC] - S[S_Q0 + 2]) * P[P_LAM]
             daq_out[nd, O_VOLTS] = _sensor_volts(rho, extra, P[P_GAP], P[P_VCC], P[P_VSAT], P[P_KNEE],
                                                  P[P_VNOISE], key0, k, P[P_ADC_LSB], P[P_ADC_MAX])
             daq_out[nd, O_AX] = S[S_AX]

@@ -99,11 +99,16 @@ class HandParams:
         and 1 N s/m.
     spot_travel_per_unit_m : float
         How far (m) the slip sensor's spot moves over the bottle surface per
-        position unit the middle finger flexes past contact (the fingertip
-        rolls and slides as the finger closes). Estimate from the finger's
-        geometry: the distal segment turns ~180 degrees over 0..500
-        (0.0063 rad per unit), and the spot sits ~3 mm (the sensor's gap)
-        from the cuff's contact, so ~19 um per unit.
+        position unit the middle fingertip advances into the wall (its
+        cuff's compression and the wall's dent: in contact the digit turns
+        only as far as the wall yields). The distal segment turns ~180
+        degrees over 0..500 (0.0063 rad per unit). If the cuff pivots on a
+        stuck contact, the spot a distance ``e`` beside it moves by
+        ``e (1 / cos(theta) - 1)``, second order: 0. If the cuff's rounded
+        face (radius ~3 mm) rolls on the wall, the contact and the spot
+        advance by ``3 mm x 0.0063`` = 19 um per unit (the value used); a
+        cuff sliding as the tip sweeps moves it further (up to ~40 um).
+        Estimate from the finger's geometry; the study's range is 0-40 um.
     stall_force_n : float
         Normal force (N) at which a digit's motor stalls and stops advancing:
         the i-Limb's whole-hand grip is 100-136 N (Belter et al. 2013, J
@@ -191,6 +196,14 @@ class SlipSensorParams:
         Standard deviation (m) of the sensor's spot on the surface: blurs
         edges such as the white/black boundary. Estimate 0.8 mm for the
         OPR5005's emitter/detector overlap at 3 mm.
+    gap_dent_fraction : float
+        Fraction of the wall's dent under the cuff by which the gap under
+        the sensor's spot opens: the spot sits ``e`` ~ 3 mm beside the cuff's
+        contact, and the dent under a fingertip spreads over ``l`` ~ 10 mm
+        (the contact's width plus the shell's bending length ``sqrt(R t)``
+        ~ 3 mm), so with a Gaussian profile the surface under the spot sinks
+        by ``exp(-(e / l)^2)`` = 0.91 of the dent and the gap opens by 0.09
+        of it (estimate); 0 when the spot sits over the contact.
 
     Examples
     --------
@@ -204,9 +217,12 @@ class SlipSensorParams:
     noise_v: float = 1.5e-3
     gap_m: float = hw.SLIP_SENSOR_GAP_M
     spot_sigma_m: float = 0.8e-3
+    gap_dent_fraction: float = 0.09
 
     def __post_init__(self) -> None:
-        _validate(self, zero_ok=("noise_v",))
+        _validate(self, zero_ok=("noise_v", "gap_dent_fraction"))
+        if self.gap_dent_fraction > 1.0:
+            raise ParameterError(f"SlipSensorParams.gap_dent_fraction must be in [0, 1], got {self.gap_dent_fraction!r}")
 
 
 @dataclass(frozen=True, slots=True)

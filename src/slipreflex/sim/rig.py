@@ -635,6 +635,7 @@ def fill_slip_sensor_params(P: np.ndarray, sensor: SlipSensorParams, track: Trac
     P[K.P_KNEE] = sensor.knee_v
     P[K.P_VNOISE] = sensor.noise_v
     P[K.P_GAP] = sensor.gap_m
+    P[K.P_DENT_FRAC] = sensor.gap_dent_fraction
     P[K.P_ADC_LSB] = hw.ADC_LSB
     P[K.P_ADC_MAX] = (1 << hw.ADC_BITS) - 1
     P[K.P_TRACK_DX] = track.dx

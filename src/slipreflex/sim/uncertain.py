@@ -219,9 +219,15 @@ UNCERTAIN: Mapping[str, UncertainConstant] = MappingProxyType({c.name: c for c i
        "estimate: 2-3 mm silicone pad, Shore 20-40 A", "hand.pad_normal_stiffness_n_m"),
     _c("cuff_shear_stiffness", "N/m", _H.cuff_shear_stiffness_n_m, 4000.0, 30000.0, "loguniform",
        "estimate: bending of the middle digit along the bottle axis", "hand.cuff_shear_stiffness_n_m"),
-    _c("spot_travel_per_unit", "m", _H.spot_travel_per_unit_m, 5e-6, 40e-6, "uniform",
-       "estimate: the distal segment turns ~0.0063 rad per unit; the spot sits 1-6 mm from the cuff's contact",
+    _c("spot_travel_per_unit", "m", _H.spot_travel_per_unit_m, 0.0, 40e-6, "uniform",
+       "absent (0: the cuff pivots on a stuck contact, the spot beside it moves at second order) to 40 um; the "
+       "distal segment turns 0.0063 rad per unit of the tip's advance into the wall: 19 um if the cuff's ~3 mm "
+       "rounded face rolls, more if it slides (estimate from the finger's geometry)",
        "hand.spot_travel_per_unit_m"),
+    _c("gap_dent_fraction", "1", _S.gap_dent_fraction, 0.0, 0.3, "uniform",
+       "absent (0: the spot over the cuff's contact) to 0.3; the spot ~3 mm (1-6 mm) beside the contact, the dent "
+       "~10 mm wide (Gaussian): the gap opens by 1 - exp(-(e / l)^2) of the dent, estimate",
+       "slip_sensor.gap_dent_fraction"),
     _c("pad_shear_stiffness", "N/m", _H.pad_shear_stiffness_n_m, 1000.0, 4000.0, "loguniform",
        "estimate: G A / h with G 0.1-0.4 MPa, 20 mm^2, 2 mm", "hand.pad_shear_stiffness_n_m"),
     _c("tactile_noise", "N", _T.noise_n, 2e-3, 10e-3, "loguniform",
