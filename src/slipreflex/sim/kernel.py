@@ -94,13 +94,17 @@ SC_SIZE = 7
 S_L0 = S_C0 + 3 * SC_SIZE
 (S_YB, S_VB, S_Y1, S_V1, S_ALAT, S_AFL, S_SPL0, S_SPL1, S_KTH, S_M1, S_C1, S_BETA, S_LOAD,
  S_FWAT) = range(S_L0, S_L0 + 14)
-S_SIZE = S_L0 + 14
+# the pads' slip vibration (thumb, index): the sensed shear's resonator, displacement (N) and its rate (N/s)
+S_V0 = S_L0 + 14
+(S_VY0, S_VV0, S_VY1, S_VV1) = range(S_V0, S_V0 + 4)
+S_SIZE = S_V0 + 4
 
 # ---- counters C (int64) ---------------------------------------------------
 # C_NFAIL: implicit friction solves that did not converge; C_NITER: most iterations one took.
 # C_SPL: index j of the 1 ms splash-noise interval [j, j + 1) ms the values S_SPL0, S_SPL1 belong to.
-C_N, C_DAQ, C_ACC, C_NFAIL, C_NITER, C_SPL = 0, 1, 2, 3, 4, 5
-C_SIZE = 6
+# C_MS0, C_MS1: micro-slip events of the thumb's and the index finger's pad so far.
+C_N, C_DAQ, C_ACC, C_NFAIL, C_NITER, C_SPL, C_MS0, C_MS1 = 0, 1, 2, 3, 4, 5, 6, 7
+C_SIZE = 8
 
 # ---- parameters P ---------------------------------------------------------
 (P_DT, P_G, P_MB, P_KN, P_LAM, P_QC, P_KSERVO, P_STALL, P_GRIP,
@@ -125,7 +129,12 @@ P_B0 = P_L0 + 11
 # range, collapse), the cuff's normal compliance, and the fraction of the dent that opens the sensor's gap
 P_R0 = P_B0 + 7
 (P_WALL_KW_INV, P_WALL_KW2_INV, P_WALL_DLIN, P_WALL_DCOL, P_CUFF_INV, P_DENT_FRAC) = range(P_R0, P_R0 + 6)
-P_SIZE = P_R0 + 6
+# the pads' slip signature (TactileParams): micro-slip events' size (fraction of the static-to-kinetic drop) and
+# rate (per metre slid, 1 / D_c), the sensed shear's resonator (omega^2, 2 zeta omega, omega), and the share of the
+# Cattaneo-Mindlin law in the pressure centre's shift (incipient slip)
+P_T0 = P_R0 + 6
+(P_MS_ETA, P_MS_PER_M, P_MS_W2, P_MS_2ZW, P_MS_W, P_INCIPIENT) = range(P_T0, P_T0 + 6)
+P_SIZE = P_T0 + 6
 #: Friction laws (PC_LAW): Coulomb with a Stribeck curve; slip weakening + healing + log rate.
 LAW_COULOMB, LAW_RATE_STATE = 0.0, 1.0
 _NEWTON_MAX = 60
@@ -265,6 +274,23 @@ def _wall_dent(nc, n1, n2, kw_inv, kw2_inv, dlin, dcol):
     if nc <= n2:
         return dlin + (nc - n1) * kw2_inv
     return dcol
+
+
+@njit(cache=True, inline="always")
+def _sensed_shear(ft, nc, phi, P, i, inc):
+    """The shear (N) whose ratio to ``nc`` shifts the array's pressure centre: with ``inc`` = 1 the
+    Cattaneo-Mindlin law of a contact whose slipping annulus grows from the edge as the load ratio
+    ``q = |F_t| / (mu N)`` grows, ``(3 / 2) mu N [1 - (1 - q)^(2/3)]`` (``F_t`` at small ``q``, steepening
+    to infinite slope at ``q = 1``), with ``inc`` = 0 the linear ``F_t``."""
+    if inc <= 0.0 or nc <= 0.0:
+        return ft
+    bp = P_C0 + i * PC_SIZE
+    mu = P[bp + PC_MUK] + (P[bp + PC_MUS] - P[bp + PC_MUK]) * phi
+    q = abs(ft) / (mu * nc)
+    if q > 1.0:
+        q = 1.0
+    m = 1.5 * mu * nc * (1.0 - (1.0 - q) ** (2.0 / 3.0))
+    return (1.0 - inc) * ft + inc * (m if ft >= 0.0 else -m)
 
 
 @njit(cache=True, inline="always")
@@ -488,6 +514,9 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
     key0 = keys[0]
     key1 = keys[1]
     key5 = keys[5]
+    key6 = keys[6]
+    ms_eta, ms_per_m, ms_w2, ms_2zw, ms_w = P[P_MS_ETA], P[P_MS_PER_M], P[P_MS_W2], P[P_MS_2ZW], P[P_MS_W]
+    inc = P[P_INCIPIENT]
     # loop invariants and the states every step reads, kept in locals (numba cannot tell that the
     # output arrays do not alias S and P, so it would reload them from memory every step)
     kservo = P[P_KSERVO]
@@ -702,6 +731,27 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
                 ev_out[nev, 1] = E_STICK
                 ev_out[nev, 2] = x
                 nev += 1
+            # the pads' micro-slip events: a Poisson process of rate w / D_c while a pad slides, each releasing
+            # ms_eta of the static-to-kinetic drop (mu_s - mu_k) N of sensed shear into the pad's resonator
+            if ms_eta > 0.0:
+                for i in range(2):
+                    bs = S_C0 + i * SC_SIZE
+                    bp = P_C0 + i * PC_SIZE
+                    iy = S_VY0 + 2 * i
+                    vy = S[iy]
+                    vv = S[iy + 1]
+                    if S[bs + SC_STUCK] == 0.0 and S[bs + SC_W] > 0.0:
+                        if _uniform(key6, 2 * n + i) < S[bs + SC_W] * dt * ms_per_m:
+                            vv -= S[bs + SC_DIR] * ms_eta * (P[bp + PC_MUS] - P[bp + PC_MUK]) * nc * ms_w
+                            C[C_MS0 + i] += 1
+                    if vv != 0.0 or vy != 0.0:
+                        vv -= (ms_w2 * vy + ms_2zw * vv) * dt
+                        vy += vv * dt
+                        if abs(vy) < 1e-12 and abs(vv) < 1e-9:
+                            vy = 0.0
+                            vv = 0.0
+                        S[iy] = vy
+                        S[iy + 1] = vv
             S[S_STUCK] = 0.0 if sliding else 1.0
             S[S_S] = s_mean
             S[S_W] = w_min if sliding else 0.0
@@ -797,7 +847,8 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
                 tac_out[ntac, T_T] = tac_next[si] / tac_rates[si]
                 bc = S_C0 + tac_contact[si] * SC_SIZE
                 tac_out[ntac, T_NC] = nc
-                tac_out[ntac, T_FT] = S[bc + SC_FT]
+                tac_out[ntac, T_FT] = _sensed_shear(S[bc + SC_FT], nc, S[bc + SC_PHI], P, tac_contact[si], inc) + (
+                    S[S_VY0 + 2 * tac_contact[si]] if tac_contact[si] < 2 else 0.0)
                 tac_out[ntac, T_S] = S[bc + SC_S]
                 tac_out[ntac, T_FALLEN] = S[S_FALLEN]
                 tac_out[ntac, T_W] = S[bc + SC_W] if S[bc + SC_STUCK] == 0.0 else 0.0

@@ -301,10 +301,35 @@ class TactileParams:
         Interlink FSR datasheet gives +-6 % part-to-part repeatability
         within a batch; 0.06.
 
-    There is no added vibration: what the arrays see while the bottle slips
-    follows from the contact's own forces (normal force, and the shear that
-    shifts the pressure centre), so a smoothly sliding pad gives a steady
-    frame and stick-slip of the friction law gives jumps.
+    slip_events : float
+        Size of a pad's micro-slip events, as a fraction of the contact's
+        static-to-kinetic drop ``(mu_s - mu_k) N``: while a pad slides, events
+        come as a Poisson process of rate ``w / D_c`` (one renewal of the
+        micro-contacts per slip-weakening distance slid) and each releases
+        this much of the drop as sensed shear, ringing in the pad
+        (stick-slip and detachment of soft silicone on smooth polymer,
+        Howe & Cutkosky 1989; Holweg et al. 1996). Estimate 0.3: an event
+        renews part of the contact, not all of it (1 would be a full
+        stick-slip cycle); 0 switches the events off.
+    slip_vibration_hz, slip_vibration_zeta : float
+        Resonance (Hz) and damping ratio of the pad's shear ringing after an
+        event: slip vibrations of elastomer fingertips lie at tens to
+        hundreds of Hz (Howe & Cutkosky 1989; Fernandez et al. 2014,
+        Sensors 14:709; Heyneman & Cutkosky 2016); estimate 150 Hz and 0.1
+        (a silicone loss factor of about 0.2).
+    incipient_slip : float
+        Share (0-1) of the Cattaneo-Mindlin law in the pressure centre's
+        shift: as the load ratio ``q = |F_t| / (mu N)`` grows the slipping
+        annulus spreads from the contact's edge and the pad's surface
+        displacement grows as ``(3/2) mu N [1 - (1 - q)^(2/3)] / k_t``
+        (Johnson 1985, ch. 7), the linear shift at small ``q``, steepening
+        toward slip. 1 (the law); 0 keeps the linear shift.
+
+    The arrays see the contact's own forces (normal force, and the shear
+    that shifts the pressure centre), the micro-slip events' ringing and
+    the incipient slip's redistribution. The events are redistributions of
+    traction within the pad's contact: the friction the bottle feels
+    follows the friction law, so the IMU does not see them.
 
     Examples
     --------
@@ -320,10 +345,17 @@ class TactileParams:
     hysteresis_n: float = 5e-3
     drift_per_decade: float = 0.02
     gain_sd: float = 0.06
+    slip_events: float = 0.3
+    slip_vibration_hz: float = 150.0
+    slip_vibration_zeta: float = 0.1
+    incipient_slip: float = 1.0
 
     def __post_init__(self) -> None:
         _validate(self, zero_ok=("noise_n", "resolution_n", "shear_shift_taxels", "hysteresis_n",
-                                 "drift_per_decade", "gain_sd"))
+                                 "drift_per_decade", "gain_sd", "slip_events", "incipient_slip"))
+        for f in ("slip_events", "slip_vibration_zeta", "incipient_slip"):
+            if getattr(self, f) > 1.0:
+                raise ParameterError(f"TactileParams.{f} must be in [0, 1], got {getattr(self, f)!r}")
 
 
 @dataclass(frozen=True, slots=True)

@@ -752,6 +752,14 @@ class Rig:
         P[K.P_KSERVO] = h.servo_gain
         P[K.P_STALL] = h.stall_force_n
         P[K.P_DROOP] = h.motor_droop
+        tp = self.tactile_params
+        w = 2.0 * math.pi * tp.slip_vibration_hz
+        P[K.P_MS_ETA] = tp.slip_events
+        P[K.P_MS_PER_M] = 1.0 / b.slip_distance_m
+        P[K.P_MS_W2] = w * w
+        P[K.P_MS_2ZW] = 2.0 * tp.slip_vibration_zeta * w
+        P[K.P_MS_W] = w
+        P[K.P_INCIPIENT] = tp.incipient_slip
         P[K.P_GRIP] = b.grip_travel_m
         P[K.P_DAQ_T] = hw.DAQ_PERIOD_S
         P[K.P_ACC_T] = 1.0 / imu.fs

@@ -242,6 +242,18 @@ UNCERTAIN: Mapping[str, UncertainConstant] = MappingProxyType({c.name: c for c i
     _c("tactile_gain_sd", "1", _T.gain_sd, 0.0, 0.15, "uniform",
        "Interlink FSR datasheet: +-6 % part-to-part within a batch; more between batches",
        "tactile.gain_sd"),
+    _c("slip_events", "1", _T.slip_events, 0.0, 1.0, "uniform",
+       "absent (0) to 1 (each event a full stick-slip cycle): stick-slip and detachment of soft silicone on smooth "
+       "polymer (Howe & Cutkosky 1989; Holweg et al. 1996); an event renews part of the contact, estimate 0.3",
+       "tactile.slip_events"),
+    _c("slip_vibration_hz", "Hz", _T.slip_vibration_hz, 50.0, 400.0, "loguniform",
+       "slip vibrations of elastomer fingertips at tens to hundreds of Hz (Howe & Cutkosky 1989; Fernandez et al. "
+       "2014; Heyneman & Cutkosky 2016); the value is an estimate", "tactile.slip_vibration_hz"),
+    _c("slip_vibration_zeta", "1", _T.slip_vibration_zeta, 0.05, 0.3, "uniform",
+       "estimate: silicone loss factor 0.1-0.6", "tactile.slip_vibration_zeta"),
+    _c("incipient_slip", "1", _T.incipient_slip, 0.0, 1.0, "uniform",
+       "absent (0: the linear shift) to 1: the Cattaneo-Mindlin partial-slip law (Johnson 1985, ch. 7), the "
+       "slipping annulus spreading from the contact's edge", "tactile.incipient_slip"),
     _c("slip_sensor_noise", "V", _S.noise_v, 0.5e-3, 3e-3, "uniform",
        "paper: noise below the 2-LSB threshold; the value is an estimate", "slip_sensor.noise_v"),
     _c("splash_rms", "1", _W.splash_rms, 0.05, 0.5, "uniform",
