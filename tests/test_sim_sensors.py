@@ -164,9 +164,7 @@ def _squeeze(hand, sensor=None):
 
 
 def test_squeezing_moves_the_sensor_spot_only_through_the_fingertip_own_motion():
-    from slipreflex.sim import HandParams
-
-    from slipreflex.sim import SlipSensorParams
+    from slipreflex.sim import HandParams, SlipSensorParams
 
     # without the fingertip's rolling and the gap's opening the signal does not move when nothing slides ...
     assert _squeeze(HandParams(spot_travel_per_unit_m=0.0), SlipSensorParams(gap_dent_fraction=0.0)) == 0

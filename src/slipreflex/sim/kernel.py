@@ -97,7 +97,10 @@ S_L0 = S_C0 + 3 * SC_SIZE
 # the pads' slip vibration (thumb, index): the sensed shear's resonator, displacement (N) and its rate (N/s)
 S_V0 = S_L0 + 14
 (S_VY0, S_VV0, S_VY1, S_VV1) = range(S_V0, S_V0 + 4)
-S_SIZE = S_V0 + 4
+# the digits' motor vibration (thumb, index, middle): each motor's phase (rad) and its force on the contact (N)
+S_M0 = S_V0 + 4
+S_MPH0, S_FM0 = S_M0, S_M0 + 3
+S_SIZE = S_M0 + 6
 
 # ---- counters C (int64) ---------------------------------------------------
 # C_NFAIL: implicit friction solves that did not converge; C_NITER: most iterations one took.
@@ -134,7 +137,10 @@ P_R0 = P_B0 + 7
 # Cattaneo-Mindlin law in the pressure centre's shift (incipient slip)
 P_T0 = P_R0 + 6
 (P_MS_ETA, P_MS_PER_M, P_MS_W2, P_MS_2ZW, P_MS_W, P_INCIPIENT) = range(P_T0, P_T0 + 6)
-P_SIZE = P_T0 + 6
+# the digits' motor vibration (HandParams): force amplitude and angular frequency at full speed, 1 / full speed
+P_MV0 = P_T0 + 6
+(P_MV_F, P_MV_W, P_MV_INV_SPEED) = range(P_MV0, P_MV0 + 3)
+P_SIZE = P_MV0 + 3
 #: Friction laws (PC_LAW): Coulomb with a Stribeck curve; slip weakening + healing + log rate.
 LAW_COULOMB, LAW_RATE_STATE = 0.0, 1.0
 _NEWTON_MAX = 60
@@ -197,6 +203,12 @@ def normal_pair(key, i):
     u2 = _uniform(key, 2 * i + 1)
     r = np.sqrt(-2.0 * np.log(u1))
     return r * np.cos(2.0 * np.pi * u2), r * np.sin(2.0 * np.pi * u2)
+
+
+@njit(cache=True)
+def uniform(key, i):
+    """Uniform number ``i`` in (0, 1) of the stream ``key`` (counter-based)."""
+    return _uniform(key, i)
 
 
 @njit(cache=True)
@@ -517,6 +529,7 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
     key6 = keys[6]
     ms_eta, ms_per_m, ms_w2, ms_2zw, ms_w = P[P_MS_ETA], P[P_MS_PER_M], P[P_MS_W2], P[P_MS_2ZW], P[P_MS_W]
     inc = P[P_INCIPIENT]
+    mv_f, mv_w, mv_inv = P[P_MV_F], P[P_MV_W], P[P_MV_INV_SPEED]
     # loop invariants and the states every step reads, kept in locals (numba cannot tell that the
     # output arrays do not alias S and P, so it would reload them from memory every step)
     kservo = P[P_KSERVO]
@@ -564,6 +577,18 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
             if (tg - qn) * e < 0.0:
                 qn = tg
             S[S_Q0 + i] = qn
+            # the digit's motor shakes its contact while it turns: rotor unbalance, force and frequency
+            # proportional to the speed
+            if mv_f > 0.0:
+                mvr = abs(qn - q) / dt * mv_inv
+                if mvr > 0.0:
+                    ph = S[S_MPH0 + i] + mv_w * mvr * dt
+                    if ph > 6.283185307179586:
+                        ph -= 6.283185307179586
+                    S[S_MPH0 + i] = ph
+                    S[S_FM0 + i] = mv_f * mvr * np.sin(ph)
+                else:
+                    S[S_FM0 + i] = 0.0
         qbar = (S[S_Q0] + S[S_Q0 + 1] + S[S_Q0 + 2]) / 3.0
         pen = (qbar - qc) * lam
         fallen = S[S_FALLEN] > 0.0
@@ -634,13 +659,15 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
         # ---- the slosh (sideways): slosh mass m1 on the spring m1 k tanh(k h) (g - a) and damper c1,
         # tied to the bottle, which the grasp holds sideways; the jet's force drives the mode (equal and
         # opposite on the bottle: a vertical jet gives the pair no sideways momentum)
+        # the digits' motor forces, radial at 0, 120 and 240 degrees from the accelerometer's x axis
+        flat = S[S_FM0] - 0.5 * (S[S_FM0 + 1] + S[S_FM0 + 2]) if (mv_f > 0.0 and nc > 0.0) else 0.0
         if S[S_M1] > 0.0 and not fallen:
             m1 = S[S_M1]
             du = v1 - vb
             fs = m1 * S[S_KTH] * (g - a_prev) * (y1 - yb) + S[S_C1] * du
             fq = S[S_BETA] * (fjet + fspl)
             S[S_FWAT] = fs - fq
-            ab = (fs - fq - klat * yb - clat * vb) / (m + mland - m1)
+            ab = (fs - fq + flat - klat * yb - clat * vb) / (m + mland - m1)
             v1 += (fq - fs) / m1 * dt
             y1 += v1 * dt
             vb += ab * dt
@@ -650,6 +677,18 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
             S[S_VB] = vb
             S[S_YB] = yb
             S[S_ALAT] = ab
+        elif (flat != 0.0 or vb != 0.0 or yb != 0.0) and not fallen:
+            # no water: the bottle alone on the grasp's sideways stiffness
+            ab = (flat - klat * yb - clat * vb) / (m + mland)
+            vb += ab * dt
+            yb += vb * dt
+            if abs(yb) < 1e-15 and abs(vb) < 1e-12:
+                yb = 0.0
+                vb = 0.0
+            S[S_VB] = vb
+            S[S_YB] = yb
+            S[S_ALAT] = ab
+            S[S_FWAT] = 0.0
         else:
             S[S_ALAT] = 0.0
             S[S_FWAT] = 0.0
@@ -846,7 +885,7 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
                 tac_out[ntac, T_IDX] = tac_next[si]
                 tac_out[ntac, T_T] = tac_next[si] / tac_rates[si]
                 bc = S_C0 + tac_contact[si] * SC_SIZE
-                tac_out[ntac, T_NC] = nc
+                tac_out[ntac, T_NC] = nc + S[S_FM0 + tac_contact[si]] if nc > 0.0 else nc
                 tac_out[ntac, T_FT] = _sensed_shear(S[bc + SC_FT], nc, S[bc + SC_PHI], P, tac_contact[si], inc) + (
                     S[S_VY0 + 2 * tac_contact[si]] if tac_contact[si] < 2 else 0.0)
                 tac_out[ntac, T_S] = S[bc + SC_S]

@@ -121,6 +121,16 @@ class HandParams:
         of at full speed. 1 is the DC motor's straight line (a brushed DC
         motor's speed falls linearly from no-load to stall at constant
         voltage); 0 keeps full speed up to the stall.
+    motor_vibration_n, motor_vibration_hz : float
+        The digit motor's vibration at full speed, a force on the digit's
+        contact (N amplitude) at the motor's rotation frequency (Hz); both
+        scale with the digit's speed (rotor unbalance: ``F = m_r G omega``
+        for a balance grade ``G``). Estimate: a ~3 g rotor balanced to ISO
+        1940 grade G6.3 (6.3 mm/s, small electric motors) at ~7500 rpm (a
+        digit closing half a turn in 0.8 s through a ~1:200 worm gear)
+        gives 0.003 x 0.0063 x 785 = 0.015 N at 125 Hz; 0 switches it off.
+        Seen by the tactile arrays (the normal force of that digit's pad)
+        and, through the grasp's sideways stiffness, by the IMU.
     grasp_speed_units_s : float
         Closing speed (units/s) of the grasp routine's approach: a slow
         "close" (about 30 % PWM) so the 0.8 N stop does not overshoot much;
@@ -153,12 +163,15 @@ class HandParams:
     spot_travel_per_unit_m: float = 19e-6
     stall_force_n: float = 25.0
     motor_droop: float = 1.0
+    motor_vibration_n: float = 0.015
+    motor_vibration_hz: float = 125.0
     grasp_speed_units_s: float = 150.0
     grasp_poll_fs: float = 100.0
     settle_s: float = 0.5
 
     def __post_init__(self) -> None:
-        _validate(self, zero_ok=("latency_s", "settle_s", "spot_travel_per_unit_m", "motor_droop"))
+        _validate(self, zero_ok=("latency_s", "settle_s", "spot_travel_per_unit_m", "motor_droop",
+                                   "motor_vibration_n"))
         if self.motor_droop > 1.0:
             raise ParameterError(f"HandParams.motor_droop must be in [0, 1], got {self.motor_droop!r}")
 
@@ -222,7 +235,8 @@ class SlipSensorParams:
     def __post_init__(self) -> None:
         _validate(self, zero_ok=("noise_v", "gap_dent_fraction"))
         if self.gap_dent_fraction > 1.0:
-            raise ParameterError(f"SlipSensorParams.gap_dent_fraction must be in [0, 1], got {self.gap_dent_fraction!r}")
+            raise ParameterError(f"SlipSensorParams.gap_dent_fraction must be in [0, 1], "
+                                 f"got {self.gap_dent_fraction!r}")
 
 
 @dataclass(frozen=True, slots=True)

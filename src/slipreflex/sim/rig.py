@@ -717,6 +717,9 @@ class Rig:
         self._S[K.S_SPL0] = K.normal(self._keys[5], 0)
         P = self._P
         self._S[K.S_SPL1] = P[K.P_SPL_RHO] * self._S[K.S_SPL0] + P[K.P_SPL_SIG] * K.normal(self._keys[5], 1)
+        # the digit motors turn with unrelated phases (stream keys[7])
+        for i in range(3):
+            self._S[K.S_MPH0 + i] = 2.0 * math.pi * float(K.uniform(self._keys[7], i))
         self._C = np.zeros(K.C_SIZE, dtype=np.int64)
         self._D = np.zeros((0, K.D_SIZE))
         self._W = np.zeros((0, K.W_SIZE))
@@ -760,6 +763,9 @@ class Rig:
         P[K.P_MS_2ZW] = 2.0 * tp.slip_vibration_zeta * w
         P[K.P_MS_W] = w
         P[K.P_INCIPIENT] = tp.incipient_slip
+        P[K.P_MV_F] = h.motor_vibration_n
+        P[K.P_MV_W] = 2.0 * math.pi * h.motor_vibration_hz
+        P[K.P_MV_INV_SPEED] = 1.0 / h.speed_units_s
         P[K.P_GRIP] = b.grip_travel_m
         P[K.P_DAQ_T] = hw.DAQ_PERIOD_S
         P[K.P_ACC_T] = 1.0 / imu.fs

@@ -203,6 +203,13 @@ UNCERTAIN: Mapping[str, UncertainConstant] = MappingProxyType({c.name: c for c i
     _c("motor_droop", "1", _H.motor_droop, 0.0, 1.0, "uniform",
        "absent (0: full speed up to the stall) to 1: a brushed DC motor's speed falls linearly from no load to "
        "stall at constant voltage", "hand.motor_droop"),
+    _c("motor_vibration", "N", _H.motor_vibration_n, 0.0, 0.06, "uniform",
+       "absent (0) to 0.06 N at full speed: rotor unbalance m_r G omega of a ~3 g rotor at balance grade G6.3 "
+       "(ISO 1940, small electric motors; 0.015 N) up to G2.5-G16 and gear-mesh forces, estimate",
+       "hand.motor_vibration_n"),
+    _c("motor_vibration_hz", "Hz", _H.motor_vibration_hz, 60.0, 250.0, "loguniform",
+       "estimate: a digit closing half a turn in 0.8 s through a 1:100-1:400 worm gear turns its motor at "
+       "60-250 rev/s at full speed", "hand.motor_vibration_hz"),
     _c("hand_latency", "s", _H.latency_s, 0.005, 0.030, "uniform",
        "estimate: 15-byte packet at 115200 baud (1.3 ms) plus control unit and digit controller",
        "hand.latency_s"),
