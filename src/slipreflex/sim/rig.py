@@ -444,6 +444,9 @@ class SimHand:
         self._pending: list[tuple[int, int, HandCommand, tuple[Finger, ...], float]] = []
         self._count = 0
         self._others: dict[Finger, float] = {f: 0.0 for f in Finger if f not in hw.TRIPOD}
+        #: When the closing a closed loop started for each finger ends (rig time, s; the grip
+        #: rule of :mod:`slipreflex.grip`: a later rise extends it rather than cutting it short).
+        self.closing_until: dict[Finger, float] = {}
         #: Servo targets and speed limits of thumb, index and middle (the rig hands them to the physics).
         self.targets = np.zeros(len(hw.TRIPOD))
         self.speeds = np.full(len(hw.TRIPOD), params.speed_units_s)
