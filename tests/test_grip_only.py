@@ -7,6 +7,7 @@ compared) and on the virtual rig through ``slipreflex run`` (real time)."""
 from __future__ import annotations
 
 import math
+import os
 
 import pytest
 import serial
@@ -224,3 +225,31 @@ def test_grip_is_the_rise_and_closing_time_accumulates():
     assert span(1.01, stop, 6.25) == (1.02, 1.03)  # a rise while closing: closes 10 ms longer
     with pytest.raises(ParameterError, match="finite"):
         g.rise(math.inf)
+
+
+def test_the_loop_gives_up_the_capability_it_was_given_for_the_scheduler():
+    """A non-root process started with CAP_SYS_NICE keeps SCHED_FIFO and drops every capability."""
+    import subprocess
+    import sys
+    import textwrap
+
+    code = textwrap.dedent("""
+        import os
+        from slipreflex import runtime
+        print(runtime.drop_capabilities())          # as root: says so, keeps its rights
+        try:
+            os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(5))
+        except OSError:
+            pass
+        policy = os.sched_getscheduler(0)
+        os.geteuid = lambda: 1000                   # the path of a user with CAP_SYS_NICE
+        print(runtime.drop_capabilities())
+        print(runtime._capabilities(), os.sched_getscheduler(0) == policy)
+    """)
+    if not sys.platform.startswith("linux") or os.geteuid() != 0:
+        pytest.skip("needs Linux and root to hand a process capabilities")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                         timeout=60).stdout.splitlines()
+    assert out[0].startswith("running as root: not needed and not dropped")
+    assert out[1].startswith("gave up capabilities") and "CAP_SYS_NICE" in out[1], out
+    assert out[2] == "(0, 0) True", out

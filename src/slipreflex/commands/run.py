@@ -193,7 +193,7 @@ def run(args: argparse.Namespace) -> int:
     from ..devices.daq import SerialDaq
     from ..devices.ilimb import ILimb
     from ..recording import METADATA_NAME, Recorder
-    from ..runtime import print_fault, realtime_priority, run_loop
+    from ..runtime import drop_capabilities, print_fault, realtime_priority, run_loop
 
     p0 = check_arguments(args)  # everything, before a port opens or a byte is sent
     params = chain_params(args, p0[SLIP_FINGER])
@@ -209,6 +209,9 @@ def run(args: argparse.Namespace) -> int:
         board_meta = {"board_params": json.dumps(bparams.to_dict())}
     if args.realtime:
         print(realtime_priority(), flush=True)
+    dropped = drop_capabilities()  # the loop keeps nothing it does not need (docs/runtime.md)
+    if dropped:
+        print(dropped, flush=True)
     stop = threading.Event()
 
     def on_signal(signum: int, _frame: object) -> None:

@@ -446,7 +446,7 @@ def _cfg(rig, t_end: float, sampler) -> np.ndarray:
     cfg[CF_SPEED] = rig.hand.params.speed_units_s
     cfg[CF_PREPOS] = rig.last_daq_position(Finger.MIDDLE)
     cfg[CF_CHUNK] = max(1, int(0.25 / rig.physics.dt))
-    cfg[CF_GSPEED] = hw.FINGER_SPEED_UNITS_S
+    cfg[CF_GSPEED] = rig.hand.params.speed_units_s   # sim/loop.py's _grip_sender: the hand's own speed
     if sampler is not None:
         tp = rig.tactile_params
         cfg[CF_SI] = rig.samplers.index(sampler)

@@ -6,10 +6,11 @@ or ``(4, 4)`` index-finger tactile frames at the reflex's own ``fs``), passes
 the measured middle-finger position with every sample, and sends every rise of
 the returned command to the tripod fingers (thumb, index, middle) as closing
 time, the grip-only rule of :mod:`slipreflex.grip` that the real-rig loop
-applies too: a rise of ``g`` units is a CLOSE at the hand's documented speed
-(:data:`~slipreflex.hardware.FINGER_SPEED_UNITS_S`, full PWM) and a STOP
-``g / speed`` seconds later, a rise while the fingers still close extends the
-closing. The commands are sent at the time of the sample that produced them and
+applies too: a rise of ``g`` units is a CLOSE at the hand's closing speed
+(full PWM: ``HandParams.speed_units_s``, the documented
+:data:`~slipreflex.hardware.FINGER_SPEED_UNITS_S` on the nominal plant) and a
+STOP ``g / speed`` seconds later, a rise while the fingers still close extends
+the closing. The commands are sent at the time of the sample that produced them and
 reach the fingers after the hand's latency; the physics is advanced in
 stretches that never pass a time a pending command could still change, so
 the result is the same as stepping sample by sample.
@@ -326,7 +327,9 @@ def _grip_sender(hand, groups: list[tuple[tuple[Finger, ...], float]], start: fl
     """A ``send(c, at)`` that turns each rise of ``c`` into CLOSE and STOP commands (the grip rule)."""
     grip = Grip(start, [f for g, _ in groups for f in g], {f: off for g, off in groups for f in g})
     assert grip.groups == groups   # both from slipreflex.grip.finger_groups
-    speed = float(hw.FINGER_SPEED_UNITS_S)
+    # the simulated hand's own closing speed is its documented rate (625 units/s on the nominal
+    # plant, hardware.FINGER_SPEED_UNITS_S): a rise of g units closes its fingers g units
+    speed = float(getattr(getattr(hand, "params", None), "speed_units_s", hw.FINGER_SPEED_UNITS_S))
 
     def send(value, at):
         if not math.isfinite(value):   # checked before any finger gets it, as the compiled loop does
