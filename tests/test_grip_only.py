@@ -250,6 +250,6 @@ def test_the_loop_gives_up_the_capability_it_was_given_for_the_scheduler():
         pytest.skip("needs Linux and root to hand a process capabilities")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
                          timeout=60).stdout.splitlines()
-    assert out[0].startswith("running as root: not needed and not dropped")
+    assert out[0].startswith("root: not needed, its rights are kept")
     assert out[1].startswith("gave up capabilities") and "CAP_SYS_NICE" in out[1], out
     assert out[2] == "(0, 0) True", out

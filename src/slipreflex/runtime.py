@@ -1264,8 +1264,8 @@ def drop_capabilities() -> str:
     if not sys.platform.startswith("linux"):
         return ""
     if os.geteuid() == 0:
-        return ("running as root: not needed and not dropped; give the user CAP_SYS_NICE or an "
-                "rtprio limit instead (docs/runtime.md, Privileges)")
+        return ("root: not needed, its rights are kept; give the user CAP_SYS_NICE or an rtprio "
+                "limit instead (docs/runtime.md, Privileges)")
     eff, prm = _capabilities()
     if not (eff or prm):
         return ""

@@ -210,7 +210,7 @@ def run(args: argparse.Namespace) -> int:
     if args.realtime:
         print(realtime_priority(), flush=True)
     dropped = drop_capabilities()  # the loop keeps nothing it does not need (docs/runtime.md)
-    if dropped:
+    if dropped and (args.realtime or not dropped.startswith("root:")):
         print(dropped, flush=True)
     stop = threading.Event()
 
