@@ -31,12 +31,21 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..errors import DeviceError, ParameterError
-from ..interfaces import GraspResult
 from ..hardware import (
-    CONTACT_FORCE_N, FINGER_MAX, FINGER_MIN, FINGER_SPEED_UNITS_S, ILIMB_BAUD, ILIMB_END, ILIMB_START,
+    CONTACT_FORCE_N,
+    FINGER_MAX,
+    FINGER_MIN,
+    FINGER_SPEED_UNITS_S,
+    ILIMB_BAUD,
+    ILIMB_END,
+    ILIMB_START,
     PWM_MAX,
-    THUMB_ROTATOR_MAX, TRIPOD, Finger, HandCommand,
+    THUMB_ROTATOR_MAX,
+    TRIPOD,
+    Finger,
+    HandCommand,
 )
+from ..interfaces import GraspResult
 from .port import ReconnectingPort
 
 __all__ = [
@@ -425,9 +434,9 @@ class ILimb:
                                      f"report, so the target could open it")
             last = self._targets.get(c.finger)
             if last is None or c.value < last:
+                why = "no target known" if last is None else f"below its last target {last:g}"
                 raise ParameterError(f"i-Limb: {c.finger.name} POSITION {c.value} refused while a reflex "
-                                     f"runs: below the finger's last target "
-                                     f"({'none' if last is None else f'{last:g}'}), it could open the finger")
+                                     f"runs: {why}")
 
     @staticmethod
     def _targets_packet(targets: Mapping[Finger, float]) -> bytes:
@@ -519,7 +528,7 @@ class ILimb:
         >>> hand.set_positions({Finger.INDEX: 140})
         Traceback (most recent call last):
         ...
-        slipreflex.errors.ParameterError: i-Limb: INDEX POSITION 140 refused while a reflex runs: below the finger's last target (148), it could open the finger
+        slipreflex.errors.ParameterError: i-Limb: INDEX POSITION 140 refused while a reflex runs: below its last target 148
         """
         self._reflex = bool(running)
         self._closed.clear()
@@ -557,7 +566,7 @@ class ILimb:
         """
         self._port.close()
 
-    def __enter__(self) -> "ILimb":
+    def __enter__(self) -> ILimb:
         return self
 
     def __exit__(self, *exc: object) -> None:

@@ -265,8 +265,8 @@ class VirtualDevices:
     :class:`~slipreflex.interfaces.Hand` methods (position: ``set_positions``;
     close: ``close_fingers`` at the PWM's share of the documented speed; stop:
     ``hold``), falling back to position targets for a hand without them (stop:
-    hold the measured position; close/open: move to the end of the range). Perturbations run when :meth:`trigger` is called or their
-    scheduled time comes.
+    hold the measured position; close/open: move to the end of the range).
+    Perturbations run when :meth:`trigger` is called or their scheduled time comes.
 
     Parameters
     ----------
@@ -354,7 +354,7 @@ class VirtualDevices:
         """Seconds since :meth:`start` (NaN before)."""
         return time.perf_counter() - self._t0
 
-    def start(self) -> "VirtualDevices":
+    def start(self) -> VirtualDevices:
         """Start the real-time thread (idempotent); returns self."""
         if self._thread is None:
             self._t0 = time.perf_counter()
@@ -391,7 +391,7 @@ class VirtualDevices:
         """True while the thread runs."""
         return self._thread is not None and self._thread.is_alive()
 
-    def __enter__(self) -> "VirtualDevices":
+    def __enter__(self) -> VirtualDevices:
         return self.start()
 
     def __exit__(self, *exc: object) -> None:
