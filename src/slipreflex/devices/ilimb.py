@@ -434,9 +434,9 @@ class ILimb:
                                      f"report, so the target could open it")
             last = self._targets.get(c.finger)
             if last is None or c.value < last:
-                why = "no target known" if last is None else f"below its last target {last:g}"
+                why = "no target known" if last is None else f"below its target {last:g}"
                 raise ParameterError(f"i-Limb: {c.finger.name} POSITION {c.value} refused while a reflex "
-                                     f"runs: {why}")
+                                     f"runs ({why})")
 
     @staticmethod
     def _targets_packet(targets: Mapping[Finger, float]) -> bytes:
@@ -528,7 +528,7 @@ class ILimb:
         >>> hand.set_positions({Finger.INDEX: 140})
         Traceback (most recent call last):
         ...
-        slipreflex.errors.ParameterError: i-Limb: INDEX POSITION 140 refused while a reflex runs: below its last target 148
+        slipreflex.errors.ParameterError: i-Limb: INDEX POSITION 140 refused while a reflex runs (below its target 148)
         """
         self._reflex = bool(running)
         self._closed.clear()
