@@ -94,6 +94,7 @@ def test_every_method_of_the_chain_has_a_compiled_step():
             methods.DATH_FLOOR, methods.DATH_LEAK} <= set(COMPILED)
 
 
+@pytest.mark.slow
 def test_finger_offsets_reach_the_offset_finger_only(monkeypatch):
     """authors-gui closes the middle finger 20 units further: at the first command, its group alone
     closes 20 / 625 s longer; later rises close every finger alike. Both loops split commands alike."""

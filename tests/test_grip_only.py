@@ -85,6 +85,7 @@ def _simulated_run(p0, what, duration):
     return grasp, res, hand.log, src.seen, sim.rig.fallen
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("what, duration", [("drop", 1.5), ("pour", 32.0)])
 def test_every_p0_adds_the_same_grip_never_opens_and_holds_the_bottle(what, duration):
     runs = {p0: _simulated_run(p0, what, duration) for p0 in P0S}
@@ -121,6 +122,7 @@ def _virtual_run(tmp_path, p0, schedule, duration="1.0"):
     return code, grasp, track, sim, packets
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("p0", P0S)
 def test_run_on_the_virtual_rig_with_any_p0_never_opens_and_answers_the_drop(tmp_path, capsys, p0):
     code, grasp, track, sim, packets = _virtual_run(tmp_path, p0, [("drop", 0.2)])
@@ -134,6 +136,7 @@ def test_run_on_the_virtual_rig_with_any_p0_never_opens_and_answers_the_drop(tmp
     assert "fully closed" not in out and "ceiling" not in out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("p0", [0, 500])
 def test_a_pour_on_the_virtual_rig_never_opens_the_hand(tmp_path, capsys, p0):
     code, grasp, track, sim, _ = _virtual_run(tmp_path, p0, [("pour", 0.1)], duration="2.0")
