@@ -32,7 +32,7 @@ RUN_S = 4.0
 # (in-process: one sample period later), so that neither the phase nor whether the reflex is
 # running when the pour begins is at the mercy of how long the ports took to open (a slow
 # start under load once lost the bottle, issue 15). Measured (python -m pytest -s with a
-# print, 4 runs): 5.12-5.13 mm over the ptys, 5.02-5.03 mm in-process (the same pour instant
+# print; grip-only rule, 1 run): 4.58 mm over the ptys, 4.46 mm in-process (the same pour instant
 # and hand commands replayed); fallen unassisted.
 PHASE = 12 + 3 * 16
 
