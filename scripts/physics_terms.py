@@ -9,12 +9,14 @@ nominal value, then with all of them. Per run it prints, from the perturbation t
   at rest, 260 Hz frames of the index finger) and how many detections it makes;
 * SWT-SD: the largest ``|c_k|`` over its threshold (380 Hz) and how many samples its ON signal is on;
 * IMU: the largest deviation of the accelerometer's y axis (along the bottle) from its rest mean, in sd of its
-  rest noise (5 is the noise-floor rule the tactile thresholds use);
+  rest noise (5 is the noise-floor rule the tactile thresholds use), from the perturbation to 0.1 s after the
+  first slip (so that the run-away and fall-out do not dominate);
 * when the bottle first slips and whether it falls.
 
 Terms: ``grip`` (the bounded grip: wall softening and the motor's torque-speed line), ``roll`` (the fingertip's
 roll and the gap's opening), ``events`` (the pads' micro-slip events), ``incipient`` (the Cattaneo-Mindlin
-redistribution of incipient slip). A figure (``--figure PATH``) shows the index array's NMSD and SWT-SD ratios
+redistribution of incipient slip), ``motor`` (the digits' motor vibration; in an open loop the digits move only
+in the grasp, before the rest recording). A figure (``--figure PATH``) shows the index array's NMSD and SWT-SD ratios
 over time for the base and each term, pour and drop on TR.
 
 Run: ``python scripts/physics_terms.py [--figure physics_terms.png] [--bottles TR,TX]``.
@@ -39,7 +41,7 @@ REST_S = 4.0
 
 def plants() -> dict[str, dict]:
     """Keyword sets for Rig: the base (every term absent), each term alone, all terms."""
-    absent_hand = {"motor_droop": 0.0, "spot_travel_per_unit_m": 0.0}
+    absent_hand = {"motor_droop": 0.0, "spot_travel_per_unit_m": 0.0, "motor_vibration_n": 0.0}
     absent_bottle = {"wall_softening": 0.0}
     absent_sensor = {"gap_dent_fraction": 0.0}
     absent_tac = {"slip_events": 0.0, "incipient_slip": 0.0}
@@ -51,6 +53,7 @@ def plants() -> dict[str, dict]:
                  "sensor": {"gap_dent_fraction": SlipSensorParams().gap_dent_fraction}},
         "events": {"tactile": {"slip_events": TactileParams().slip_events}},
         "incipient": {"tactile": {"incipient_slip": TactileParams().incipient_slip}},
+        "motor": {"hand": {"motor_vibration_n": HandParams().motor_vibration_n}},
     }
     out = {}
     for name, on in terms.items():
@@ -93,10 +96,12 @@ def run(bottle: str, what: str, kw: dict, seed: int = 0) -> dict:
     h = rig.daq_history()
     ay = h.accel[:, 1]
     rest = (h.t > t_rest + 0.5) & (h.t < t_pert)
-    act = (h.t >= t_pert) & (h.t < end)
+    stop = min(end, t_pert + out["onset"] + 0.1) if np.isfinite(out["onset"]) else end
+    act = (h.t >= t_pert) & (h.t < stop)
     sd = float(np.std(ay[rest]))
     out["imu_sd"] = float(np.max(np.abs(ay[act] - ay[rest].mean())) / sd) if sd > 0 else np.inf
     out["t_pert"] = t_pert
+    out["t_end"] = end
     return out
 
 
@@ -130,8 +135,12 @@ def main() -> None:
                 for name in ps:
                     r = traces[(b0, what, name)]
                     t = r[stat + "_t"] - r["t_pert"]
-                    keep = t > (-1.0 if what == "drop" else 5.0)
-                    ax.plot(t[keep], r[stat + "_trace"][keep], lw=0.7, label=name)
+                    if what == "drop":
+                        keep = (t > -0.1) & (t < 0.8)
+                    else:   # the last 1.5 s before the first slip, to just after fall-out
+                        keep = (t > r["onset"] - 1.5) & (t < r["t_end"] - r["t_pert"] + 0.05)
+                    ax.plot(t[keep], r[stat + "_trace"][keep], lw=0.8, label=name,
+                            ls="-" if name in ("base", "all") else "--")
                 ax.axhline(1.0, color="k", ls="--", lw=0.8)
                 ax.set_yscale("log")
                 ax.set_title(f"{b0} open-loop {what}: {stat.upper()} statistic / threshold")
