@@ -140,7 +140,11 @@ P_T0 = P_R0 + 6
 # the digits' motor vibration (HandParams): force amplitude and angular frequency at full speed, 1 / full speed
 P_MV0 = P_T0 + 6
 (P_MV_F, P_MV_W, P_MV_INV_SPEED) = range(P_MV0, P_MV0 + 3)
-P_SIZE = P_MV0 + 3
+# the bottle's shoulder (Bottle.shoulder_slope): radius lost per metre the bottle slides past grip_travel (0: the
+# contacts are lost at once there), and the sine of its half-angle
+P_SH0 = P_MV0 + 3
+(P_TAPER, P_TAPER_SIN) = range(P_SH0, P_SH0 + 2)
+P_SIZE = P_SH0 + 2
 #: Friction laws (PC_LAW): Coulomb with a Stribeck curve; slip weakening + healing + log rate.
 LAW_COULOMB, LAW_RATE_STATE = 0.0, 1.0
 _NEWTON_MAX = 60
@@ -530,6 +534,7 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
     ms_eta, ms_per_m, ms_w2, ms_2zw, ms_w = P[P_MS_ETA], P[P_MS_PER_M], P[P_MS_W2], P[P_MS_2ZW], P[P_MS_W]
     inc = P[P_INCIPIENT]
     mv_f, mv_w, mv_inv = P[P_MV_F], P[P_MV_W], P[P_MV_INV_SPEED]
+    taper, taper_sin, grip = P[P_TAPER], P[P_TAPER_SIN], P[P_GRIP]
     # loop invariants and the states every step reads, kept in locals (numba cannot tell that the
     # output arrays do not alias S and P, so it would reload them from memory every step)
     kservo = P[P_KSERVO]
@@ -591,6 +596,10 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
                     S[S_FM0 + i] = 0.0
         qbar = (S[S_Q0] + S[S_Q0 + 1] + S[S_Q0 + 2]) / 3.0
         pen = (qbar - qc) * lam
+        pen_full = pen
+        # past grip_travel the fingertips are on the shoulder, whose radius shrinks as the bottle slides
+        if taper > 0.0 and x > grip:
+            pen -= taper * (x - grip)
         fallen = S[S_FALLEN] > 0.0
         nc = _grip_force(pen, kn, pen1, pen2, n1w, n2w, k2w, k3w) if not fallen else 0.0
         S[S_NC] = nc
@@ -655,6 +664,9 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
         m = mb + mw
         S[S_MASS] = m + mland
         wload = m * g + fjet + fspl + fdrop
+        # on the shoulder the three normal forces lean along the axis and push the bottle out of the grasp
+        if taper > 0.0 and x > grip and not fallen:
+            wload += 3.0 * nc * taper_sin
         S[S_LOAD] = wload
         # ---- the slosh (sideways): slosh mass m1 on the spring m1 k tanh(k h) (g - a) and damper c1,
         # tied to the bottle, which the grasp holds sideways; the jet's force drives the mode (equal and
@@ -795,7 +807,7 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
             S[S_S] = s_mean
             S[S_W] = w_min if sliding else 0.0
             S[S_FT] = ftot
-            if x > P[P_GRIP]:
+            if (x > grip + pen_full / taper) if taper > 0.0 else (x > grip):
                 S[S_FALLEN] = 1.0
                 S[S_TFALL] = t1
                 S[S_STUCK] = 0.0

@@ -264,6 +264,16 @@ class Bottle:
     grip_travel_m : float
         How far (m) the bottle can slide down before the fingertips reach the
         shoulder and lose contact ("fallen out").
+    shoulder_slope : float
+        Radius the bottle loses per metre it slides down once the fingertips
+        have passed ``grip_travel_m`` and are on its shoulder (the shape the
+        grasp sees): the normal force falls as the gap opens, the three
+        normal forces lean along the axis and push the bottle out with ``3 N
+        sin(alpha)``, and the contacts are lost when the shoulder has taken up
+        the fingertips' whole travel. Estimate for the paper's 500 ml bottles:
+        the shoulder narrows from the 32.5 mm body to a ~13 mm neck over
+        ~40 mm, 0.49. 0: no taper, the contacts are lost at once at
+        ``grip_travel_m`` (the earlier model).
     wall_linear_range_m : float
         Dent (m) of the wall under one fingertip up to which it follows the
         linear law ``wall_stiffness_n_m``: estimate 3 mm (about ten wall
@@ -302,6 +312,7 @@ class Bottle:
     stribeck_velocity_m_s: float = 1e-3
     wall_stiffness_n_m: float = 600.0
     grip_travel_m: float = 0.03
+    shoulder_slope: float = 0.49
     wall_linear_range_m: float = 3e-3
     wall_softening: float = 0.3
     wall_collapse_m: float = 0.026
@@ -329,6 +340,7 @@ class Bottle:
         _check("Bottle", "stribeck_velocity_m_s", self.stribeck_velocity_m_s, lo=0.0, lo_open=True)
         _check("Bottle", "wall_stiffness_n_m", self.wall_stiffness_n_m, lo=0.0, lo_open=True)
         _check("Bottle", "grip_travel_m", self.grip_travel_m, lo=0.0, lo_open=True, hi=0.09)
+        _check("Bottle", "shoulder_slope", self.shoulder_slope, lo=0.0, hi=10.0)
         _check("Bottle", "wall_linear_range_m", self.wall_linear_range_m, lo=0.0, lo_open=True, hi=0.05)
         _check("Bottle", "wall_softening", self.wall_softening, lo=0.0, hi=0.99)
         _check("Bottle", "wall_collapse_m", self.wall_collapse_m, lo=0.0, lo_open=True, hi=0.06)

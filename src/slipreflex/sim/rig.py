@@ -795,6 +795,8 @@ class Rig:
         P[K.P_MV_F] = h.motor_vibration_n
         P[K.P_MV_W] = 2.0 * math.pi * h.motor_vibration_hz
         P[K.P_MV_INV_SPEED] = 1.0 / h.speed_units_s
+        P[K.P_TAPER] = b.shoulder_slope
+        P[K.P_TAPER_SIN] = b.shoulder_slope / math.sqrt(1.0 + b.shoulder_slope ** 2)
         P[K.P_GRIP] = b.grip_travel_m
         P[K.P_DAQ_T] = hw.DAQ_PERIOD_S
         P[K.P_ACC_T] = 1.0 / imu.fs

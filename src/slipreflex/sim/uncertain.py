@@ -187,6 +187,9 @@ UNCERTAIN: Mapping[str, UncertainConstant] = MappingProxyType({c.name: c for c i
     _c("wall_stiffness", "N/m", _B["TR"].wall_stiffness_n_m, 300.0, 1500.0, "loguniform",
        "estimate: a thin 500 ml PET bottle dents 0.7-3 mm under a 1 N fingertip push",
        "bottle.wall_stiffness_n_m"),
+    _c("shoulder_slope", "1", _B["TR"].shoulder_slope, 0.0, 1.0, "uniform",
+       "absent (0: the contacts are lost at once at grip_travel) to 1; a 500 ml bottle's shoulder narrows from the "
+       "32.5 mm body to a ~13 mm neck over 20-60 mm (0.3-1), estimate", "bottle.shoulder_slope"),
     _c("wall_softening", "1", _B["TR"].wall_softening, 0.0, 0.67, "uniform",
        "absent (0: the linear law) to 0.67; beyond its linear range the section ovalizes into three lobes with the "
        "ring's bending stiffness E t^3 b / (12 x 0.0159 R^3): 200-1000 N/m for 0.2-0.3 mm PET (E 2-4 GPa) over a "
