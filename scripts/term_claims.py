@@ -1,0 +1,59 @@
+"""Which physics term moved which claim: the default reproduction with each term switched off in turn.
+
+Runs the default reproduction grid (same master seed, 10 trials per cell) on the nominal plant and on the plant
+with one term at its "absent" value (the uncertain table's lower bound), judges the paper's claims on each
+(:func:`slipreflex.analysis.claims.judge_run`) and prints the verdicts side by side, with the numbers of the
+claims whose verdict or numbers a term changes.
+
+Run: ``python scripts/term_claims.py [--jobs 2] [--terms grip,roll,...]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+#: Each term and the uncertain constants that switch it off (their "absent" values).
+TERMS: dict[str, dict[str, float]] = {
+    "grip": {"wall_softening": 0.0, "motor_droop": 0.0},
+    "roll": {"spot_travel_per_unit": 0.0, "gap_dent_fraction": 0.0},
+    "spot": {"spot_travel_per_unit": 0.0},
+    "gap": {"gap_dent_fraction": 0.0},
+    "events": {"slip_events": 0.0},
+    "incipient": {"incipient_slip": 0.0},
+    "motor": {"motor_vibration": 0.0},
+    "shoulder": {"shoulder_slope": 0.0},
+}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--terms", default="grip,roll,events,incipient,motor,shoulder",
+                    help=f"comma-separated, of: {', '.join(TERMS)} (spot and gap: the two halves of roll)")
+    args = ap.parse_args()
+
+    from slipreflex.analysis.claims import judge_run
+    from slipreflex.experiments import ReproduceConfig, run_reproduce
+    from slipreflex.sim.uncertain import plant_from_values
+
+    runs = {}
+    for label in ("all", *args.terms.split(",")):
+        values = {} if label == "all" else TERMS[label]
+        cfg = ReproduceConfig(plant=plant_from_values(values))
+        rows = run_reproduce(cfg, jobs=args.jobs, progress=False, plots=False).rows
+        runs[label] = {c.number: c for c in judge_run(rows, plant=cfg.plant)}
+        print(f"ran: {'every term on' if label == 'all' else 'without ' + label}", flush=True)
+    labels = list(runs)
+    print("claim  " + "  ".join(f"{('-' + x) if x != 'all' else 'all':>12s}" for x in labels))
+    for n in sorted(runs["all"]):
+        print(f"{n:5d}  " + "  ".join(f"{runs[x][n].verdict[:12]:>12s}" for x in labels))
+    for n in sorted(runs["all"]):
+        nums = {x: runs[x][n].numbers for x in labels}
+        if len(set(nums.values())) > 1:
+            print(f"\nclaim {n}:")
+            for x in labels:
+                print(f"  {('without ' + x) if x != 'all' else 'all terms':18s} {runs[x][n].verdict}: {nums[x]}")
+
+
+if __name__ == "__main__":
+    main()
