@@ -85,3 +85,19 @@ def test_incipient_slip_follows_cattaneo_mindlin_while_the_pad_holds(runs):
     # the linear law at small load, steeper near slip
     assert q.max() > 0.9
     assert np.all(np.abs(a2[idx, K.T_FT]) >= np.abs(ft) - 1e-12)
+
+
+def test_a_patch_shifted_off_the_array_reads_nothing_and_raises_nothing():
+    # a snapshot whose shear is far beyond what its normal force carries (all Gaussian terms underflow)
+    snap = np.zeros((1, K.T_SIZE))
+    snap[0, K.T_NC], snap[0, K.T_FT] = 1e-12, 1.0
+    out = np.empty((1, 4, 4))
+    state = np.full((2, 4, 4), np.nan)
+    K.tactile_frames(snap, np.uint64(1), 1.0, 0.9, 0.7, 0.0, 0.0, 1.0, 0.0, 0.0, state, out)
+    assert np.all(out == 0.0)
+
+
+def test_the_sensed_shear_never_exceeds_full_slip(runs):
+    for rig, a in runs:
+        ok = a[:, K.T_NC] > 0
+        assert np.all(np.abs(a[ok, K.T_FT]) <= 1.5 * rig.bottle.mu_s * a[ok, K.T_NC] * (1 + 1e-12))

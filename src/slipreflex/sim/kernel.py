@@ -898,8 +898,12 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
                 tac_out[ntac, T_T] = tac_next[si] / tac_rates[si]
                 bc = S_C0 + tac_contact[si] * SC_SIZE
                 tac_out[ntac, T_NC] = nc + S[S_FM0 + tac_contact[si]] if nc > 0.0 else nc
-                tac_out[ntac, T_FT] = _sensed_shear(S[bc + SC_FT], nc, S[bc + SC_PHI], P, tac_contact[si], inc) + (
+                fsen = _sensed_shear(S[bc + SC_FT], nc, S[bc + SC_PHI], P, tac_contact[si], inc) + (
                     S[S_VY0 + 2 * tac_contact[si]] if tac_contact[si] < 2 else 0.0)
+                # the pad's surface carries at most the Cattaneo-Mindlin shear of full slip, 1.5 mu_s N (the
+                # ringing of earlier events cannot outlast the normal force that carried it)
+                fmax = 1.5 * P[P_C0 + tac_contact[si] * PC_SIZE + PC_MUS] * nc
+                tac_out[ntac, T_FT] = min(max(fsen, -fmax), fmax)
                 tac_out[ntac, T_S] = S[bc + SC_S]
                 tac_out[ntac, T_FALLEN] = S[S_FALLEN]
                 tac_out[ntac, T_W] = S[bc + SC_W] if S[bc + SC_STUCK] == 0.0 else 0.0
@@ -950,7 +954,7 @@ def tactile_frames(snap, key, gain0, patch_sigma, shear_shift, noise, resolution
         for b in range(4):
             ey[b] = np.exp(-(b - cy) * (b - cy) * inv2s2)
             sy += ey[b]
-        scale = tot / (sx * sy)
+        scale = tot / (sx * sy) if sy > 0.0 else 0.0   # a patch shifted far off the array (all terms underflow)
         gain = gain0 * (1.0 + drift * np.log10(1.0 + snap[r, T_T]))
         for b in range(4):
             for a2 in range(2):
