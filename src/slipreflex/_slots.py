@@ -10,7 +10,7 @@ from collections.abc import Callable
 from typing import Any
 
 
-def slot(index: int, cast: Callable[[Any], Any], doc: str) -> property:
+def slot(index: int, cast: Callable[[Any], Any], doc: str) -> Any:  # a property, read as its value
     """A read-only property: ``cast(self._S[index])``, documented by ``doc``.
 
     Examples

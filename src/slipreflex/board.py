@@ -32,7 +32,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -40,6 +40,9 @@ from . import hardware as hw
 from .chain.encoder import dath_update
 from .errors import DataError, ParameterError
 from .validation import instance
+
+if TYPE_CHECKING:
+    from .interfaces import InputKind
 
 __all__ = [
     "COEF_Q", "SIG_Q", "H_MAX", "BoardParams", "BoardChain", "BoardReflex", "BoardResult",
@@ -270,6 +273,7 @@ class BoardParams:
                 raise ParameterError(f"{name} must be a whole number for the board, got {value!r}")
             whole[name] = int(value)
         g, a1, a2 = quantize_lowpass(p.fs, p.cutoff)
+        assert p.reset_after is not None, "an MPI that never resets is a variant, refused above"
         return cls(g=g, a1=a1, a2=a2, theta0=volts_to_q16(p.threshold), filter=p.filter,
                    dath=p.dath, dath_samples=p.dath_samples, dath_floor=volts_to_q16(p.dath_floor),
                    x0=None if p.x0 is None else volts_to_q16(p.x0), n=p.n,
@@ -552,7 +556,7 @@ class BoardReflex:
     100.0
     """
 
-    input_kind = "slip"
+    input_kind: InputKind = "slip"
 
     def __init__(self, params: BoardParams | None = None, *, fs: float = hw.DAQ_FS,
                  **kwargs) -> None:

@@ -482,8 +482,9 @@ def run_reproduce(config: ReproduceConfig | None = None, *, jobs: int | None = N
 
     def finished(group: tuple) -> None:
         bar.update(len(group))
-        for c in group if on_done else ():
-            on_done(c)
+        if on_done is not None:
+            for c in group:
+                on_done(c)
 
     with Progress(len(cells), desc="trials", unit="trial", enabled=progress) as bar:
         try:

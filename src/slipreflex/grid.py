@@ -18,7 +18,7 @@ Examples
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Hashable, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 from typing import Any
@@ -59,7 +59,7 @@ class Cell:
         return (self.experiment, self.bottle, self.method, self.trial)
 
 
-def run_cells(calls: Mapping[Hashable, Callable[[], Any]], jobs: int,
+def run_cells(calls: Mapping[Any, Callable[[], Any]], jobs: int,
               finished: Callable[[Any], Any], done: dict) -> None:
     """Run every call into ``done`` by its key: in this process for ``jobs == 1``, else on a pool.
 

@@ -291,7 +291,7 @@ def load_plugins() -> tuple[str, ...]:
         try:
             obj = ep.load()
             got = obj() if callable(obj) and not isinstance(obj, MethodSpec) else obj
-            specs = [got] if isinstance(got, MethodSpec) else list(got)
+            specs = [got] if isinstance(got, MethodSpec) else list(got)  # pyright: ignore[reportArgumentType]
         except Exception as err:  # a broken plugin is the user's to fix: say which one
             raise ParameterError(f"method plugin {ep.name!r} ({ep.value}): cannot load: {err}") from err
         for spec in specs:

@@ -472,8 +472,9 @@ def safe_start(hand: Hand, p0: float | Mapping[Any, float],
     (149.0, ['stop'])
     """
     start = start_positions(p0, fingers)
-    if hasattr(hand, "hold"):
-        hand.hold(tuple(start))
+    hold = getattr(hand, "hold", None)   # optional in the Hand protocol
+    if hold is not None:
+        hold(tuple(start))
     reported = hand.positions()
     for f, v in reported.items():
         if f in start and v is not None and math.isfinite(v) and v > start[f]:
@@ -602,7 +603,7 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
     if duration is not None and not (math.isfinite(duration) and duration > 0):
         raise ParameterError(f"run_loop: duration must be > 0 s, got {duration!r}")
     fingers = tuple(Finger(f) for f in fingers)
-    ref0 = getattr(reflex, "command", None)  # the reflex's own start (SlipReflex: clip(p0))
+    ref0: Any = getattr(reflex, "command", None)  # the reflex's own start (SlipReflex: clip(p0))
     ref_ok = isinstance(ref0, (int, float)) and math.isfinite(ref0)
     if p0 is None and not ref_ok:
         raise ParameterError("run_loop: give p0 (the reflex has no initial command)")
@@ -613,7 +614,8 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
         start, start_error = safe_start(hand, given, fingers), None
     except DeviceError as err:  # the STOP did not go out: the fingers stay as the grasp left them
         start, start_error = given, err
-    dropped = source.drop_buffered() if hasattr(source, "drop_buffered") else 0
+    drop_buffered = getattr(source, "drop_buffered", None)   # optional in the SampleSource protocol
+    dropped = drop_buffered() if drop_buffered is not None else 0
     loop = _Loop(source, hand, reflex, start=start,
                  ref0=float(ref0) if ref_ok else start.get(SLIP_FINGER, next(iter(start.values()))),
                  recorder=recorder, duration=duration, watchdog=watchdog, poll=poll, stop=stop,
@@ -816,7 +818,7 @@ class _Loop:
             if pos is not None:
                 pos -= self.slip_shift  # in the reflex's frame
             cmd = reflex.step(s.slip_volts, pos)
-            r = SampleRecord(s, arrival, self.clock() - (s.t + self.offset), pos, cmd,
+            r = SampleRecord(s, arrival, self.clock() - (s.t + (self.offset or 0.0)), pos, cmd,
                              filtered=reflex.last_filtered, threshold=reflex.last_threshold,
                              event=bool(reflex.last_event), count=reflex.last_count,
                              board=getattr(reflex, "last_board", None))
@@ -893,7 +895,7 @@ class _Loop:
             return
         now = self.clock()
         r.sent, r.latency = True, now - r.arrival
-        r.frame_latency = now - (r.sample.t + self.offset)
+        r.frame_latency = now - (r.sample.t + (self.offset or 0.0))  # offset: set by the first read
         self.latencies.append(r.latency)
         self.frame_latencies.append(r.frame_latency)
         if not self.hand_ok:

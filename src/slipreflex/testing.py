@@ -170,7 +170,8 @@ def _check_attributes(reflex: Any) -> None:
         if not callable(getattr(reflex, m, None)):
             _fail(reflex, f"{m} must be callable")
     if not isinstance(reflex, Reflex):
-        missing = [a for a in (*Reflex.__annotations__, "step", "reset") if not hasattr(reflex, a)]
+        members = [n for n, v in vars(Reflex).items() if isinstance(v, property)]
+        missing = [a for a in (*members, "step", "reset") if not hasattr(reflex, a)]
         _fail(reflex, f"is not a slipreflex.interfaces.Reflex (missing: {', '.join(missing)})")
 
 

@@ -315,7 +315,7 @@ def success_chart(summary: Sequence[dict[str, Any]], path: str | Path) -> Path:
         ax.set_yticks([0, 20, 40, 60, 80, 100])
         ax.set_ylabel("successful trials (%)")
         ax.set_title(f"Success, {e}: the slip stopped before the bottle fell", fontsize=8)
-    handles = [Patch(color=_color(m), label=f"{_registry.label(m)} (ours)") for m in shown if m not in "Dv"]
+    handles: list[Any] = [Patch(color=_color(m), label=f"{_registry.label(m)} (ours)") for m in shown if m not in "Dv"]
     if "D" in shown:
         handles.append(Line2D([], [], ls="", marker="D", color="k", ms=4.5, label="paper, as stated"))
     if "v" in shown:

@@ -126,7 +126,7 @@ def _cell(v: Any) -> str:
     return str(v)
 
 
-def write_csv(path: str | Path, rows: Sequence[dict[str, Any]],
+def write_csv(path: str | Path, rows: Sequence[Any],
               columns: Sequence[str] = RESULT_COLUMNS, *, notes: Sequence[str] = ()) -> Path:
     """Write ``rows`` with exactly ``columns`` (NaN as an empty cell).
 
@@ -345,14 +345,14 @@ def differences(summary: Sequence[dict[str, Any]], *, tolerance_sd: float = 2.0)
                 out.append(f"{s['experiment']}, {metric}, {s['bottle']}, "
                            f"{_label(s['method'])}: no value of ours (paper {p.text()} ms)")
                 continue
-            if abs(m - p.mean) > tolerance_sd * p.sd:
+            if p.sd is not None and abs(m - p.mean) > tolerance_sd * p.sd:
                 out.append(f"{s['experiment']}, {metric}, {s['bottle']}, {_label(s['method'])}: "
                            f"ours {m:.0f} ms vs paper {p.text()} ms ({m - p.mean:+.0f} ms, "
                            f"{m / p.mean:.1f}x)")
     return out
 
 
-def report_markdown(*, summary: Sequence[dict[str, Any]], rows: Sequence[dict[str, Any]],
+def report_markdown(*, summary: Sequence[dict[str, Any]], rows: Sequence[Any],
                     figures: Sequence[tuple[str, str]], setup: Sequence[str],
                     discussion: Sequence[str], claims: Sequence[Any] = (),
                     notices: Sequence[str] = ()) -> str:
@@ -694,7 +694,7 @@ def _bottles_paragraph(d: _Rows) -> str:
                 if (e, b, methods.DATH) in by}
         vals = {b: v for b, v in vals.items() if _finite(v)}
         if len(vals) >= 2:
-            order = sorted(vals, key=vals.get)
+            order = sorted(vals, key=lambda b: vals[b])
             tx_first = tx_first or order[0] == "TX"
             parts.append(f"{e}: " + ", ".join(f"{b} {vals[b]:.0f} ms" for b in order) + " (paper: "
                          + ", ".join(f"{b} {p.mean:g} ms" for b in order

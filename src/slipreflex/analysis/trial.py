@@ -182,7 +182,7 @@ class TrialRow(Mapping):
         kw = {}
         for f in dataclasses.fields(cls):
             if f.name in data:
-                kw[f.name] = _parse(f.name, f.type, data[f.name])
+                kw[f.name] = _parse(f.name, str(f.type), data[f.name])
         return cls(**kw)
 
 

@@ -33,8 +33,8 @@ FILTER_ORDER = 2
 def _design(fs: float, cutoff: float) -> tuple[np.ndarray, np.ndarray]:
     from scipy.signal import butter, sosfilt_zi
 
-    sos = butter(FILTER_ORDER, cutoff, fs=fs, output="sos")
-    zi = sosfilt_zi(sos)
+    sos = np.asarray(butter(FILTER_ORDER, cutoff, fs=fs, output="sos"))
+    zi = np.asarray(sosfilt_zi(sos))
     sos.setflags(write=False)
     zi.setflags(write=False)
     return sos, zi

@@ -26,16 +26,18 @@ import argparse
 import shlex
 import sys
 from pathlib import Path
+from typing import Any
 
 NAME = "study"
 HELP = "map where the paper's claims hold across plausible plants (Dask; resumable)"
 ORDER = 35
 
 
-def _list(kind: str, known):
+def _list(kind: str, known: Any):
     def parse(text: str) -> tuple[str, ...]:
         items = tuple(x.strip() for x in text.split(",") if x.strip())
-        names = known() if callable(known) else known
+        listed: Any = known() if callable(known) else known
+        names = tuple(listed)
         if kind == "methods":   # method names match in any case (the registry's rule)
             items = tuple(x.lower() for x in items)
         bad = [x for x in items if x not in names]

@@ -240,7 +240,7 @@ def _fmt(v: object) -> str:
     return "" if math.isnan(f) else repr(f)
 
 
-def _trace(rig: Rig, t0: float, method: str, cmd_t: list[float], cmd_v: list[float],
+def _trace(rig: Rig, t0: float, method: str, cmd_t: Sequence[float] | np.ndarray, cmd_v: Sequence[float] | np.ndarray,
            tac_t: np.ndarray, tac: np.ndarray) -> SimTrace:
     d = rig.daq_history(since=t0)
     ons = rig.onsets
@@ -325,7 +325,7 @@ def command_groups(fingers: tuple[Finger, ...], offsets,
     """
     offs = {Finger(f): float(v) for f, v in (offsets or {}).items()}
     lows = {Finger(f): float(v) for f, v in (floors or {}).items()}
-    groups: dict[tuple[float, float], list[Finger]] = {}
+    groups: dict[tuple[float, float, bool], list[Finger]] = {}
     for f in fingers:
         key = (offs.get(f, 0.0), lows.get(f, float(hw.FINGER_MIN)), f == Finger.THUMB_ROTATOR)
         groups.setdefault(key, []).append(f)

@@ -204,7 +204,8 @@ class DaqBlock:
         """
         out = []
         for i in range(self.t.size):
-            acc = tuple(float(a) for a in self.accel[i]) if self.accel_fresh[i] else None
+            acc = (float(self.accel[i][0]), float(self.accel[i][1]), float(self.accel[i][2])) \
+                if self.accel_fresh[i] else None
             out.append(DaqSample(seq=int(self.seq[i]), t=float(self.t[i]), slip_volts=float(self.volts[i]),
                                  accel_g=acc, flow_pulses=int(self.flow_pulses[i])))
         return out
