@@ -39,6 +39,7 @@ import numpy as np
 from . import hardware as hw
 from .chain.encoder import dath_update
 from .errors import DataError, ParameterError
+from .methods import Detections, MethodContext
 from .validation import instance
 
 if TYPE_CHECKING:
@@ -49,6 +50,7 @@ __all__ = [
     "run_board_chain", "adc_counts", "quantize_lowpass", "volts_to_q16", "board_detections",
     "FIRMWARE_ADC_MIN", "FIRMWARE_ADC_MAX", "FIRMWARE_STUCK_AFTER", "read_adc_csv",
     "write_board_outputs", "CheckedBoardReflex", "BoardSource", "board_params_from_json",
+    "build_board_method", "board_method_detections",
 ]
 
 #: Fractional bits of the filter coefficients.
@@ -838,3 +840,28 @@ class BoardSource:
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self.daq, name)
+
+
+# --- the registry's board methods (slipreflex.methods names these by entry point) ------------
+
+def build_board_method(dath: bool, p0: float, context: MethodContext, **params: Any) -> BoardReflex:
+    """The registry's ``dath-board`` / ``fixed-board``: a :class:`BoardReflex` at the rounded ``p0``.
+
+    Examples
+    --------
+    >>> build_board_method(True, 99.6, MethodContext()).params.p0
+    100
+    """
+    return BoardReflex(**{"dath": dath, **params, "p0": int(np.floor(p0 + 0.5))})
+
+
+def board_method_detections(reflex: BoardReflex, volts: np.ndarray) -> Detections:
+    """What a trial figure draws for a board method: its Q16 low-pass and its spikes.
+
+    Examples
+    --------
+    >>> board_method_detections(build_board_method(True, 100.0, MethodContext()), np.full(64, 0.4)).event_label
+    'events (spikes)'
+    """
+    x, events = board_detections(reflex, volts)
+    return Detections(x, "slip sensor on the board, Q16 low-pass (V)", events, "events (spikes)")

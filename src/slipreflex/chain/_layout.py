@@ -24,6 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._slots import Layout
+from ._shared import _clip, _design
 
 __all__ = ["pack_params", "init_state"]
 
@@ -83,9 +84,6 @@ FILTER_OFF, FILTER_BUTTERWORTH, FILTER_MEAN = 0.0, 1.0, 2.0
 
 def pack_params(params) -> np.ndarray:
     """The parameter vector P of :func:`chain_step` for a :class:`ReflexParams`."""
-    from .filters import _design
-    from .mpi import _clip
-
     p = params
     sos, zi0 = _design(p.fs, p.cutoff)
     kind = FILTER_OFF if not p.filter else FILTER_MEAN if p.filter_kind == "mean" else FILTER_BUTTERWORTH

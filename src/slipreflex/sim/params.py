@@ -125,7 +125,7 @@ class HandParams:
     0.1
     """
 
-    speed_units_s: float = 625.0
+    speed_units_s: float = hw.FINGER_SPEED_UNITS_S
     latency_s: float = 0.010
     servo_gain: float = 40.0
     travel_per_unit_m: float = 0.2e-3
