@@ -23,9 +23,9 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 from typing import Any
 
-from . import methods
+from . import experiment_specs, methods
 from .analysis.outputs import ReproduceResult
-from .analysis.paper import EXPERIMENTS, bottle_key
+from .analysis.paper import bottle_key
 from .interrupts import stop_pool, worker_signals
 
 __all__ = ["Cell", "run_cells", "row_order", "grid_result"]
@@ -111,7 +111,7 @@ def row_order(row: Any) -> tuple:
     >>> [r.bottle for r in sorted(rows, key=row_order)]
     ['TR', 'TX']
     """
-    return (EXPERIMENTS.index(row.experiment), bottle_key(row.bottle), row.bottle,
+    return (experiment_specs.names().index(row.experiment), bottle_key(row.bottle), row.bottle,
             methods.names().index(row.method), row.trial, row.event)
 
 
