@@ -9,6 +9,7 @@ do not run and do not count. A registry names what sits above it by entry point
 from __future__ import annotations
 
 import ast
+import functools
 from pathlib import Path
 
 import pytest
@@ -27,6 +28,7 @@ def _module_name(path: Path) -> str:
 MODULES = {_module_name(p): p for p in PKG.rglob("*.py")}
 
 
+@functools.cache
 def _imports(name: str, path: Path) -> list[tuple[str, int]]:
     """(imported slipreflex module, line) for every import that can run, at any depth."""
     package = name if path.name == "__init__.py" else name.rpartition(".")[0]
