@@ -557,7 +557,8 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
     key6 = keys[6]
     ms_eta, ms_per_m, ms_w2, ms_2zw, ms_w = P[P_MS_ETA], P[P_MS_PER_M], P[P_MS_W2], P[P_MS_2ZW], P[P_MS_W]
     inc = P[P_INCIPIENT]
-    mv_f, mv_w, mv_inv = P[P_MV_F], P[P_MV_W], P[P_MV_INV_SPEED]
+    ringing = True   # a pad's resonator may hold a value from the last call: look once
+    mv_f, mv_w, mv_inv_dt = P[P_MV_F], P[P_MV_W], P[P_MV_INV_SPEED] / P[P_DT]
     taper, taper_sin, grip = P[P_TAPER], P[P_TAPER_SIN], P[P_GRIP]
     # loop invariants and the states every step reads, kept in locals (numba cannot tell that the
     # output arrays do not alias S and P, so it would reload them from memory every step)
@@ -587,6 +588,7 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
         t1 = (n + 1) * dt
         # ---- fingers
         nc_prev = S[S_NC]
+        moving = False
         for i in range(3):
             q = S[S_Q0 + i]
             tg = S[S_TGT0 + i]
@@ -609,14 +611,15 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
             # the digit's motor shakes its contact while it turns: rotor unbalance, force and frequency
             # proportional to the speed
             if mv_f > 0.0:
-                mvr = abs(qn - q) / dt * mv_inv
-                if mvr > 0.0:
+                if qn != q:
+                    mvr = abs(qn - q) * mv_inv_dt
                     ph = S[S_MPH0 + i] + mv_w * mvr * dt
                     if ph > 6.283185307179586:
                         ph -= 6.283185307179586
                     S[S_MPH0 + i] = ph
                     S[S_FM0 + i] = mv_f * mvr * np.sin(ph)
-                else:
+                    moving = True
+                elif S[S_FM0 + i] != 0.0:
                     S[S_FM0 + i] = 0.0
         qbar = (S[S_Q0] + S[S_Q0 + 1] + S[S_Q0 + 2]) / 3.0
         pen = (qbar - qc) * lam
@@ -696,7 +699,7 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
         # tied to the bottle, which the grasp holds sideways; the jet's force drives the mode (equal and
         # opposite on the bottle: a vertical jet gives the pair no sideways momentum)
         # the digits' motor forces, radial at 0, 120 and 240 degrees from the accelerometer's x axis
-        flat = S[S_FM0] - 0.5 * (S[S_FM0 + 1] + S[S_FM0 + 2]) if (mv_f > 0.0 and nc > 0.0) else 0.0
+        flat = S[S_FM0] - 0.5 * (S[S_FM0 + 1] + S[S_FM0 + 2]) if (moving and nc > 0.0) else 0.0
         if S[S_M1] > 0.0 and not fallen:
             m1 = S[S_M1]
             du = v1 - vb
@@ -808,7 +811,8 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
                 nev += 1
             # the pads' micro-slip events: a Poisson process of rate w / D_c while a pad slides, each releasing
             # ms_eta of the static-to-kinetic drop (mu_s - mu_k) N of sensed shear into the pad's resonator
-            if ms_eta > 0.0:
+            if ms_eta > 0.0 and (ringing or S[S_C0 + SC_STUCK] == 0.0 or S[S_C0 + SC_SIZE + SC_STUCK] == 0.0):
+                ringing = False
                 for i in range(2):
                     bs = S_C0 + i * SC_SIZE
                     bp = P_C0 + i * PC_SIZE
@@ -827,6 +831,8 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
                             vv = 0.0
                         S[iy] = vy
                         S[iy + 1] = vv
+                        if vy != 0.0:
+                            ringing = True
             S[S_STUCK] = 0.0 if sliding else 1.0
             S[S_S] = s_mean
             S[S_W] = w_min if sliding else 0.0
