@@ -6,6 +6,11 @@ with one term at its "absent" value (the uncertain table's lower bound), judges 
 claims whose verdict or numbers a term changes.
 
 Run: ``python scripts/term_claims.py [--jobs 2] [--terms grip,roll,...]``.
+
+``python scripts/term_claims.py --study DIR`` instead reads a finished study's ``plants.csv`` and prints, for
+claims 4, 5 and 7, on how many plants each was testable and held, and the constants whose values go with the claim
+being testable (Spearman's rho between the constant and testable = 1, p < 0.05): where the claim becomes
+decidable.
 """
 
 from __future__ import annotations
@@ -25,12 +30,45 @@ TERMS: dict[str, dict[str, float]] = {
 }
 
 
+def decidable(folder: str, claims: tuple[int, ...] = (4, 5, 7)) -> None:
+    """Per claim: plants testable and holding, and the constants that go with it being testable."""
+    import csv
+    from pathlib import Path
+
+    import numpy as np
+    from scipy.stats import spearmanr
+
+    from slipreflex.sim.uncertain import UNCERTAIN
+
+    rows = [r for r in csv.DictReader((Path(folder) / "plants.csv").open()) if not r.get("error")]
+    for n in claims:
+        v = [r[f"claim_{n}"] for r in rows]
+        testable = np.array([x not in ("", "not testable here") for x in v], dtype=float)
+        holds = sum(x == "holds" for x in v)
+        print(f"claim {n}: testable on {int(testable.sum())} of {len(rows)} plants, holds on {holds}")
+        if 0 < testable.sum() < len(rows):
+            found = []
+            for name in UNCERTAIN:
+                x = np.array([float(r[name]) for r in rows])
+                if np.ptp(x) == 0:
+                    continue
+                rho, p = spearmanr(x, testable)
+                if p < 0.05:
+                    found.append((abs(rho), name, rho, p))
+            for _, name, rho, p in sorted(found, reverse=True):
+                print(f"  testable with {name}: rho {rho:+.2f} (p {p:.2g})")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--terms", default="grip,roll,events,incipient,motor,shoulder",
                     help=f"comma-separated, of: {', '.join(TERMS)} (spot and gap: the two halves of roll)")
+    ap.add_argument("--study", default=None, help="a study's output folder: where claims 4, 5, 7 become testable")
     args = ap.parse_args()
+    if args.study:
+        decidable(args.study)
+        return
 
     from slipreflex.analysis.claims import judge_run
     from slipreflex.experiments import ReproduceConfig, run_reproduce
