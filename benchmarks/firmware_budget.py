@@ -13,7 +13,8 @@ means not in the SLEEP instruction: every interrupt handler, the framing, the CR
 the chain. For the DAQ and the DAQ + chain it also prints where those cycles go, per
 function (the harness attributes every instruction's cycles to its address; avr-nm
 maps addresses to functions), and for the ATmega2560 the time from the conversion of
-the sample that completes a window to the first byte of the hand packet on UART1.
+the sample at which a hand packet (CLOSE or STOP) is due to its first byte on UART1,
+and how much longer than g / 625 s each closing (CLOSE to STOP) lasted.
 Simulated time, so the numbers do not depend on the host machine.
 
 Run: python benchmarks/firmware_budget.py [--seconds S]
@@ -124,9 +125,15 @@ def main() -> int:
                       f"readings, every frame equal to the Python twin's")
                 if brep.latencies:
                     lat = brep.latencies
-                    print(f"  hand packets: {len(lat)}; conversion start of the window-completing "
-                          f"sample -> first byte on UART1: max {max(lat)} cycles "
-                          f"({max(lat) / 16e3:.3f} ms), mean {sum(lat) / len(lat):.0f} cycles")
+                    n_close = sum(c == "CLOSE" for _, c in brep.packets)
+                    print(f"  hand packets: {len(lat)} ({n_close} CLOSE, {len(lat) - n_close} STOP, "
+                          f"none OPEN or POSITION); conversion start of their sample -> first byte "
+                          f"on UART1: max {max(lat)} cycles ({max(lat) / 16e3:.3f} ms), mean "
+                          f"{sum(lat) / len(lat):.0f} cycles")
+                if brep.closings:
+                    over = [(got - exact) / 16e3 for _, got, exact in brep.closings]
+                    print(f"  closings without a fault: {len(over)}; CLOSE -> STOP minus g / 625 s: "
+                          f"{min(over):+.3f} .. {max(over):+.3f} ms (rounded up to whole 3 ms samples)")
             for e in errors:
                 print(f"  ERROR: {e}")
             if profile:

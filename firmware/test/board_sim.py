@@ -16,9 +16,9 @@ produced:
 --out OUT2`` writes the same two files from the Python twin, so ``diff`` shows any
 disagreement. --dath selects the DATH encoder (default: fixed threshold, as in the
 issue's runner); --p0 the initial position; --mega runs the standalone ATmega2560
-build and also writes OUT.hand.csv (sample, cycles, position: every i-Limb packet it
-sent on UART1, with the CPU cycles from the completing sample's conversion start to
-the packet's first byte). The board's outputs are also checked against the twin
+build and also writes OUT.hand.csv (sample, cycles, command: every i-Limb packet it
+sent on UART1 after the STOP every start sends, CLOSE or STOP, with the CPU cycles
+from its sample's conversion start to the packet's first byte). The board's outputs are also checked against the twin
 (firmware/test/check_board.py); exit status 1 if they differ.
 """
 
@@ -110,7 +110,7 @@ def main(argv: list[str] | None = None) -> int:
             hand = [(s, c, p) for (s, p), c in zip(rep.packets, rep.latencies) if s < k]
             paths += (Path(f"{prefix}.hand.csv"),)
             write_columns(paths[-1], {"sample": [h[0] for h in hand], "cycles": [h[1] for h in hand],
-                                      "position": [h[2] for h in hand]})
+                                      "command": [h[2] for h in hand]})
     print(f"{args.adc_csv}: {k} samples through the board under simavr "
           f"({'DATH' if args.dath else 'fixed'}, p0 {args.p0}{', ATmega2560' if args.mega else ''})")
     print("  " + rep.summary().replace("\n", "\n  "))
