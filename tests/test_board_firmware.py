@@ -59,18 +59,7 @@ def _harness(build_dir: Path, elf: str, outdir: Path, seconds: float, *args: str
     return outdir
 
 
-def slip_like(seed: int, k: int) -> np.ndarray:
-    """Counts like the slip sensor's: a level, quiet stretches, slips (fast texture),
-    a disconnected sensor (near 0 V) and a stuck converter (identical readings)."""
-    rng = np.random.default_rng(seed)
-    x = 300 + np.cumsum(rng.normal(0, 0.3, k))
-    for start in range(400, k - 200, 900):          # slips: texture at 30-60 Hz
-        n = int(rng.integers(80, 200))
-        x[start:start + n] += rng.uniform(3, 12) * np.sin(np.arange(n) * rng.uniform(0.6, 1.2))
-    adc = np.clip(np.round(x + rng.normal(0, 0.6, k)), 0, 1023).astype(int)
-    adc[k // 3:k // 3 + 40] = 2                       # sensor unplugged for 120 ms
-    adc[2 * k // 3:2 * k // 3 + 1100] = adc[2 * k // 3 - 1]   # stuck for 3.3 s
-    return adc
+slip_like = board_sim.slip_like
 
 
 def test_reflex_config_header_is_the_twins():

@@ -1,6 +1,6 @@
 """The reflex as the microcontroller runs it: the Python twin of ``firmware/reflex/``.
 
-The C99 core in ``firmware/reflex/reflex.c`` runs the chain of shared SPEC section 1
+The C99 core in ``firmware/reflex/reflex.c`` runs the chain of docs/method.md section 1
 in integer fixed point on 10-bit ADC counts. This module does the same integer
 operations, in the same order, so the two agree bit for bit on every sample; the
 shared vectors in ``tests/data/board/vectors.txt`` and random signals check that
