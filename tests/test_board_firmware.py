@@ -44,7 +44,7 @@ def build(tmp_path_factory, tools):
     tools("make", "cc", "avr-gcc", "avr-libc", "simavr")
     out = tmp_path_factory.mktemp("fwb") / "build"
     targets = [f"{out}/{t}" for t in ("daq-reflex.elf", "daq-reflex-wrong-rounding.elf",
-                                      "hand2560.elf", "harness")]
+                                      "hand2560.elf", "hand2560-wrong-rounding.elf", "harness")]
     proc = subprocess.run(["make", "-C", str(FIRMWARE), f"BUILD={out}", *targets],
                           capture_output=True, text=True)
     assert proc.returncode == 0, proc.stdout + proc.stderr
@@ -130,6 +130,24 @@ def test_standalone_mega_drives_the_hand(build, tmp_path):
     windows_in = [int(np.count_nonzero(trace.rises[c:s])) for (c, kc), (s, _) in
                   zip(rep.packets, rep.packets[1:]) if kc == "CLOSE"]
     assert max(windows_in) >= 2, windows_in
+
+
+@pytest.mark.slow
+def test_negative_control_hand_rounded_down_is_rejected(build, tmp_path):
+    """A firmware whose closings are rounded down to whole samples (STOP one sample early
+    whenever g is not a multiple of 15/8) sends the right kinds of packet, but not at the
+    twin's samples: the checker says so."""
+    adc = slip_like(4, 6000)
+    good = check_board.check(_mega(build, adc, tmp_path / "good"))
+    assert good.ok, good.summary()
+    (tmp_path / "bad").mkdir()
+    (tmp_path / "bad" / "adc.txt").write_text("\n".join(map(str, adc)))
+    out = _harness(build, "hand2560-wrong-rounding.elf", tmp_path / "bad" / "cap",
+                   len(adc) * 0.003 + 0.01, "--mcu", "atmega2560", "--adc",
+                   str(tmp_path / "bad" / "adc.txt"))
+    rep = check_board.check(out)
+    assert not rep.ok
+    assert any("frames flagged HAND" in e or "not g / 625 s" in e for e in rep.errors), rep.errors
 
 
 @pytest.mark.slow

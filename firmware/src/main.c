@@ -255,7 +255,12 @@ static uint8_t hand_step(const struct reflex_out *out)
         grip_level = out->command;
         grip_level_check = (uint16_t)~(uint16_t)grip_level;
     }
+#ifdef HAND_WRONG_ROUNDING
+    /* Negative control for the tests: closing time rounded down (floor), not up. */
+    uint8_t want = grip_left >= REFLEX_CFG_GRIP_PER_SAMPLE && !out->fault;
+#else
     uint8_t want = grip_left > 0 && !out->fault;
+#endif
     uint8_t onset = out->fault && !hand_fault;
     uint8_t sent = 0;
     if (want && !hand_closing)
