@@ -20,6 +20,7 @@ import pytest
 
 from slipreflex import board, hardware
 from slipreflex.cli import main as cli_main
+from slipreflex.devices import ilimb, wire
 
 ROOT = Path(__file__).resolve().parents[1]
 FIRMWARE = ROOT / "firmware"
@@ -169,6 +170,62 @@ def test_mega_fault_during_closing_stops_and_resumes(build, tmp_path):
     assert got[3][1] == "STOP" and got[3][0] - (c + 9) + 4 == s - c, (got, s)
 
 
+def _after_restart(out: Path, dest: Path) -> int:
+    """Copy the part of a capture after the firmware's (first) restart into ``dest``, as
+    a capture of its own; return the restart's cycle."""
+    lines = (out / "events.txt").read_text().splitlines()
+    restart = next(int(ln.split()[1]) for ln in lines if ln.startswith("R "))
+    dest.mkdir()
+    (dest / "events.txt").write_text("\n".join(ln for ln in lines if ln[0] in "AX" and
+                                              int(ln.split()[1]) >= restart) + "\n")
+    for name in ("uart", "uart1"):
+        data = (out / f"{name}.bin").read_bytes()
+        cyc = np.fromfile(out / f"{name}_cycles.bin", dtype="<u8")
+        keep = cyc >= restart
+        (dest / f"{name}.bin").write_bytes(bytes(np.frombuffer(data, dtype=np.uint8)[keep]))
+        cyc[keep].astype("<u8").tofile(dest / f"{name}_cycles.bin")
+    return restart
+
+
+@pytest.mark.slow
+def test_mega_watchdog_reset_while_closing_sends_stop_and_resumes(build, tmp_path):
+    """The sample clock stops in the middle of a closing (a hung interrupt): no more
+    samples, the watchdog resets the board 60 ms later, and the restarted firmware sends
+    STOP before its first sample (the closing the hang left running ends there; never
+    OPEN). Its MPI resumes from the grip already added (the level kept in .noinit), so
+    after the reset the board is exactly the twin started at that level."""
+    adc = slip_like(4, 6000)
+    trace = board.board_hand(board.run_board_chain(adc, board.BoardParams.firmware()))
+    (c, _), (s, _) = next((a, b) for a, b in zip(trace.packets, trace.packets[1:])
+                          if a[1] == hardware.HandCommand.CLOSE and b[0] - a[0] >= 20)
+    res = board.run_board_chain(adc, board.BoardParams.firmware())
+    level = int(res.commands[(c + 1) // 16 - 1])             # the command that rose at c
+    (tmp_path / "adc.txt").write_text("\n".join(map(str, adc)))
+    stall_s = (c + 5.5) * hardware.DAQ_PERIOD_S               # between samples c+5 and c+6
+    out = _harness(build, "hand2560.elf", tmp_path / "cap", len(adc) * 0.003 + 0.01, "--mcu",
+                   "atmega2560", "--adc", str(tmp_path / "adc.txt"), "--stall-at", f"{stall_s:.6f}")
+    events = (out / "events.txt").read_text().splitlines()
+    stall = next(int(ln.split()[1]) for ln in events if ln.startswith("S "))
+    restart = _after_restart(out, tmp_path / "after")
+    assert 0.055 < (restart - stall) / hardware.F_CPU < 0.07          # the 60 ms watchdog
+    data = (out / "uart1.bin").read_bytes()
+    cyc = np.fromfile(out / "uart1_cycles.bin", dtype="<u8")
+    packets = ilimb.PacketParser().feed(data)
+    kinds = [(int(cyc[15 * j]), p[0].command) for j, p in enumerate(packets)]
+    before = [k for t, k in kinds if t < restart]
+    after = [(t, k) for t, k in kinds if t >= restart]
+    assert before[-1] == hardware.HandCommand.CLOSE                     # closing when it hung
+    first_sample = min(int(ln.split()[1]) for ln in events if ln.startswith("A ")
+                       and int(ln.split()[1]) > restart)
+    assert after[0][1] == hardware.HandCommand.STOP and after[0][0] < first_sample
+    assert _raw_commands(data) <= {0, 1}
+    # After the reset: the twin with p0 = the level, on the readings the board took then.
+    rep = check_board.check(tmp_path / "after", p0=level)
+    assert rep.ok, rep.summary()
+    frames = wire.FrameParser().feed((tmp_path / "after" / "uart.bin").read_bytes())
+    assert frames[0].seq == 0 and frames[0].reflex.command == level > 0
+
+
 @pytest.mark.slow
 def test_mega_never_opens_on_simulated_drop_and_pour(tmp_path, tools):
     """The standalone firmware on the slip-sensor counts of a whole simulated drop and a
@@ -240,7 +297,6 @@ def test_checker_rejects_damaged_captures(build, tmp_path, damage):
         (out / "uart1.bin").write_bytes(data[:15] + data[30:])
         np.r_[cyc[:15], cyc[30:]].astype("<u8").tofile(out / "uart1_cycles.bin")
     else:                             # one frame claims another command (CRC fixed up)
-        from slipreflex.devices import wire
         data = bytearray((out / "uart.bin").read_bytes())
         k = 100 * wire.FRAME_LEN_REFLEX
         data[k + 20] ^= 1
