@@ -15,6 +15,9 @@ shared vectors in ``tests/data/board/vectors.txt`` and random signals check that
   1.6384 counts = 107374 in Q16; DATH's ``|x_k - x_(k-1)|`` is the exact difference
   of two Q16 samples;
 * windows and MPI: integers (the MPI is exact, commands are whole positions).
+* the standalone board's hand (``hand2560``): :class:`BoardHand`, grip only added --
+  each rise of the command is CLOSE at full PWM and a STOP ``ceil(8 g / 15)`` samples
+  later, a fault sends STOP, never OPEN or POSITION (:func:`board_hand` over a run).
 
 Examples
 --------
