@@ -251,7 +251,7 @@ static uint8_t hand_step(const struct reflex_out *out)
     if (hand_closing)
         grip_left -= REFLEX_CFG_GRIP_PER_SAMPLE;          /* one sample of closing done */
     if (out->window && out->command > grip_level) {
-        grip_left += (int32_t)REFLEX_CFG_GRIP_PER_UNIT * (int32_t)(out->command - grip_level);
+        grip_left += (int32_t)REFLEX_CFG_GRIP_PER_UNIT * ((int32_t)out->command - grip_level);
         grip_level = out->command;
         grip_level_check = (uint16_t)~(uint16_t)grip_level;
     }
