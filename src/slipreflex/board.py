@@ -606,6 +606,12 @@ class HandTrace:
         Per sample: the closing time still owed after it, in 1/15 of a sample.
     closing : numpy.ndarray of bool
         Per sample: the fingers are closing after it.
+
+    Examples
+    --------
+    >>> t = board_hand(run_board_chain([300] * 32 + [300, 320] * 32, BoardParams.firmware()))
+    >>> t.grip, int(t.left[47]), int(t.closing.sum())      # 90 units: 720/15 = 48 samples
+    (90, 720, 48)
     """
 
     packets: list
@@ -615,7 +621,13 @@ class HandTrace:
 
     @property
     def grip(self) -> int:
-        """Units of grip the run's rises added."""
+        """Units of grip the run's rises added.
+
+        Examples
+        --------
+        >>> board_hand(run_board_chain([300] * 64, BoardParams.firmware())).grip
+        0
+        """
         return int(self.rises.sum())
 
 
