@@ -91,6 +91,7 @@ class _From:
         pass
 
 
+@pytest.mark.realtime
 @pytest.mark.slow
 def test_run_over_virtual_devices_suppresses_slip_like_the_in_process_simulation(tmp_path):
     without, _ = _in_process(lambda p0: _Hold())
@@ -186,6 +187,7 @@ def _readline(proc, want, deadline_s=120.0):
     raise AssertionError(f"no line starting with {want!r}; got {lines}")
 
 
+@pytest.mark.realtime
 @pytest.mark.slow
 def test_virtual_rig_command_keys_signals_schedule_and_run(tmp_path, capsys, monkeypatch):
     import slipreflex.runtime as runtime
