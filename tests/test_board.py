@@ -2,7 +2,7 @@
 
 Bit-exactness by shared vectors (tests/data/board/vectors.txt) and random signals,
 the negative control (a core built with truncation instead of rounding), and the
-twin's semantics against the float chain of shared SPEC section 1.
+twin's semantics against the float chain of docs/method.md section 1.
 """
 
 from __future__ import annotations
@@ -180,7 +180,7 @@ def test_c_core_equals_twin_on_random_signals(host_build, tmp_path):
     assert "60 vectors" in proc.stdout and " 0 failures" in proc.stdout
 
 
-# -- the twin against the float chain (SPEC 1) --------------------------------------------
+# -- the twin against the float chain (docs/method.md section 1) --------------------------------------------
 
 def test_documented_constants():
     p = board.BoardParams.from_chain()
@@ -237,7 +237,7 @@ def test_filter_is_close_to_the_float_filter():
 @given(st.lists(st.integers(0, 1023), min_size=1, max_size=300), st.booleans(),
        st.integers(0, 60_000), st.integers(1, 20))
 def test_encoder_without_filter_is_the_spec_encoder(adc, dath, theta, d):
-    """Filter off: x = adc << 16 are exact in float64, so the float encoder (SPEC 1.2)
+    """Filter off: x = adc << 16 are exact in float64, so the float encoder (docs/method.md section 1.2)
     on them must give the same events as the board's integer encoder."""
     res = board.run_board_chain(adc, filter=False, dath=dath, dath_samples=d,
                                 threshold=theta / 2**16 * hardware.ADC_LSB)
@@ -251,7 +251,7 @@ def test_encoder_without_filter_is_the_spec_encoder(adc, dath, theta, d):
 @given(st.lists(st.integers(0, 1023), min_size=16, max_size=600), st.integers(0, 500),
        st.integers(0, 20), st.integers(0, 20), st.integers(1, 12))
 def test_mpi_is_exact(adc, p0, kp, ki, reset_after):
-    """The integer MPI equals the float MPI (SPEC 1.4) on the same counts."""
+    """The integer MPI equals the float MPI (docs/method.md section 1.4) on the same counts."""
     res = board.run_board_chain(adc, dath=True, p0=p0, kp=kp, ki=ki, reset_after=reset_after)
     ref = mpi(res.counts.astype(float), p0=p0, kp=kp, ki=ki, reset_after=reset_after)
     assert res.commands.tolist() == ref.tolist()

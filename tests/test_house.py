@@ -1,4 +1,4 @@
-"""The package's own house rules (issue 12): checked over every public name, so new code is covered."""
+"""The package's own house rules: checked over every public name, so new code is covered."""
 
 from __future__ import annotations
 

@@ -244,7 +244,7 @@ def test_garbage_truncated_and_flipped_frames_while_running(tmp_path):
     st = res.daq_stats
     assert st["garbage_bytes"] >= 20 and st["truncated"] >= 1 and st["crc_errors"] >= 1
     assert st["resyncs"] >= 3
-    # each kind of damage is a recorded fault event (issue 15: not only a 1 Hz counter)
+    # each kind of damage is a recorded fault event (not only a 1 Hz counter)
     kinds = {f.kind for f in res.faults}
     assert {"daq-garbage", "daq-truncated", "daq-crc"} <= kinds
     assert kinds <= {"daq-garbage", "daq-truncated", "daq-crc", "watchdog", "watchdog-clear"}

@@ -1,4 +1,4 @@
-"""Safe start: `run` never opens the hand, whatever --p0 says (issue 15, finding 1)."""
+"""Safe start: `run` never opens the hand, whatever --p0 says."""
 
 from __future__ import annotations
 

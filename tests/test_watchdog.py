@@ -1,4 +1,4 @@
-"""A watchdog that stays a watchdog, continuous time, and the loop's fault events (issue 15)."""
+"""A watchdog that stays a watchdog, continuous time, and the loop's fault events."""
 
 from __future__ import annotations
 
