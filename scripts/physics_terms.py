@@ -16,7 +16,7 @@ nominal value, then with all of them. Per run it prints, from the perturbation t
 Terms: ``grip`` (the bounded grip: wall softening and the motor's torque-speed line), ``roll`` (the fingertip's
 roll and the gap's opening), ``events`` (the pads' micro-slip events), ``incipient`` (the Cattaneo-Mindlin
 redistribution of incipient slip), ``motor`` (the digits' motor vibration; in an open loop the digits move only
-in the grasp, before the rest recording). A figure (``--figure PATH``) shows the index array's NMSD and SWT-SD ratios
+in the grasp, before the rest recording), ``shoulder`` (the bottle's shoulder taper). A figure (``--figure PATH``) shows the index array's NMSD and SWT-SD ratios
 over time for the base and each term, pour and drop on TR.
 
 Run: ``python scripts/physics_terms.py [--figure physics_terms.png] [--bottles TR,TX]``.
@@ -42,7 +42,7 @@ REST_S = 4.0
 def plants() -> dict[str, dict]:
     """Keyword sets for Rig: the base (every term absent), each term alone, all terms."""
     absent_hand = {"motor_droop": 0.0, "spot_travel_per_unit_m": 0.0, "motor_vibration_n": 0.0}
-    absent_bottle = {"wall_softening": 0.0}
+    absent_bottle = {"wall_softening": 0.0, "shoulder_slope": 0.0}
     absent_sensor = {"gap_dent_fraction": 0.0}
     absent_tac = {"slip_events": 0.0, "incipient_slip": 0.0}
     terms = {
@@ -54,6 +54,7 @@ def plants() -> dict[str, dict]:
         "events": {"tactile": {"slip_events": TactileParams().slip_events}},
         "incipient": {"tactile": {"incipient_slip": TactileParams().incipient_slip}},
         "motor": {"hand": {"motor_vibration_n": HandParams().motor_vibration_n}},
+        "shoulder": {"bottle": {"shoulder_slope": BOTTLES["TR"].shoulder_slope}},
     }
     out = {}
     for name, on in terms.items():
