@@ -16,7 +16,8 @@ nominal value, then with all of them. Per run it prints, from the perturbation t
 Terms: ``grip`` (the bounded grip: wall softening and the motor's torque-speed line), ``roll`` (the fingertip's
 roll and the gap's opening), ``events`` (the pads' micro-slip events), ``incipient`` (the Cattaneo-Mindlin
 redistribution of incipient slip), ``motor`` (the digits' motor vibration; in an open loop the digits move only
-in the grasp, before the rest recording), ``shoulder`` (the bottle's shoulder taper). A figure (``--figure PATH``) shows the index array's NMSD and SWT-SD ratios
+in the grasp, before the rest recording), ``shoulder`` (the bottle's shoulder taper). A figure
+(``--figure PATH``) shows the index array's NMSD and SWT-SD ratios
 over time for the base and each term, pour and drop on TR.
 
 Run: ``python scripts/physics_terms.py [--figure physics_terms.png] [--bottles TR,TX]``.
