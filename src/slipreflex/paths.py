@@ -195,6 +195,7 @@ def new_file(path: str | os.PathLike, mode: str = "w", *, replace: bool = False)
         raise IsADirectoryError(errno.EISDIR, "exists and is not a regular file", os.fspath(path))
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
     try:
+        os.fchmod(fd, 0o666 & ~_umask())   # mkstemp's 0600 would hide the output from the group
         with os.fdopen(fd, mode, **({} if "b" in mode else {"newline": "", "encoding": "utf-8"})) as fh:
             yield fh
         if replace:
@@ -204,6 +205,12 @@ def new_file(path: str | os.PathLike, mode: str = "w", *, replace: bool = False)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
 
 
 def unique_name(folder: str | os.PathLike, stem: str, suffix: str, *, also: Sequence[str] = ()) -> Path:
@@ -366,6 +373,10 @@ class OutputSet:
 MAX_TEXT_BYTES: int = 64 * 1024 * 1024
 
 
+def _where(what: str, path: Any) -> str:
+    return f"{what} {os.fspath(path)}" if what else os.fspath(path)
+
+
 def read_capped(path: str | os.PathLike, what: str, limit: int = MAX_TEXT_BYTES) -> bytes:
     """The bytes of a user's file, refusing a non-regular file or one over ``limit`` bytes.
 
@@ -386,23 +397,23 @@ def read_capped(path: str | os.PathLike, what: str, limit: int = MAX_TEXT_BYTES)
     try:
         fd = os.open(p, os.O_RDONLY | getattr(os, "O_CLOEXEC", 0))
     except FileNotFoundError:
-        raise ParameterError(f"{what} {p}: no such file") from None
+        raise ParameterError(f"{_where(what, p)}: no such file") from None
     except OSError as err:
-        raise ParameterError(f"{what} {p}: cannot read: {err.strerror or err}") from None
+        raise ParameterError(f"{_where(what, p)}: cannot read: {err.strerror or err}") from None
     with os.fdopen(fd, "rb") as fh:
         st = os.fstat(fh.fileno())
         if stat.S_ISDIR(st.st_mode):
-            raise ParameterError(f"{what} {p}: is a directory, not a file")
+            raise ParameterError(f"{_where(what, p)}: is a directory, not a file")
         if not stat.S_ISREG(st.st_mode):
-            raise ParameterError(f"{what} {p}: not a regular file")
+            raise ParameterError(f"{_where(what, p)}: not a regular file")
         if st.st_size > limit:
-            raise ParameterError(f"{what} {p}: {st.st_size} bytes, more than the {limit} a command reads")
+            raise ParameterError(f"{_where(what, p)}: {st.st_size} bytes, more than the {limit} a command reads")
         try:
             data = fh.read(limit + 1)
         except OSError as err:
-            raise ParameterError(f"{what} {p}: cannot read: {err.strerror or err}") from None
+            raise ParameterError(f"{_where(what, p)}: cannot read: {err.strerror or err}") from None
     if len(data) > limit:
-        raise ParameterError(f"{what} {p}: more than the {limit} bytes a command reads")
+        raise ParameterError(f"{_where(what, p)}: more than the {limit} bytes a command reads")
     return data
 
 
@@ -422,10 +433,10 @@ def read_text(path: str | os.PathLike, what: str, limit: int = MAX_TEXT_BYTES) -
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as err:
-        raise ParameterError(f"{what} {os.fspath(path)}: not UTF-8 text (byte 0x{data[err.start]:02x} at "
+        raise ParameterError(f"{_where(what, path)}: not UTF-8 text (byte 0x{data[err.start]:02x} at "
                              f"offset {err.start}); save it as UTF-8") from None
     if "\x00" in text:
-        raise ParameterError(f"{what} {os.fspath(path)}: a binary file (NUL byte at offset {text.index(chr(0))})")
+        raise ParameterError(f"{_where(what, path)}: a binary file (NUL byte at offset {text.index(chr(0))})")
     return text
 
 
@@ -447,6 +458,6 @@ def read_toml(path: str | os.PathLike, what: str) -> dict[str, Any]:
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
-        raise ParameterError(f"{what} {os.fspath(path)}: invalid TOML: {err}") from None
+        raise ParameterError(f"{_where(what, path)}: invalid TOML: {err}") from None
     except RecursionError:
-        raise ParameterError(f"{what} {os.fspath(path)}: invalid TOML: nested too deeply") from None
+        raise ParameterError(f"{_where(what, path)}: invalid TOML: nested too deeply") from None
