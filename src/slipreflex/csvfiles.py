@@ -23,7 +23,6 @@ from __future__ import annotations
 import csv
 import math
 import os
-import tempfile
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -289,7 +288,7 @@ def read_preamble(path: str | os.PathLike) -> dict[str, str]:
 
 
 def write_columns(path: str | os.PathLike, columns: Mapping[str, Sequence], *,
-                  preamble: Mapping[str, str] | None = None) -> None:
+                  preamble: Mapping[str, str] | None = None, replace: bool = True) -> None:
     """Write equal-length columns to a CSV atomically.
 
     The file appears under its name only once it is complete (written to a
@@ -304,6 +303,9 @@ def write_columns(path: str | os.PathLike, columns: Mapping[str, Sequence], *,
         Column name to values; all the same length.
     preamble : mapping of str to str, optional
         Written first as ``# key: value`` lines (one line each; see :func:`read_preamble`).
+    replace : bool
+        Replace an earlier file of that name (a regular file only; a symlink is replaced,
+        never followed); False refuses any existing name (:class:`FileExistsError`).
 
     Examples
     --------
@@ -318,17 +320,13 @@ def write_columns(path: str | os.PathLike, columns: Mapping[str, Sequence], *,
     cols = [np.asarray(columns[n]) for n in names]
     if len({c.shape[0] for c in cols}) > 1:
         raise ValueError(f"columns of {path} differ in length: {[c.shape[0] for c in cols]}")
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
-    try:
-        with os.fdopen(fd, "w", newline="") as fh:
-            for key, value in (preamble or {}).items():
-                if "\n" in f"{key}{value}" or ":" in key:
-                    raise ValueError(f"preamble of {path}: key {key!r} or its value spans lines or has ':'")
-                fh.write(f"{PREAMBLE_PREFIX} {key}: {value}\n")
-            w = csv.writer(fh, lineterminator="\n")
-            w.writerow(names)
-            w.writerows(zip(*(c.tolist() for c in cols)))
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    from .paths import new_file
+
+    with new_file(path, "w", replace=replace) as fh:
+        for key, value in (preamble or {}).items():
+            if "\n" in f"{key}{value}" or ":" in key:
+                raise ValueError(f"preamble of {path}: key {key!r} or its value spans lines or has ':'")
+            fh.write(f"{PREAMBLE_PREFIX} {key}: {value}\n")
+        w = csv.writer(fh, lineterminator="\n")
+        w.writerow(names)
+        w.writerows(zip(*(c.tolist() for c in cols)))

@@ -451,7 +451,7 @@ def within(name: str, value: Any, option: str | None = None) -> Any:
     >>> within("rest_s", 1e9, "--rest")
     Traceback (most recent call last):
     ...
-    slipreflex.errors.ParameterError: --rest must be a finite number > 0 and <= 600, got 1000000000.0 (plausible range 0..600 s; docs/runtime.md, Limits)
+    slipreflex.errors.ParameterError: --rest must be a finite number > 0 and <= 600, got 1000000000.0 (plausible range > 0..600 s; docs/runtime.md, Limits)
     """
     lim = LIMITS[name]
     label = option or name
@@ -460,7 +460,7 @@ def within(name: str, value: Any, option: str | None = None) -> Any:
             return integer(label, value, lo=int(lim.lo), hi=int(lim.hi))
         return number(label, value, lo=lim.lo, hi=lim.hi, lo_open=lim.lo_open)
     except ParameterError as err:
-        raise ParameterError(f"{err} (plausible range {lim.lo:g}..{lim.hi:g}"
+        raise ParameterError(f"{err} (plausible range {'> ' if lim.lo_open else ''}{lim.lo:g}..{lim.hi:g}"
                              f"{' ' + lim.unit if lim.unit else ''}; docs/runtime.md, Limits)") from None
 
 
