@@ -400,12 +400,12 @@ def read_capped(path: str | os.PathLike, what: str, limit: int = MAX_TEXT_BYTES)
         raise ParameterError(f"{_where(what, p)}: no such file") from None
     except OSError as err:
         raise ParameterError(f"{_where(what, p)}: cannot read: {err.strerror or err}") from None
+    st = os.fstat(fd)
+    if not stat.S_ISREG(st.st_mode):
+        os.close(fd)
+        raise ParameterError(f"{_where(what, p)}: " + ("is a directory, not a file" if stat.S_ISDIR(st.st_mode)
+                                                       else "not a regular file"))
     with os.fdopen(fd, "rb") as fh:
-        st = os.fstat(fh.fileno())
-        if stat.S_ISDIR(st.st_mode):
-            raise ParameterError(f"{_where(what, p)}: is a directory, not a file")
-        if not stat.S_ISREG(st.st_mode):
-            raise ParameterError(f"{_where(what, p)}: not a regular file")
         if st.st_size > limit:
             raise ParameterError(f"{_where(what, p)}: {st.st_size} bytes, more than the {limit} a command reads")
         try:
