@@ -564,6 +564,7 @@ def probe_scheduler(address: str, timeout: float | None = None) -> None:
 
 
 def _client(workers: int | None, scheduler: str | None, dashboard: str | None = None):
+    import logging
     import signal
 
     from dask.distributed import Client, LocalCluster
@@ -585,7 +586,8 @@ def _client(workers: int | None, scheduler: str | None, dashboard: str | None = 
         old = signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:
         cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                               dashboard_address=dashboard)   # no dashboard unless asked for
+                               dashboard_address=dashboard,   # no dashboard unless asked for
+                               silence_logs=logging.ERROR)    # the workers' warnings are Dask's business
     finally:
         if main:
             signal.signal(signal.SIGINT, old)
@@ -680,17 +682,36 @@ def run_study(config: StudyConfig, out: str | Path, *, workers: int | None = Non
     return StudyRun(config, out, read_parts(out, fp), computed, time.perf_counter() - t0, where)
 
 
+#: Loggers hushed after a Ctrl-C (their shutdown messages are expected, not news).
+_QUIET_LOGGERS: tuple[str, ...] = ("distributed", "tornado", "asyncio")
+#: Seconds the client and the local cluster get to close after a Ctrl-C.
+_STOP_CLOSE_S: float = 3.0
+
+
 def _run_dask(todo: list[int], plants: list[dict], config: StudyConfig, workers: int | None,
               scheduler: str | None, finished: Callable[[PlantOutcome], None], fp: str,
               dashboard: str | None = None) -> str:
     import logging
+    import signal
 
     from dask.distributed import as_completed
 
-    from ..interrupts import GRACE_S, signals_ignored
+    from ..interrupts import signals_ignored
 
     client, cluster, where = _client(workers, scheduler, dashboard)
     futures = []
+    quiet = [logging.getLogger(n) for n in _QUIET_LOGGERS]
+    levels = [q.level for q in quiet]
+
+    def hush(signum: int, frame: Any) -> None:
+        # A stop is quick and quiet: Dask's shutdown chatter (cancelled tasks, closed streams,
+        # killed workers) is not the user's business; the caller prints one line. The loggers
+        # are hushed here, before the interrupt reaches Dask's event loop.
+        for q in quiet:
+            q.setLevel(logging.CRITICAL)
+        raise KeyboardInterrupt
+
+    old = signal.signal(signal.SIGINT, hush) if _main_thread() else None
     stopped = False
     try:
         futures = [client.submit(run_plant, i, plants[i], config, key=f"slipreflex-study-{fp}-{i}", pure=False)
@@ -700,20 +721,21 @@ def _run_dask(todo: list[int], plants: list[dict], config: StudyConfig, workers:
             fut.release()
     except KeyboardInterrupt:
         stopped = True
-        raise
-    finally:
-        # A stop is quick and quiet: Dask's shutdown chatter (closed streams, killed workers) is
-        # not the user's business; the caller prints one line.
-        quiet = [logging.getLogger(n) for n in ("distributed", "tornado", "asyncio")] if stopped else []
-        levels = [q.level for q in quiet]
         for q in quiet:
             q.setLevel(logging.CRITICAL)
+        raise
+    finally:
         with signals_ignored():
+            if old is not None:
+                signal.signal(signal.SIGINT, old)
             for f in futures:
                 f.cancel()
-            client.close(timeout=4 * GRACE_S if stopped else None)
-            if cluster is not None:
-                cluster.close(timeout=4 * GRACE_S if stopped else None)
+            # after a stop, a close that takes long is abandoned: the workers are this process's
+            # children and end with it
+            with contextlib.suppress(Exception) if stopped else contextlib.nullcontext():
+                client.close(timeout=_STOP_CLOSE_S if stopped else None)
+                if cluster is not None:
+                    cluster.close(timeout=_STOP_CLOSE_S if stopped else None)
         for q, lv in zip(quiet, levels):
             q.setLevel(lv)
     return where
