@@ -34,6 +34,7 @@ from pathlib import Path
 from typing import IO, Any
 
 from .errors import ParameterError
+from .validation import LIMITS
 
 __all__ = ["output_dir", "create_new", "publish", "new_file", "unique_name", "OutputSet", "MANIFEST",
            "read_capped", "read_text", "read_toml", "MAX_TEXT_BYTES"]
@@ -368,9 +369,9 @@ class OutputSet:
 
 # --- user input files: bounded reads, one-line errors ------------------------------------------
 
-#: Largest text input (TOML, results CSV) a command reads, bytes: far above any real one,
-#: far below what would exhaust memory (docs/runtime.md, "Limits").
-MAX_TEXT_BYTES: int = 64 * 1024 * 1024
+#: Largest text input (TOML, results CSV) a command reads, bytes (``LIMITS["text_file_bytes"]``,
+#: docs/runtime.md "Limits").
+MAX_TEXT_BYTES: int = int(LIMITS["text_file_bytes"].hi)
 
 
 def _where(what: str, path: Any) -> str:

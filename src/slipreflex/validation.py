@@ -406,37 +406,39 @@ class Limit:
 #: before any work starts; docs/runtime.md "Limits" prints it). The bounds are far outside any
 #: real use and far inside what would run for days or exhaust memory.
 LIMITS: dict[str, Limit] = {
-    "trials": Limit(1, 1000, "", "trials per bottle, experiment and method (the paper: 10); 1000 is "
-                    "about a CPU-day for the default grid", "reproduce/study --trials", whole=True),
-    "plants": Limit(1, 100_000, "", "plants of a study (default 64); 10^5 plants of one trial each is "
-                    "weeks of CPU on one machine and 10^5 Parquet parts", "study --plants", whole=True),
+    "trials": Limit(1, 1000, "", "trials per bottle, experiment and method (the paper ran 10)",
+                    "reproduce/study --trials", whole=True),
+    "plants": Limit(1, 100_000, "", "plants of a study (default 64); each plant runs the whole grid",
+                    "study --plants", whole=True),
     "jobs": Limit(1, 1024, "", "worker processes", "reproduce --jobs, study --workers", whole=True),
-    "rest_s": Limit(0, 600, "s", "recorded rest before the perturbation (paper about 2 s); memory grows "
-                    "with it (about 60 MB per simulated minute and trial)", "reproduce --rest", lo_open=True),
-    "after_s": Limit(0, 600, "s", "recording after the load", "reproduce --after", lo_open=True),
+    "rest_s": Limit(0, 600, "s", "recorded rest before the perturbation; every simulated second of every "
+                    "trial is held in memory", "reproduce --rest", lo_open=True),
+    "after_s": Limit(0, 600, "s", "recording after the load, held in memory as the rest",
+                     "reproduce --after", lo_open=True),
     "calibration_s": Limit(0, 600, "s", "each at-rest calibration recording", "reproduce --calibration",
                            lo_open=True),
     "rest_k": Limit(0, 100, "sd", "NMSD/SWT-SD threshold in standard deviations at rest", "reproduce --rest-k",
                     lo_open=True),
     "swt_persist": Limit(0, 10_000, "samples", "SWT-SD persistence (30 s at the DAQ's rate)",
                          "reproduce --swt-persist", whole=True),
-    "grasp_force_n": Limit(0, 20, "N", "contact force at which the grasp stops (paper 0.8 N; an i-Limb "
-                           "digit pinches at most about 20 N)", "reproduce/virtual-rig --grasp-force",
-                           lo_open=True),
+    "grasp_force_n": Limit(0, 20, "N", "contact force at which the grasp stops (the paper's 0.8 N, 25 times)",
+                           "reproduce/virtual-rig --grasp-force", lo_open=True),
     "duration_s": Limit(0, 7 * 86400, "s", "a real-time run or virtual rig (a week)",
                         "run/virtual-rig --duration", lo_open=True),
-    "fs_hz": Limit(0, 1e6, "Hz", "sampling rate of a recording (the DAQ: 333.33 Hz; 1 MHz is beyond any "
-                   "slip-sensor ADC)", "detect/run --fs", lo_open=True),
-    "scan_distance_mm": Limit(0, 500, "mm", "scan length (paper 50 mm; a UR10 reaches about 1.3 m, a test "
-                              "surface is centimetres)", "scan --distance", lo_open=True),
-    "scan_speed_mm_s": Limit(0.01, 1000, "mm/s", "scan speed (paper 1 mm/s)", "scan --speed"),
-    "scan_samples": Limit(1, 20_000_000, "samples", "distance / speed x the DAQ's rate (about 17 h of "
-                          "scan; 10^7 samples are a few GB of traces)", "scan --distance/--speed", whole=True),
-    "csv_samples": Limit(1, 50_000_000, "samples", "samples in a CSV recording (42 h at 333 Hz)",
+    "fs_hz": Limit(0, 1e6, "Hz", "sampling rate of a recording (the DAQ's is 333.33 Hz)", "detect/run --fs",
+                   lo_open=True),
+    "scan_distance_mm": Limit(0, 500, "mm", "scan length (the paper's 50 mm, 10 times)", "scan --distance",
+                              lo_open=True),
+    "scan_speed_mm_s": Limit(0.01, 1000, "mm/s", "scan speed (the paper's 1 mm/s)", "scan --speed"),
+    "scan_samples": Limit(1, 20_000_000, "samples", "distance / speed x the DAQ's rate (about 17 h of scan); "
+                          "every sample is held in memory", "scan --distance/--speed", whole=True),
+    "csv_samples": Limit(1, 50_000_000, "samples", "samples in a CSV recording (about 42 h at 333.33 Hz)",
                          "detect", whole=True),
-    "csv_line_bytes": Limit(1, 1_000_000, "bytes", "one CSV line (a sample row is tens of bytes)", "detect, "
-                            "claims", whole=True),
-    "recording_bytes": Limit(1, 8 * 1024 ** 3, "bytes", "an MCAP recording (a day of a run is about 1 GB)",
+    "csv_line_bytes": Limit(1, 1_000_000, "bytes", "one CSV line (a sample row is tens of bytes)",
+                            "detect, claims", whole=True),
+    "text_file_bytes": Limit(1, 64 * 1024 ** 2, "bytes", "a TOML or results file (64 MiB)",
+                             "--objects, --ranges, claims", whole=True),
+    "recording_bytes": Limit(1, 8e9, "bytes", "an MCAP recording; the reader holds the whole file in memory",
                              "replay, export, recover", whole=True),
 }
 
