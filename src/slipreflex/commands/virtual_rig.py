@@ -70,17 +70,12 @@ def _objects(args: argparse.Namespace):
     return table[args.bottle], loads
 
 
-def run(args: argparse.Namespace) -> int:
-    """Grasp, open the ports, run in real time, print a summary at exit."""
-    from ..devices.simrig import SimRig
-    from ..devices.virtual import VirtualDevices, parse_schedule
-
-    from ..paths import output_dir
-
+def _check_arguments(args: argparse.Namespace) -> None:
+    """Bounded --duration and --grasp-force; a --link-dir whose daq/hand names are free (before the grasp)."""
     from ..errors import ParameterError
+    from ..paths import output_dir
     from ..validation import within
 
-    schedule = parse_schedule(args.schedule)
     if args.duration is not None:
         within("duration_s", args.duration, "--duration")
     if args.grasp_force is not None:
@@ -91,6 +86,15 @@ def run(args: argparse.Namespace) -> int:
             if os.path.lexists(link_dir / name):
                 raise ParameterError(f"--link-dir {args.link_dir}: {name} exists; the rig makes its links "
                                      f"new and removes only those (move it or choose another --link-dir)")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Grasp, open the ports, run in real time, print a summary at exit."""
+    from ..devices.simrig import SimRig
+    from ..devices.virtual import VirtualDevices, parse_schedule
+
+    schedule = parse_schedule(args.schedule)
+    _check_arguments(args)
     bottle, loads = _objects(args)
     rig = SimRig(bottle=bottle, seed=args.seed, **loads)
     grasp = rig.grasp(args.grasp_force)
