@@ -46,8 +46,8 @@ TEXTS = ["", ",", ",,", "x", "é", "a:b", "stand:5,white:-1", "drop@nan", "thumb
 
 def _files(root: Path) -> list[str]:
     """Hostile and valid input files, made once per test."""
-    from slipreflex.recording import METADATA_NAME, Recorder
     from slipreflex.chain import ReflexParams
+    from slipreflex.recording import METADATA_NAME, Recorder
 
     (root / "bin.toml").write_bytes(bytes(range(256)) * 4)
     (root / "latin1.toml").write_bytes(b'[bottles.B]\nname = "caf\xe9"\n')

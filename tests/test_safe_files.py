@@ -16,7 +16,7 @@ import pytest
 from slipreflex.cli import main
 from slipreflex.errors import ParameterError
 from slipreflex.paths import OutputSet, create_new, new_file, unique_name
-from slipreflex.recording import (METADATA_NAME, PLANNED_SAMPLES, Recorder, RecordingError, read_recording)
+from slipreflex.recording import METADATA_NAME, PLANNED_SAMPLES, Recorder, RecordingError, read_recording
 
 RUN = ["run", "--daq", "/nonexistent/daq", "--hand", "/nonexistent/hand", "--p0", "148"]
 

@@ -443,7 +443,7 @@ class Recorder:
             self._close_file()
         self._remove_part()
 
-    def __enter__(self) -> "Recorder":
+    def __enter__(self) -> Recorder:
         return self
 
     def __exit__(self, *exc: object) -> None:

@@ -450,10 +450,10 @@ def within(name: str, value: Any, option: str | None = None) -> Any:
     --------
     >>> within("trials", 3)
     3
-    >>> within("rest_s", 1e9, "--rest")
+    >>> within("rest_s", 1e9, "--rest")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    slipreflex.errors.ParameterError: --rest must be a finite number > 0 and <= 600, got 1000000000.0 (plausible range > 0..600 s; docs/runtime.md, Limits)
+    slipreflex.errors.ParameterError: --rest must be a finite number > 0 and <= 600, got 1000000000.0 (plausible ...
     """
     lim = LIMITS[name]
     label = option or name

@@ -14,12 +14,36 @@ slipreflex`` does not pay for numba.
 from __future__ import annotations
 
 import numpy as np
-from .._numba_cache import CACHE
 from numba import njit
 
-from ._layout import (KIND_SWT, P_FS, P_HI, P_HOLD, P_KIND, P_LO, P_PERSIST, P_SPC, P_STEP, P_TAXELS,
-                      P_THRESHOLD, P_WEIGHTS, P_WINDOW, S_ARRAYS, S_CLOSING, S_DETECTIONS, S_EPISODE,
-                      S_EVENT, S_FRAMES, S_LEVEL, S_REMAINING, S_RING, S_STAT, S_TARGET, S_TRIGGERS)
+from .._numba_cache import CACHE
+from ._layout import (
+    KIND_SWT,
+    P_FS,
+    P_HI,
+    P_HOLD,
+    P_KIND,
+    P_LO,
+    P_PERSIST,
+    P_SPC,
+    P_STEP,
+    P_TAXELS,
+    P_THRESHOLD,
+    P_WEIGHTS,
+    P_WINDOW,
+    S_ARRAYS,
+    S_CLOSING,
+    S_DETECTIONS,
+    S_EPISODE,
+    S_EVENT,
+    S_FRAMES,
+    S_LEVEL,
+    S_REMAINING,
+    S_RING,
+    S_STAT,
+    S_TARGET,
+    S_TRIGGERS,
+)
 
 
 @njit(cache=CACHE, inline="always")

@@ -10,15 +10,58 @@ functions so that ``import slipreflex`` does not pay for numba.
 from __future__ import annotations
 
 import numpy as np
-from .._numba_cache import CACHE
 from numba import njit
 
-from ._layout import (FILTER_BUTTERWORTH, FILTER_MEAN, P_ACC_RESET, P_D, P_DATH, P_EVENT, P_FILTER,
-                      P_FLOOR, P_HI, P_KI, P_KP, P_LEAK, P_LEAK_ON, P_LO, P_MEAN_M, P_N, P_NSEC,
-                      P_M0, P_P0, P_RESET_AFTER, P_SOS, P_THETA0, P_X0, P_X0_GIVEN, S_ACC, S_CLOCK, S_COUNT, S_FILLED,
-                      S_H, S_LAST_ACC, S_LAST_COUNT, S_LAST_EVENT, S_LAST_THETA, S_LAST_X, S_M,
-                      S_MEAN_N, S_MEAN_POS, S_PBASE, S_PREV, S_REMAINING, S_SKIPPED, S_SLIDE,
-                      S_SLIDE_POS, S_STARTED, S_THETA, S_ZEROS, S_ZI)
+from .._numba_cache import CACHE
+from ._layout import (
+    FILTER_BUTTERWORTH,
+    FILTER_MEAN,
+    P_ACC_RESET,
+    P_D,
+    P_DATH,
+    P_EVENT,
+    P_FILTER,
+    P_FLOOR,
+    P_HI,
+    P_KI,
+    P_KP,
+    P_LEAK,
+    P_LEAK_ON,
+    P_LO,
+    P_M0,
+    P_MEAN_M,
+    P_N,
+    P_NSEC,
+    P_P0,
+    P_RESET_AFTER,
+    P_SOS,
+    P_THETA0,
+    P_X0,
+    P_X0_GIVEN,
+    S_ACC,
+    S_CLOCK,
+    S_COUNT,
+    S_FILLED,
+    S_H,
+    S_LAST_ACC,
+    S_LAST_COUNT,
+    S_LAST_EVENT,
+    S_LAST_THETA,
+    S_LAST_X,
+    S_M,
+    S_MEAN_N,
+    S_MEAN_POS,
+    S_PBASE,
+    S_PREV,
+    S_REMAINING,
+    S_SKIPPED,
+    S_SLIDE,
+    S_SLIDE_POS,
+    S_STARTED,
+    S_THETA,
+    S_ZEROS,
+    S_ZI,
+)
 
 
 @njit(cache=CACHE, inline="always")

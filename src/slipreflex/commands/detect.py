@@ -191,7 +191,6 @@ def _prefix(args: argparse.Namespace) -> Path:
 def _run_board(args: argparse.Namespace) -> int:
     """``detect --board``: the Python twin of the firmware over a CSV of ADC counts."""
     from ..board import BoardParams, read_adc_csv, run_board_chain, write_board_outputs
-
     from ..hardware import FINGER_MAX
     from ..validation import number
 

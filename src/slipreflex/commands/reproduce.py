@@ -138,7 +138,6 @@ def run(args: argparse.Namespace) -> int:
     Ctrl-C or SIGTERM stops the run within about two seconds and writes what finished,
     marked partial; exit status 130.
     """
-    from ..errors import ParameterError
     from ..experiments import ReproduceConfig, estimate_wall_s, run_reproduce
     from ..interrupts import Interrupted, signals_ignored, sigterm_interrupts
     from ..paths import OutputSet
@@ -206,11 +205,10 @@ def _write(result, outputs, command: str | None) -> dict | None:
     Ctrl-C while writing leaves the previous outputs untouched: one "interrupted" line,
     and None (the caller exits 130).
     """
-    from ..analysis.report import terminal_table
-    from ..experiments import write_outputs
-
     from ..analysis.claims import claims_terminal, judge_run
     from ..analysis.outputs import paper_part
+    from ..analysis.report import terminal_table
+    from ..experiments import write_outputs
 
     staged = outputs.stage()
     try:

@@ -21,7 +21,6 @@ from .. import __version__
 from ..errors import ParameterError
 from ..hardware import DAQ_FS, FINGER_MAX, SLIP_FINGER, TRIPOD, Finger
 from ..methods import DATH, FIXED
-
 from ..runtime import WATCHDOG_MAX_S, WATCHDOG_MIN_S, WATCHDOG_S
 
 NAME = "run"
@@ -198,7 +197,7 @@ def run(args: argparse.Namespace) -> int:
     from ..chain import SlipReflex
     from ..devices.daq import SerialDaq
     from ..devices.ilimb import ILimb
-    from ..recording import METADATA_NAME, PLANNED_SAMPLES
+    from ..recording import PLANNED_SAMPLES
     from ..runtime import print_fault, realtime_priority, run_loop
 
     p0 = check_arguments(args)  # everything, before a port opens or a byte is sent
@@ -229,7 +228,7 @@ def run(args: argparse.Namespace) -> int:
                 "fingers": json.dumps([f.name.lower() for f in TRIPOD]),
                 "p0": json.dumps({f.name.lower(): v for f, v in p0.items()}),
                 "daq": args.daq, "hand": args.hand, "watchdog_s": repr(args.watchdog),
-                "started": datetime.datetime.now(datetime.timezone.utc).isoformat(), "rate_hz": repr(params.fs),
+                "started": datetime.datetime.now(datetime.UTC).isoformat(), "rate_hz": repr(params.fs),
                 **board_meta}
         if args.duration is not None:   # a reader of a file cut short then knows what it misses
             meta[PLANNED_SAMPLES] = str(int(args.duration * params.fs))

@@ -42,11 +42,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the scan, write the files, print the numbers."""
-    from ..errors import ParameterError
-    from ..sim import scan
-
     from ..hardware import DAQ_FS
     from ..paths import OutputSet
+    from ..sim import scan
     from ..validation import number, within
 
     within("scan_speed_mm_s", args.speed, "--speed")

@@ -57,9 +57,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``slipreflex study``."""
     from .. import methods
     from ..experiments import BOTTLE_NAMES, EXPERIMENTS
-    from ..study import DEFAULT_PLANTS, DEFAULT_TRIALS, DESIGNS
-
     from ..experiments import DEFAULT_SEED as seed
+    from ..study import DEFAULT_PLANTS, DEFAULT_TRIALS, DESIGNS
     p.add_argument("--plants", type=int, default=DEFAULT_PLANTS,
                    help=f"plants to draw (default {DEFAULT_PLANTS}; saltelli rounds up to B(D+2))")
     p.add_argument("--design", choices=DESIGNS, default="sobol", help="design over the constants (default sobol)")
@@ -88,11 +87,38 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-progress", action="store_true", help="no progress output")
 
 
+#: What ``pip install 'slipreflex[study]'`` adds; the base install never imports them.
+STUDY_EXTRA = ("dask", "distributed", "pyarrow", "SALib")
+
+
+def require_study_extra() -> None:
+    """Raise a one-line error naming the ``study`` extra when any of its packages is missing.
+
+    Raises
+    ------
+    SlipreflexError
+        ``needs the optional 'study' extra (not installed: ...)``, before any work starts.
+
+    Examples
+    --------
+    >>> require_study_extra()  # doctest: +SKIP
+    """
+    import importlib.util
+
+    from ..errors import SlipreflexError
+
+    missing = [name for name in STUDY_EXTRA if importlib.util.find_spec(name) is None]
+    if missing:
+        raise SlipreflexError(f"needs the optional 'study' extra (not installed: {', '.join(missing)}); "
+                              "install it with: pip install 'slipreflex[study]'")
+
+
 def run(args: argparse.Namespace) -> int:
     """Run the study, write the outputs, print the claims' fractions."""
+    require_study_extra()
+    from ..paths import OutputSet
     from ..study import StudyConfig, run_study
     from ..study.analyse import claim_fractions, plant_table, write_outputs
-
     from ..validation import within
 
     within("trials", args.trials, "--trials")
@@ -102,8 +128,6 @@ def run(args: argparse.Namespace) -> int:
     config = StudyConfig(plants=args.plants, design=args.design, trials=args.trials, bottles=tuple(args.bottles),
                          methods=tuple(args.methods), experiments=tuple(args.experiments), seed=args.seed,
                          ranges=args.ranges, calibrate=not args.no_calibration)
-    from ..paths import OutputSet
-
     if args.out.is_dir():   # a file of the user's where the study writes its tables: refused before any work
         OutputSet(args.out, NAME).check(OUTPUT_NAMES)
     try:

@@ -19,11 +19,11 @@ from __future__ import annotations
 import argparse
 import os
 import select
-from pathlib import Path
 import signal
 import sys
 import threading
 import time
+from pathlib import Path
 
 NAME = "virtual-rig"
 HELP = "simulated rig behind two pseudo-terminals (DAQ and i-Limb) for 'slipreflex run'"

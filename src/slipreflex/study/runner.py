@@ -254,7 +254,8 @@ def _calibrated(plant: Any, table: Mapping) -> tuple[Any, dict[str, Any]]:
     from dataclasses import replace
     from types import MappingProxyType
 
-    from ..sim.calibration import CALIBRATION_SEEDS as DEFAULT_SEEDS, calibrate_bottle
+    from ..sim.calibration import CALIBRATION_SEEDS as DEFAULT_SEEDS
+    from ..sim.calibration import calibrate_bottle
 
     c = table["first_slip_ml"]
     kw = plant.rig_kwargs()
@@ -554,7 +555,7 @@ def probe_scheduler(address: str, timeout: float | None = None) -> None:
                 frames = struct.unpack("<Q", read_exact(sock, 8))[0]
                 if not 1 <= frames <= 64:
                     raise ValueError
-            except (TimeoutError, socket.timeout):
+            except TimeoutError:
                 raise ParameterError(f"{where}: no Dask handshake within {timeout:g} s (not a Dask "
                                      f"scheduler?)") from None
             except (ValueError, ConnectionError):
