@@ -122,6 +122,7 @@ def sandbox(tmp_path, monkeypatch):
     return _files(tmp_path)
 
 
+@pytest.mark.slow
 def test_every_option_value_is_refused_in_one_line_or_reaches_the_work(sandbox, capsys):
     @SETTINGS
     @given(_argv(sandbox))

@@ -96,17 +96,24 @@ def test_the_local_cluster_listens_on_loopback_without_a_dashboard(monkeypatch):
     assert seen["dashboard_address"] == "127.0.0.1:0"
 
 
-def test_a_reused_out_names_the_arguments_that_differ(tmp_path, capsys):
-    out = str(tmp_path / "o")
-    assert main(["study", *TINY, "--workers", "0", "--out", out]) == 0
-    capsys.readouterr()
-    args = [*TINY, "--workers", "0", "--out", out]
+def test_a_reused_out_names_the_arguments_that_differ(tmp_path, capsys, monkeypatch):
+    from slipreflex.study import StudyConfig
+
+    monkeypatch.setattr(runner, "run_plant", lambda *a, **k: pytest.fail("work started"))
+    out = tmp_path / "o"
+    cfg = StudyConfig(plants=2, trials=1, bottles=("TX",), methods=("dath",), experiments=("drop",),
+                      calibrate=False)
+    assert runner._check_out(out, cfg) is True                 # what a first run records
+    assert runner._check_out(out, cfg) is False                # the same study: resumed
+    args = [*TINY, "--workers", "0", "--out", str(out)]
     args[args.index("--plants") + 1] = "4"
     assert main(["study", *args, "--seed", "7"]) == 2
     err = capsys.readouterr().err
     assert "--plants 4 (the study there: 2)" in err and "--seed 7" in err and "fingerprint" not in err
+    assert len(err.strip().splitlines()) == 1
 
 
+@pytest.mark.slow
 def test_ctrl_c_of_a_local_cluster_study_is_one_line(tmp_path):
     env = {**os.environ, "PYTHONUNBUFFERED": "1"}
     proc = subprocess.Popen([sys.executable, "-m", "slipreflex", "study", *TINY[:-1], "--plants", "8",

@@ -95,7 +95,7 @@ def _decide() -> bool:
         if "numba" in sys.modules:          # numba read its configuration already
             from numba.core import config
 
-            config.CACHE_DIR = folder
+            config.CACHE_DIR = folder  # pyright: ignore[reportAttributeAccessIssue]
     if warning:
         print(f"slipreflex: warning: {warning}", file=sys.stderr)
     return on

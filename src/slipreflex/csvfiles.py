@@ -205,7 +205,8 @@ def read_recording(path: str | os.PathLike, fs: float | None = None) -> Recordin
     header: list[str] | None = None
     first_line = 0
     has_header = False
-    it = ix = None
+    it: int | None = None
+    ix = 0
     width = 0
     t, x, lines = array("d"), array("d"), array("q")
     for line_no, line in _lines(path):
@@ -222,7 +223,7 @@ def read_recording(path: str | os.PathLike, fs: float | None = None) -> Recordin
             if has_header and "x" in header and "t" in header:
                 it, ix = header.index("t"), header.index("x")
             elif len(header) == 1:
-                it, ix = None, 0
+                ix = 0
             else:
                 missing = [c for c in INPUT_COLUMNS if c not in header] if has_header else list(INPUT_COLUMNS)
                 raise DataError(f"{path}, line {first_line}: missing column(s) {', '.join(missing)} "
@@ -249,7 +250,7 @@ def read_recording(path: str | os.PathLike, fs: float | None = None) -> Recordin
     if not x:
         raise DataError(f"{path}: no samples after the header")
     xs = np.frombuffer(x, dtype=float).copy()
-    ts = np.frombuffer(t, dtype=float).copy() if it is not None else np.arange(xs.size) / float(fs)
+    ts = np.frombuffer(t, dtype=float).copy() if it is not None else np.arange(xs.size) / float(fs or 1.0)
     return Recording(path, ts, xs, np.frombuffer(lines, dtype=np.int64).astype(int), it is not None, preamble)
 
 

@@ -128,7 +128,7 @@ def create_new(path: str | os.PathLike, mode: str = "wb") -> IO[Any]:
     """
     fd = os.open(path, _NEW, 0o666)
     try:
-        return os.fdopen(fd, mode, **({} if "b" in mode else {"newline": "", "encoding": "utf-8"}))
+        return os.fdopen(fd, mode) if "b" in mode else os.fdopen(fd, mode, newline="", encoding="utf-8")
     except BaseException:
         os.close(fd)
         raise
@@ -197,7 +197,7 @@ def new_file(path: str | os.PathLike, mode: str = "w", *, replace: bool = False)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
     try:
         os.fchmod(fd, 0o666 & ~_umask())   # mkstemp's 0600 would hide the output from the group
-        with os.fdopen(fd, mode, **({} if "b" in mode else {"newline": "", "encoding": "utf-8"})) as fh:
+        with (os.fdopen(fd, mode) if "b" in mode else os.fdopen(fd, mode, newline="", encoding="utf-8")) as fh:
             yield fh
         if replace:
             os.replace(tmp, path)

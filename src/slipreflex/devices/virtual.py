@@ -162,7 +162,7 @@ class PtyPort:
 
     def _is_our_link(self, target: str) -> bool:
         try:
-            return bool(target) and os.readlink(self.link) == target
+            return bool(target and self.link) and os.readlink(str(self.link)) == target
         except OSError:   # gone, or not a symlink
             return False
 

@@ -587,7 +587,7 @@ def _client(workers: int | None, scheduler: str | None, dashboard: str | None = 
         old = signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:
         cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                               dashboard_address=dashboard,   # no dashboard unless asked for
+                               dashboard_address=dashboard,   # type: ignore[arg-type]  # None: no dashboard
                                silence_logs=logging.ERROR)    # the workers' warnings are Dask's business
     finally:
         if main:
