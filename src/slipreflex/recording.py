@@ -985,7 +985,8 @@ def export_csv(path: str | os.PathLike | Recording, out: str | os.PathLike | Non
     samples = rec.topic("/daq/samples")
     if not samples:
         raise DataError(f"{rec.path}: no slip-sensor samples to export")
-    main = Path(out) if out is not None else Path(rec.path).with_suffix(".csv")
+    src = str(rec.path)[:-len(PART_SUFFIX)] if str(rec.path).endswith(PART_SUFFIX) else str(rec.path)
+    main = Path(out) if out is not None else Path(src).with_suffix(".csv")   # run.mcap(.part) -> run.csv
     companions = {
         "imu": ("/daq/imu", ("t", "ax", "ay", "az")),
         "flow": ("/daq/flow", ("t", "pulses")),
