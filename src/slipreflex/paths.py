@@ -378,7 +378,7 @@ def _where(what: str, path: Any) -> str:
     return f"{what} {os.fspath(path)}" if what else os.fspath(path)
 
 
-def read_capped(path: str | os.PathLike, what: str, limit: int = MAX_TEXT_BYTES) -> bytes:
+def read_capped(path: str | os.PathLike, what: str, limit: int = MAX_TEXT_BYTES, kind: str = "file") -> bytes:
     """The bytes of a user's file, refusing a non-regular file or one over ``limit`` bytes.
 
     Raises
@@ -404,7 +404,7 @@ def read_capped(path: str | os.PathLike, what: str, limit: int = MAX_TEXT_BYTES)
     st = os.fstat(fd)
     if not stat.S_ISREG(st.st_mode):
         os.close(fd)
-        raise ParameterError(f"{_where(what, p)}: " + ("is a directory, not a file" if stat.S_ISDIR(st.st_mode)
+        raise ParameterError(f"{_where(what, p)}: " + (f"is a directory, not a {kind}" if stat.S_ISDIR(st.st_mode)
                                                        else "not a regular file"))
     with os.fdopen(fd, "rb") as fh:
         if st.st_size > limit:
@@ -418,7 +418,7 @@ def read_capped(path: str | os.PathLike, what: str, limit: int = MAX_TEXT_BYTES)
     return data
 
 
-def read_text(path: str | os.PathLike, what: str, limit: int = MAX_TEXT_BYTES) -> str:
+def read_text(path: str | os.PathLike, what: str, limit: int = MAX_TEXT_BYTES, kind: str = "file") -> str:
     """A user's text file as UTF-8 (:func:`read_capped`; a binary or Latin-1 file is one line).
 
     Examples
@@ -430,7 +430,7 @@ def read_text(path: str | os.PathLike, what: str, limit: int = MAX_TEXT_BYTES) -
     ...
     slipreflex.errors.ParameterError: --ranges ...l1.toml: not UTF-8 text (byte 0xe9 at offset 5)...
     """
-    data = read_capped(path, what, limit)
+    data = read_capped(path, what, limit, kind)
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as err:
@@ -455,7 +455,7 @@ def read_toml(path: str | os.PathLike, what: str) -> dict[str, Any]:
     """
     import tomllib
 
-    text = read_text(path, what)
+    text = read_text(path, what, kind="TOML file")
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
