@@ -390,7 +390,7 @@ class Limit:
     Examples
     --------
     >>> LIMITS["trials"].hi
-    1000
+    10000
     """
 
     lo: float
@@ -406,7 +406,8 @@ class Limit:
 #: before any work starts; docs/runtime.md "Limits" prints it). The bounds are far outside any
 #: real use and far inside what would run for days or exhaust memory.
 LIMITS: dict[str, Limit] = {
-    "trials": Limit(1, 1000, "", "trials per bottle, experiment and method (the paper ran 10)",
+    "trials": Limit(1, 10_000, "", "trials per bottle, experiment and method (the paper ran 10; a run "
+                    "estimated over 10 minutes says how to shorten it)",
                     "reproduce/study --trials", whole=True),
     "plants": Limit(1, 100_000, "", "plants of a study (default 64); each plant runs the whole grid",
                     "study --plants", whole=True),
