@@ -231,7 +231,7 @@ def run(args: argparse.Namespace) -> int:
                 "started": datetime.datetime.now(datetime.UTC).isoformat(), "rate_hz": repr(params.fs),
                 **board_meta}
         if args.duration is not None:   # a reader of a file cut short then knows what it misses
-            meta[PLANNED_SAMPLES] = str(int(args.duration * params.fs))
+            meta[PLANNED_SAMPLES] = str(round(args.duration * params.fs))
         recorder = _recorder(args.record, meta)  # fails before the ports open
     old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
     started = False
