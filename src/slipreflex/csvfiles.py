@@ -330,7 +330,7 @@ def read_preamble(path: str | os.PathLike) -> dict[str, str]:
     return out
 
 
-def write_columns(path: str | os.PathLike, columns: Mapping[str, Sequence], *,
+def write_columns(path: str | os.PathLike, columns: Mapping[str, Sequence | np.ndarray], *,
                   preamble: Mapping[str, str] | None = None, replace: bool = True) -> None:
     """Write equal-length columns to a CSV atomically.
 
