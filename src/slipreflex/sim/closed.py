@@ -106,7 +106,7 @@ class _Stamped:
 
 _LOCATORS = getattr(getattr(_caching, "CacheImpl", None), "_locator_classes", None)
 _CACHE = CACHE and isinstance(_LOCATORS, list)   # another numba: no cache rather than a stale one
-if _CACHE and not any(issubclass(c, _Stamped) for c in _LOCATORS):
+if CACHE and isinstance(_LOCATORS, list) and not any(issubclass(c, _Stamped) for c in _LOCATORS):
     _LOCATORS[:0] = [type(f"_Stamped{base.__name__}", (_Stamped, base), {})
                      for base in (_caching.UserProvidedCacheLocator, _caching.InTreeCacheLocator,
                                   _caching.UserWideCacheLocator)]
