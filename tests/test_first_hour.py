@@ -1,4 +1,4 @@
-"""A new user's first hour (issue 11): the steps after set-up that the README promises."""
+"""A new user's first hour: the steps after set-up that the README promises."""
 
 import os
 import subprocess

@@ -155,6 +155,7 @@ def test_disk_full_mid_run_stops_recording_without_raising():
         buf.close()
 
 
+@pytest.mark.realtime
 @pytest.mark.slow
 def test_sigkilled_run_leaves_a_recording_that_replays(tmp_path):
     """End to end: `slipreflex run` on the virtual rig, killed with SIGKILL mid-run."""

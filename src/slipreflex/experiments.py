@@ -1,6 +1,6 @@
 """The paper's experiments on the simulated rig: protocol, trial grid, parallel runs.
 
-One *trial* (SPEC 4): build the rig for a bottle with the trial's seed, grasp
+One *trial* (docs/method.md section 4): build the rig for a bottle with the trial's seed, grasp
 to 0.8 N and settle, record ``rest_s`` of the bottle at rest, then apply the
 perturbation (the sudden 10 g drop, or the 500 ml pour at 1 L/min) while the
 method's reflex runs in closed loop, and record every stream until

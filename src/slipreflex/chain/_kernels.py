@@ -1,6 +1,6 @@
 """numba kernels of the chain: one per-sample update per stage, composed.
 
-The per-sample updates here are the arithmetic of SPEC 1.1-1.4 written once for
+The per-sample updates here are the arithmetic of docs/method.md sections 1.1-1.4 written once for
 compiled code; the streaming objects in the sibling modules perform exactly the
 same IEEE operations in the same order (no fastmath, so no FMA contraction), which
 is why batch and streaming agree bit for bit. Imported lazily by the batch
@@ -78,7 +78,7 @@ def sos_update(sos, zi, x):
 @njit(cache=CACHE, inline="always")
 def encoder_update(x, prev, acc, theta, remaining, clock, theta0, dath, dath_samples, floor,
                    acc_reset, leak, leak_on):
-    """SPEC 1.2 for one sample, with the accumulator's optional leak and periodic reset.
+    """docs/method.md section 1.2 for one sample, with the accumulator's optional leak and periodic reset.
 
     Returns (event, acc_before_reset, theta_used, acc, theta, remaining, clock).
     ``acc_reset <= 0`` means no periodic reset; ``leak_on`` multiplies the old
@@ -110,7 +110,7 @@ def encoder_update(x, prev, acc, theta, remaining, clock, theta0, dath, dath_sam
 
 @njit(cache=CACHE, inline="always")
 def mpi_update(v, p_base, h, m_prev, zeros, kp, ki, reset_after, lo, hi, position):
-    """SPEC 1.4 for one window; a reset takes ``position`` as P0, or the command if it is NaN.
+    """docs/method.md section 1.4 for one window; a reset takes ``position`` as P0, or the command if it is NaN.
 
     ``reset_after < 0`` never resets.
     """

@@ -3,7 +3,7 @@
 Reads a ``results.csv`` (written by ``slipreflex reproduce``, by an older version of it,
 or by your own analysis with the same columns: see
 :data:`slipreflex.analysis.trial.RESULT_COLUMNS`) and prints the claims table that
-``reproduce`` prints: each of the paper's claims (SPEC 4.1) as *holds*, *fails* or *not
+``reproduce`` prints: each of the paper's claims (docs/method.md section 4.1) as *holds*, *fails* or *not
 testable here*, with the numbers behind the verdict. Claims 1-2 are judged on a
 characterization scan of the simulated slip sensor seeded with ``--seed``.
 
