@@ -40,6 +40,7 @@ STEPS: list[tuple[str, tuple[str, ...], list[str]]] = [
     ("benchmark tables", ("benchmark table", "benchmark summary", "vs-sim table", "chain rule",
                           "k sensitivity", "why"),
      [sys.executable, str(SCRIPTS / "benchmark_table.py"), "--write"]),
+    ("limits table", ("limits table",), [sys.executable, str(SCRIPTS / "limits_table.py"), "--write"]),
 ]
 
 

@@ -271,9 +271,10 @@ def test_a_sigstopped_loop_raises_a_staleness_fault_and_holds_after_it_resumes(t
                                 "--hand", str(tmp_path / "hand"), "--p0", p0, "--record", str(rec)],
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         _line(run.stdout, "running")
-        size0 = rec.stat().st_size
+        part = tmp_path / "stop.mcap.part"     # the recording's name while the run lasts
+        size0 = part.stat().st_size
         deadline = time.monotonic() + 30
-        while rec.stat().st_size == size0:  # the loop is running: its first flush arrived
+        while part.stat().st_size == size0:  # the loop is running: its first flush arrived
             assert time.monotonic() < deadline, "the run never recorded anything"
             time.sleep(0.01)
         run.send_signal(signal.SIGSTOP)  # frozen: the virtual board keeps sending

@@ -140,9 +140,11 @@ def write_csv(path: str | Path, rows: Sequence[Any],
     >>> p.read_text().splitlines()
     ['a,b', '1.5,']
     """
+    from ..paths import new_file
+
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    with path.open("w", newline="") as fh:
+    with new_file(path, "w", replace=True) as fh:
         fh.writelines(f"# {n}\n" for n in notes)
         w = csv.writer(fh)
         w.writerow(columns)
