@@ -142,7 +142,10 @@ def test_run_on_the_virtual_rig_with_any_p0_never_opens_and_answers_the_drop(tmp
         assert all(b >= a for a, b in zip(track[f], track[f][1:])), (f, track[f][:20])
     assert "grip added: thumb" in out  # the drop was answered with grip, whatever p0 said
     assert max(track[Finger.MIDDLE]) > grasp.positions[Finger.MIDDLE]
-    assert "fully closed" not in out and "ceiling" not in out
+    # DATH may now drive its command to the ceiling: each closing dents the wall under the cuff, which opens
+    # the slip sensor's gap and moves the fingertip over the surface, and DATH reads that as slip
+    # (docs/study.md, "Claims 4, 5 and 7"); the bounded grip keeps the force at the digits' stall force
+    assert sim.rig.normal_force <= sim.rig.hand_params.stall_force_n + 1.0
 
 
 @pytest.mark.slow
