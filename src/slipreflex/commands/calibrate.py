@@ -12,7 +12,7 @@ in which case its pad friction is calibrated to it.
 Examples (shell)::
 
     slipreflex calibrate
-    slipreflex calibrate --objects my.toml --bottles JAR TR
+    slipreflex calibrate --objects my.toml --bottles JAR,TR
     slipreflex calibrate --objects my.toml --bottles JAR --first-slip-ml 150
 """
 
@@ -29,8 +29,11 @@ ORDER = 45
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Command-line options of ``slipreflex calibrate``."""
     parser.add_argument("--objects", type=Path, default=None, help="TOML file of your own bottles and surfaces")
-    parser.add_argument("--bottles", nargs="+", default=None,
-                        help="bottles to calibrate (default: the paper's TR DK TX, plus every bottle of --objects)")
+    from ._lists import names_list
+
+    parser.add_argument("--bottles", type=names_list, default=None,
+                        help="comma-separated bottles to calibrate (default: the paper's TR,DK,TX, plus every "
+                             "bottle of --objects)")
     parser.add_argument("--first-slip-ml", type=float, default=None,
                         help="calibrate every listed bottle's pad friction so that its open-loop first slip comes "
                              "at this volume (default: the paper's bottles are calibrated to 200 ml, yours kept)")

@@ -30,7 +30,7 @@ def _csv_list(kind: str, known, *, any_case: bool = False):
         from ..validation import choices
 
         try:
-            return choices(kind, [x.strip() for x in text.split(",") if x.strip()], known(),
+            return choices(kind, list(_names(text)), known(),
                            any_case=any_case)
         except ParameterError as err:
             raise argparse.ArgumentTypeError(str(err)) from None
@@ -39,7 +39,9 @@ def _csv_list(kind: str, known, *, any_case: bool = False):
 
 def _names(text: str) -> tuple[str, ...]:
     """A comma-separated list of names, checked later against the run's objects."""
-    return tuple(x.strip() for x in text.split(",") if x.strip())
+    from ._lists import names_list
+
+    return names_list(text)
 
 
 def own_objects(args: argparse.Namespace) -> dict:
