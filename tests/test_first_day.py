@@ -30,3 +30,17 @@ def test_space_separated_names_are_refused_with_the_right_form(capsys, argv, opt
     assert main(argv) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and option in err[0] and right in err[0] and "comma-separated" in err[0]
+
+
+# -- scan --------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("argv, says", [
+    (["--layout", "stand:5,white:10,black:15"], "longer than --layout 'stand:5,white:10,black:15' (30 mm)"),
+    (["--distance", "60"], "longer than the paper's layout (50 mm)"),
+    (["--objects", "MISSING.toml"], "--objects MISSING.toml: no such file"),
+])
+def test_scan_refuses_what_it_cannot_do_before_any_work(tmp_path, capsys, argv, says):
+    out = tmp_path / "scan"
+    assert main(["scan", "--out", str(out), *argv]) == 2
+    assert says in capsys.readouterr().err
+    assert not out.exists()

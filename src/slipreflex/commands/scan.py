@@ -1,7 +1,8 @@
 """``slipreflex scan``: the simulated characterization scan of the slip sensor (paper Fig. 4-9).
 
 The sensor moves 5 cm down the white/black test surface at 1 mm/s, 3 mm
-away (:func:`slipreflex.sim.scan`); the command writes the trace as CSV and
+away (:func:`slipreflex.sim.scan`), or over ``--layout``; ``--distance`` longer than the
+layout is an error (the scan never runs past its surfaces). The command writes the trace as CSV and
 a figure like the paper's Fig. 6-9 (filtered signal; accumulator with the
 threshold; spikes; fixed threshold and DATH), and prints the voltage range
 on white and on black, the spike count of each method and the smallest
@@ -28,7 +29,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Command-line options of ``slipreflex scan``."""
     parser.add_argument("--seed", type=int, default=0, help="texture and noise seed (default 0)")
     parser.add_argument("--speed", type=float, default=1.0, help="scan speed in mm/s (default 1, the paper's)")
-    parser.add_argument("--distance", type=float, default=50.0, help="scan length in mm (default 50)")
+    parser.add_argument("--distance", type=float, default=50.0,
+                        help="scan length in mm (default 50, the paper's layout; at most the layout's length)")
     parser.add_argument("--threshold", type=float, default=0.008, help="base threshold in V (default 0.008)")
     parser.add_argument("--out", type=Path, default=Path("out/scan"), help="output directory (default out/scan)")
     parser.add_argument("--no-figure", action="store_true", help="skip the PNG figure")
@@ -47,10 +49,22 @@ def run(args: argparse.Namespace) -> int:
 
     from ..paths import output_dir
 
+    from ..sim.scan import PAPER_LAYOUT
+
     if args.speed <= 0 or args.distance <= 0:
         raise ParameterError("--speed and --distance must be > 0")
+    if args.objects is not None and not args.objects.is_file():
+        raise ParameterError(f"--objects {args.objects}: no such file")
+    layout = _layout(args) if args.layout is not None else list(PAPER_LAYOUT)
+    if args.objects is not None and args.layout is None:
+        _layout_names(args)         # the file is read and checked even when no layout uses it
+    length_mm = 1e3 * sum(length for _, length in layout)
+    if args.distance > length_mm + 1e-9:
+        what = f"--layout {args.layout!r}" if args.layout is not None else "the paper's layout"
+        raise ParameterError(f"--distance {args.distance:g} mm is longer than {what} ({length_mm:g} mm): "
+                             f"give --distance {length_mm:g} or less, or a longer --layout")
     out: Path = output_dir(args.out, "--out")
-    kw = {"layout": _layout(args)} if args.layout is not None else {}
+    kw = {"layout": layout} if args.layout is not None else {}
     result = scan(seed=args.seed, speed=args.speed * 1e-3, distance=args.distance * 1e-3, **kw)
     summary = result.analyse(threshold=args.threshold)
     csv_path = out / "scan.csv"
@@ -82,16 +96,23 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _layout(args: argparse.Namespace) -> list:
-    """``--layout`` as (Surface, length_m) pairs; names from the built-ins or ``--objects``."""
-    from ..errors import ParameterError
+def _layout_names(args: argparse.Namespace) -> dict:
+    """The surfaces ``--objects`` adds (its surfaces, and its bottles' surfaces by bottle name)."""
     from ..sim import load_objects
-    from ..sim.objects import resolve_surface
 
     objs = load_objects(args.objects) if args.objects is not None else None
     extra = dict(objs.surfaces) if objs else {}
     if objs:
         extra.update({n: b.surface for n, b in objs.bottles.items()})
+    return extra
+
+
+def _layout(args: argparse.Namespace) -> list:
+    """``--layout`` as (Surface, length_m) pairs; names from the built-ins or ``--objects``."""
+    from ..errors import ParameterError
+    from ..sim.objects import resolve_surface
+
+    extra = _layout_names(args)
     out = []
     for i, part in enumerate(p.strip() for p in args.layout.split(",") if p.strip()):
         name, sep, mm = part.partition(":")
