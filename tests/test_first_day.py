@@ -44,3 +44,78 @@ def test_scan_refuses_what_it_cannot_do_before_any_work(tmp_path, capsys, argv, 
     assert main(["scan", "--out", str(out), *argv]) == 2
     assert says in capsys.readouterr().err
     assert not out.exists()
+
+
+# -- virtual-rig -------------------------------------------------------------------------------
+
+class _QuietRig:
+    """No samples; remembers when it was perturbed and the hand's targets."""
+
+    def __init__(self):
+        self.perturbed = []
+        self.got = {}
+        rig = self
+
+        class Hand:
+            @staticmethod
+            def set_positions(targets):
+                rig.got.update(targets)
+
+            @staticmethod
+            def positions():
+                return dict(rig.got)
+        self.hand = Hand
+
+    def advance_to(self, t):
+        return []
+
+    def perturb(self, kind):
+        self.perturbed.append(kind)
+
+
+def _wait(cond, seconds=10.0):
+    import time
+
+    deadline = time.monotonic() + seconds
+    while not cond() and time.monotonic() < deadline:
+        time.sleep(0.01)
+    return cond()
+
+
+def test_virtual_rig_schedule_waits_for_run_and_announces_each_perturbation():
+    from slipreflex.devices.ilimb import ILimb
+    from slipreflex.devices.virtual import VirtualDevices
+    from slipreflex.hardware import Finger
+
+    said = []
+    rig = _QuietRig()
+    with VirtualDevices(rig, schedule=[("drop", 0.05)], schedule_from="connect", on_event=said.append) as dev:
+        assert not _wait(lambda: rig.perturbed, 0.4)       # nobody connected: the schedule waits
+        with ILimb(dev.hand_path) as hand:
+            hand.set_positions({Finger.MIDDLE: 200})
+            assert _wait(lambda: rig.perturbed)
+        dev.trigger("pour", "signal")
+        assert _wait(lambda: len(rig.perturbed) == 2)
+    assert said[0].startswith("client connected at") and "schedule starts now" in said[0]
+    drop, pour = said[1], said[2]
+    assert drop.startswith("drop at") and drop.endswith("(schedule)") and pour.endswith("(signal)")
+    (_, t_drop), _ = dev.triggered
+    assert t_drop >= dev.connected_at + 0.05 >= 0.4
+
+
+def test_virtual_rig_summary_gives_the_fall_time_and_caps_the_slide():
+    from slipreflex.devices.simrig import SimRig
+    from slipreflex.sim import Pour
+
+    sim = SimRig("TR", pour=Pour(rate_l_min=6.0, volume_ml=300.0))
+    sim.grasp()
+    sim.advance_to(0.0)
+    sim.perturb("pour")
+    sim.advance_to(12.0)
+    r = sim.rig
+    assert r.fallen and r.displacement > 0.1                 # free fall far below the grip
+    line = sim.status()
+    fall = float(line.split("FALLEN at t=")[1].split(" s")[0])
+    assert abs(fall - (r.fall_time - (r.t - 12.0))) < 0.01 and fall < 11.5
+    shown = float(line.split("displaced ")[1].split(" mm")[0])
+    assert shown == pytest.approx(r.bottle.grip_travel_m * 1e3)
