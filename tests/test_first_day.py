@@ -119,3 +119,46 @@ def test_virtual_rig_summary_gives_the_fall_time_and_caps_the_slide():
     assert abs(fall - (r.fall_time - (r.t - 12.0))) < 0.01 and fall < 11.5
     shown = float(line.split("displaced ")[1].split(" mm")[0])
     assert shown == pytest.approx(r.bottle.grip_travel_m * 1e3)
+
+
+# -- help and docs agree with the code -----------------------------------------------------------
+
+def _sub(name):
+    parser = build_parser()
+    return next(a for a in parser._subparsers._group_actions[0].choices.items() if a[0] == name)[1]
+
+
+def _option(parser, flag):
+    return next(a for a in parser._actions if flag in a.option_strings)
+
+
+def test_detect_and_run_offer_the_same_presets():
+    from slipreflex.chain.params import PRESETS
+
+    assert list(_option(_sub("detect"), "--preset").choices) == list(_option(_sub("run"), "--preset").choices) \
+        == sorted(PRESETS)
+
+
+def test_defaults_are_shown_as_numbers():
+    helps = {cmd: _sub(cmd).format_help() for cmd in ("reproduce", "run", "detect", "virtual-rig", "scan")}
+    assert not any("PAPER_" in h for h in helps.values())
+    reproduce = " ".join(helps["reproduce"].split())
+    for text in ("(default 0.01, the paper's)", "(default 0.02, the paper's)", "(default 1, the paper's)",
+                 "(default 500, the paper's)"):
+        assert text in reproduce
+
+
+def test_the_p0_example_is_what_virtual_rig_prints():
+    from slipreflex.devices.simrig import SimRig
+
+    line = SimRig("TR", seed=0).grasp().p0_text()           # virtual-rig's defaults: TR, seed 0
+    assert line in " ".join(_sub("run").format_help().split())
+    for doc in ("README.md", "docs/runtime.md"):
+        text = (ROOT / doc).read_text()
+        assert line in text and "thumb=149" not in text and "index=147,middle=147" not in text
+
+
+def test_study_docs_install_from_the_repository_or_a_wheel():
+    text = (ROOT / "docs/study.md").read_text()
+    assert "pip install slipreflex" not in text and "not on PyPI" in text
+    assert "pip wheel" in text and "slipreflex-0.1.0-py3-none-any.whl" in text

@@ -104,14 +104,16 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    default=EXPERIMENTS,
                    help=f"comma-separated experiments (default: {','.join(EXPERIMENTS)})")
     p.add_argument("--seed", type=int, default=d["seed"], help=f"master seed (default {d['seed']})")
+    from ..sim import PAPER_DROP, PAPER_POUR
+
     p.add_argument("--drop-mass", type=float, default=None, metavar="KG",
-                   help="dropped mass in kg (default: the paper's, slipreflex.sim.PAPER_DROP)")
+                   help=f"dropped mass in kg (default {PAPER_DROP.mass_kg:g}, the paper's)")
     p.add_argument("--drop-height", type=float, default=None, metavar="M",
-                   help="drop height above the opening in m (default: the paper's, PAPER_DROP)")
+                   help=f"drop height above the opening in m (default {PAPER_DROP.height_m:g}, the paper's)")
     p.add_argument("--pour-rate", type=float, default=None, metavar="L_MIN",
-                   help="pour rate in L/min (default: the paper's, slipreflex.sim.PAPER_POUR)")
+                   help=f"pour rate in L/min (default {PAPER_POUR.rate_l_min:g}, the paper's)")
     p.add_argument("--pour-volume", type=float, default=None, metavar="ML",
-                   help="poured volume in ml (default: the paper's, PAPER_POUR)")
+                   help=f"poured volume in ml (default {PAPER_POUR.volume_ml:g}, the paper's)")
     p.add_argument("--rest", type=float, default=d["rest_s"], metavar="S",
                    help=f"rest recorded before the perturbation, s (default {d['rest_s']:g})")
     p.add_argument("--after", type=float, default=d["after_s"], metavar="S",
