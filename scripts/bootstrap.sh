@@ -61,7 +61,10 @@ if [ ! -x .venv/bin/python ]; then
   "$PYTHON" -m venv .venv
 fi
 VPY=.venv/bin/python
-"$VPY" -m pip install -q --disable-pip-version-check -e ".[test]"
+# pip's own lines (Collecting / Downloading / Installing ...) show the progress: on a fresh
+# machine this step downloads the dependencies and takes a minute or two; it is never silent.
+echo "bootstrap.sh: installing slipreflex and its dependencies into .venv with pip (a minute or two on a fresh machine)"
+"$VPY" -m pip install --disable-pip-version-check --progress-bar on -e ".[test]"
 echo "bootstrap.sh: slipreflex is installed in .venv; to use it later: source .venv/bin/activate"
 export PATH="$PWD/.venv/bin:$PATH"
 

@@ -162,3 +162,55 @@ def test_study_docs_install_from_the_repository_or_a_wheel():
     text = (ROOT / "docs/study.md").read_text()
     assert "pip install slipreflex" not in text and "not on PyPI" in text
     assert "pip wheel" in text and "slipreflex-0.1.0-py3-none-any.whl" in text
+
+
+# -- the first run ------------------------------------------------------------------------------
+
+def test_an_empty_numba_cache_is_seen_as_cold(tmp_path):
+    code = "from slipreflex.experiments import cold_kernels; print(len(cold_kernels()))"
+    env = {**__import__("os").environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba")}
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=300)
+    assert r.returncode == 0, r.stderr
+    from slipreflex.experiments import KERNELS
+
+    assert int(r.stdout) == len(KERNELS)
+
+
+def test_the_estimate_counts_the_compilation_of_a_cold_cache(tmp_path, capsys, monkeypatch):
+    import slipreflex.experiments as ex
+
+    class Stop(Exception):
+        pass
+
+    def stop(*a, **k):
+        raise Stop
+
+    monkeypatch.setattr(ex, "run_reproduce", stop)
+    said = {}
+    for cold in ([], ["closed._closed_slip"]):
+        monkeypatch.setattr(ex, "cold_kernels", lambda cold=cold: cold)
+        with pytest.raises(Stop):
+            main(["reproduce", "--trials", "1", "--bottles", "TR", "--experiments", "drop", "--jobs", "2",
+                  "--out", str(tmp_path / "r")])
+        said[bool(cold)] = capsys.readouterr().err
+    assert "compiles the kernels once" in said[True] and "compiles" not in said[False]
+    small = ex.ReproduceConfig(trials=1, bottles=("TR",), experiments=("drop",))
+    assert ex.estimate_wall_s(small, 2, cold=True) >= ex.estimate_wall_s(small, 2) + 15
+
+
+def test_the_kernels_are_compiled_before_the_workers_start():
+    """Workers are forked after the parent compiled the closed loops: one compilation, not one per worker."""
+    code = """
+import slipreflex.experiments as ex
+from slipreflex.sim import closed
+seen = []
+def pool(calls, jobs, finished, done):
+    seen.append((jobs, bool(closed._closed_slip.signatures), bool(closed._closed_tactile.signatures)))
+ex.run_cells = pool
+ex.run_reproduce(ex.ReproduceConfig(trials=1, bottles=("TR",), experiments=("drop",), methods=("dath", "nmsd")),
+                 jobs=2, progress=False, plots=False)
+print(seen)
+"""
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600, cwd=ROOT)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.strip() == "[(2, True, True)]"

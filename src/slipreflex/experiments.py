@@ -61,7 +61,8 @@ from .validation import choices, flag, integer, positive, set_field
 
 __all__ = [
     "METHODS", "EXPERIMENTS", "BOTTLE_NAMES", "DEFAULT_SEED", "ReproduceConfig", "Cell",
-    "trial_seed", "calibration_seed", "estimate_wall_s", "TRIAL_SIM_SPEED", "closing_speed", "calibrate",
+    "trial_seed", "calibration_seed", "estimate_wall_s", "TRIAL_SIM_SPEED", "COLD_COMPILE_S",
+    "cold_kernels", "warm_kernels", "KERNELS", "closing_speed", "calibrate",
     "run_trial",
     "ReproduceResult", "run_reproduce", "write_outputs", "method_context",
     "RESULTS_CSV_COLUMNS", "LANDING_S",
@@ -307,22 +308,105 @@ TRIAL_SIM_SPEED: float = 600.0
 STARTUP_S: float = 3.0
 
 
-def estimate_wall_s(config: ReproduceConfig, jobs: int) -> float:
+#: Wall seconds to compile every kernel of a reproduction when numba's disk cache is cold
+#: (the first run on a machine, or after the kernels' source changed), compiled once in the
+#: parent before the workers start. Measured with an empty ``NUMBA_CACHE_DIR``: threshold
+#: calibration 6.8 s, the slip closed loop 7.0 s, the tactile one 5.3 s (19 s at load average
+#: 1.8-3.1, an AMD EPYC core); 22 leaves a margin.
+COLD_COMPILE_S: float = 22.0
+
+#: The numba kernels a reproduction calls (module, function): their disk cache decides a
+#: cold start (the helpers they inline are compiled into them and never cached alone).
+KERNELS: tuple[tuple[str, str], ...] = (
+    ("slipreflex.sim.kernel", "step_until"), ("slipreflex.sim.kernel", "tactile_frames"),
+    ("slipreflex.sim.kernel", "normal"), ("slipreflex.sim.kernel", "normal_pair"),
+    ("slipreflex.sim.kernel", "derive_key"), ("slipreflex.sim.closed", "_closed_slip"),
+    ("slipreflex.sim.closed", "_closed_tactile"), ("slipreflex.chain._kernels", "chain_step"),
+    ("slipreflex.baselines._kernels", "tactile_step"))
+
+
+def cold_kernels() -> list[str]:
+    """The kernels of :data:`KERNELS` that numba's disk cache cannot load yet, nor this process has.
+
+    Not empty on a first run (or after their source changed): they will be compiled,
+    which :data:`COLD_COMPILE_S` estimates.
+
+    Examples
+    --------
+    >>> isinstance(cold_kernels(), list)
+    True
+    """
+    import importlib
+
+    cold = []
+    for module, name in KERNELS:
+        disp = getattr(importlib.import_module(module), name)
+        if disp.signatures:
+            continue
+        try:
+            warm = bool(disp._cache._cache_file._load_index())
+        except Exception:           # noqa: BLE001 - no cache, or an unreadable index: cold
+            warm = False
+        if not warm:
+            cold.append(f"{module.rsplit('.', 1)[-1]}.{name}")
+    return cold
+
+
+def estimate_wall_s(config: ReproduceConfig, jobs: int, *, cold: bool = False) -> float:
     """A rough run time (s) of ``config`` on ``jobs`` workers, before it starts.
 
-    From the simulated time of every trial and :data:`TRIAL_SIM_SPEED`; the progress
-    lines then measure the real pace.
+    From the simulated time of every trial and :data:`TRIAL_SIM_SPEED`, plus
+    :data:`COLD_COMPILE_S` when the kernels must be compiled first (``cold``, e.g.
+    ``bool(cold_kernels())``); the progress lines then measure the real pace.
 
     Examples
     --------
     >>> small = ReproduceConfig(trials=1, bottles=("TR",), methods=("dath",))
     >>> estimate_wall_s(small, 1) < estimate_wall_s(ReproduceConfig(), 1)
     True
+    >>> estimate_wall_s(small, 2, cold=True) - estimate_wall_s(small, 2) == COLD_COMPILE_S
+    True
     """
     per_trial = [config.duration(e) for e in config.experiments]
     sim_s = sum(per_trial) * config.trials * len(config.bottles) * len(config.methods)
     cells = config.trials * len(config.bottles) * len(config.methods) * len(config.experiments)
-    return STARTUP_S + sim_s / (TRIAL_SIM_SPEED * max(1, min(jobs, cells)))
+    return STARTUP_S + (COLD_COMPILE_S if cold else 0.0) + sim_s / (TRIAL_SIM_SPEED * max(1, min(jobs, cells)))
+
+
+def warm_kernels(config: ReproduceConfig, thresholds: dict[str, float],
+                 specs: dict[str, methods.MethodSpec]) -> list[str]:
+    """Compile the closed-loop kernels the run's methods need, once, in this process.
+
+    Runs 20 ms of closed loop for one method of each input kind (slip sensor, tactile)
+    on the run's first bottle, so that worker processes forked afterwards inherit the
+    compiled kernels (and a cold numba cache is filled once, not once per worker).
+    Returns the methods it ran.
+
+    Examples
+    --------
+    >>> cfg = ReproduceConfig(trials=1, bottles=("TR",), methods=("dath",))
+    >>> warm_kernels(cfg, {}, {"dath": methods.get("dath")})
+    ['dath']
+    """
+    from .hardware import SLIP_FINGER
+    from .sim import run_closed_loop
+    from .sim.variations import VariationSpread, grasped_rig
+
+    plant = {} if config.plant is None else {"rig_kwargs": config.plant.rig_kwargs(),
+                                             "bottles": dict(config.plant.bottles)}
+    ran, kinds = [], set()
+    for name, spec in specs.items():
+        if spec.input_kind in kinds:
+            continue
+        kinds.add(spec.input_kind)
+        rig, grasp = grasped_rig(config.bottles[0], trial_seed(config.seed, config.experiments[0],
+                                                               config.bottles[0], 0),
+                                 config.grasp_force_n, spread=VariationSpread.none(), **plant)
+        p0 = float(round(grasp.positions[SLIP_FINGER]))
+        reflex = spec.build(p0, dataclasses.replace(method_context(config, thresholds), method=spec.name))
+        run_closed_loop(rig, reflex, 0.02)
+        ran.append(name)
+    return ran
 
 
 def closing_speed() -> float:
@@ -472,6 +556,8 @@ def run_reproduce(config: ReproduceConfig | None = None, *, jobs: int | None = N
         check_grasp(config.bottle(b), config.grasp_force_n)
     thresholds = calibrate(config) if set(config.methods) & set(methods.calibrated()) else {}
     specs = {m: methods.get(m) for m in config.methods}
+    if jobs > 1:       # compiled here once: the forked workers inherit it (each compiled its own before)
+        warm_kernels(config, thresholds, specs)
     t_cal = time.perf_counter() - t0
     cells = config.cells()
     plot_method = methods.DATH if methods.DATH in config.methods else config.methods[0]

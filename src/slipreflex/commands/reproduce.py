@@ -159,8 +159,13 @@ def run(args: argparse.Namespace) -> int:
         independent_seeds=args.independent_seeds, grasp_force_n=args.grasp_force, **own_objects(args))
     output_dir(args.out, "--out")                    # before the first trial, not after the last
     jobs = int(args.jobs or os.cpu_count() or 1)
-    n, estimate = len(config.cells()), estimate_wall_s(config, jobs)
+    from ..experiments import COLD_COMPILE_S, cold_kernels
+
+    cold = bool(cold_kernels())
+    n, estimate = len(config.cells()), estimate_wall_s(config, jobs, cold=cold)
     print(f"{n} trials on {jobs} worker(s): about {format_duration(estimate)}"
+          + (f" (first run: about {COLD_COMPILE_S:g} s of it compiles the kernels once; later runs "
+             "load them from numba's cache)" if cold else "")
           + (" (a long run: fewer --trials, --bottles or --methods shorten it)" if estimate > LONG_RUN_S else ""),
           file=sys.stderr, flush=True)
     command = "slipreflex " + " ".join(shlex.quote(a) for a in sys.argv[1:]) if sys.argv[1:] else None
