@@ -214,3 +214,58 @@ print(seen)
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600, cwd=ROOT)
     assert r.returncode == 0, r.stderr
     assert r.stdout.strip() == "[(2, True, True)]"
+
+
+# -- figures draw what the controller saw ---------------------------------------------------------
+
+def _trial(method, experiment="drop", bottle="DK", k=0, **cfg):
+    from slipreflex.experiments import Cell, ReproduceConfig, calibrate, run_trial, trial_seed
+
+    config = ReproduceConfig(trials=1, bottles=(bottle,), experiments=(experiment,), **cfg)
+    th = calibrate(config) if method in ("nmsd", "swt") else {}
+    cell = Cell(experiment, bottle, method, k, trial_seed(config.seed, experiment, bottle, k))
+    return run_trial(cell, config, th, keep_plot=True)
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_the_loop_records_what_its_reflex_computed(compiled):
+    from slipreflex.chain import SlipReflex
+    from slipreflex.hardware import SLIP_FINGER
+    from slipreflex.sim import PAPER_DROP, run_closed_loop
+    from slipreflex.sim.loop import reflex_log
+    from slipreflex.sim.variations import grasped_rig
+
+    from slipreflex.experiments import DEFAULT_SEED, trial_seed
+
+    rig, g = grasped_rig("DK", trial_seed(DEFAULT_SEED, "drop", "DK", 0), 0.8)
+    rig.perturb(PAPER_DROP, at=rig.t + 0.5)
+    reflex = SlipReflex(dath=True, p0=float(round(g.positions[SLIP_FINGER])))
+    t0 = rig.t
+    tr = run_closed_loop(rig, reflex, 1.0, compiled=compiled)
+    log = reflex_log(tr)
+    fed = tr.t[tr.t > t0 + 1e-12]                      # a sample at t0 came before the loop: never the reflex's
+    assert log["t"][0] > t0 and np.array_equal(log["t"], fed[:log["t"].size]) and fed.size - log["t"].size <= 1
+    # every command the loop sent is the recorded MPI state at that input, at a window's end
+    at = np.searchsorted(log["t"], tr.cmd_t)
+    assert np.array_equal(log["command"][at], tr.cmd_value) and (log["count"][at] >= 0).all()
+    # each window count is the number of recorded spikes in that window
+    ends = np.flatnonzero(log["count"] >= 0)
+    starts = np.concatenate(([-1], ends[:-1]))
+    spikes = np.cumsum(log["event"] > 0)
+    assert np.array_equal(spikes[ends] - np.where(starts >= 0, spikes[np.maximum(starts, 0)], 0), log["count"][ends])
+    assert log["count"].max() > 0
+
+
+@pytest.mark.parametrize("method", ["dath", "nmsd", "swt"])
+def test_trial_figures_draw_the_recorded_detections(method):
+    rows, plot = _trial(method)
+    assert plot.event_t is not None and "the reflex computed" in plot.event_label
+    response = rows[0].onset_s + rows[0].response_ms / 1e3
+    if len(plot.event_t) == 0:             # nothing detected: nothing drawn, and no response
+        assert np.isnan(response) and plot.sensor is not None
+    else:                                  # the command never rises before the first drawn detection
+        assert float(np.min(plot.event_t)) <= response + 1e-9
+    if method == "dath":
+        assert plot.counts is not None and int(np.sum(plot.counts)) == len(plot.event_t)
+    else:
+        assert plot.sensor_threshold > 0

@@ -74,6 +74,10 @@ class TrialPlot:
     load_t: Any = None
     load: Any = None
     load_label: str = "volume (ml)"
+    counts_t: Any = None
+    counts: Any = None
+    sensor_threshold: float = float("nan")
+    load_at_onsets: Sequence[float] = ()
     onsets: Sequence[float] = ()
     responses: Sequence[float] = ()
     lasts: Sequence[float] = ()
@@ -122,11 +126,22 @@ def plot_trial(p: TrialPlot, path: str | Path) -> Path:
     axes = list(axes)
     every = list(axes)
     letters = iter("ABCDE")
+    ax_load = None
     if has_load:
-        ax = axes.pop(0)
+        ax = ax_load = axes.pop(0)
         ax.plot(p.load_t, p.load, color="tab:cyan", lw=1)
         ax.set_ylabel(p.load_label, fontsize=8)
-        ax.set_title(f"{next(letters)}) {p.load_label}", loc="left", fontsize=8, y=1.0)
+        ax.set_title(f"{next(letters)}) {p.load_label}, at each onset (I) and response (II)", loc="left",
+                     fontsize=8, y=1.0)
+        lt, lv = np.asarray(p.load_t, dtype=float), np.asarray(p.load, dtype=float)
+        for on, resp in zip(p.onsets, p.responses):
+            for x, mark, color in ((on, "o", "tab:red"), (resp, "s", "tab:green")):
+                if x is not None and math.isfinite(x):
+                    y = float(np.interp(x, lt, lv))
+                    ax.plot([x], [y], mark, color=color, ms=3.5, transform=ax.transData)
+                    if mark == "o":
+                        ax.annotate(f"{y:.0f} ml", (x, y), xytext=(3, 3), textcoords="offset points",
+                                    fontsize=6.5, color=color)
     ax_acc, ax_sen, ax_ev, ax_cmd = axes
     ax_acc.plot(p.accel_t, p.accel, color="0.4", lw=0.6, label="raw")
     if p.envelope is not None:
@@ -141,18 +156,29 @@ def plot_trial(p: TrialPlot, path: str | Path) -> Path:
     ax_acc.set_title(f"{next(letters)}) {p.accel_label}", loc="left", fontsize=8, y=1.0)
     if p.sensor is not None:
         ax_sen.plot(p.sensor_t, p.sensor, color="tab:blue", lw=0.8)
+        if not math.isnan(p.sensor_threshold):
+            ax_sen.axhline(p.sensor_threshold, color="tab:blue", ls=":", lw=0.8)
     ax_sen.set_title(f"{next(letters)}) {p.sensor_label}", loc="left", fontsize=8, y=1.0)
     ev = np.asarray([] if p.event_t is None else p.event_t, dtype=float)
     if ev.size:
         ax_ev.vlines(ev, 0, 1, color="k", lw=0.7)
     ax_ev.set_yticks([])
-    ax_ev.set_title(f"{next(letters)}) {p.event_label} ({ev.size})", loc="left", fontsize=8, y=1.0)
+    counted = ""
+    if p.counts_t is not None and len(p.counts_t):
+        ax_n = ax_ev.twinx()
+        ax_n.step(p.counts_t, p.counts, where="pre", color="tab:orange", lw=0.8, label="window count")
+        ax_n.set_ylabel("count", fontsize=7)
+        ax_n.set_ylim(bottom=0, top=max(1.0, float(np.max(p.counts))) * 1.15)
+        ax_n.tick_params(labelsize=7)
+        every.append(ax_n)
+        counted = ", spike count per window (orange)"
+    ax_ev.set_title(f"{next(letters)}) {p.event_label} ({ev.size}){counted}", loc="left", fontsize=8, y=1.0)
     if p.cmd_t is not None and len(p.cmd_t):
         ax_cmd.step(p.cmd_t, p.cmd_v, where="post", color="tab:green", lw=1.0)
     ax_cmd.set_ylabel("position", fontsize=8)
     ax_cmd.set_title(f"{next(letters)}) commanded finger position", loc="left", fontsize=8, y=1.0)
     ax_cmd.set_xlabel("time (s)")
-    for ax in (ax_acc, ax_sen, ax_ev, ax_cmd):
+    for ax in (ax_acc, ax_sen, ax_ev, ax_cmd) + ((ax_load,) if ax_load is not None else ()):
         _mark(ax, p.onsets, "tab:red", "I onset" if ax is ax_acc else None)
         _mark(ax, p.responses, "tab:green", "II response" if ax is ax_acc else None)
         _mark(ax, p.lasts, "tab:olive", "III last change" if ax is ax_acc else None, ":")
