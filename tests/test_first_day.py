@@ -269,3 +269,67 @@ def test_trial_figures_draw_the_recorded_detections(method):
         assert plot.counts is not None and int(np.sum(plot.counts)) == len(plot.event_t)
     else:
         assert plot.sensor_threshold > 0
+
+
+# -- advice that holds ------------------------------------------------------------------------
+
+JAR = """[bottles.JAR]          # a 250 g jar whose pads grip with mu 0.4
+mass_kg = 0.25
+height_m = 0.12
+diameter_m = 0.07
+mu_s = 0.4
+mu_k = 0.3
+surface = "TR"
+"""
+
+
+def _jar_config(**kw):
+    from slipreflex.experiments import ReproduceConfig
+    from slipreflex.sim import BOTTLES, load_objects
+    from slipreflex.sim.uncertain import Plant
+
+    import tempfile
+
+    path = Path(tempfile.mkdtemp()) / "jar.toml"
+    path.write_text(JAR)
+    plant = Plant(bottles={**BOTTLES, **load_objects(path).bottles})
+    return ReproduceConfig(bottles=("JAR",), plant=plant, **kw), path
+
+
+def test_the_suggested_grasp_force_was_simulated_on_the_runs_trials_before_it_is_printed(tmp_path, capsys):
+    import re
+
+    from slipreflex.experiments import GRASP_MARGIN, grasp_holds, trial_seed
+
+    config, path = _jar_config(trials=10, methods=("dath",))
+    assert main(["reproduce", "--objects", str(path), "--bottles", "JAR", "--methods", "dath", "--trials", "10",
+                 "--out", str(tmp_path / "r"), "--no-progress"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "cannot hold it" in err
+    m = re.search(r"use --grasp-force ([0-9.]+) \(simulated before this message: .* in 20 of 20 of this run's "
+                  r"trial grasps, variations included; ([0-9.]+) N was the weakest", err)
+    assert m, err
+    force, weakest = float(m.group(1)), float(m.group(2))
+    assert force >= weakest * GRASP_MARGIN - 1e-9
+    seeds = [trial_seed(config.seed, e, "JAR", k) for e in ("drop", "pour") for k in range(10)]
+    assert all(grasp_holds(config, "JAR", force, seeds))
+    assert not all(grasp_holds(config, "JAR", weakest / 1.1, seeds))     # the weakest is the edge
+
+
+def test_a_trial_whose_object_left_before_the_load_is_void_and_reported_apart():
+    from slipreflex.analysis.report import report_markdown, summarize, terminal_table
+    from slipreflex.experiments import Cell, run_trial, trial_seed
+
+    config, _ = _jar_config(trials=6, methods=("dath",), experiments=("drop",), grasp_force_n=1.95)
+    rows = []
+    for k in (4, 5):            # at 1.95 N trial 5's grasp lets the jar go during the rest; trial 4 holds
+        cell = Cell("drop", "JAR", "dath", k, trial_seed(config.seed, "drop", "JAR", k))
+        rows += run_trial(cell, config, {})[0]
+    void = [r for r in rows if r.fell_before_load]
+    assert [r.trial for r in void] == [5] and void[0].fell_out_s < void[0].perturbation_s
+    s = summarize(rows)[0]
+    assert s["n_void"] == 1 and s["trial_success_n"] == 1 and s["event_success_n"] == len(rows) - len(void)
+    table = terminal_table([s])
+    assert "Void trials" in table and "drop JAR DATH 1 of 2" in table
+    md = report_markdown(summary=[s], rows=rows, figures=[], setup=[], discussion=[])
+    assert "**Void trials (the object left the grasp before the perturbation" in md

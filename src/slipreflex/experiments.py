@@ -63,7 +63,8 @@ __all__ = [
     "METHODS", "EXPERIMENTS", "BOTTLE_NAMES", "DEFAULT_SEED", "ReproduceConfig", "Cell",
     "trial_seed", "calibration_seed", "estimate_wall_s", "TRIAL_SIM_SPEED", "COLD_COMPILE_S",
     "cold_kernels", "warm_kernels", "KERNELS", "closing_speed", "calibrate",
-    "run_trial",
+    "run_trial", "grip_without_slip", "GRASP_MARGIN", "GRASP_CHECK_TRIALS", "grasp_holds",
+    "verified_grasp_force", "check_run_grasp",
     "ReproduceResult", "run_reproduce", "write_outputs", "method_context",
     "RESULTS_CSV_COLUMNS", "LANDING_S",
 ]
@@ -491,11 +492,132 @@ def run_trial(cell: Cell, config: ReproduceConfig, thresholds: dict[str, float],
         load_t=tr.t if pour else None, load=tr.water_ml if pour else None,
         threshold=float("nan") if threshold is None else float(threshold))
     truth = {round(e.onset, 9): e for e in tr.slip_events}
+    before = tr.fall_time is not None and tr.fall_time < t_pert      # fell in the grasp or the rest
+    unslipped = grip_without_slip(tr.cmd_t, tr.cmd_value, p0, tr.slip_events)
     rows = [dataclasses.replace(r, grasp_position=p0, grasp_force_n=float(grasp.force_n),
-                                perturbation_s=t_pert, **_true_slip(truth.get(round(r.true_onset_s, 9))))
+                                perturbation_s=t_pert, fell_before_load=before, grip_without_slip=unslipped,
+                                **_true_slip(truth.get(round(r.true_onset_s, 9))))
             for r in analyse_trial(streams)]
     plot = trial_plot(cell, spec, tr, reflex, rows, t_pert) if keep_plot else None
     return rows, plot
+
+
+def grip_without_slip(cmd_t, cmd_v, base: float, slips: Any) -> float:
+    """How far the commanded position rose (finger units) while no true slip was under way.
+
+    ``slips`` are the simulator's slip episodes (``onset``, ``end``; an open one lasts to
+    the end); ``base`` is the command in force before the first (the grasp position).
+    A reflex that squeezes at a knock, before any slip, shows here and not in its
+    response times.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace as E
+    >>> grip_without_slip([1.0, 2.0, 3.0], [150.0, 170.0, 175.0], 148.0, [E(onset=1.9, end=2.5)])
+    7.0
+    """
+    t = np.asarray(cmd_t, dtype=float)
+    v = np.asarray(cmd_v, dtype=float)
+    if t.size == 0:
+        return 0.0
+    rise = np.maximum(np.diff(np.concatenate(([base], v))), 0.0)
+    during = np.zeros(t.size, dtype=bool)
+    for ev in slips:
+        end = math.inf if ev.end is None else ev.end
+        during |= (t >= ev.onset) & (t <= end)
+    return float(rise[~during].sum())
+
+
+#: The force a failed grasp check suggests is the weakest that held every checked trial grasp
+#: of the run, times this margin (an estimate: trial-to-trial variation of placement and
+#: friction beyond the checked seeds; 1.2 is the margin above which no trial of the jar
+#: example fell in 40 grasps, tests/test_first_day.py).
+GRASP_MARGIN: float = 1.2
+#: At most this many of a run's trial grasps are simulated to verify a suggested force.
+GRASP_CHECK_TRIALS: int = 20
+
+
+def grasp_holds(config: ReproduceConfig, bottle: str, force: float, seeds) -> list[bool]:
+    """Per trial seed: whether a ``force`` grasp of ``bottle`` holds it through the rest before the load.
+
+    The run's own trial grasp (its variations included), then ``config.rest_s`` of rest:
+    what a trial does before its perturbation.
+
+    Examples
+    --------
+    >>> cfg = ReproduceConfig(trials=1, bottles=("TR",))
+    >>> grasp_holds(cfg, "TR", 0.8, [trial_seed(cfg.seed, "drop", "TR", 0)])
+    [True]
+    """
+    from .sim.variations import VariationSpread, grasped_rig
+
+    plant = {} if config.plant is None else {"rig_kwargs": config.plant.rig_kwargs(),
+                                             "bottles": dict(config.plant.bottles)}
+    held = []
+    for seed in seeds:
+        rig, _ = grasped_rig(bottle, seed, force, spread=None if config.variations else VariationSpread.none(),
+                             **plant)
+        rig.advance(config.rest_s)
+        held.append(not rig.fallen)
+    return held
+
+
+def verified_grasp_force(config: ReproduceConfig, bottle: str) -> tuple[float, float, int]:
+    """A grasp force for ``bottle`` verified on the run's trial grasps: (suggested, weakest, grasps).
+
+    ``weakest`` is the weakest force (steps of 10 % from the run's) that held every one of
+    the run's first :data:`GRASP_CHECK_TRIALS` trial grasps through the rest; the
+    suggestion is ``weakest`` times :data:`GRASP_MARGIN`, rounded up to 0.1 N, and
+    simulated again on the same grasps before it is returned (raised further if any fell).
+
+    Examples
+    --------
+    >>> cfg = ReproduceConfig(trials=2, bottles=("TR",), grasp_force_n=0.8)
+    >>> force, weakest, n = verified_grasp_force(cfg, "TR")
+    >>> force >= weakest * GRASP_MARGIN, n
+    (True, 4)
+    """
+    seeds = list(dict.fromkeys(trial_seed(config.seed, e, bottle, k) for k in range(config.trials)
+                               for e in config.experiments))[:GRASP_CHECK_TRIALS]
+    weakest = config.grasp_force_n
+    for _ in range(40):
+        if all(grasp_holds(config, bottle, weakest, seeds)):
+            break
+        weakest *= 1.1
+    force = math.ceil(weakest * GRASP_MARGIN * 10.0 - 1e-9) / 10.0
+    while not all(grasp_holds(config, bottle, force, seeds)):
+        force = math.ceil(force * 11.0 - 1e-9) / 10.0
+    return force, weakest, len(seeds)
+
+
+def check_run_grasp(config: ReproduceConfig, bottle: str) -> None:
+    """Refuse a run whose grasp cannot hold ``bottle``, suggesting a force verified on its trials.
+
+    :func:`slipreflex.sim.calibration.check_grasp` decides (one nominal grasp); when it
+    refuses, the force the message suggests comes from :func:`verified_grasp_force`: it
+    held every checked trial grasp of this run through the rest, with a margin.
+
+    Raises
+    ------
+    slipreflex.sim.calibration.GraspFailed
+
+    Examples
+    --------
+    >>> check_run_grasp(ReproduceConfig(trials=1, bottles=("TR",)), "TR")
+    """
+    from .sim.calibration import GraspFailed, check_grasp
+
+    try:
+        check_grasp(config.bottle(bottle), config.grasp_force_n)
+    except GraspFailed as err:
+        text = str(err)
+        reason = text.split(": use ", 1)[0] if ": use " in text else text
+        force, weakest, n = verified_grasp_force(config, bottle)
+        raise GraspFailed(
+            f"{reason}: use --grasp-force {force:.1f} (simulated before this message: it held the bottle "
+            f"through the grasp and the {config.rest_s:g} s rest in {n} of {n} of this run's trial grasps, "
+            f"variations included; {weakest:.2f} N was the weakest that held them all, plus "
+            f"{100 * (GRASP_MARGIN - 1):.0f} % margin), or pads that grip better") from None
 
 
 def _true_slip(ev: Any) -> dict[str, float]:
@@ -551,9 +673,8 @@ def run_reproduce(config: ReproduceConfig | None = None, *, jobs: int | None = N
         raise ParameterError(f"jobs must be >= 1, got {jobs}")
     t0 = time.perf_counter()
     import scipy.signal  # noqa: F401  (once, here: forked workers inherit it; each took ~1 s to import it)
-    from .sim.calibration import check_grasp
     for b in config.bottles:                    # a grasp that cannot hold a bottle fails here, at once
-        check_grasp(config.bottle(b), config.grasp_force_n)
+        check_run_grasp(config, b)
     thresholds = calibrate(config) if set(config.methods) & set(methods.calibrated()) else {}
     specs = {m: methods.get(m) for m in config.methods}
     if jobs > 1:       # compiled here once: the forked workers inherit it (each compiled its own before)

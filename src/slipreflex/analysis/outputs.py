@@ -13,7 +13,7 @@ Examples
 >>> res = run_reproduce(ReproduceConfig(trials=1, bottles=("TX",), methods=("fixed",),
 ...                                     experiments=("drop",)), jobs=1, progress=False, plots=False)
 >>> sorted(write_outputs(res, tempfile.mkdtemp()))[:3]
-['bars_drop_response.png', 'bars_drop_total.png', 'report']
+['bars_drop_response.png', 'bars_drop_total.png', 'grip_without_slip.png']
 """
 
 from __future__ import annotations
@@ -25,11 +25,12 @@ from pathlib import Path
 from typing import Any
 
 from .paper import BOTTLE_ORDER, EXPERIMENTS
-from .report import (SUCCESS_CAPTION, SUMMARY_COLUMNS, bars_caption, discussion_text, report_markdown,
+from .report import (GRIP_CAPTION, SUCCESS_CAPTION, SUMMARY_COLUMNS, bars_caption, discussion_text, report_markdown,
                      setup_lines, trial_caption, write_csv, zoom_caption)
 from .trial import RESULT_COLUMNS, TrialRow
 
-__all__ = ["ReproduceResult", "write_outputs", "trial_plot", "paper_part", "not_the_papers", "trial_outcome"]
+__all__ = ["ReproduceResult", "write_outputs", "trial_plot", "paper_part", "not_the_papers", "trial_outcome",
+           "scored", "zoom_window"]
 
 
 @dataclass
@@ -140,7 +141,7 @@ def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str 
                          setup=setup_lines(result, command), notices=notices,
                          discussion=list(discussion) if discussion is not None else discussion_text(paper),
                          claims=() if partial or not paper.rows else judge_run(
-                             paper.rows, seed=result.config.seed, plant=result.config.plant))
+                             scored(paper.rows), seed=result.config.seed, plant=result.config.plant))
     if others:
         from .report import terminal_table
 
@@ -148,6 +149,19 @@ def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str 
     paths["report"] = out / "report.md"
     paths["report"].write_text(md)
     return paths
+
+
+def scored(rows: Sequence[Any]) -> list[Any]:
+    """The rows a method is judged on: every row but those of void trials (object out before the load).
+
+    Examples
+    --------
+    >>> scored([{"fell_before_load": True}, {"fell_before_load": False}])
+    [{'fell_before_load': False}]
+    """
+    from .report import void
+
+    return [r for r in rows if not void(r)]
 
 
 def not_the_papers(config: Any) -> list[str]:
@@ -224,6 +238,7 @@ def _figure_tasks(result: ReproduceResult, fig_dir: Path) -> list[tuple[str, str
             tasks.append((f"bars_{e}_{metric}.png", bars_caption(e, metric), F.bar_chart,
                           (result.summary, e, metric)))
     tasks.append(("success.png", SUCCESS_CAPTION, F.success_chart, (result.summary,)))
+    tasks.append(("grip_without_slip.png", GRIP_CAPTION, F.grip_chart, (result.summary,)))
     return tasks
 
 

@@ -158,6 +158,10 @@ def run(args: argparse.Namespace) -> int:
         swt_persist=args.swt_persist, variations=not args.no_variations,
         independent_seeds=args.independent_seeds, grasp_force_n=args.grasp_force, **own_objects(args))
     output_dir(args.out, "--out")                    # before the first trial, not after the last
+    from ..experiments import check_run_grasp
+
+    for b in config.bottles:                         # a grasp that cannot hold: one line, before the estimate
+        check_run_grasp(config, b)
     jobs = int(args.jobs or os.cpu_count() or 1)
     from ..experiments import COLD_COMPILE_S, cold_kernels
 
@@ -193,7 +197,7 @@ def _write(result, out: Path, command: str | None) -> dict:
     from ..experiments import write_outputs
 
     from ..analysis.claims import claims_terminal, judge_run
-    from ..analysis.outputs import paper_part
+    from ..analysis.outputs import paper_part, scored
 
     paths = write_outputs(result, out, command=command)
     paper, _, notice = paper_part(result)
@@ -201,7 +205,7 @@ def _write(result, out: Path, command: str | None) -> dict:
         print(notice)
     print(terminal_table(result.summary))
     if not result.partial_note and paper.rows:
-        print(claims_terminal(judge_run(paper.rows, seed=result.config.seed)))
+        print(claims_terminal(judge_run(scored(paper.rows), seed=result.config.seed)))
     print(f"{len(result.rows)} rows from {result.trials_finished} trials in {result.wall_s:.1f} s "
           f"({result.jobs} jobs); wrote {paths['results'].parent}/"
           "{results.csv, summary.csv, report.md" + ("" if result.partial_note else ", figures/") + "}")
