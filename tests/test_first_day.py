@@ -333,3 +333,53 @@ def test_a_trial_whose_object_left_before_the_load_is_void_and_reported_apart():
     assert "Void trials" in table and "drop JAR DATH 1 of 2" in table
     md = report_markdown(summary=[s], rows=rows, figures=[], setup=[], discussion=[])
     assert "**Void trials (the object left the grasp before the perturbation" in md
+
+
+# -- success per trial and per slip event; grip added without slip --------------------------------
+
+def test_success_is_counted_per_trial_and_per_slip_event_and_named_so(tmp_path):
+    from slipreflex.analysis.figures import success_chart
+    from slipreflex.analysis.report import report_markdown, summarize, terminal_table
+
+    rows = [{"experiment": "drop", "bottle": "TX", "method": "dath", "trial": k, "seed": k, "event": e,
+             "n_events": 1, "success": not (k == 9 and e == 1), "grip_without_slip": 0.0}
+            for k in range(10) for e in range(2 if k == 9 else 1)]
+    s = summarize(rows)[0]
+    assert (s["trial_success_n"], s["event_success_n"]) == (10, 11)
+    assert s["trial_success_rate"] == 0.9 and s["event_success_rate"] == pytest.approx(10 / 11)
+    table = terminal_table([s])
+    assert "success/trial" in table and "success/slip event" in table and "90% of 10" in table
+    assert "91% of 11" in table
+    md = report_markdown(summary=[s], rows=rows, figures=[], setup=[], discussion=[])
+    assert "| success per trial | success per slip event |" in md and "| 90% of 10 | 91% of 11 |" in md
+    assert success_chart([s], tmp_path / "s.png").stat().st_size > 1000
+
+
+def test_grip_added_before_any_slip_is_measured():
+    """The docs' can under the pour: DATH squeezes when the water lands, with no slip at all."""
+    from importlib.resources import files
+
+    from slipreflex.analysis.report import summarize, terminal_table
+    from slipreflex.experiments import Cell, ReproduceConfig, run_trial, trial_seed
+    from slipreflex.sim import BOTTLES, load_objects
+    from slipreflex.sim.uncertain import Plant
+
+    objs = load_objects(files("slipreflex") / "data/objects/example.toml")
+    config = ReproduceConfig(trials=1, bottles=("CAN",), experiments=("pour",),
+                             plant=Plant(bottles={**BOTTLES, **objs.bottles}))
+    rows, _ = run_trial(Cell("pour", "CAN", "dath", 0, trial_seed(config.seed, "pour", "CAN", 0)), config, {})
+    assert rows[0].n_true_slips == 0 and np.isnan(rows[0].response_ms)     # no slip, so no response time
+    assert rows[0].grip_without_slip > 100                                 # yet the hand closed
+    s = summarize(rows)[0]
+    assert s["grip_without_slip_mean"] == rows[0].grip_without_slip
+    assert f"{rows[0].grip_without_slip:.0f} units" in terminal_table([s])
+
+
+def test_the_run_draws_success_and_grip_figures(tmp_path):
+    from slipreflex.analysis.outputs import _figure_tasks
+    from slipreflex.experiments import ReproduceConfig, ReproduceResult
+
+    res = ReproduceResult(ReproduceConfig(trials=1), [], [{"experiment": "drop", "bottle": "TR", "method": "dath",
+                                                         "grip_without_slip_mean": 5.0}], {}, {}, 0.0, 1)
+    names = [t[0] for t in _figure_tasks(res, tmp_path)]
+    assert "success.png" in names and "grip_without_slip.png" in names
