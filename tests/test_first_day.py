@@ -383,3 +383,51 @@ def test_the_run_draws_success_and_grip_figures(tmp_path):
                                                          "grip_without_slip_mean": 5.0}], {}, {}, 0.0, 1)
     names = [t[0] for t in _figure_tasks(res, tmp_path)]
     assert "success.png" in names and "grip_without_slip.png" in names
+
+
+# -- the figures a reader of the paper misses ------------------------------------------------------
+
+def _texts_of_saved_figures(monkeypatch):
+    import matplotlib.figure
+
+    seen = []
+    real = matplotlib.figure.Figure.savefig
+
+    def keep(fig, *a, **k):
+        seen.append([t.get_text() for ax in fig.axes for t in ax.texts]
+                    + [ax.get_title() for ax in fig.axes] + [fig._suptitle.get_text() if fig._suptitle else ""])
+        return real(fig, *a, **k)
+    monkeypatch.setattr(matplotlib.figure.Figure, "savefig", keep)
+    return seen
+
+
+def test_the_scan_figure_draws_the_papers_levels(tmp_path, monkeypatch):
+    seen = _texts_of_saved_figures(monkeypatch)
+    assert main(["scan", "--out", str(tmp_path)]) == 0
+    texts = " ".join(seen[-1])
+    assert "paper 0.3-0.5 V" in texts and "paper 3.32-3.35 V" in texts and "the paper's levels" in texts
+
+
+def test_calibrate_draws_the_open_loop_calibration(tmp_path, monkeypatch, capsys):
+    seen = _texts_of_saved_figures(monkeypatch)
+    png = tmp_path / "cal" / "calibration.png"
+    assert main(["calibrate", "--bottles", "TR", "--figure", str(png)]) == 0
+    assert png.stat().st_size > 5000 and f"wrote {png}" in capsys.readouterr().out
+    texts = " ".join(seen[-1])
+    assert "Open-loop calibration" in texts and "TR: pad mu_s" in texts
+
+
+def test_a_run_draws_nmsd_and_swt_trials_and_zooms_that_zoom(tmp_path):
+    from slipreflex.analysis.outputs import _figure_tasks, zoom_window
+    from slipreflex.experiments import ReproduceConfig, run_reproduce
+
+    res = run_reproduce(ReproduceConfig(trials=1, bottles=("DK", "TX"), experiments=("drop",)), jobs=1,
+                        progress=False)
+    names = [t[0] for t in _figure_tasks(res, tmp_path)]
+    for m in ("dath", "nmsd", "swt"):
+        assert f"trial_drop_DK_{m}.png" in names
+    assert "trial_drop_TX_dath.png" in names and "trial_drop_TX_nmsd.png" not in names
+    plot = res.plots[("drop", "DK", "dath", 0)]
+    lo, hi = zoom_window(plot, "drop")
+    full = plot.xlim[1] - plot.xlim[0]
+    assert hi - lo <= full / 3 and lo < min(plot.onsets) and hi > max(plot.responses)

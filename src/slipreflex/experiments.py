@@ -682,7 +682,11 @@ def run_reproduce(config: ReproduceConfig | None = None, *, jobs: int | None = N
     t_cal = time.perf_counter() - t0
     cells = config.cells()
     plot_method = methods.DATH if methods.DATH in config.methods else config.methods[0]
-    want = {c.key for c in cells if plots and c.trial == 0 and c.method == plot_method}
+    # every bottle's first trial with DATH (the paper's Figs. 10-12, 15); NMSD's and SWT-SD's on the
+    # first bottle, so their detections are seen too
+    extra = {methods.NMSD, methods.SWT} & set(config.methods)
+    want = {c.key for c in cells if plots and c.trial == 0
+            and (c.method == plot_method or (c.method in extra and c.bottle == config.bottles[0]))}
     # the methods of one trial seed (consecutive cells) run in one call and share its grasp
     groups = [tuple(g) for _, g in itertools.groupby(cells, lambda c: (c.experiment, c.bottle, c.trial, c.seed))]
     calls = {g: functools.partial(_run_paired, g, config, thresholds, frozenset(want), specs) for g in groups}

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from ..methods import DATH
 from .paper import BOTTLE_ORDER, EXPERIMENTS
 from .report import (GRIP_CAPTION, SUCCESS_CAPTION, SUMMARY_COLUMNS, bars_caption, discussion_text, report_markdown,
                      setup_lines, trial_caption, write_csv, zoom_caption)
@@ -229,7 +230,7 @@ def _figure_tasks(result: ReproduceResult, fig_dir: Path) -> list[tuple[str, str
         plot = result.plots[key]
         tasks.append((f"trial_{e}_{b}_{m}.png", trial_caption(e, b, m), F.plot_trial, (plot,)))
         ons = [x for x in plot.onsets if x == x]
-        if ons:
+        if ons and (m == DATH or not any(k[2] == DATH for k in result.plots)):    # one zoom per figure set
             zoom = dataclasses.replace(plot, xlim=zoom_window(plot, e),
                                        title=plot.title + ", zoomed on its slips")
             tasks.append((f"trial_{e}_{b}_{m}_zoom.png", zoom_caption(b, m, e), F.plot_trial, (zoom,)))

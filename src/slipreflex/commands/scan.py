@@ -157,13 +157,33 @@ def _figure(result, summary, path: Path, threshold: float) -> None:
         ax.axvline(a * 1000, ls="--", c="grey", lw=0.6)
         ax.text((a + b) * 500, 0.97, name, transform=ax.get_xaxis_transform(), ha="center", va="top",
                 fontsize=8, bbox={"fc": "white", "ec": "0.6", "lw": 0.5, "pad": 1.5})
-    ax.set(title="A  filtered slip-sensor output over the scan (shaded: the test surface's regions)",
-           xlabel="position (mm)", ylabel="V")
+    from ..analysis.paper import PAPER_SCAN_VOLTS
+
+    banded = False
+    for name, a, b in result.regions:         # the paper's level on white and on black, where they lie
+        if name in PAPER_SCAN_VOLTS:
+            lo, hi = PAPER_SCAN_VOLTS[name]
+            ax.fill_between([a * 1000, b * 1000], lo - 0.01, hi + 0.01, color="tab:red", alpha=0.25, lw=0,
+                            label=None if banded else "paper's level (Figs. 6-9)", zorder=1)
+            low = lo < 0.5 * float(np.nanmax(x))     # the label inside the axes: above a low band, below a high one
+            ax.text(b * 1000 - 0.5, hi + 0.03 if low else lo - 0.06, f"paper {lo:g}-{hi:g} V", ha="right",
+                    va="bottom" if low else "top", fontsize=7, color="tab:red")
+            banded = True
+    if banded:
+        ax.legend(fontsize=7, loc="center right")
+    ax.set(title="A  filtered slip-sensor output over the scan (shaded: the test surface's regions; red: "
+                 "the paper's levels)", xlabel="position (mm)", ylabel="V")
     for col, name in enumerate(shown):
         a, b = regions[name]
         sel = (pos >= a + 2.5) & (pos <= b - 2.5)
         axb = fig.add_subplot(gs[1, col])
         axb.plot(pos[sel], x[sel], lw=0.8)
+        base = name.split("@")[0]
+        if base in PAPER_SCAN_VOLTS:
+            lo, hi = PAPER_SCAN_VOLTS[base]
+            axb.axhspan(lo, hi, color="tab:red", alpha=0.2, lw=0)
+            axb.text(0.99, 0.02, f"paper {lo:g}-{hi:g} V (red band{'' if lo <= x[sel].max() and hi >= x[sel].min() else ', off this scale'})",
+                     transform=axb.transAxes, ha="right", va="bottom", fontsize=7, color="tab:red")
         axb.set(title=f"B  {name}: filtered output", ylabel="V")
         axc = fig.add_subplot(gs[2, col], sharex=axb)
         for meth, color in ((FIXED, "C0"), (DATH, "C2")):
