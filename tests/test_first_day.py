@@ -167,17 +167,18 @@ def test_study_docs_install_from_the_repository_or_a_wheel():
 # -- the first run ------------------------------------------------------------------------------
 
 def test_an_empty_numba_cache_is_seen_as_cold(tmp_path):
-    code = "from slipreflex.experiments import cold_kernels; print(len(cold_kernels()))"
+    code = "from slipreflex.warmup import cold_kernels; print(len(cold_kernels()))"
     env = {**__import__("os").environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba")}
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=300)
     assert r.returncode == 0, r.stderr
-    from slipreflex.experiments import KERNELS
+    from slipreflex.warmup import KERNELS
 
     assert int(r.stdout) == len(KERNELS)
 
 
 def test_the_estimate_counts_the_compilation_of_a_cold_cache(tmp_path, capsys, monkeypatch):
     import slipreflex.experiments as ex
+    import slipreflex.warmup as wu
 
     class Stop(Exception):
         pass
@@ -188,7 +189,7 @@ def test_the_estimate_counts_the_compilation_of_a_cold_cache(tmp_path, capsys, m
     monkeypatch.setattr(ex, "run_reproduce", stop)
     said = {}
     for cold in ([], ["closed._closed_slip"]):
-        monkeypatch.setattr(ex, "cold_kernels", lambda cold=cold: cold)
+        monkeypatch.setattr(wu, "cold_kernels", lambda cold=cold: cold)
         with pytest.raises(Stop):
             main(["reproduce", "--trials", "1", "--bottles", "TR", "--experiments", "drop", "--jobs", "2",
                   "--out", str(tmp_path / "r")])
@@ -299,7 +300,8 @@ def _jar_config(**kw):
 def test_the_suggested_grasp_force_was_simulated_on_the_runs_trials_before_it_is_printed(tmp_path, capsys):
     import re
 
-    from slipreflex.experiments import GRASP_MARGIN, grasp_holds, trial_seed
+    from slipreflex.experiments import trial_seed
+    from slipreflex.grasping import GRASP_MARGIN, grasp_holds
 
     config, path = _jar_config(trials=10, methods=("dath",))
     assert main(["reproduce", "--objects", str(path), "--bottles", "JAR", "--methods", "dath", "--trials", "10",

@@ -57,14 +57,13 @@ from .interrupts import Interrupted
 from .progress import Progress
 from .hardware import CONTACT_FORCE_N
 from .thresholds import calibrate, calibration_seed
+from .warmup import STARTUP_S, TRIAL_SIM_SPEED, estimate_wall_s  # noqa: F401  (public here too)
 from .validation import choices, flag, integer, positive, set_field
 
 __all__ = [
     "METHODS", "EXPERIMENTS", "BOTTLE_NAMES", "DEFAULT_SEED", "ReproduceConfig", "Cell",
-    "trial_seed", "calibration_seed", "estimate_wall_s", "TRIAL_SIM_SPEED", "COLD_COMPILE_S",
-    "cold_kernels", "warm_kernels", "KERNELS", "closing_speed", "calibrate",
-    "run_trial", "grip_without_slip", "GRASP_MARGIN", "GRASP_CHECK_TRIALS", "grasp_holds",
-    "verified_grasp_force", "check_run_grasp",
+    "trial_seed", "calibration_seed", "estimate_wall_s", "TRIAL_SIM_SPEED", "grasp_seeds", "closing_speed", "calibrate",
+    "run_trial",
     "ReproduceResult", "run_reproduce", "write_outputs", "method_context",
     "RESULTS_CSV_COLUMNS", "LANDING_S",
 ]
@@ -280,6 +279,18 @@ def trial_seed(master: int, experiment: str, bottle: str, trial: int, method: st
     return _seed63(child)
 
 
+def grasp_seeds(config: ReproduceConfig, bottle: str) -> list[int]:
+    """The trial seeds of ``bottle`` in a run, trial by trial (what its grasp check simulates).
+
+    Examples
+    --------
+    >>> len(grasp_seeds(ReproduceConfig(trials=3), "TR"))
+    6
+    """
+    return list(dict.fromkeys(trial_seed(config.seed, e, bottle, k) for k in range(config.trials)
+                              for e in config.experiments))
+
+
 @functools.lru_cache(maxsize=64)
 def _cell_sequence(master: int, e: int, b: int) -> tuple[Any, tuple[int, ...], int]:
     """(entropy, spawn_key, pool_size) of ``SeedSequence(master).spawn(2)[e].spawn(3)[b]``.
@@ -297,117 +308,6 @@ def _cell_sequence(master: int, e: int, b: int) -> tuple[Any, tuple[int, ...], i
 def _seed63(ss: np.random.SeedSequence) -> int:
     """A seed sequence as the 63-bit integer results.csv records."""
     return int(ss.generate_state(2, dtype=np.uint64)[0] >> np.uint64(1))
-
-
-#: Simulated seconds per wall second of one trial (simulation, reflex, analysis) on one
-#: worker, for the run-time estimate printed before a reproduction starts.
-#: ``python benchmarks/bench_reproduce.py --jobs 2`` prints it as simulated s per CPU s (798 at load
-#: average 1.4, 514-562 at 2.9-3.8, default grid, compiled closed loop, an AMD EPYC core); 600
-#: leaves a margin. A busy machine runs slower, and the progress lines say so.
-TRIAL_SIM_SPEED: float = 600.0
-#: Wall seconds before the first trial: imports, threshold calibration, worker start.
-STARTUP_S: float = 3.0
-
-
-#: Wall seconds to compile every kernel of a reproduction when numba's disk cache is cold
-#: (the first run on a machine, or after the kernels' source changed), compiled once in the
-#: parent before the workers start. Measured with an empty ``NUMBA_CACHE_DIR``: threshold
-#: calibration 6.8 s, the slip closed loop 7.0 s, the tactile one 5.3 s (19 s at load average
-#: 1.8-3.1, an AMD EPYC core); 22 leaves a margin.
-COLD_COMPILE_S: float = 22.0
-
-#: The numba kernels a reproduction calls (module, function): their disk cache decides a
-#: cold start (the helpers they inline are compiled into them and never cached alone).
-KERNELS: tuple[tuple[str, str], ...] = (
-    ("slipreflex.sim.kernel", "step_until"), ("slipreflex.sim.kernel", "tactile_frames"),
-    ("slipreflex.sim.kernel", "normal"), ("slipreflex.sim.kernel", "normal_pair"),
-    ("slipreflex.sim.kernel", "derive_key"), ("slipreflex.sim.closed", "_closed_slip"),
-    ("slipreflex.sim.closed", "_closed_tactile"), ("slipreflex.chain._kernels", "chain_step"),
-    ("slipreflex.baselines._kernels", "tactile_step"))
-
-
-def cold_kernels() -> list[str]:
-    """The kernels of :data:`KERNELS` that numba's disk cache cannot load yet, nor this process has.
-
-    Not empty on a first run (or after their source changed): they will be compiled,
-    which :data:`COLD_COMPILE_S` estimates.
-
-    Examples
-    --------
-    >>> isinstance(cold_kernels(), list)
-    True
-    """
-    import importlib
-
-    cold = []
-    for module, name in KERNELS:
-        disp = getattr(importlib.import_module(module), name)
-        if disp.signatures:
-            continue
-        try:
-            warm = bool(disp._cache._cache_file._load_index())
-        except Exception:           # noqa: BLE001 - no cache, or an unreadable index: cold
-            warm = False
-        if not warm:
-            cold.append(f"{module.rsplit('.', 1)[-1]}.{name}")
-    return cold
-
-
-def estimate_wall_s(config: ReproduceConfig, jobs: int, *, cold: bool = False) -> float:
-    """A rough run time (s) of ``config`` on ``jobs`` workers, before it starts.
-
-    From the simulated time of every trial and :data:`TRIAL_SIM_SPEED`, plus
-    :data:`COLD_COMPILE_S` when the kernels must be compiled first (``cold``, e.g.
-    ``bool(cold_kernels())``); the progress lines then measure the real pace.
-
-    Examples
-    --------
-    >>> small = ReproduceConfig(trials=1, bottles=("TR",), methods=("dath",))
-    >>> estimate_wall_s(small, 1) < estimate_wall_s(ReproduceConfig(), 1)
-    True
-    >>> estimate_wall_s(small, 2, cold=True) - estimate_wall_s(small, 2) == COLD_COMPILE_S
-    True
-    """
-    per_trial = [config.duration(e) for e in config.experiments]
-    sim_s = sum(per_trial) * config.trials * len(config.bottles) * len(config.methods)
-    cells = config.trials * len(config.bottles) * len(config.methods) * len(config.experiments)
-    return STARTUP_S + (COLD_COMPILE_S if cold else 0.0) + sim_s / (TRIAL_SIM_SPEED * max(1, min(jobs, cells)))
-
-
-def warm_kernels(config: ReproduceConfig, thresholds: dict[str, float],
-                 specs: dict[str, methods.MethodSpec]) -> list[str]:
-    """Compile the closed-loop kernels the run's methods need, once, in this process.
-
-    Runs 20 ms of closed loop for one method of each input kind (slip sensor, tactile)
-    on the run's first bottle, so that worker processes forked afterwards inherit the
-    compiled kernels (and a cold numba cache is filled once, not once per worker).
-    Returns the methods it ran.
-
-    Examples
-    --------
-    >>> cfg = ReproduceConfig(trials=1, bottles=("TR",), methods=("dath",))
-    >>> warm_kernels(cfg, {}, {"dath": methods.get("dath")})
-    ['dath']
-    """
-    from .hardware import SLIP_FINGER
-    from .sim import run_closed_loop
-    from .sim.variations import VariationSpread, grasped_rig
-
-    plant = {} if config.plant is None else {"rig_kwargs": config.plant.rig_kwargs(),
-                                             "bottles": dict(config.plant.bottles)}
-    ran, kinds = [], set()
-    for name, spec in specs.items():
-        if spec.input_kind in kinds:
-            continue
-        kinds.add(spec.input_kind)
-        rig, grasp = grasped_rig(config.bottles[0], trial_seed(config.seed, config.experiments[0],
-                                                               config.bottles[0], 0),
-                                 config.grasp_force_n, spread=VariationSpread.none(), **plant)
-        p0 = float(round(grasp.positions[SLIP_FINGER]))
-        reflex = spec.build(p0, dataclasses.replace(method_context(config, thresholds), method=spec.name))
-        run_closed_loop(rig, reflex, 0.02)
-        ran.append(name)
-    return ran
 
 
 def closing_speed() -> float:
@@ -493,6 +393,8 @@ def run_trial(cell: Cell, config: ReproduceConfig, thresholds: dict[str, float],
         threshold=float("nan") if threshold is None else float(threshold))
     truth = {round(e.onset, 9): e for e in tr.slip_events}
     before = tr.fall_time is not None and tr.fall_time < t_pert      # fell in the grasp or the rest
+    from .analysis.metrics import grip_without_slip
+
     unslipped = grip_without_slip(tr.cmd_t, tr.cmd_value, p0, tr.slip_events)
     rows = [dataclasses.replace(r, grasp_position=p0, grasp_force_n=float(grasp.force_n),
                                 perturbation_s=t_pert, fell_before_load=before, grip_without_slip=unslipped,
@@ -500,124 +402,6 @@ def run_trial(cell: Cell, config: ReproduceConfig, thresholds: dict[str, float],
             for r in analyse_trial(streams)]
     plot = trial_plot(cell, spec, tr, reflex, rows, t_pert) if keep_plot else None
     return rows, plot
-
-
-def grip_without_slip(cmd_t, cmd_v, base: float, slips: Any) -> float:
-    """How far the commanded position rose (finger units) while no true slip was under way.
-
-    ``slips`` are the simulator's slip episodes (``onset``, ``end``; an open one lasts to
-    the end); ``base`` is the command in force before the first (the grasp position).
-    A reflex that squeezes at a knock, before any slip, shows here and not in its
-    response times.
-
-    Examples
-    --------
-    >>> from types import SimpleNamespace as E
-    >>> grip_without_slip([1.0, 2.0, 3.0], [150.0, 170.0, 175.0], 148.0, [E(onset=1.9, end=2.5)])
-    7.0
-    """
-    t = np.asarray(cmd_t, dtype=float)
-    v = np.asarray(cmd_v, dtype=float)
-    if t.size == 0:
-        return 0.0
-    rise = np.maximum(np.diff(np.concatenate(([base], v))), 0.0)
-    during = np.zeros(t.size, dtype=bool)
-    for ev in slips:
-        end = math.inf if ev.end is None else ev.end
-        during |= (t >= ev.onset) & (t <= end)
-    return float(rise[~during].sum())
-
-
-#: The force a failed grasp check suggests is the weakest that held every checked trial grasp
-#: of the run, times this margin (an estimate: trial-to-trial variation of placement and
-#: friction beyond the checked seeds; 1.2 is the margin above which no trial of the jar
-#: example fell in 40 grasps, tests/test_first_day.py).
-GRASP_MARGIN: float = 1.2
-#: At most this many of a run's trial grasps are simulated to verify a suggested force.
-GRASP_CHECK_TRIALS: int = 20
-
-
-def grasp_holds(config: ReproduceConfig, bottle: str, force: float, seeds) -> list[bool]:
-    """Per trial seed: whether a ``force`` grasp of ``bottle`` holds it through the rest before the load.
-
-    The run's own trial grasp (its variations included), then ``config.rest_s`` of rest:
-    what a trial does before its perturbation.
-
-    Examples
-    --------
-    >>> cfg = ReproduceConfig(trials=1, bottles=("TR",))
-    >>> grasp_holds(cfg, "TR", 0.8, [trial_seed(cfg.seed, "drop", "TR", 0)])
-    [True]
-    """
-    from .sim.variations import VariationSpread, grasped_rig
-
-    plant = {} if config.plant is None else {"rig_kwargs": config.plant.rig_kwargs(),
-                                             "bottles": dict(config.plant.bottles)}
-    held = []
-    for seed in seeds:
-        rig, _ = grasped_rig(bottle, seed, force, spread=None if config.variations else VariationSpread.none(),
-                             **plant)
-        rig.advance(config.rest_s)
-        held.append(not rig.fallen)
-    return held
-
-
-def verified_grasp_force(config: ReproduceConfig, bottle: str) -> tuple[float, float, int]:
-    """A grasp force for ``bottle`` verified on the run's trial grasps: (suggested, weakest, grasps).
-
-    ``weakest`` is the weakest force (steps of 10 % from the run's) that held every one of
-    the run's first :data:`GRASP_CHECK_TRIALS` trial grasps through the rest; the
-    suggestion is ``weakest`` times :data:`GRASP_MARGIN`, rounded up to 0.1 N, and
-    simulated again on the same grasps before it is returned (raised further if any fell).
-
-    Examples
-    --------
-    >>> cfg = ReproduceConfig(trials=2, bottles=("TR",), grasp_force_n=0.8)
-    >>> force, weakest, n = verified_grasp_force(cfg, "TR")
-    >>> force >= weakest * GRASP_MARGIN, n
-    (True, 4)
-    """
-    seeds = list(dict.fromkeys(trial_seed(config.seed, e, bottle, k) for k in range(config.trials)
-                               for e in config.experiments))[:GRASP_CHECK_TRIALS]
-    weakest = config.grasp_force_n
-    for _ in range(40):
-        if all(grasp_holds(config, bottle, weakest, seeds)):
-            break
-        weakest *= 1.1
-    force = math.ceil(weakest * GRASP_MARGIN * 10.0 - 1e-9) / 10.0
-    while not all(grasp_holds(config, bottle, force, seeds)):
-        force = math.ceil(force * 11.0 - 1e-9) / 10.0
-    return force, weakest, len(seeds)
-
-
-def check_run_grasp(config: ReproduceConfig, bottle: str) -> None:
-    """Refuse a run whose grasp cannot hold ``bottle``, suggesting a force verified on its trials.
-
-    :func:`slipreflex.sim.calibration.check_grasp` decides (one nominal grasp); when it
-    refuses, the force the message suggests comes from :func:`verified_grasp_force`: it
-    held every checked trial grasp of this run through the rest, with a margin.
-
-    Raises
-    ------
-    slipreflex.sim.calibration.GraspFailed
-
-    Examples
-    --------
-    >>> check_run_grasp(ReproduceConfig(trials=1, bottles=("TR",)), "TR")
-    """
-    from .sim.calibration import GraspFailed, check_grasp
-
-    try:
-        check_grasp(config.bottle(bottle), config.grasp_force_n)
-    except GraspFailed as err:
-        text = str(err)
-        reason = text.split(": use ", 1)[0] if ": use " in text else text
-        force, weakest, n = verified_grasp_force(config, bottle)
-        raise GraspFailed(
-            f"{reason}: use --grasp-force {force:.1f} (simulated before this message: it held the bottle "
-            f"through the grasp and the {config.rest_s:g} s rest in {n} of {n} of this run's trial grasps, "
-            f"variations included; {weakest:.2f} N was the weakest that held them all, plus "
-            f"{100 * (GRASP_MARGIN - 1):.0f} % margin), or pads that grip better") from None
 
 
 def _true_slip(ev: Any) -> dict[str, float]:
@@ -673,12 +457,16 @@ def run_reproduce(config: ReproduceConfig | None = None, *, jobs: int | None = N
         raise ParameterError(f"jobs must be >= 1, got {jobs}")
     t0 = time.perf_counter()
     import scipy.signal  # noqa: F401  (once, here: forked workers inherit it; each took ~1 s to import it)
+    from .grasping import check_run_grasp
+    from .warmup import warm_kernels
+
     for b in config.bottles:                    # a grasp that cannot hold a bottle fails here, at once
-        check_run_grasp(config, b)
+        check_run_grasp(config, b, grasp_seeds(config, b))
     thresholds = calibrate(config) if set(config.methods) & set(methods.calibrated()) else {}
     specs = {m: methods.get(m) for m in config.methods}
     if jobs > 1:       # compiled here once: the forked workers inherit it (each compiled its own before)
-        warm_kernels(config, thresholds, specs)
+        warm_kernels(config, method_context(config, thresholds), specs,
+                     trial_seed(config.seed, config.experiments[0], config.bottles[0], 0))
     t_cal = time.perf_counter() - t0
     cells = config.cells()
     plot_method = methods.DATH if methods.DATH in config.methods else config.methods[0]

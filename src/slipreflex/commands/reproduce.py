@@ -158,12 +158,13 @@ def run(args: argparse.Namespace) -> int:
         swt_persist=args.swt_persist, variations=not args.no_variations,
         independent_seeds=args.independent_seeds, grasp_force_n=args.grasp_force, **own_objects(args))
     output_dir(args.out, "--out")                    # before the first trial, not after the last
-    from ..experiments import check_run_grasp
+    from ..experiments import grasp_seeds
+    from ..grasping import check_run_grasp
 
     for b in config.bottles:                         # a grasp that cannot hold: one line, before the estimate
-        check_run_grasp(config, b)
+        check_run_grasp(config, b, grasp_seeds(config, b))
     jobs = int(args.jobs or os.cpu_count() or 1)
-    from ..experiments import COLD_COMPILE_S, cold_kernels
+    from ..warmup import COLD_COMPILE_S, cold_kernels
 
     cold = bool(cold_kernels())
     n, estimate = len(config.cells()), estimate_wall_s(config, jobs, cold=cold)

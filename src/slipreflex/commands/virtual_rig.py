@@ -75,6 +75,21 @@ def _objects(args: argparse.Namespace):
     return table[args.bottle], loads
 
 
+def _banner(args: argparse.Namespace, dev, grasp, schedule) -> None:
+    """The lines a user needs first: the ports, p0, the grasp, the run command, keys, schedule."""
+    print(f"daq: {dev.daq_path}", flush=True)
+    print(f"hand: {dev.hand_path}", flush=True)
+    print(f"p0: {grasp.p0_text()}", flush=True)
+    print(f"grasp: bottle {args.bottle}, {grasp.force_n:.2f} N per contact, "
+          f"{'stable' if grasp.stable else 'NOT stable'}", flush=True)
+    print(f"run: slipreflex run --daq {dev.daq_path} --hand {dev.hand_path} --p0 {grasp.p0_text()}",
+          flush=True)
+    print("keys: d+Enter drop, p+Enter pour, q+Enter quit; SIGUSR1 drop, SIGUSR2 pour", flush=True)
+    if schedule:
+        when = "after 'run' connects" if args.schedule_from == "connect" else "after now"
+        print("schedule: " + ", ".join(f"{k} {t:g} s" for k, t in schedule) + f" {when}", flush=True)
+
+
 def run(args: argparse.Namespace) -> int:
     """Grasp, open the ports, run in real time, print a summary at exit."""
     from ..devices.simrig import SimRig
@@ -105,17 +120,7 @@ def run(args: argparse.Namespace) -> int:
     dev = VirtualDevices(rig, link_dir=args.link_dir, schedule=schedule, schedule_from=args.schedule_from,
                          on_event=announce)
     try:
-        print(f"daq: {dev.daq_path}", flush=True)
-        print(f"hand: {dev.hand_path}", flush=True)
-        print(f"p0: {grasp.p0_text()}", flush=True)
-        print(f"grasp: bottle {args.bottle}, {grasp.force_n:.2f} N per contact, "
-              f"{'stable' if grasp.stable else 'NOT stable'}", flush=True)
-        print(f"run: slipreflex run --daq {dev.daq_path} --hand {dev.hand_path} --p0 {grasp.p0_text()}",
-              flush=True)
-        print("keys: d+Enter drop, p+Enter pour, q+Enter quit; SIGUSR1 drop, SIGUSR2 pour", flush=True)
-        if schedule:
-            when = "after 'run' connects" if args.schedule_from == "connect" else "after now"
-            print("schedule: " + ", ".join(f"{k} {t:g} s" for k, t in schedule) + f" {when}", flush=True)
+        _banner(args, dev, grasp, schedule)
         if args.realtime:
             from ..runtime import realtime_priority
 
