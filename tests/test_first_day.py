@@ -231,12 +231,11 @@ def _trial(method, experiment="drop", bottle="DK", k=0, **cfg):
 @pytest.mark.parametrize("compiled", [True, False])
 def test_the_loop_records_what_its_reflex_computed(compiled):
     from slipreflex.chain import SlipReflex
+    from slipreflex.experiments import DEFAULT_SEED, trial_seed
     from slipreflex.hardware import SLIP_FINGER
     from slipreflex.sim import PAPER_DROP, run_closed_loop
     from slipreflex.sim.loop import reflex_log
     from slipreflex.sim.variations import grasped_rig
-
-    from slipreflex.experiments import DEFAULT_SEED, trial_seed
 
     rig, g = grasped_rig("DK", trial_seed(DEFAULT_SEED, "drop", "DK", 0), 0.8)
     rig.perturb(PAPER_DROP, at=rig.t + 0.5)
@@ -285,11 +284,11 @@ surface = "TR"
 
 
 def _jar_config(**kw):
+    import tempfile
+
     from slipreflex.experiments import ReproduceConfig
     from slipreflex.sim import BOTTLES, load_objects
     from slipreflex.sim.uncertain import Plant
-
-    import tempfile
 
     path = Path(tempfile.mkdtemp()) / "jar.toml"
     path.write_text(JAR)

@@ -53,12 +53,12 @@ from .baselines.calibration import REST_K
 from .baselines.swt import SWT_WINDOW
 from .errors import ParameterError
 from .grid import Cell, grid_result, run_cells
+from .hardware import CONTACT_FORCE_N
 from .interrupts import Interrupted
 from .progress import Progress
-from .hardware import CONTACT_FORCE_N
 from .thresholds import calibrate, calibration_seed
-from .warmup import STARTUP_S, TRIAL_SIM_SPEED, estimate_wall_s  # noqa: F401  (public here too)
 from .validation import choices, flag, integer, positive, set_field
+from .warmup import STARTUP_S, TRIAL_SIM_SPEED, estimate_wall_s  # noqa: F401  (public here too)
 
 __all__ = [
     "METHODS", "EXPERIMENTS", "BOTTLE_NAMES", "DEFAULT_SEED", "ReproduceConfig", "Cell",
@@ -182,8 +182,7 @@ class ReproduceConfig:
         if self.rest_s < need:
             raise ParameterError(f"rest_s must be >= {need:g} s (the first {OnsetParams().baseline_s * 1e3:g} "
                                  f"ms of rest set the onset threshold), got {self.rest_s!r}")
-        self.drop  # validates the drop and pour through the simulator's own classes
-        self.pour
+        _ = self.drop, self.pour  # validates the drop and pour through the simulator's own classes
 
     @property
     def drop(self):
@@ -365,7 +364,6 @@ def run_trial(cell: Cell, config: ReproduceConfig, thresholds: dict[str, float],
     from .analysis.trial import TrialStreams, analyse_trial
     from .hardware import SLIP_FINGER
     from .sim import run_closed_loop
-
     from .sim.variations import VariationSpread, grasped_rig
 
     plant = {} if config.plant is None else {"rig_kwargs": config.plant.rig_kwargs(),
@@ -457,6 +455,7 @@ def run_reproduce(config: ReproduceConfig | None = None, *, jobs: int | None = N
         raise ParameterError(f"jobs must be >= 1, got {jobs}")
     t0 = time.perf_counter()
     import scipy.signal  # noqa: F401  (once, here: forked workers inherit it; each took ~1 s to import it)
+
     from .grasping import check_run_grasp
     from .warmup import warm_kernels
 

@@ -27,11 +27,13 @@ from typing import Any
 import numpy as np
 
 from .. import methods
+from ..csvfiles import cell_bool, cell_float
 from ..methods import label as _label
 from .paper import BOTTLE_ORDER, EXPERIMENTS, PAPER, PAPER_SUCCESS, paper_value
 from .trial import RESULT_COLUMNS
 
-__all__ = ["SUMMARY_COLUMNS", "summarize", "void", "void_notice", "NOT_COMPARED", "write_csv", "read_csv", "terminal_table",
+__all__ = ["SUMMARY_COLUMNS", "summarize", "void", "void_notice", "NOT_COMPARED", "write_csv", "read_csv",
+           "terminal_table",
            "comparison_markdown", "success_markdown", "onset_markdown", "pour_slips_markdown",
            "differences",
            "report_markdown", "fmt_mean_sd", "group_key_order", "setup_lines", "discussion_text",
@@ -49,13 +51,8 @@ SUMMARY_COLUMNS: tuple[str, ...] = (
 )
 
 
-def _num(x: Any) -> float:
-    """A cell as float: "" (how write_csv stores NaN) and None are NaN."""
-    return float("nan") if x is None or (isinstance(x, str) and not x.strip()) else float(x)
-
-
 def _stats(values: Iterable[Any]) -> tuple[float, float, int]:
-    v = np.array([_num(x) for x in values], dtype=float)
+    v = np.array([cell_float(x) for x in values], dtype=float)
     v = v[np.isfinite(v)]
     if v.size == 0:
         return float("nan"), float("nan"), 0
@@ -85,10 +82,15 @@ def _table_methods(by: dict[tuple[str, str, str], Any]) -> list[str]:
             + sorted(ran - set(methods.names())))
 
 
-def _truthy(x: Any) -> float:
-    if isinstance(x, str):
-        return 1.0 if x.strip().lower() in ("true", "1") else 0.0
-    return float(bool(x))
+def _count(x: Any) -> int:
+    """A count cell as an int (a blank or NaN cell is 0)."""
+    v = cell_float(x)
+    return int(v) if v == v else 0
+
+
+def _flag(x: Any) -> float:
+    """A True/False cell (bool or its CSV text) as 1.0 / 0.0."""
+    return float(cell_bool(x))
 
 
 def void(row: Any) -> bool:
@@ -102,7 +104,7 @@ def void(row: Any) -> bool:
     >>> void({"fell_before_load": "True"}), void({"fell_before_load": False}), void({})
     (True, False, False)
     """
-    return bool(_truthy(row.get("fell_before_load", False)))
+    return bool(_flag(row.get("fell_before_load", False)))
 
 
 def _trial_key(r: Any) -> tuple:
@@ -142,18 +144,18 @@ def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
         rm, rs, rn = _stats(r.get("response_ms", math.nan) for r in g)
         tm, ts, tn = _stats(r.get("total_ms", math.nan) for r in g)
         em, es, en = _stats(r.get("onset_error_ms", math.nan) for r in g)
-        succ = [_truthy(r.get("success", False)) for r in g]
+        succ = [_flag(r.get("success", False)) for r in g]
         trials: dict[tuple, list[Any]] = {}
         for r in g:
             trials.setdefault(_trial_key(r), []).append(r)
-        per_trial = [min(_truthy(r.get("success", False)) for r in t) for t in trials.values()]
+        per_trial = [min(_flag(r.get("success", False)) for r in t) for t in trials.values()]
         gm, gs, gn = _stats(t[0].get("grip_without_slip", math.nan) for t in trials.values())
         pr, pt = paper_value(e, "response_ms", b, m), paper_value(e, "total_ms", b, m)
         out.append({
             "experiment": e, "bottle": b, "method": m,
             "n_trials": len(trials),
             "n_rows": len(g),
-            "n_events": int(sum(1 for r in g if _num(r.get("n_events", 1)) > 0)),
+            "n_events": int(sum(1 for r in g if cell_float(r.get("n_events", 1)) > 0)),
             "response_mean_ms": rm, "response_sd_ms": rs, "response_n": rn,
             "total_mean_ms": tm, "total_sd_ms": ts, "total_n": tn,
             "trial_success_rate": float(np.mean(per_trial)) if per_trial else float("nan"),
@@ -169,7 +171,7 @@ def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
 
 def _pct(s: dict[str, Any], kind: str) -> str:
     """``"90% of 10"`` for a summary row's ``kind`` ("trial" or "event") success, ``"-"`` without one."""
-    n = int(_num(s.get(f"{kind}_success_n", 0)) or 0)
+    n = _count(s.get(f"{kind}_success_n", 0))
     return f"{100 * float(s[f'{kind}_success_rate']):.0f}% of {n}" if n else "-"
 
 
@@ -178,11 +180,12 @@ def void_notice(summary: Sequence[dict[str, Any]]) -> str:
 
     Examples
     --------
-    >>> void_notice([{"experiment": "drop", "bottle": "JAR", "method": "dath", "n_void": 2, "n_trials": 8}])
-    'Void trials (the object left the grasp before the perturbation, so no method was tested; not scored): drop JAR DATH 2 of 10. A stronger --grasp-force holds it.'
+    >>> line = void_notice([{"experiment": "drop", "bottle": "JAR", "method": "dath", "n_void": 2, "n_trials": 8}])
+    >>> line.startswith("Void trials (the object left the grasp before the perturbation"), line.split(": ")[1]
+    (True, 'drop JAR DATH 2 of 10. A stronger --grasp-force holds it.')
     """
     parts = [f"{s['experiment']} {s['bottle']} {_label(s['method'])} {int(s['n_void'])} of "
-             f"{int(s['n_void']) + int(s['n_trials'])}" for s in summary if int(_num(s.get("n_void", 0)) or 0)]
+             f"{int(s['n_void']) + int(s['n_trials'])}" for s in summary if _count(s.get("n_void", 0))]
     if not parts:
         return ""
     return ("Void trials (the object left the grasp before the perturbation, so no method was tested; "
@@ -270,7 +273,7 @@ def terminal_table(summary: Sequence[dict[str, Any]]) -> str:
             f"{fmt_mean_sd(s['response_mean_ms'], s['response_sd_ms'], s['response_n']):17} "
             f"{fmt_mean_sd(s['total_mean_ms'], s['total_sd_ms'], s['total_n']):17} "
             f"{_pct(s, 'trial'):13} {_pct(s, 'event'):18} "
-            + ("-" if not _finite(_num(grip)) else f"{float(grip):.0f} units"))
+            + ("-" if not _finite(cell_float(grip)) else f"{float(grip):.0f} units"))
     notice = void_notice(summary)
     return "\n".join(lines + ([notice] if notice else []))
 
@@ -280,8 +283,8 @@ def comparison_markdown(summary: Sequence[dict[str, Any]]) -> str:
 
     Examples
     --------
-    >>> print(comparison_markdown([]).splitlines()[0])
-    | experiment, metric | bottle | DATH paper | DATH ours | fixed paper | fixed ours | NMSD paper | NMSD ours | SWT-SD paper | SWT-SD ours |
+    >>> comparison_markdown([]).splitlines()[0].split(" | ")[:5]
+    ['| experiment, metric', 'bottle', 'DATH paper', 'DATH ours', 'fixed paper']
     """
     by = {(s["experiment"], s["bottle"], s["method"]): s for s in summary}
     order = _table_methods(by)
@@ -334,7 +337,7 @@ def success_markdown(summary: Sequence[dict[str, Any]]) -> str:
              "grip added without slip (units) | paper |", "|---|---|---|---|---|---|---|"]
     for s in sorted(summary, key=lambda s: group_key_order((s["experiment"], s["bottle"], s["method"]))):
         e, b, m = s["experiment"], s["bottle"], s["method"]
-        grip = _num(s.get("grip_without_slip_mean", math.nan))
+        grip = cell_float(s.get("grip_without_slip_mean", math.nan))
         lines.append(f"| {e} | {b} | {_label(m)} | {_pct(s, 'trial')} | {_pct(s, 'event')} | "
                      f"{'-' if math.isnan(grip) else format(grip, '.0f')} | {PAPER_SUCCESS.get((e, b, m), '-')} |")
     return "\n".join(lines)
@@ -351,7 +354,7 @@ def onset_markdown(rows: Sequence[dict[str, Any]]) -> str:
     """
     groups: dict[tuple[str, str], list[float]] = {}
     for r in rows:
-        groups.setdefault((r["experiment"], r["bottle"]), []).append(_num(r.get("onset_error_ms")))
+        groups.setdefault((r["experiment"], r["bottle"]), []).append(cell_float(r.get("onset_error_ms")))
     lines = ["| experiment | bottle | error ms, mean ± sd (n) | min | max |", "|---|---|---|---|---|"]
     for (e, b) in sorted(groups, key=lambda k: group_key_order((k[0], k[1], ""))):
         v = np.array(groups[(e, b)], dtype=float)
@@ -385,11 +388,11 @@ def pour_slips_markdown(rows: Sequence[dict[str, Any]]) -> str:
              "| ml at 2nd slip (median) |", "|---|---|---|---|---|---|"]
     for (b, m) in sorted(groups, key=lambda k: group_key_order(("pour", k[0], k[1]))):
         trials = groups[(b, m)]
-        n = [int(_num(rs[0].get("n_events", 0))) for rs in trials.values()]
-        first = [_num(r.get("load_at_onset")) for rs in trials.values() for r in rs
-                 if int(_num(r.get("event", 0))) == 0 and int(_num(r.get("n_events", 0))) > 0]
-        second = [_num(r.get("load_at_onset")) for rs in trials.values() for r in rs
-                  if int(_num(r.get("event", 0))) == 1]
+        n = [int(cell_float(rs[0].get("n_events", 0))) for rs in trials.values()]
+        first = [cell_float(r.get("load_at_onset")) for rs in trials.values() for r in rs
+                 if int(cell_float(r.get("event", 0))) == 0 and int(cell_float(r.get("n_events", 0))) > 0]
+        second = [cell_float(r.get("load_at_onset")) for rs in trials.values() for r in rs
+                  if int(cell_float(r.get("event", 0))) == 1]
 
         def med(v):
             v = [x for x in v if x == x]
@@ -615,7 +618,8 @@ def setup_lines(result: Any, command: str | None = None) -> list[str]:
            if getattr(c, "variations", False) else "; every repeat is the nominal plant"),
         f"drop: {c.drop.mass_kg * 1e3:g} g from {c.drop.height_m * 1e2:g} cm above the opening; "
         f"pour: {c.pour.volume_ml:g} ml at {c.pour.rate_l_min:g} L/min ({c.pour.duration_s:.0f} s)",
-        f"protocol: grasp to {getattr(c, 'grasp_force_n', hw.CONTACT_FORCE_N):g} N, settle (simulator's grasp routine), "
+        f"protocol: grasp to {getattr(c, 'grasp_force_n', hw.CONTACT_FORCE_N):g} N, "
+        "settle (simulator's grasp routine), "
         f"{c.rest_s:g} s of rest recorded, perturbation, {c.after_s:g} s after it ends",
         _chain_line(),
     ]
@@ -663,7 +667,8 @@ def _analysis_lines(c: Any) -> list[str]:
     from .trial import MAX_RESPONSE_S
 
     op = OnsetParams()
-    travel = sorted({c.bottle(b).grip_travel_m if hasattr(c, "bottle") else BOTTLES[b].grip_travel_m for b in c.bottles})
+    travel = sorted({c.bottle(b).grip_travel_m if hasattr(c, "bottle") else BOTTLES[b].grip_travel_m
+                     for b in c.bottles})
     return [
         f"onset: paper's recipe with k = {op.k:g} sd over the first {op.baseline_s * 1e3:.0f} ms; slip "
         f"episodes must peak at {op.peak_factor:g}x the threshold; responses later than "

@@ -22,7 +22,6 @@ from .. import __version__
 from ..errors import ParameterError
 from ..hardware import DAQ_FS, FINGER_MAX, SLIP_FINGER, TRIPOD, Finger
 from ..methods import DATH, FIXED
-
 from ..runtime import WATCHDOG_MAX_S, WATCHDOG_MIN_S, WATCHDOG_S
 
 NAME = "run"
@@ -213,7 +212,7 @@ def run(args: argparse.Namespace) -> int:
                 "fingers": json.dumps([f.name.lower() for f in TRIPOD]),
                 "p0": json.dumps({f.name.lower(): v for f, v in p0.items()}),
                 "daq": args.daq, "hand": args.hand, "watchdog_s": repr(args.watchdog),
-                "started": datetime.datetime.now(datetime.timezone.utc).isoformat(), **board_meta}
+                "started": datetime.datetime.now(datetime.UTC).isoformat(), **board_meta}
         recorder = Recorder(path, metadata={METADATA_NAME: meta})  # fails before the ports open
     old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
     started = False

@@ -45,10 +45,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run the scan, write the files, print the numbers."""
     from ..errors import ParameterError
-    from ..sim import scan
-
     from ..paths import output_dir
-
+    from ..sim import scan
     from ..sim.scan import PAPER_LAYOUT
 
     if args.speed <= 0 or args.distance <= 0:
@@ -182,7 +180,8 @@ def _figure(result, summary, path: Path, threshold: float) -> None:
         if base in PAPER_SCAN_VOLTS:
             lo, hi = PAPER_SCAN_VOLTS[base]
             axb.axhspan(lo, hi, color="tab:red", alpha=0.2, lw=0)
-            axb.text(0.99, 0.02, f"paper {lo:g}-{hi:g} V (red band{'' if lo <= x[sel].max() and hi >= x[sel].min() else ', off this scale'})",
+            seen = lo <= x[sel].max() and hi >= x[sel].min()
+            axb.text(0.99, 0.02, f"paper {lo:g}-{hi:g} V (red band{'' if seen else ', off this scale'})",
                      transform=axb.transAxes, ha="right", va="bottom", fontsize=7, color="tab:red")
         axb.set(title=f"B  {name}: filtered output", ylabel="V")
         axc = fig.add_subplot(gs[2, col], sharex=axb)
