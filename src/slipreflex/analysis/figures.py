@@ -349,8 +349,8 @@ def success_chart(summary: Sequence[dict[str, Any]], path: str | Path) -> Path:
         ax.set_yticks([0, 20, 40, 60, 80, 100])
         ax.set_ylabel("success (%)")
         ax.set_title(f"Success, {e}: per trial (bars), per slip event (dots)", fontsize=8)
-    handles = [Patch(color=_color(m), label=f"{_registry.label(m)}, per trial (ours)") for m in shown
-               if m not in ("D", "v", "o")]
+    handles: list[Any] = [Patch(color=_color(m), label=f"{_registry.label(m)}, per trial (ours)") for m in shown
+                          if m not in ("D", "v", "o")]
     if "o" in shown:
         handles.append(Line2D([], [], ls="", marker="o", mfc="white", mec="k", ms=4, label="per slip event (ours)"))
     if "D" in shown:

@@ -112,9 +112,10 @@ class SimRig:
         """
         r = self.rig
         t0 = r.t if self._t0 is None else self._t0
-        cap = r.bottle.grip_travel_m if r.fallen else float("inf")
-        where = (f"FALLEN at t={r.fall_time - t0:.2f} s (slid out of the grip's "
-                 f"{r.bottle.grip_travel_m * 1e3:g} mm travel; stopped at t={r.t - t0:.2f} s)" if r.fallen
+        fell = r.fall_time
+        cap = r.bottle.grip_travel_m if fell is not None else float("inf")
+        where = (f"FALLEN at t={fell - t0:.2f} s (slid out of the grip's "
+                 f"{r.bottle.grip_travel_m * 1e3:g} mm travel; stopped at t={r.t - t0:.2f} s)" if fell is not None
                  else f"held at t={r.t - t0:.2f} s")
         return (f"bottle {r.bottle.name}: displaced {min(r.displacement, cap) * 1e3:.2f} mm, slid "
                 f"{min(r.slip, cap) * 1e3:.2f} mm, load {r.load_mass * 1e3:.1f} g, {where}")

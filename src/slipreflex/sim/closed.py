@@ -525,7 +525,7 @@ def run_compiled(rig, reflex, t_end: float, split: list[tuple[tuple[Finger, ...]
     finally:   # also when the reflex's step raised: the rig then stands where the Python loop's would
         _hand_back(rig, buf, cnt, groups, None if sampler is None else (sampler, tstate))
     nc = int(cnt[N_CMD])
-    if slots:
+    if slots and record is not None:
         n_fed = int(cnt[N_DAQ] if sampler is None else cnt[N_FRAMES])
         record.append((tuple(slots), buf.rec[:n_fed].copy()))
     if status == _BAD_COMMAND:
