@@ -15,6 +15,7 @@ import argparse
 import csv
 import dataclasses
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -62,7 +63,7 @@ def run(args: argparse.Namespace) -> int:
         raise ParameterError(f"--distance {args.distance:g} mm is longer than {what} ({length_mm:g} mm): "
                              f"give --distance {length_mm:g} or less, or a longer --layout")
     out: Path = output_dir(args.out, "--out")
-    kw = {"layout": layout} if args.layout is not None else {}
+    kw: dict[str, Any] = {"layout": layout} if args.layout is not None else {}
     result = scan(seed=args.seed, speed=args.speed * 1e-3, distance=args.distance * 1e-3, **kw)
     summary = result.analyse(threshold=args.threshold)
     csv_path = out / "scan.csv"
@@ -99,7 +100,7 @@ def _layout_names(args: argparse.Namespace) -> dict:
     from ..sim import load_objects
 
     objs = load_objects(args.objects) if args.objects is not None else None
-    extra = dict(objs.surfaces) if objs else {}
+    extra: dict[str, Any] = dict(objs.surfaces) if objs else {}
     if objs:
         extra.update({n: b.surface for n, b in objs.bottles.items()})
     return extra
