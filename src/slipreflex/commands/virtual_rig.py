@@ -20,6 +20,7 @@ p0: thumb=213,index=212,middle=212
 from __future__ import annotations
 
 import argparse
+import os
 import select
 import signal
 import sys
@@ -49,7 +50,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="the schedule counts from when 'slipreflex run' connects (its first hand packet; "
                         "the default) or from the rig's start")
     p.add_argument("--link-dir", default=None,
-                   help="also create DIR/daq and DIR/hand symlinks to the ports (stable paths; DIR is created)")
+                   help="also create DIR/daq and DIR/hand symlinks to the ports (stable paths; DIR is created; "
+                        "existing DIR/daq or DIR/hand is an error, and only the links made are removed at exit)")
     p.add_argument("--duration", type=float, default=None, help="exit after this many seconds")
     p.add_argument("--realtime", action="store_true",
                    help="run the rig's real-time thread under SCHED_FIFO (it stands in for hardware "
@@ -90,15 +92,31 @@ def _banner(args: argparse.Namespace, dev, grasp, schedule) -> None:
         print("schedule: " + ", ".join(f"{k} {t:g} s" for k, t in schedule) + f" {when}", flush=True)
 
 
+def _check_arguments(args: argparse.Namespace) -> None:
+    """Bounded --duration and --grasp-force; a --link-dir whose daq/hand names are free (before the grasp)."""
+    from ..errors import ParameterError
+    from ..paths import output_dir
+    from ..validation import within
+
+    if args.duration is not None:
+        within("duration_s", args.duration, "--duration")
+    if args.grasp_force is not None:
+        within("grasp_force_n", args.grasp_force, "--grasp-force")
+    if args.link_dir is not None:
+        link_dir = output_dir(args.link_dir, "--link-dir")      # before the grasp: a bad DIR costs one line
+        for name in ("daq", "hand"):
+            if os.path.lexists(link_dir / name):
+                raise ParameterError(f"--link-dir {args.link_dir}: {name} exists; the rig makes its links "
+                                     f"new and removes only those (move it or choose another --link-dir)")
+
+
 def run(args: argparse.Namespace) -> int:
     """Grasp, open the ports, run in real time, print a summary at exit."""
     from ..devices.simrig import SimRig
     from ..devices.virtual import VirtualDevices, parse_schedule
-    from ..paths import output_dir
 
     schedule = parse_schedule(args.schedule)
-    if args.link_dir is not None:
-        output_dir(args.link_dir, "--link-dir")      # before the grasp: a bad DIR costs one line
+    _check_arguments(args)
     bottle, loads = _objects(args)
     rig = SimRig(bottle=bottle, seed=args.seed, **loads)
     grasp = rig.grasp(args.grasp_force)
@@ -113,6 +131,7 @@ def run(args: argparse.Namespace) -> int:
 
     old = {s: signal.signal(s, on_signal)
            for s in (signal.SIGINT, signal.SIGTERM, signal.SIGUSR1, signal.SIGUSR2)}
+
     def announce(text: str) -> None:
         print(text, flush=True)
 
