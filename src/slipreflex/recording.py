@@ -32,9 +32,21 @@ started, on the PC's clock):
 /board/state       (``run --board-reflex``) per sample: what the board's own chain sent
                    (spike, window, fault, hand, v, command, x in Q16 counts) and
                    ``match``, whether its Python twin agreed
+/hand/targets      with every command, the position sent to each finger as flat fields
+                   (``thumb``, ``index``, ``middle``, ...; null for a finger not commanded),
+                   so a plot draws one line per finger
+/tactile/frames    (a tactile method) every frame as flat fields: ``total`` and ``peak`` (N),
+                   then one ``taxel_K`` per taxel (the frame in C order)
+/rig/truth         (``virtual-rig --live``) the simulated rig's truth per sample: the
+                   object's displacement and slip (m), its load (kg), fallen, and the
+                   measured finger positions
 /faults            watchdog, device and recording faults, with the action taken
 /stats             periodic DAQ and loop counters
 =================  ===========================================================
+
+Every field of a topic but ``/hand/commands`` (``fingers``, ``targets``) and ``/stats``
+(``counters``) is a scalar: what a live plot (``--live``, :mod:`slipreflex.live`) draws as
+one line. :func:`schema` gives a topic's schema, the one the recording and the live view share.
 
 Examples
 --------
@@ -60,7 +72,8 @@ from typing import IO, Any
 from .errors import DataError, SlipreflexError
 
 __all__ = [
-    "TOPICS", "METADATA_NAME", "RecordingError", "Recorder", "Recording", "read_recording",
+    "TOPICS", "METADATA_NAME", "RecordingError", "Recorder", "Recording", "read_recording", "schema",
+    "FINGER_FIELDS",
 ]
 
 #: Name of the metadata record holding the chain parameters and run facts.
@@ -68,6 +81,9 @@ METADATA_NAME: str = "slipreflex"
 
 _N, _I, _B, _S = (["number", "null"], "integer", "boolean", "string")
 _ACCEL = {"ax": "number", "ay": "number", "az": "number"}
+#: The per-finger fields of /hand/targets and /rig/truth (the hand's fingers by name, lower case).
+FINGER_FIELDS: tuple[str, ...] = ("thumb", "index", "middle", "ring", "little", "thumb_rotator")
+_TAXEL = {"type": "number"}
 
 #: Every topic: its schema name and its fields with JSON-schema types.
 TOPICS: dict[str, tuple[str, dict[str, Any]]] = {
@@ -88,6 +104,13 @@ TOPICS: dict[str, tuple[str, dict[str, Any]]] = {
     "/board/state": ("slipreflex.BoardState", {"seq": _I, "t": "number", "spike": _B, "window": _B,
                                                "fault": _B, "hand": _B, "v": _I, "command": _I,
                                                "x": _I, "match": _B}),
+    "/hand/targets": ("slipreflex.FingerTargets", {"seq": _I, "t": "number", "sent": _B,
+                                                   **{f: _N for f in FINGER_FIELDS}}),
+    "/tactile/frames": ("slipreflex.TactileFrame", {"seq": _I, "t": "number", "total": "number",
+                                                    "peak": "number"}),
+    "/rig/truth": ("slipreflex.RigTruth", {"t": "number", "displacement": "number", "slip": "number",
+                                           "load_mass": "number", "fallen": _B,
+                                           **{f: _N for f in FINGER_FIELDS}}),
     "/faults": ("slipreflex.Fault", {"time": "number", "kind": _S, "message": _S, "action": _S}),
     "/stats": ("slipreflex.Stats", {"time": "number", "counters": {"type": "object"}}),
 }
@@ -103,10 +126,46 @@ class RecordingError(SlipreflexError, OSError):
     """
 
 
-def _schema(name: str, fields: dict[str, Any]) -> bytes:
+def _schema(name: str, fields: dict[str, Any], extra: dict[str, Any] | None = None) -> bytes:
     props = {k: (v if isinstance(v, dict) else {"type": v}) for k, v in fields.items()}
     return json.dumps({"$schema": "http://json-schema.org/draft-07/schema#", "title": name,
-                       "type": "object", "properties": props}).encode()
+                       "type": "object", "properties": props, **(extra or {})}).encode()
+
+
+#: Topics with fields beyond their listed ones: /tactile/frames has one number per taxel.
+_EXTRA: dict[str, dict[str, Any]] = {
+    "/tactile/frames": {"patternProperties": {"^taxel_[0-9]+$": _TAXEL}},
+}
+
+
+def schema(topic: str) -> tuple[str, bytes]:
+    """The name and JSON schema (bytes) of a topic: the one definition the recording and the
+    live view (:mod:`slipreflex.live`) both use.
+
+    Parameters
+    ----------
+    topic : str
+        One of :data:`TOPICS`.
+
+    Returns
+    -------
+    (str, bytes)
+
+    Raises
+    ------
+    RecordingError
+        For an unknown topic.
+
+    Examples
+    --------
+    >>> name, data = schema("/chain/windows")
+    >>> name, json.loads(data)["properties"]["count"]
+    ('slipreflex.Window', {'type': 'integer'})
+    """
+    if topic not in TOPICS:
+        raise RecordingError(f"unknown topic {topic!r} (known: {', '.join(TOPICS)})")
+    name, fields = TOPICS[topic]
+    return name, _schema(name, fields, _EXTRA.get(topic))
 
 
 class Recorder:
@@ -185,9 +244,9 @@ class Recorder:
             self._writer = Writer(self._fh, chunk_size=chunk_size, compression=comp)
             self._writer.start(profile="", library="slipreflex")
             self._channels: dict[str, int] = {}
-            for topic, (name, fields) in TOPICS.items():
-                sid = self._writer.register_schema(name=name, encoding="jsonschema",
-                                                   data=_schema(name, fields))
+            for topic in TOPICS:
+                name, data = schema(topic)
+                sid = self._writer.register_schema(name=name, encoding="jsonschema", data=data)
                 self._channels[topic] = self._writer.register_channel(
                     topic=topic, message_encoding="json", schema_id=sid)
             for name, data in (metadata or {}).items():

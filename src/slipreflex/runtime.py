@@ -528,7 +528,8 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
              duration: float | None = None, watchdog: float = WATCHDOG_S, poll: float = 0.01,
              fingers: Sequence[Finger] = TRIPOD, stop: threading.Event | None = None,
              on_fault: Callable[[Fault], None] | None = None, stats_interval: float = 1.0,
-             clock: Callable[[], float] = time.perf_counter, guard: bool = True) -> RunResult:
+             clock: Callable[[], float] = time.perf_counter, guard: bool = True,
+             taps: Sequence[Any] = ()) -> RunResult:
     """Run the reflex in real time until ``duration``, ``stop`` or Ctrl-C.
 
     Parameters
@@ -564,6 +565,10 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
         Monotonic clock (s); ``time.perf_counter`` if ``last_arrival`` is to be used.
     guard : bool
         Run the stall guard thread (holds the fingers if the loop stops iterating).
+    taps : sequence of Tap
+        Live publishers (:class:`slipreflex.taps.Tap`: the Foxglove view, LSL outlets): each
+        gets every message the recording gets, after the commands are out, through its
+        non-blocking ``put``; the caller starts and closes them.
 
     Returns
     -------
@@ -617,7 +622,7 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
     loop = _Loop(source, hand, reflex, start=start,
                  ref0=float(ref0) if ref_ok else start.get(SLIP_FINGER, next(iter(start.values()))),
                  recorder=recorder, duration=duration, watchdog=watchdog, poll=poll, stop=stop,
-                 on_fault=on_fault, stats_interval=stats_interval, clock=clock)
+                 on_fault=on_fault, stats_interval=stats_interval, clock=clock, taps=taps)
     if start_error is not None:
         loop.fault("hold-failed", f"safe start: {start_error}", "fingers stay where the grasp left them; "
                    "the watchdog holds again if samples stop")
@@ -639,17 +644,22 @@ def _warm_up(reflex: Any) -> None:
 class _Sink:
     """The loop's side of the recorder: never raises; its failure is reported once."""
 
-    def __init__(self, recorder: Any, t0: float, on_fail: Callable[[str], None]) -> None:
+    def __init__(self, recorder: Any, t0: float, on_fail: Callable[[str], None],
+                 taps: Sequence[Any] = ()) -> None:
         self.recorder = recorder
         self.ok = recorder is not None
+        self.taps = tuple(taps)
         self.t0 = t0
         self.wall0 = time.time_ns()
         self.on_fail = on_fail
         self.error: str | None = None
 
     def write(self, topic: str, msg: dict[str, Any], t: float) -> None:
-        if self.ok and not self.recorder.write(topic, msg, self.wall0 + int((t - self.t0) * 1e9)):
+        ns = self.wall0 + int((t - self.t0) * 1e9)
+        if self.ok and not self.recorder.write(topic, msg, ns):
             self.check()
+        for tap in self.taps:
+            tap.put(topic, msg, ns)
 
     def check(self) -> None:
         if self.ok and self.recorder.error is not None:
@@ -658,6 +668,8 @@ class _Sink:
             self.on_fail(self.error)
 
     def samples(self, records: list[SampleRecord], finger_names: list[str], last_flow: int | None) -> int | None:
+        if not (self.ok or self.taps):
+            return last_flow
         for r in records:
             s, arr = r.sample, r.arrival
             self.write("/daq/samples", {"seq": s.seq, "t": s.t, "slip_volts": s.slip_volts,
@@ -683,6 +695,7 @@ class _Sink:
                                               "fingers": finger_names, "targets": targets,
                                               "sent": r.sent, "note": r.note, "latency": r.latency,
                                               "frame_latency": r.frame_latency}, arr)
+                self.write("/hand/targets", {"seq": s.seq, "t": s.t, "sent": r.sent, **targets}, arr)
         return last_flow
 
 
@@ -692,7 +705,7 @@ class _Loop:
     def __init__(self, source: Any, hand: Any, reflex: Any, *, start: dict[Finger, float],
                  ref0: float, recorder: Any, duration: float | None, watchdog: float, poll: float,
                  stop: threading.Event | None, on_fault: Callable[[Fault], None] | None,
-                 stats_interval: float, clock: Callable[[], float]) -> None:
+                 stats_interval: float, clock: Callable[[], float], taps: Sequence[Any] = ()) -> None:
         self.source, self.hand, self.reflex = source, hand, reflex
         self.fingers = tuple(start)
         self.finger_names = [f.name.lower() for f in self.fingers]
@@ -709,7 +722,7 @@ class _Loop:
         self.res = RunResult(start={f.name.lower(): v for f, v in start.items()},
                              initial_command="STOP " + ",".join(self.finger_names))
         self.t0 = clock()
-        self.sink = _Sink(recorder, self.t0, self._recording_failed)
+        self.sink = _Sink(recorder, self.t0, self._recording_failed, taps)
         self.lock = threading.Lock()  # hand writes: the loop and the stall guard
         self.heartbeat = self.t0
         self.guard_faults: collections.deque[Fault] = collections.deque()

@@ -24,6 +24,7 @@ from ..hardware import DAQ_FS, FINGER_MAX, SLIP_FINGER, TRIPOD, Finger
 from ..methods import DATH, FIXED
 
 from ..runtime import WATCHDOG_MAX_S, WATCHDOG_MIN_S, WATCHDOG_S
+from ._live import add_live_arguments, check_live_arguments, close_taps, open_taps
 
 NAME = "run"
 HELP = "run the slip reflex in real time: read the DAQ port, drive the i-Limb port, record to MCAP"
@@ -122,6 +123,7 @@ def check_arguments(args: argparse.Namespace) -> dict[Finger, float]:
     chain_params(args, p0[SLIP_FINGER])  # validates every chain option
     if getattr(args, "board_reflex", False):
         _check_board_arguments(args)
+    check_live_arguments(args)
     return p0
 
 
@@ -170,6 +172,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--board-p0", type=int, default=0,
                    help="with --board-reflex: the REFLEX_P0 the board was built with (default 0)")
     add_chain_arguments(p)
+    add_live_arguments(p)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -211,9 +214,14 @@ def run(args: argparse.Namespace) -> int:
                 "daq": args.daq, "hand": args.hand, "watchdog_s": repr(args.watchdog),
                 "started": datetime.datetime.now(datetime.timezone.utc).isoformat(), **board_meta}
         recorder = Recorder(path, metadata={METADATA_NAME: meta})  # fails before the ports open
+    taps: list[Any] = []
     old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
     started = False
     try:
+        from ..live import RUN_TOPICS
+
+        taps = open_taps(args, RUN_TOPICS + (("/board/state",) if args.board_reflex else ()),
+                         lsl_source=args.daq)
         with SerialDaq(args.daq) as daq, ILimb(args.hand) as hand:
             started = True
             print(f"running {reflex.name} reflex: daq {args.daq}, hand {args.hand}, p0 "
@@ -227,10 +235,11 @@ def run(args: argparse.Namespace) -> int:
                 source = BoardSource(daq, reflex)
             # run_loop starts with STOP: the fingers stay where the grasp left them
             res = run_loop(source, hand, reflex, p0=p0, recorder=recorder, duration=args.duration,
-                           watchdog=args.watchdog, stop=stop, on_fault=print_fault)
+                           watchdog=args.watchdog, stop=stop, on_fault=print_fault, taps=taps)
     finally:
         for s, h in old.items():
             signal.signal(s, h)
+        close_taps(taps)
         if recorder is not None:
             recorder.close()
             if not started:  # the ports did not open: leave no empty recording behind
