@@ -61,7 +61,8 @@ if [ ! -x .venv/bin/python ]; then
   "$PYTHON" -m venv .venv
 fi
 VPY=.venv/bin/python
-"$VPY" -m pip install -q --disable-pip-version-check -e ".[test]"
+# live and lsl: the live view's and LSL's tests run, not skip (pylsl's wheel carries liblsl)
+"$VPY" -m pip install -q --disable-pip-version-check -e ".[test,live,lsl]"
 echo "bootstrap.sh: slipreflex is installed in .venv; to use it later: source .venv/bin/activate"
 export PATH="$PWD/.venv/bin:$PATH"
 

@@ -31,7 +31,7 @@ DIST = f"{NAME}-{VERSION}.dist-info"
 
 def _wheel(directory, files):
     name = f"{NAME}-{VERSION}-py3-none-any.whl"
-    files[f"{DIST}/METADATA"] = f"Metadata-Version: 2.1\\nName: {NAME}\\nVersion: {VERSION}\\nProvides-Extra: test\\n"
+    files[f"{DIST}/METADATA"] = f"Metadata-Version: 2.1\\nName: {NAME}\\nVersion: {VERSION}\\nProvides-Extra: test\\nProvides-Extra: live\\nProvides-Extra: lsl\\n"
     files[f"{DIST}/WHEEL"] = "Wheel-Version: 1.0\\nGenerator: test\\nRoot-Is-Purelib: true\\nTag: py3-none-any\\n"
     files[f"{DIST}/entry_points.txt"] = "[console_scripts]\\nslipreflex = standin:main\\n"
     record = []

@@ -235,3 +235,66 @@ def test_cli_live_port_in_use_is_one_line_before_the_ports_open(capsys):
     out = capsys.readouterr()
     assert code == 2 and f"127.0.0.1:{port}" in out.err and "running" not in out.out
     assert len(out.err.strip().splitlines()) == 1
+
+
+def test_virtual_rig_live_publishes_the_rigs_truth(tmp_path):
+    """``virtual-rig --live``: a client watching the simulated rig's truth as it runs."""
+    import subprocess
+    import sys
+
+    _foxglove()
+    proc = subprocess.Popen([sys.executable, "-m", "slipreflex", "virtual-rig", "--live", "127.0.0.1:0",
+                             "--duration", "4", "--schedule", "drop@0.5"],
+                            stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        url = None
+        for line in proc.stdout:
+            if line.startswith("live view: "):
+                url = line.split()[2]
+                break
+        assert url and url.startswith("ws://127.0.0.1:")
+        client = FoxgloveClient(url, 1)
+        assert [c["topic"] for c in client.channels.values()] == ["/rig/truth"]
+        client.wait_for({"/rig/truth": 300}, timeout=20)
+        client.close()
+        out, err = proc.communicate(timeout=60)
+    finally:
+        proc.kill()
+    assert proc.returncode == 0, err
+    truth = [m for _, m in client.got["/rig/truth"]]
+    assert len(truth) >= 300
+    t = [m["t"] for m in truth]
+    assert all(b > a for a, b in zip(t, t[1:]))
+    fields = json.loads(schema("/rig/truth")[1])["properties"]
+    assert all(set(m) == set(fields) for m in truth)
+    assert all(m["middle"] > 0 and m["ring"] is None for m in truth)
+    assert max(m["load_mass"] for m in truth) > min(m["load_mass"] for m in truth)  # the drop landed
+
+
+def test_replay_plays_a_recording_to_a_live_client_as_recorded(tmp_path, capsys):
+    _foxglove()
+    from test_runtime import ToyRig
+
+    from slipreflex.commands.replay import play
+    from slipreflex.devices.virtual import VirtualDevices
+    from slipreflex.live import LiveView
+
+    path = tmp_path / "r.mcap"
+    with VirtualDevices(ToyRig(), schedule=[("drop", 0.3)]) as dev:
+        assert main(["run", "--daq", dev.daq_path, "--hand", dev.hand_path, "--p0", "150",
+                     "--duration", "1.0", "--record", str(path)]) == 0
+    rec = read_recording(path)
+    topics = [t for t in rec.messages if rec.messages[t]]
+    with LiveView(("127.0.0.1", 0), topics) as view:
+        client = FoxgloveClient(view.url, len(topics))
+        n = play(rec, [view], pace=4.0)
+        client.wait_for({t: len(rec.topic(t)) for t in topics})
+        client.close()
+    assert n == sum(len(rec.topic(t)) for t in topics)
+    for t in topics:
+        assert [m for _, m in client.got[t]] == rec.topic(t)
+        assert [ns for ns, _ in client.got[t]] == rec.log_times[t]
+    capsys.readouterr()
+    assert main(["replay", str(path), "--live", "127.0.0.1:0", "--pace", "0"]) == 0
+    out = capsys.readouterr().out
+    assert f"played {n} messages" in out and "identical" in out

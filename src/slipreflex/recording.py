@@ -38,8 +38,9 @@ started, on the PC's clock):
 /tactile/frames    (a tactile method) every frame as flat fields: ``total`` and ``peak`` (N),
                    then one ``taxel_K`` per taxel (the frame in C order)
 /rig/truth         (``virtual-rig --live``) the simulated rig's truth per sample: the
-                   object's displacement and slip (m), its load (kg), fallen, and the
-                   measured finger positions
+                   object's displacement and slip (m), velocity (m/s), the normal force
+                   per contact (N), its load (kg), slipping, fallen, and the measured
+                   finger positions
 /faults            watchdog, device and recording faults, with the action taken
 /stats             periodic DAQ and loop counters
 =================  ===========================================================
@@ -109,7 +110,8 @@ TOPICS: dict[str, tuple[str, dict[str, Any]]] = {
     "/tactile/frames": ("slipreflex.TactileFrame", {"seq": _I, "t": "number", "total": "number",
                                                     "peak": "number"}),
     "/rig/truth": ("slipreflex.RigTruth", {"t": "number", "displacement": "number", "slip": "number",
-                                           "load_mass": "number", "fallen": _B,
+                                           "velocity": "number", "normal_force": "number",
+                                           "load_mass": "number", "slipping": _B, "fallen": _B,
                                            **{f: _N for f in FINGER_FIELDS}}),
     "/faults": ("slipreflex.Fault", {"time": "number", "kind": _S, "message": _S, "action": _S}),
     "/stats": ("slipreflex.Stats", {"time": "number", "counters": {"type": "object"}}),

@@ -44,6 +44,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--link-dir", default=None,
                    help="also create DIR/daq and DIR/hand symlinks to the ports (stable paths; DIR is created)")
     p.add_argument("--duration", type=float, default=None, help="exit after this many seconds")
+    from ._live import add_live_arguments
+
+    add_live_arguments(p, lsl=False)
     p.add_argument("--realtime", action="store_true",
                    help="run the rig's real-time thread under SCHED_FIFO (it stands in for hardware "
                         "that a busy PC cannot slow; Linux, needs privileges)")
@@ -75,7 +78,10 @@ def run(args: argparse.Namespace) -> int:
 
     from ..paths import output_dir
 
+    from ._live import check_live_arguments, close_taps, open_taps
+
     schedule = parse_schedule(args.schedule)
+    check_live_arguments(args)
     if args.link_dir is not None:
         output_dir(args.link_dir, "--link-dir")      # before the grasp: a bad DIR costs one line
     bottle, loads = _objects(args)
@@ -92,7 +98,19 @@ def run(args: argparse.Namespace) -> int:
 
     old = {s: signal.signal(s, on_signal)
            for s in (signal.SIGINT, signal.SIGTERM, signal.SIGUSR1, signal.SIGUSR2)}
-    dev = VirtualDevices(rig, link_dir=args.link_dir, schedule=schedule)
+    taps = open_taps(args, ("/rig/truth",))
+
+    def publish_truth(_rig: object) -> None:  # the rig's thread: one /rig/truth per advance
+        msg = rig.truth()
+        for tap in taps:
+            tap.put("/rig/truth", msg, time.time_ns())
+
+    try:
+        dev = VirtualDevices(rig, link_dir=args.link_dir, schedule=schedule,
+                             on_advance=publish_truth if taps else None)
+    except BaseException:
+        close_taps(taps)
+        raise
     try:
         print(f"daq: {dev.daq_path}", flush=True)
         print(f"hand: {dev.hand_path}", flush=True)
@@ -140,7 +158,10 @@ def run(args: argparse.Namespace) -> int:
     finally:
         for s, h in old.items():
             signal.signal(s, h)
-        dev.stop()
+        try:
+            dev.stop()
+        finally:
+            close_taps(taps)
     print(f"stopped after {dev.elapsed:.1f} s: {dev.frames_written} frames sent, "
           f"{dev.hand_packets} hand packets applied ({dev.hand_parser.rejected} rejected), "
           f"perturbations {[(k, round(t, 2)) for k, t in dev.triggered]}", flush=True)

@@ -99,6 +99,25 @@ class SimRig:
         else:
             raise ParameterError(f"unknown perturbation {kind!r}: drop or pour")
 
+    def truth(self) -> dict[str, Any]:
+        """The rig's truth now, as a ``/rig/truth`` message (:data:`slipreflex.recording.TOPICS`).
+
+        Examples
+        --------
+        >>> r = SimRig("TR"); _ = r.grasp(); m = r.truth()
+        >>> m["fallen"], m["middle"] > 0, m["ring"] is None
+        (False, True, True)
+        """
+        from ..hardware import TRIPOD
+        from ..recording import FINGER_FIELDS
+
+        r = self.rig
+        pos = r.hand.positions()
+        fingers = {f.name.lower(): float(v) for f, v in pos.items() if f in TRIPOD}
+        return {"t": r.t, "displacement": r.displacement, "slip": r.slip, "velocity": r.velocity,
+                "normal_force": r.normal_force, "load_mass": r.load_mass, "slipping": bool(r.slipping),
+                "fallen": bool(r.fallen), **{f: fingers.get(f) for f in FINGER_FIELDS}}
+
     def status(self) -> str:
         """One line of truth: displacement, slip, fallen, load.
 

@@ -280,6 +280,9 @@ class VirtualDevices:
         Actions ``fn(devices)`` run in the rig's thread at fixed times after
         :meth:`start` (e.g. ``(1.0, lambda d: d.unplug("hand"))``), for
         scripted fault tests.
+    on_advance : callable, optional
+        ``on_advance(rig)``, called in the rig's thread after each advance (``virtual-rig
+        --live`` puts the rig's truth on its live view); it must not block.
 
     Attributes
     ----------
@@ -313,8 +316,10 @@ class VirtualDevices:
 
     def __init__(self, rig: Any, *, link_dir: str | None = None,
                  schedule: Iterable[tuple[str, float]] = (), period: float = DAQ_PERIOD_S,
-                 script: Iterable[tuple[float, Any]] = ()) -> None:
+                 script: Iterable[tuple[float, Any]] = (),
+                 on_advance: Any = None) -> None:
         self.rig = rig
+        self.on_advance = on_advance
         self.period = period
         self.daq = PtyPort(os.path.join(link_dir, "daq") if link_dir else None)
         self.hand = PtyPort(os.path.join(link_dir, "hand") if link_dir else None)
@@ -508,13 +513,16 @@ class VirtualDevices:
             while schedule and schedule[0][0] <= t:
                 self._handle(schedule.pop(0)[1])
             self._drain()
-            for s in self.rig.advance_to(t):
+            samples = self.rig.advance_to(t)
+            for s in samples:
                 self._last_seq = s.seq
                 if self._daq_paused:
                     continue
                 seq = s.seq - self._seq_offset
                 self.daq.write(wire.encode_sample(dataclasses.replace(s, seq=seq)))
                 self.frames_written += 1
+            if samples and self.on_advance is not None:
+                self.on_advance(self.rig)
             # Sleep until the next sample is due, waking early for hand packets.
             t = time.perf_counter() - self._t0
             timeout = max(0.0, (math.floor(t / self.period) + 1) * self.period - t)
