@@ -298,3 +298,21 @@ def test_replay_plays_a_recording_to_a_live_client_as_recorded(tmp_path, capsys)
     assert main(["replay", str(path), "--live", "127.0.0.1:0", "--pace", "0"]) == 0
     out = capsys.readouterr().out
     assert f"played {n} messages" in out and "identical" in out
+
+
+def test_shipped_layout_is_built_by_its_script_and_plots_recorded_fields():
+    import importlib.util
+
+    root = Path(__file__).resolve().parents[1]
+    spec = importlib.util.spec_from_file_location("foxglove_layout", root / "scripts" / "foxglove_layout.py")
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+    for path in script.series_paths():
+        topic, _, field = path.partition(".")
+        assert topic in TOPICS, path
+        assert not field or field in json.loads(schema(topic)[1])["properties"], path
+    shipped = json.loads((root / "foxglove" / "slipreflex.json").read_text())
+    text = json.dumps(shipped)
+    assert all(path in text for path in script.series_paths())
+    pytest.importorskip("foxglove", reason="foxglove-sdk (slipreflex[live]) builds the layout")
+    assert script.main(["--check"]) == 0

@@ -5,8 +5,8 @@ message its recording gets (the same topics and schemas, :func:`slipreflex.recor
 and the tap's thread logs them on a `Foxglove SDK <https://docs.foxglove.dev/docs/sdk>`_
 WebSocket server (the ``foxglove-sdk`` package, ``pip install 'slipreflex[live]'``), on
 loopback by default. Open Foxglove, *Open connection* -> *Foxglove WebSocket*,
-``ws://127.0.0.1:8765``, and import the layout :data:`LAYOUT` (``foxglove/slipreflex.json``
-in the repository; docs/runtime.md, "Live view") for plots of the signal, the spikes and
+``ws://127.0.0.1:8765``, and import the layout ``foxglove/slipreflex.json`` of the
+repository (built by ``scripts/foxglove_layout.py``; docs/runtime.md, "Live view") for plots of the signal, the spikes and
 the MPI command as in the paper's Fig. 10. The same layout opens a recorded MCAP file.
 
 Examples
@@ -21,7 +21,6 @@ Examples
 from __future__ import annotations
 
 import json
-import os
 from collections.abc import Iterable, Mapping
 from typing import Any
 
@@ -29,7 +28,7 @@ from .errors import DeviceError, ParameterError
 from .recording import TOPICS, schema
 from .taps import Tap
 
-__all__ = ["LiveView", "parse_address", "require_foxglove", "RUN_TOPICS", "DEFAULT_PORT", "LAYOUT",
+__all__ = ["LiveView", "parse_address", "require_foxglove", "RUN_TOPICS", "DEFAULT_PORT",
            "WS_SUBPROTOCOLS"]
 
 #: Port of ``--live`` given without one (Foxglove's own default).
@@ -40,8 +39,6 @@ WS_SUBPROTOCOLS: tuple[str, ...] = ("foxglove.sdk.v1", "foxglove.websocket.v1")
 #: The topics a ``run`` publishes (a board reflex adds /board/state, a tactile method /tactile/frames).
 RUN_TOPICS: tuple[str, ...] = ("/daq/samples", "/daq/imu", "/daq/flow", "/chain/state", "/chain/events",
                                "/chain/windows", "/hand/commands", "/hand/targets", "/faults", "/stats")
-#: The Foxglove layout with the paper's Fig. 10-style panels (built by scripts/foxglove_layout.py).
-LAYOUT: str = os.path.join("foxglove", "slipreflex.json")
 
 
 def parse_address(text: str, option: str = "--live") -> tuple[str, int]:

@@ -99,6 +99,17 @@ class SimRig:
         else:
             raise ParameterError(f"unknown perturbation {kind!r}: drop or pour")
 
+    def tactile(self, finger: Any) -> Any:
+        """One ``(4, 4)`` tactile frame (N) of a tripod finger now (the virtual Ability Hand's touch).
+
+        Examples
+        --------
+        >>> from slipreflex.hardware import Finger
+        >>> r = SimRig("TR"); _ = r.grasp(); float(r.tactile(Finger.INDEX).sum()) > 0.5
+        True
+        """
+        return self.rig.tactile(finger)
+
     def truth(self) -> dict[str, Any]:
         """The rig's truth now, as a ``/rig/truth`` message (:data:`slipreflex.recording.TOPICS`).
 

@@ -280,6 +280,10 @@ class VirtualDevices:
         Actions ``fn(devices)`` run in the rig's thread at fixed times after
         :meth:`start` (e.g. ``(1.0, lambda d: d.unplug("hand"))``), for
         scripted fault tests.
+    hand_type : str
+        The hand behind the hand port, a name of :mod:`slipreflex.hands` ("ilimb": i-Limb
+        packets applied to ``rig.hand``; "ability": the Ability Hand's UART, each command
+        answered with the measured positions and touch sites).
     on_advance : callable, optional
         ``on_advance(rig)``, called in the rig's thread after each advance (``virtual-rig
         --live`` puts the rig's truth on its live view); it must not block.
@@ -317,7 +321,13 @@ class VirtualDevices:
     def __init__(self, rig: Any, *, link_dir: str | None = None,
                  schedule: Iterable[tuple[str, float]] = (), period: float = DAQ_PERIOD_S,
                  script: Iterable[tuple[float, Any]] = (),
-                 on_advance: Any = None) -> None:
+                 on_advance: Any = None, hand_type: str = "ilimb") -> None:
+        from ..hands import get_hand
+
+        spec = get_hand(hand_type)
+        self.hand_type = spec.name
+        #: the hand's side of its protocol (None: the i-Limb's packets, applied below)
+        self.emulator = spec.virtual(rig) if spec.virtual is not None else None
         self.rig = rig
         self.on_advance = on_advance
         self.period = period
@@ -538,6 +548,12 @@ class VirtualDevices:
                     pass
             if self.hand.master is not None and self.hand.master in ready:
                 data = self.hand.read()
+                if self.emulator is not None:
+                    reply = self.emulator.feed(data)
+                    self.hand_packets = self.emulator.commands
+                    if reply:
+                        self.hand.write(reply)
+                    continue
                 for cmds in self.hand_parser.feed(data):
                     self.hand_packets += 1
                     self._apply_packet(cmds)

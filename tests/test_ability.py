@@ -1,0 +1,87 @@
+"""The PSYONIC Ability Hand: its published UART protocol, the driver, and the virtual hand on a pty."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import serial
+
+from slipreflex.devices import ability as ab
+from slipreflex.devices.simrig import SimRig
+from slipreflex.devices.virtual import VirtualDevices
+from slipreflex.errors import DataError, DeviceError, ParameterError
+from slipreflex.hands import get_hand, open_hand
+from slipreflex.hardware import Finger
+from slipreflex.interfaces import Hand, TactileSource
+
+
+def test_frames_follow_the_icd_byte_for_byte():
+    # position command: address, header 0x10, six int16 LE of deg * 32767 / 150, checksum, stuffed
+    frame = ab.encode_positions([15.0, 0, 0, 0, 0, -15.0])
+    body = ab.unstuff(frame)[0]
+    assert body[:2] == b"\x50\x10" and len(body) == 15 and sum(body) % 256 == 0
+    assert int.from_bytes(body[2:4], "little", signed=True) == round(15 * 32767 / 150)
+    assert int.from_bytes(body[12:14], "little", signed=True) == -round(15 * 32767 / 150)
+    # stuffing: 0x7E and 0x7D inside a frame are escaped, and unstuffing restores them
+    payload = bytes(range(0x70, 0x80))
+    assert ab.unstuff(b"\x00\x7e" + ab.stuff(payload)[1:]) == [payload]
+    assert ab.stuff(payload).count(0x7E) == 2
+    # reply: 12-bit touch values two per three bytes, all 4096 values round-trip
+    touch = list(range(0, 4096, 137))[:30]
+    reply = ab.decode_reply(ab.unstuff(ab.encode_reply([1.0] * 6, [5] * 6, touch, status=3))[0])
+    assert list(reply.touch) == touch and reply.currents == (5,) * 6 and reply.status == 3
+    assert ab.touch_counts(ab.touch_newtons(np.arange(4096))).tolist() == list(range(4096))
+    bad = bytearray(ab.unstuff(ab.encode_reply([0.0] * 6))[0])
+    bad[30] ^= 1
+    with pytest.raises(DataError, match="checksum"):
+        ab.decode_reply(bytes(bad))
+    with pytest.raises(ParameterError, match="6 angles"):
+        ab.encode_positions([200.0] * 6)
+
+
+def _virtual(tmp_path, **kw):
+    rig = SimRig("TR", seed=3)
+    grasp = rig.grasp()
+    return VirtualDevices(rig, hand_type="ability", link_dir=str(tmp_path), **kw), grasp
+
+
+def test_driver_against_the_virtual_hand_positions_commands_and_touch(tmp_path):
+    dev, grasp = _virtual(tmp_path)
+    with dev:
+        with open_hand("ability", dev.hand_path, fs=260.0) as hand:
+            assert isinstance(hand, Hand) and isinstance(hand, TactileSource) and hand.shape == (6,)
+            measured = hand.positions()
+            # the first reply carries the grasp: the tripod where the sim's grasp left it
+            for f in (Finger.THUMB, Finger.INDEX, Finger.MIDDLE):
+                assert measured[f] == pytest.approx(grasp.positions[f], abs=0.05)
+            frames = []
+            for _ in range(200):
+                frames += hand.read_frames(0.01)
+                if len(frames) >= 40:
+                    break
+            assert len(frames) >= 40
+            assert [s.seq for s in frames] == list(range(frames[0].seq, frames[0].seq + len(frames)))
+            assert all(b.t >= a.t for a, b in zip(frames, frames[1:]))
+            touched = np.array([s.frame for s in frames])
+            assert touched.shape[1:] == (6,) and (touched > ab.touch_newtons([1])[0]).any()
+            # a command moves the named finger only; the others stay at their measured position
+            hand.set_positions({Finger.MIDDLE: grasp.positions[Finger.MIDDLE] + 10})
+            for _ in range(100):
+                hand.read_frames(0.01)
+                if hand.positions()[Finger.MIDDLE] > grasp.positions[Finger.MIDDLE] + 5:
+                    break
+            now = hand.positions()
+            assert now[Finger.MIDDLE] > grasp.positions[Finger.MIDDLE] + 5
+            assert now[Finger.INDEX] == pytest.approx(grasp.positions[Finger.INDEX], abs=1.0)
+            with pytest.raises(ParameterError, match="0..500"):
+                hand.set_positions({Finger.INDEX: 600})
+            with pytest.raises(ParameterError, match="no wrist"):
+                hand.set_positions({Finger.WRIST: 10})
+    assert dev.emulator.commands > 40 and dev.emulator.rejected == 0
+
+
+def test_a_silent_port_is_one_line_naming_it():
+    loop = serial.serial_for_url("loop://", timeout=0)  # echoes the request back: no reply frame
+    with pytest.raises(DeviceError, match="no reply from an Ability Hand"):
+        ab.AbilityHand(loop, reply_timeout=0.05)
+    assert get_hand("ability").tactile and not get_hand("ilimb").tactile
