@@ -1,0 +1,36 @@
+"""Any registered method that applies to a command's input reaches it: detect, replay, run, virtual-rig."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from slipreflex import methods
+from slipreflex.chain import run_chain
+from slipreflex.cli import main
+from slipreflex.csvfiles import read_slip_csv
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "slip_example.csv"
+
+
+@pytest.mark.parametrize("name", ["dath-event", "dath-floor", "dath-leak", "authors-gui"])
+def test_detect_runs_every_chain_variant_as_registered(tmp_path, name, capsys):
+    assert main(["detect", str(EXAMPLE), "--method", name.upper(), "--out", str(tmp_path / "d")]) == 0
+    assert f"method {name}" in capsys.readouterr().out
+    t, x = read_slip_csv(EXAMPLE)
+    params = methods.make(name).params
+    expected = run_chain(x, type(params).from_dict({**params.to_dict(), "fs": params.fs, "p0": 0.0}))
+    got = np.loadtxt(tmp_path / "d.samples.csv", delimiter=",", skiprows=1, usecols=None, ndmin=2)
+    header = (tmp_path / "d.samples.csv").read_text().splitlines()[0].split(",")
+    assert got[:, header.index("event")].astype(bool).tolist() == expected.events.astype(bool).tolist()
+
+
+def test_detect_refuses_a_method_its_input_cannot_feed_in_one_line(tmp_path, capsys):
+    for name, words in (("nmsd", "reads tactile frames"), ("swt", "reads tactile frames"),
+                        ("dath-board", "give --board"), ("nope", "unknown 'nope'")):
+        assert main(["detect", str(EXAMPLE), "--method", name, "--out", str(tmp_path / "d")]) == 2
+        err = capsys.readouterr().err
+        assert words in err and len(err.strip().splitlines()) == 1, err
+    assert not (tmp_path / "d.samples.csv").exists()
