@@ -34,3 +34,28 @@ def test_detect_refuses_a_method_its_input_cannot_feed_in_one_line(tmp_path, cap
         err = capsys.readouterr().err
         assert words in err and len(err.strip().splitlines()) == 1, err
     assert not (tmp_path / "d.samples.csv").exists()
+
+
+def test_replay_runs_a_registered_method_over_a_recording(tmp_path, capsys):
+    from test_runtime import ToyRig
+
+    from slipreflex.devices.virtual import VirtualDevices
+    from slipreflex.recording import read_recording
+
+    path = tmp_path / "r.mcap"
+    with VirtualDevices(ToyRig(), schedule=[("drop", 0.3)]) as dev:
+        assert main(["run", "--daq", dev.daq_path, "--hand", dev.hand_path, "--p0", "150",
+                     "--duration", "1.0", "--record", str(path)]) == 0
+    capsys.readouterr()
+    rec = read_recording(path)
+    assert main(["replay", str(path), "--method", "dath-event"]) == 0
+    out = capsys.readouterr().out
+    reflex = methods.make("dath-event", p0=150.0)
+    events = 0
+    for m in rec.topic("/daq/samples"):
+        reflex.step(m["slip_volts"], m["position"])
+        events += bool(reflex.last_event)
+    assert f"dath-event: events {events}," in out and events > 0
+    assert main(["replay", str(path), "--method", "nmsd"]) == 2
+    err = capsys.readouterr().err
+    assert "reads tactile frames" in err and len(err.strip().splitlines()) == 1

@@ -25,6 +25,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
     add_recording_arguments(p, "replay a recording cut by a crash or with damaged chunks up to its first gap")
     add_live_arguments(p)
+    p.add_argument("--method", default=None,
+                   help="instead of checking the recorded chain, run this registered method over the "
+                        "recorded input (a method that reads the slip sensor over /daq/samples, a tactile "
+                        "one over /tactile/frames) and print what it would have done")
+    p.add_argument("--threshold", type=float, default=None,
+                   help="with a tactile --method: its threshold in its unit (N/s for nmsd, N for swt)")
     p.add_argument("--pace", type=float, default=1.0,
                    help="with --live/--lsl: play the recording at this many times real time "
                         "(1 = as recorded; 0 = as fast as possible)")
@@ -50,9 +56,57 @@ def run(args: argparse.Namespace) -> int:
         finally:
             close_taps(taps)
         print(f"played {n} messages of {args.recording}", flush=True)
+    if args.method is not None:
+        return replay_method(rec, args.method, args.threshold)
     res = replay(rec)
     print(res.summary())
     return 0 if res.identical else 1
+
+
+def replay_method(rec, name: str, threshold: float | None = None) -> int:
+    """Run a registered method over a recording's input; print its spikes and commands."""
+    import json
+
+    import numpy as np
+
+    from ..errors import DataError
+    from ..hardware import SLIP_FINGER
+    from ..methods import MethodContext, applicable, make
+    from ..recording import METADATA_NAME
+
+    supplies = {k for k, topic in (("slip", "/daq/samples"), ("tactile", "/tactile/frames")) if rec.topic(topic)}
+    spec = applicable(name, supplies, f"{rec.path} (recorded: {', '.join(sorted(supplies)) or 'nothing'})")
+    start = json.loads(rec.metadata.get("start", {}).get("p0", "{}") or "{}")
+    p0 = float(start.get(SLIP_FINGER.name.lower(), 0.0))
+    params = {}
+    if spec.input_kind == "tactile":
+        frames = rec.topic("/tactile/frames")
+        n = len([k for k in frames[0] if k.startswith("taxel_")])
+        x = [np.array([m[f"taxel_{k}"] for k in range(n)]) for m in frames]
+        if threshold is None:
+            raise DataError(f"--method {spec.name} needs --threshold (its unit: {spec.threshold_unit})")
+        params = {"threshold": threshold, "shape": (n,)}
+        positions = [None] * len(x)
+    else:
+        samples = rec.topic("/daq/samples")
+        x = [m["slip_volts"] for m in samples]
+        positions = [m.get("position") for m in samples]
+        frames = samples
+    reflex = make(spec.name, p0=p0, context=MethodContext(), **params)
+    events = commands = 0
+    last = None
+    for m, v, pos in zip(frames, x, positions):
+        cmd = reflex.step(v, pos)
+        events += bool(reflex.last_event)
+        if cmd is not None:
+            commands += 1
+            last = (m["t"], float(cmd))
+    recorded = rec.metadata.get(METADATA_NAME, {}).get("reflex", "?")
+    print(f"{rec.path}: {len(x)} recorded {'frames' if spec.input_kind == 'tactile' else 'samples'} "
+          f"(recorded with {recorded}) through {spec.name}")
+    print(f"{spec.name}: events {events}, commands {commands}"
+          + (f", last command {last[1]:g} at t={last[0]:.3f} s" if last else ""))
+    return 0
 
 
 def play(rec, taps, pace: float = 1.0, *, sleep=None, clock=None) -> int:
