@@ -39,8 +39,8 @@ def test_frames_follow_the_icd_byte_for_byte():
         ab.encode_positions([200.0] * 6)
 
 
-def _virtual(tmp_path, **kw):
-    rig = SimRig("TR", seed=3)
+def _virtual(tmp_path, pour=None, **kw):
+    rig = SimRig("TR", seed=3, pour=pour)
     grasp = rig.grasp()
     return VirtualDevices(rig, hand_type="ability", link_dir=str(tmp_path), **kw), grasp
 
@@ -85,3 +85,67 @@ def test_a_silent_port_is_one_line_naming_it():
     with pytest.raises(DeviceError, match="no reply from an Ability Hand"):
         ab.AbilityHand(loop, reply_timeout=0.05)
     assert get_hand("ability").tactile and not get_hand("ilimb").tactile
+
+
+def _rest_threshold(dev, seconds=1.0):
+    """NMSD's threshold from the virtual hand's touch sites at rest, as a lab calibrates it."""
+    import time
+
+    from slipreflex.baselines import rest_threshold
+
+    frames = []
+    with open_hand("ability", dev.hand_path, fs=260.0) as hand:
+        deadline = time.monotonic() + seconds
+        while time.monotonic() < deadline:
+            frames += [s.frame for s in hand.read_frames(0.01)]
+    return rest_threshold(np.array(frames), "nmsd", 260.0)
+
+
+def test_run_nmsd_on_the_ability_hands_touch_sensors_over_the_virtual_hand(tmp_path, capsys):
+    """``run --hand-type ability --method nmsd``: no DAQ, the fingertip is the tactile source."""
+    from slipreflex.cli import main
+    from slipreflex.recording import read_recording
+
+    path = tmp_path / "nmsd.mcap"
+    dev, grasp = _virtual(tmp_path, schedule=[("drop", 3.0)])
+    with dev:
+        thr = _rest_threshold(dev)
+        code = main(["run", "--hand", dev.hand_path, "--hand-type", "ability", "--method", "nmsd",
+                     "--tactile-threshold", f"{thr:.6g}", "--p0", grasp.p0_text(), "--duration", "3.0",
+                     "--record", str(path)])
+    out = capsys.readouterr().out
+    assert code == 0, out
+    assert "touch sensors of the ability hand" in out
+    rec = read_recording(path)
+    frames = rec.topic("/tactile/frames")
+    assert 0.6 * 260 * 3.0 < len(frames) <= 1.1 * 260 * 3.0
+    assert {f"taxel_{k}" for k in range(6)} <= set(frames[0]) and not rec.topic("/daq/samples")
+    assert rec.metadata["slipreflex"]["reflex"] == "nmsd" and rec.metadata["slipreflex"]["hand_type"] == "ability"
+    assert [m["seq"] for m in frames] == list(range(frames[0]["seq"], frames[0]["seq"] + len(frames)))
+    assert len(rec.topic("/chain/events")) > 0 and any(m["sent"] for m in rec.topic("/hand/commands"))
+    # replaying NMSD over the recorded frames finds the same detections
+    capsys.readouterr()
+    assert main(["replay", str(path), "--method", "nmsd", "--threshold", f"{thr:.6g}"]) == 0
+    assert f"nmsd: events {len(rec.topic('/chain/events'))}," in capsys.readouterr().out
+
+
+def test_run_dath_with_the_daq_and_the_ability_hand(tmp_path, capsys):
+    """``run --hand-type ability``: the slip sensor on the DAQ, the commands to the Ability Hand."""
+    from slipreflex.cli import main
+    from slipreflex.recording import read_recording
+
+    path = tmp_path / "ab.mcap"
+    from slipreflex.sim import Pour
+
+    # a fast pour: past the first slip (200 ml) about 2.5 s after it starts
+    dev, grasp = _virtual(tmp_path, Pour(rate_l_min=6.0, volume_ml=300.0), schedule=[("pour", 0.5)])
+    with dev:
+        code = main(["run", "--daq", dev.daq_path, "--hand", dev.hand_path, "--hand-type", "ability",
+                     "--p0", grasp.p0_text(), "--duration", "4.0", "--record", str(path)])
+        closed = dev.rig.rig.hand.positions()
+    assert code == 0, capsys.readouterr()
+    rec = read_recording(path)
+    sent = [m for m in rec.topic("/hand/commands") if m["sent"]]
+    assert sent and dev.emulator.commands > len(sent) and dev.emulator.rejected == 0
+    assert closed[Finger.MIDDLE] > grasp.positions[Finger.MIDDLE]  # the reflex closed the hand
+    assert all(closed[f] >= grasp.positions[f] - 0.5 for f in (Finger.THUMB, Finger.INDEX, Finger.MIDDLE))

@@ -59,3 +59,38 @@ def test_replay_runs_a_registered_method_over_a_recording(tmp_path, capsys):
     assert main(["replay", str(path), "--method", "nmsd"]) == 2
     err = capsys.readouterr().err
     assert "reads tactile frames" in err and len(err.strip().splitlines()) == 1
+
+
+def test_run_dath_event_over_the_virtual_ilimb_records_and_replays(tmp_path, capsys):
+    from test_runtime import ToyRig
+
+    from slipreflex.devices.virtual import VirtualDevices
+    from slipreflex.recording import read_recording
+
+    path = tmp_path / "ev.mcap"
+    with VirtualDevices(ToyRig(), schedule=[("drop", 0.3)]) as dev:
+        assert main(["run", "--daq", dev.daq_path, "--hand", dev.hand_path, "--p0", "150",
+                     "--method", "dath-event", "--duration", "1.2", "--record", str(path)]) == 0
+    assert "running dath-event reflex" in capsys.readouterr().out
+    rec = read_recording(path)
+    assert rec.metadata["slipreflex"]["reflex"] == "dath-event"
+    assert methods.make("dath-event").params.to_dict()["mpi_mode"] == "event"
+    assert '"mpi_mode": "event"' in rec.metadata["slipreflex"]["reflex_params"]
+    assert rec.topic("/chain/events") and any(m["sent"] for m in rec.topic("/hand/commands"))
+    assert main(["replay", str(path)]) == 0  # the variant's chain, rebuilt from the recording
+    assert "identical" in capsys.readouterr().out
+
+
+def test_run_refuses_a_method_its_devices_cannot_feed_before_any_port_opens(tmp_path, capsys):
+    base = ["run", "--hand", "loop://", "--p0", "100", "--no-record", "--duration", "1"]
+    cases = [(["--daq", "loop://", "--method", "nmsd", "--tactile-threshold", "40"],
+              "nmsd reads tactile frames, which --daq loop:// and the i-Limb does not supply"),
+             (["--method", "dath"], "reads slip-sensor samples, which no --daq and the i-Limb"),
+             (["--daq", "loop://", "--method", "dath-event", "--kp", "3"], "--kp applies to fixed and dath only"),
+             (["--hand-type", "ability", "--method", "nmsd"], "needs --tactile-threshold > 0"),
+             (["--daq", "loop://", "--tactile-threshold", "3"], "--tactile-threshold is for a tactile method"),
+             (["--daq", "loop://", "--method", "nope"], "unknown 'nope'")]
+    for extra, words in cases:
+        assert main(base + extra) == 2, extra
+        err = capsys.readouterr().err
+        assert words in err and len(err.strip().splitlines()) == 1, err

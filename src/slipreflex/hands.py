@@ -51,6 +51,8 @@ class HandSpec:
         it has ``close()``. Options: ``fs`` (the tactile rate) for a tactile hand.
     tactile : bool
         The driver is also a :class:`~slipreflex.interfaces.TactileSource`.
+    tactile_shape : tuple of int
+        The shape of its tactile frames (empty for a hand without touch sensors).
     virtual : callable, optional
         ``virtual(rig)``: the hand's side of its protocol on a rig, with ``feed(bytes) ->
         bytes`` (the replies to write back) and ``commands`` / ``rejected`` counters; None
@@ -67,6 +69,7 @@ class HandSpec:
     open: Callable[..., Any]
     tactile: bool = False
     virtual: Callable[[Any], Any] | None = None
+    tactile_shape: tuple[int, ...] = ()
 
     def __post_init__(self) -> None:
         text("HandSpec.name", self.name)
@@ -154,4 +157,4 @@ def _virtual_ability(rig: Any) -> Any:
 
 register_hand(HandSpec(ILIMB, "i-Limb", _open_ilimb))
 register_hand(HandSpec(ABILITY, "Ability Hand", _open_ability, tactile=True,
-                       virtual=_virtual_ability))
+                       virtual=_virtual_ability, tactile_shape=(6,)))

@@ -36,7 +36,7 @@ started, on the PC's clock):
                    (``thumb``, ``index``, ``middle``, ...; null for a finger not commanded),
                    so a plot draws one line per finger
 /tactile/frames    (a tactile method) every frame as flat fields: ``total`` and ``peak`` (N),
-                   then one ``taxel_K`` per taxel (the frame in C order)
+                   ``position`` (as /daq/samples), then one ``taxel_K`` per taxel (C order)
 /rig/truth         (``virtual-rig --live``) the simulated rig's truth per sample: the
                    object's displacement and slip (m), velocity (m/s), the normal force
                    per contact (N), its load (kg), slipping, fallen, and the measured
@@ -108,7 +108,7 @@ TOPICS: dict[str, tuple[str, dict[str, Any]]] = {
     "/hand/targets": ("slipreflex.FingerTargets", {"seq": _I, "t": "number", "sent": _B,
                                                    **{f: _N for f in FINGER_FIELDS}}),
     "/tactile/frames": ("slipreflex.TactileFrame", {"seq": _I, "t": "number", "total": "number",
-                                                    "peak": "number"}),
+                                                    "peak": "number", "position": _N}),
     "/rig/truth": ("slipreflex.RigTruth", {"t": "number", "displacement": "number", "slip": "number",
                                            "velocity": "number", "normal_force": "number",
                                            "load_mass": "number", "slipping": _B, "fallen": _B,

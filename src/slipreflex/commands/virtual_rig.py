@@ -44,8 +44,15 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--link-dir", default=None,
                    help="also create DIR/daq and DIR/hand symlinks to the ports (stable paths; DIR is created)")
     p.add_argument("--duration", type=float, default=None, help="exit after this many seconds")
+    from ..hands import hand_names
     from ._live import add_live_arguments
 
+    p.add_argument("--hand-type", default="ilimb", choices=hand_names(),
+                   help="the hand behind the hand port (default ilimb; ability: the Ability Hand's UART, "
+                        "with its fingertip touch sensors fed from the simulated tactile arrays)")
+    p.add_argument("--method", default=None,
+                   help="the method 'run' will use: checked against what this rig supplies (the slip "
+                        "sensor; tactile frames with --hand-type ability) and put in the printed run line")
     add_live_arguments(p, lsl=False)
     p.add_argument("--realtime", action="store_true",
                    help="run the rig's real-time thread under SCHED_FIFO (it stands in for hardware "
@@ -80,8 +87,16 @@ def run(args: argparse.Namespace) -> int:
 
     from ._live import check_live_arguments, close_taps, open_taps
 
+    from ..hands import get_hand
+    from ..methods import applicable
+
     schedule = parse_schedule(args.schedule)
     check_live_arguments(args)
+    hand = get_hand(args.hand_type)
+    method = None
+    if args.method is not None:
+        method = applicable(args.method, {"slip", "tactile"} if hand.tactile else {"slip"},
+                            f"the virtual rig with the {hand.label}")
     if args.link_dir is not None:
         output_dir(args.link_dir, "--link-dir")      # before the grasp: a bad DIR costs one line
     bottle, loads = _objects(args)
@@ -107,7 +122,7 @@ def run(args: argparse.Namespace) -> int:
 
     try:
         dev = VirtualDevices(rig, link_dir=args.link_dir, schedule=schedule,
-                             on_advance=publish_truth if taps else None)
+                             on_advance=publish_truth if taps else None, hand_type=hand.name)
     except BaseException:
         close_taps(taps)
         raise
@@ -117,8 +132,13 @@ def run(args: argparse.Namespace) -> int:
         print(f"p0: {grasp.p0_text()}", flush=True)
         print(f"grasp: bottle {args.bottle}, {grasp.force_n:.2f} N per contact, "
               f"{'stable' if grasp.stable else 'NOT stable'}", flush=True)
-        print(f"run: slipreflex run --daq {dev.daq_path} --hand {dev.hand_path} --p0 {grasp.p0_text()}",
-              flush=True)
+        line = "slipreflex run" + ("" if method is not None and method.input_kind == "tactile"
+                                   else f" --daq {dev.daq_path}") + f" --hand {dev.hand_path}"
+        if hand.name != "ilimb":
+            line += f" --hand-type {hand.name}"
+        if method is not None:
+            line += f" --method {method.name}" + (" --tactile-threshold T" if method.input_kind == "tactile" else "")
+        print(f"run: {line} --p0 {grasp.p0_text()}", flush=True)
         print("keys: d+Enter drop, p+Enter pour, q+Enter quit; SIGUSR1 drop, SIGUSR2 pour", flush=True)
         if args.realtime:
             from ..runtime import realtime_priority
@@ -163,7 +183,8 @@ def run(args: argparse.Namespace) -> int:
         finally:
             close_taps(taps)
     print(f"stopped after {dev.elapsed:.1f} s: {dev.frames_written} frames sent, "
-          f"{dev.hand_packets} hand packets applied ({dev.hand_parser.rejected} rejected), "
+          f"{dev.hand_packets} hand packets applied "
+          f"({(dev.emulator or dev.hand_parser).rejected} rejected), "
           f"perturbations {[(k, round(t, 2)) for k, t in dev.triggered]}", flush=True)
     print(rig.status(), flush=True)
     return 0

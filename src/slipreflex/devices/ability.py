@@ -12,8 +12,10 @@ Frames
 Commands (host -> hand)
     Position mode, header ``0x10 + variant``: six int16 little-endian positions,
     ``degrees * 32767 / 150``, in the hand's order index, middle, ring, pinky, thumb
-    flexor, thumb rotator (the rotator's angles are negative). Read-only mode, header
-    ``0xA0 + variant``: no data; the hand replies without changing what it does.
+    flexor, thumb rotator (the rotator's angles are negative). Velocity mode, header
+    ``0x20 + variant``: six int16 velocities, ``degrees/s * 32767 / 3000`` (ICD 3.4.2;
+    positive closes). Read-only mode, header ``0xA0 + variant``: no data; the hand replies
+    without changing what it does.
 Replies (hand -> host), variant 0 (the ICD's "variant 1")
     header, then per finger position and motor current (int16 each, 24 bytes), then the
     30 touch sites as 12-bit values packed two per three bytes (45 bytes; 6 sites per
@@ -56,7 +58,7 @@ from ..interfaces import TactileSample
 from .port import ReconnectingPort
 
 __all__ = ["ABILITY_BAUD", "ADDRESS", "ORDER", "TOUCH_FINGERS", "SITES", "FULL_CLOSE_DEG",
-           "checksum", "stuff", "unstuff", "Unstuffer", "encode_positions", "encode_read",
+           "checksum", "stuff", "unstuff", "Unstuffer", "encode_positions", "encode_velocities", "encode_read",
            "decode_command", "AbilityReply", "decode_reply", "encode_reply", "touch_newtons",
            "touch_counts", "degrees_of", "units_of", "AbilityHand"]
 
@@ -76,7 +78,8 @@ SITES: int = 6
 FULL_CLOSE_DEG: float = 100.0
 _SCALE = 32767 / 150  # int16 counts per degree (ICD 3.4.1)
 _FRAME, _ESC, _MASK = 0x7E, 0x7D, 0x20
-_POSITION, _READ = 0x10, 0xA0
+_POSITION, _VELOCITY, _READ = 0x10, 0x20, 0xA0
+_VSCALE = 32767 / 3000  # int16 counts per degree per second (ICD 3.4.2)
 _REPLY_LEN = 1 + 24 + 45 + 1  # header, position/current pairs, touch, status (checksum apart)
 _FSR_C1, _FSR_C2 = 121591.0, 0.878894
 _ADC_V, _ADC_COUNTS, _R_TOP, _R_BOTTOM = 3.3, 4096, 33000.0, 10000.0
@@ -203,6 +206,27 @@ def encode_positions(degrees: Sequence[float], variant: int = 0, address: int = 
     return _framed(body)
 
 
+def encode_velocities(deg_s: Sequence[float], variant: int = 0, address: int = ADDRESS) -> bytes:
+    """A velocity command: six speeds in degrees per second, in :data:`ORDER` (positive closes).
+
+    Raises
+    ------
+    ParameterError
+        Not six finite speeds within +-3000 degrees/s.
+
+    Examples
+    --------
+    >>> body = unstuff(encode_velocities([100.0, 0, 0, 0, 0, 0]))[0]
+    >>> hex(body[1]), round(decode_command(body)[2][0], 1)
+    ('0x20', 100.0)
+    """
+    vals = [float(v) for v in deg_s]
+    if len(vals) != len(ORDER) or not all(math.isfinite(v) and abs(v) <= 3000.0 for v in vals):
+        raise ParameterError(f"Ability Hand velocity command needs 6 speeds within +-3000 degrees/s, got {vals}")
+    body = struct.pack("<BB6h", address, _VELOCITY + _variant(variant), *(round(v * _VSCALE) for v in vals))
+    return _framed(body)
+
+
 def encode_read(variant: int = 0, address: int = ADDRESS) -> bytes:
     """A read-only request: the hand replies and keeps doing what it does.
 
@@ -215,7 +239,8 @@ def encode_read(variant: int = 0, address: int = ADDRESS) -> bytes:
 
 
 def decode_command(frame: bytes) -> tuple[int, int, list[float] | None]:
-    """``(address, header, degrees or None)`` of a command frame (the hand's side).
+    """``(address, header, values or None)`` of a command frame (the hand's side): degrees for
+    a position frame, degrees per second for a velocity frame, None for any other.
 
     Raises
     ------
@@ -230,10 +255,11 @@ def decode_command(frame: bytes) -> tuple[int, int, list[float] | None]:
     if len(frame) < 3 or sum(frame) & 0xFF:
         raise DataError(f"Ability Hand command frame fails its checksum: {frame.hex(' ')}")
     address, header = frame[0], frame[1]
-    if header & 0xF0 == _POSITION:
+    if header & 0xF0 in (_POSITION, _VELOCITY):
         if len(frame) != 15:
-            raise DataError(f"Ability Hand position frame has {len(frame)} bytes, not 15")
-        return address, header, [v / _SCALE for v in struct.unpack("<6h", frame[2:14])]
+            raise DataError(f"Ability Hand position or velocity frame has {len(frame)} bytes, not 15")
+        scale = _SCALE if header & 0xF0 == _POSITION else _VSCALE
+        return address, header, [v / scale for v in struct.unpack("<6h", frame[2:14])]
     return address, header, None
 
 
@@ -383,6 +409,10 @@ class AbilityHand:
     """The Ability Hand on a serial port: a :class:`~slipreflex.interfaces.Hand` and a
     :class:`~slipreflex.interfaces.TactileSource` (one finger's 6 touch sites per frame).
 
+    Every reply carries the touch sites, so every reply is a frame: a command's reply
+    stands for that period's read-only request (the next one waits a period), which keeps
+    the frames near ``fs``.
+
     At construction it asks the hand for one reply (read-only mode) and fails unless
     one comes: every later command then starts from the fingers' measured positions,
     so a command never moves a finger it does not name. :meth:`read_frames` asks for a
@@ -437,6 +467,7 @@ class AbilityHand:
         self._unstuffer = Unstuffer()
         self._measured: dict[Finger, float] = {}
         self._targets: dict[Finger, float] = {}
+        self._closing: dict[Finger, float] = {}  # finger -> closing speed, degrees/s
         self._next_request = -math.inf
         self._t0 = time.perf_counter()
         self._seq = 0
@@ -457,6 +488,10 @@ class AbilityHand:
                               f"(UART API with byte stuffing on, {ABILITY_BAUD} baud?)")
 
     # -- bytes ------------------------------------------------------------------------
+    def _command_sent(self) -> None:
+        """A command's reply is this period's frame: the next read-only request waits a period."""
+        self._next_request = time.perf_counter() + 1 / self.fs
+
     def _write(self, frame: bytes) -> None:
         import serial
 
@@ -525,11 +560,44 @@ class AbilityHand:
         """
         frame, full = self._command(targets)
         self._write(frame)
+        self._command_sent()
         self._targets = {f: v for f, v in full.items()}
 
+    def close_fingers(self, fingers: Iterable[Finger], speed: float) -> None:
+        """Start closing ``fingers`` at ``speed`` finger units per second, until :meth:`hold`.
+
+        Sent in velocity mode (ICD 3.4.2): the named fingers at ``speed`` (in degrees per
+        second, :func:`degrees_of`), every other finger at 0, which holds it.
+
+        Raises
+        ------
+        ParameterError
+            A finger the hand lacks, or a speed that is not > 0 (nothing is written).
+        """
+        fs = [Finger(f) for f in fingers]
+        bad = [f for f in fs if f not in ORDER]
+        if bad or not (math.isfinite(speed) and speed > 0):
+            raise ParameterError(f"Ability Hand: cannot close {[f.name.lower() for f in bad] or fs} at {speed!r} "
+                                 f"units/s (fingers of the hand, speed > 0)")
+        closing = {**self._closing, **{f: abs(degrees_of(f, speed)) for f in fs}}
+        self._write(encode_velocities([closing.get(f, 0.0) * (-1 if f == Finger.THUMB_ROTATOR else 1)
+                                       for f in ORDER]))
+        self._command_sent()
+        self._closing = closing
+
     def hold(self, fingers: Iterable[Finger] = ()) -> None:
-        """Hold ``fingers`` where they were last measured (never opens the hand)."""
-        self.set_positions({Finger(f): self._measured[Finger(f)] for f in fingers if Finger(f) in self._measured})
+        """Hold ``fingers`` where they were last measured (never opens the hand); fingers still
+        closing keep closing."""
+        fs = [Finger(f) for f in fingers]
+        closing = {f: v for f, v in self._closing.items() if f not in fs}
+        if closing:
+            self._write(encode_velocities([closing.get(f, 0.0) * (-1 if f == Finger.THUMB_ROTATOR else 1)
+                                           for f in ORDER]))
+            self._command_sent()
+            self._closing = closing
+            return
+        self._closing = {}
+        self.set_positions({f: self._measured[f] for f in fs if f in self._measured})
 
     def positions(self) -> dict[Finger, float]:
         """The positions of the last reply, in finger units."""
@@ -629,6 +697,26 @@ class VirtualAbilityHand:
             counts[k:k + SITES] = touch_counts(np.where(force > _TOUCHED_N, force + _FSR_C2, 0.0)).tolist()
         return counts
 
+    def _velocities(self, deg_s: dict[Finger, float]) -> None:
+        """Velocity mode on the rig's hand: a closing finger closes at that speed, a finger at
+        0 holds, an opening one goes to 0 (the simulated hand speaks i-Limb commands)."""
+        from ..hardware import PWM_MAX, HandCommand
+
+        hand = self.rig.hand
+        full = getattr(getattr(hand, "params", None), "speed_units_s", None)
+        for f, v in deg_s.items():
+            if f == Finger.THUMB_ROTATOR:
+                continue
+            units = units_of(f, v)
+            if units > 0 and hasattr(hand, "command") and full:
+                hand.command(HandCommand.CLOSE, [f], min(float(PWM_MAX), units / full * PWM_MAX))
+            elif units == 0 and hasattr(hand, "command"):
+                hand.command(HandCommand.STOP, [f], 0.0)
+            elif units < 0:
+                hand.set_positions({f: 0.0})
+            elif units > 0:
+                hand.set_positions({f: float(FINGER_MAX)})
+
     def reply(self) -> bytes:
         """The reply to a command now: measured positions and touch values."""
         pos = self.rig.hand.positions()
@@ -644,9 +732,11 @@ class VirtualAbilityHand:
                 self.rejected += 1
                 continue
             self.commands += 1
-            if degrees is not None:
+            if degrees is not None and header & 0xF0 == _POSITION:
                 self.rig.hand.set_positions({f: min(max(units_of(f, d), FINGER_MIN), FINGER_MAX)
                                              for f, d in zip(ORDER, degrees) if f != Finger.THUMB_ROTATOR})
+            elif degrees is not None:
+                self._velocities(dict(zip(ORDER, degrees)))
             out += self.reply()
         return bytes(out)
 
