@@ -316,3 +316,34 @@ def test_shipped_layout_is_built_by_its_script_and_plots_recorded_fields():
     assert all(path in text for path in script.series_paths())
     pytest.importorskip("foxglove", reason="foxglove-sdk (slipreflex[live]) builds the layout")
     assert script.main(["--check"]) == 0
+
+
+def test_lsl_samples_of_a_tactile_run_carry_each_taxel(tmp_path):
+    pylsl = _pylsl()
+    import numpy as np
+
+    from slipreflex.interfaces import TactileSample
+    from slipreflex.lsl import LslOutlets, tactile_channels
+    from slipreflex.runtime import tactile_message
+
+    outlets = LslOutlets(f"tac-{uuid.uuid4().hex[:8]}", fs=260.0, taxels=6).start()
+    try:
+        inlet = _resolve(pylsl, f"{outlets.source_id}-samples")
+        info = inlet.info()
+        assert info.channel_count() == 2 + 6 + 4 and info.type() == "tactile"
+        ns0 = time.time_ns()
+        frames = [np.arange(6.0) * 0.1 + k for k in range(5)]
+        for k, f in enumerate(frames):
+            s = TactileSample(k, k / 260.0, f)
+            outlets.put("/tactile/frames", tactile_message(s, 150.0), ns0 + k)
+            outlets.put("/chain/state", {"seq": k, "t": s.t, "filtered": None, "threshold": 40.0,
+                                         "event": k == 3}, ns0 + k)
+        outlets.flush()
+        data, stamps = _pull(inlet, 5)
+    finally:
+        outlets.close()
+    names = tactile_channels(6)[0]
+    assert [row[names.index("taxel_5")] for row in data] == [f[5] for f in frames]
+    assert [row[names.index("total")] for row in data] == [float(f.sum()) for f in frames]
+    assert [row[names.index("event")] for row in data] == [0, 0, 0, 1, 0]
+    assert np.allclose(np.diff(stamps), 1 / 260.0)

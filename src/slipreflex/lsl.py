@@ -39,14 +39,27 @@ from .errors import DeviceError, ParameterError
 from .hardware import DAQ_FS
 from .taps import Tap
 
-__all__ = ["LslOutlets", "SAMPLE_CHANNELS", "SAMPLE_UNITS", "marker_text", "require_pylsl"]
+__all__ = ["LslOutlets", "SAMPLE_CHANNELS", "SAMPLE_UNITS", "marker_text", "require_pylsl", "tactile_channels"]
 
 #: The channels of the samples stream, in order.
 SAMPLE_CHANNELS: tuple[str, ...] = ("slip_volts", "filtered", "threshold", "event", "position",
                                     "ax", "ay", "az", "flow_pulses")
 #: Their units.
 SAMPLE_UNITS: tuple[str, ...] = ("V", "V", "V", "bool", "i-Limb units", "g", "g", "g", "pulses")
-_INDEX = {name: k for k, name in enumerate(SAMPLE_CHANNELS)}
+
+
+
+def tactile_channels(taxels: int) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """Channels and units of the samples stream of a run whose method reads tactile frames.
+
+    Examples
+    --------
+    >>> tactile_channels(2)[0]
+    ('total', 'peak', 'taxel_0', 'taxel_1', 'filtered', 'threshold', 'event', 'position')
+    """
+    names = ("total", "peak", *(f"taxel_{k}" for k in range(taxels)), "filtered", "threshold", "event",
+             "position")
+    return names, ("N",) * (2 + taxels) + ("N", "", "bool", "i-Limb units")
 
 
 def require_pylsl(option: str = "--lsl") -> Any:
@@ -109,6 +122,10 @@ class LslOutlets(Tap):
         DAQ port or ``slipreflex``.
     fs : float
         Nominal rate of the samples stream (Hz).
+    taxels : int
+        For a run whose method reads tactile frames: taxels per frame; the samples stream
+        then has one sample per frame with :func:`tactile_channels` (0: the slip sensor's
+        :data:`SAMPLE_CHANNELS`).
 
     Attributes
     ----------
@@ -130,16 +147,19 @@ class LslOutlets(Tap):
     """
 
     def __init__(self, name: str = "slipreflex", *, source_id: str | None = None,
-                 fs: float = DAQ_FS) -> None:
+                 fs: float = DAQ_FS, taxels: int = 0) -> None:
         pylsl = require_pylsl()
         super().__init__("lsl outlets")
         self.pylsl = pylsl
         sid = source_id or f"{name}@slipreflex"
+        self.channels, units = tactile_channels(taxels) if taxels else (SAMPLE_CHANNELS, SAMPLE_UNITS)
+        self._index = {c: k for k, c in enumerate(self.channels)}
+        self._sample_topic = "/tactile/frames" if taxels else "/daq/samples"
         try:
-            info = pylsl.StreamInfo(f"{name}-samples", "slip", len(SAMPLE_CHANNELS), float(fs),
-                                    pylsl.cf_double64, f"{sid}-samples")
+            info = pylsl.StreamInfo(f"{name}-samples", "tactile" if taxels else "slip", len(self.channels),
+                                    float(fs), pylsl.cf_double64, f"{sid}-samples")
             chans = info.desc().append_child("channels")
-            for label, unit in zip(SAMPLE_CHANNELS, SAMPLE_UNITS):
+            for label, unit in zip(self.channels, units):
                 ch = chans.append_child("channel")
                 ch.append_child_value("label", label)
                 ch.append_child_value("unit", unit)
@@ -170,24 +190,25 @@ class LslOutlets(Tap):
 
     def handle(self, topic: str, msg: Mapping[str, Any], log_time_ns: int) -> None:
         """Build and push samples and markers (the tap's thread)."""
-        if topic == "/daq/samples":
+        index = self._index
+        if topic == self._sample_topic:
             if self.offset is None:
                 self.offset = self.lsl_time(log_time_ns) - msg["t"]
-            row = [math.nan] * len(SAMPLE_CHANNELS)
-            row[_INDEX["slip_volts"]] = float(msg["slip_volts"])
-            row[_INDEX["position"]] = _num(msg.get("position"))
-            row[_INDEX["flow_pulses"]] = float(msg["flow_pulses"])
+            row = [math.nan] * len(self.channels)
+            for key, k in index.items():
+                if key in msg and key not in ("event",):
+                    row[k] = _num(msg[key])
             self._row, self._seq, self._t = row, msg["seq"], msg["t"]
             return
         if topic == "/daq/imu" and self._row is not None and msg["seq"] == self._seq:
             for axis in ("ax", "ay", "az"):
-                self._row[_INDEX[axis]] = float(msg[axis])
+                self._row[index[axis]] = float(msg[axis])
             return
         if topic == "/chain/state" and self._row is not None and msg["seq"] == self._seq:
             row = self._row
-            row[_INDEX["filtered"]] = _num(msg.get("filtered"))
-            row[_INDEX["threshold"]] = _num(msg.get("threshold"))
-            row[_INDEX["event"]] = 1.0 if msg.get("event") else 0.0
+            row[index["filtered"]] = _num(msg.get("filtered"))
+            row[index["threshold"]] = _num(msg.get("threshold"))
+            row[index["event"]] = 1.0 if msg.get("event") else 0.0
             self.samples.push_sample(row, self._t + (self.offset or 0.0))
             self.pushed_samples += 1
             self._row = None

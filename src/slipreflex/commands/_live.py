@@ -51,7 +51,7 @@ def check_live_arguments(args: argparse.Namespace) -> None:
 
 
 def open_taps(args: argparse.Namespace, topics: Iterable[str], *, lsl_source: str = "",
-              fs: float | None = None) -> list[Any]:
+              fs: float | None = None, taxels: int = 0) -> list[Any]:
     """Start the taps the options ask for and say where they are; the caller closes them."""
     taps: list[Any] = []
     try:
@@ -66,7 +66,7 @@ def open_taps(args: argparse.Namespace, topics: Iterable[str], *, lsl_source: st
             from ..lsl import LslOutlets
 
             outlets = LslOutlets(args.lsl, source_id=f"{args.lsl}@{lsl_source}" if lsl_source else None,
-                                 fs=fs or DAQ_FS)
+                                 fs=fs or DAQ_FS, taxels=taxels)
             taps.append(outlets.start())
             print(f"lsl: outlets {outlets.names[0]} and {outlets.names[1]}", flush=True)
     except BaseException:

@@ -295,7 +295,8 @@ def run(args: argparse.Namespace) -> int:
         topics = RUN_TOPICS + (("/board/state",) if args.board_reflex else ())
         if tactile:
             topics = ("/tactile/frames",) + tuple(t for t in topics if not t.startswith("/daq/"))
-        taps = open_taps(args, topics, lsl_source=args.daq or args.hand)
+        taps = open_taps(args, topics, lsl_source=args.daq or args.hand, fs=getattr(reflex, "fs", None),
+                         taxels=math.prod(reflex.params.shape) if tactile else 0)
         with contextlib.ExitStack() as devices:
             hand = devices.enter_context(open_hand(args.hand_type, args.hand,
                                                    **({"fs": reflex.fs} if tactile else {})))
