@@ -108,9 +108,9 @@ def main(argv: list[str] | None = None) -> int:
         return live_client(args.client, args.duration + 30)
 
     from slipreflex.chain import SlipReflex
+    from slipreflex.commands.run import parse_p0
     from slipreflex.devices.daq import SerialDaq
     from slipreflex.devices.ilimb import ILimb
-    from slipreflex.commands.run import parse_p0
     from slipreflex.hardware import SLIP_FINGER
     from slipreflex.recording import METADATA_NAME, Recorder
     from slipreflex.runtime import realtime_priority, run_loop

@@ -16,7 +16,7 @@ from slipreflex.errors import ParameterError
 from slipreflex.sim.calibration import calibrate_bottle, first_slip_ml
 from slipreflex.sim.uncertain import nominal_values, plant_from_values
 from slipreflex.study import StudyConfig
-from slipreflex.study.analyse import plant_table, study_markdown, claim_fractions
+from slipreflex.study.analyse import claim_fractions, plant_table, study_markdown
 from slipreflex.study.runner import run_plant
 
 #: A plausible plant (every constant inside the uncertain table's ranges) with a stick-slipping cuff.
@@ -49,6 +49,7 @@ def test_a_target_inside_a_jump_of_the_first_slip_is_reported_or_met_at_the_near
     assert abs(on_step.first_slip_ml - below) <= 0.02 * below and on_step.note == ""
 
 
+@pytest.mark.slow
 def test_a_study_plant_inside_a_jump_runs_at_the_nearest_edge_or_is_recorded(tmp_path):
     tr = plant_from_values(STAIRS).bottles["TR"]
     kw = plant_from_values(STAIRS).rig_kwargs()

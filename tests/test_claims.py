@@ -185,6 +185,7 @@ def test_contradictions_of_the_paper():
     assert C.contradictions_markdown(list(items.values())).count("(inconsistent)") == len(items)
 
 
+@pytest.mark.slow
 def test_report_and_terminal_carry_the_claims(tmp_path):
     from slipreflex.analysis.outputs import write_outputs
     from slipreflex.experiments import ReproduceConfig, run_reproduce
@@ -204,6 +205,7 @@ def test_missing_counts_do_not_break_the_judge():
     assert res[6].verdict == C.FAILS and "0% of" in res[6].numbers   # no slip counts: no two-slip pours
 
 
+@pytest.mark.slow
 def test_claims_command_judges_a_written_results_table_as_the_run_did(tmp_path, capsys):
     from slipreflex.analysis.claims import claims_terminal, judge_run
     from slipreflex.analysis.outputs import write_outputs

@@ -3,6 +3,7 @@ the reflex's state and the rig's, bit for bit (issue 10, item 4)."""
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -17,15 +18,22 @@ from slipreflex.hardware import Finger, HandCommand
 from slipreflex.interfaces import CompiledReflex
 from slipreflex.sim import PAPER_DROP, PAPER_POUR, Drop, Pour, Rig, closed, run_closed_loop
 
-CONTEXT = methods.MethodContext(thresholds=calibrate(ReproduceConfig(trials=1)), speed=500.0)
 SHORT_POUR = Pour(rate_l_min=1.0, volume_ml=150.0)
 # (experiment, bottle, seed): drops and pours, every bottle, several seeds
 CASES = [(PAPER_DROP, "TR", 1), (Drop(mass_kg=0.02, height_m=0.08), "TX", 2), (PAPER_POUR, "DK", 3),
          (PAPER_POUR, "TR", 4)]
 
 
+@functools.cache
+def _context() -> methods.MethodContext:
+    """The calibrated thresholds, computed on first use (never at collection)."""
+    return methods.MethodContext(thresholds=calibrate(ReproduceConfig(trials=1)), speed=500.0)
+
+
 def _compiled_methods() -> list[str]:
-    return [m for m in methods.names() if isinstance(methods.make(m, p0=100.0, context=CONTEXT), CompiledReflex)]
+    """The methods with a compiled step (whether one is does not depend on its threshold's value)."""
+    placeholder = methods.MethodContext(thresholds={m: 1.0 for m in methods.names()}, speed=500.0)
+    return [m for m in methods.names() if isinstance(methods.make(m, p0=100.0, context=placeholder), CompiledReflex)]
 
 
 COMPILED = _compiled_methods()
@@ -38,7 +46,7 @@ def _run(method_or_factory, what, bottle, seed, compiled, **kw):
     if callable(method_or_factory):
         reflex = method_or_factory(p0)
     else:
-        reflex = methods.make(method_or_factory, p0=p0, context=CONTEXT)
+        reflex = methods.make(method_or_factory, p0=p0, context=_context())
     rig.perturb(what, at=rig.t + 0.2)
     duration = 0.2 + (what.duration_s if isinstance(what, Pour) else 0.0) + 0.8
     tr = run_closed_loop(rig, reflex, duration, compiled=compiled, **kw)
@@ -68,6 +76,7 @@ def _assert_same(a, b):
     assert [s.next_index for s in ra.samplers] == [s.next_index for s in rb.samplers]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("what,bottle,seed", CASES, ids=["drop-TR", "drop-TX", "pour-DK", "pour-TR"])
 @pytest.mark.parametrize("method", COMPILED)
 def test_the_compiled_loop_equals_the_python_loop(method, what, bottle, seed):
@@ -158,6 +167,7 @@ class _Squeeze:
         self.S[:] = 0.0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("fs", [hw.NMSD_FS, hw.SWT_FS])
 @pytest.mark.parametrize("what,bottle,seed", CASES[:3], ids=["drop-TR", "drop-TX", "pour-DK"])
 def test_a_compiled_tactile_reflex_equals_its_python_loop(fs, what, bottle, seed):
@@ -240,7 +250,7 @@ def test_a_tactile_reflex_for_other_frames_fails_as_in_the_python_loop():
     for compiled in (True, False):
         rig = Rig("TR")
         rig.grasp()
-        reflex = methods.make(methods.NMSD, p0=100.0, context=CONTEXT, shape=(7,))
+        reflex = methods.make(methods.NMSD, p0=100.0, context=_context(), shape=(7,))
         with pytest.raises(DataError, match="shape"):
             run_closed_loop(rig, reflex, 0.1, compiled=compiled)
 
@@ -291,9 +301,9 @@ def test_a_step_that_raises_leaves_the_rig_as_the_python_loop_leaves_it():
 def test_a_zero_length_run_from_the_start_returns(method, compiled):
     """From t = 0 no step is left before t_end: both loops return at once (the Python loop used to spin)."""
     rig = Rig("TR")
-    tr = run_closed_loop(rig, methods.make(method, context=CONTEXT), 0.0, compiled=compiled)
+    tr = run_closed_loop(rig, methods.make(method, context=_context()), 0.0, compiled=compiled)
     assert rig.t == 0.0 and tr.t.size == 0 and tr.cmd_t.size == 0
-    tr = run_closed_loop(rig, methods.make(method, context=CONTEXT), 0.01, compiled=compiled)
+    tr = run_closed_loop(rig, methods.make(method, context=_context()), 0.01, compiled=compiled)
     assert tr.t.size == 4 and tr.t[0] == 0.0
 
 
@@ -335,7 +345,7 @@ def test_the_loops_agree_off_the_default_latency_and_time_step(method, latency, 
     for compiled in (True, False):
         rig = Rig("DK", seed=5, hand=HandParams(latency_s=latency), physics=PhysicsParams(dt=dt))
         g = rig.grasp()
-        reflex = methods.make(method, p0=float(round(g.positions[hw.SLIP_FINGER])), context=CONTEXT)
+        reflex = methods.make(method, p0=float(round(g.positions[hw.SLIP_FINGER])), context=_context())
         rig.perturb(PAPER_DROP, at=rig.t + 0.3)
         runs.append((rig, reflex, run_closed_loop(rig, reflex, 1.5, compiled=compiled)))
     _assert_same(*runs)
@@ -393,10 +403,10 @@ def test_no_finger_target_drops_below_its_start_in_a_closed_loop_pour(method, mo
         rig, g = grasped_rig("DK", seed, hw.CONTACT_FORCE_N)
         start = rig.hand.positions()
         assert start[Finger.THUMB] > start[Finger.MIDDLE], "the case needs a thumb that stopped further closed"
-        reflex = methods.make(method, p0=start[hw.SLIP_FINGER], context=CONTEXT)
+        reflex = methods.make(method, p0=start[hw.SLIP_FINGER], context=_context())
         if not compiled:   # the Python loop sends every target through the hand's command: keep them
             command = rig.hand.command
-            monkeypatch.setattr(rig.hand, "command", lambda kind, fingers, value=0.0, at=None: (
+            monkeypatch.setattr(rig.hand, "command", lambda kind, fingers, value=0.0, at=None, command=command: (
                 sent.extend((f, value) for f in fingers), command(kind, fingers, value, at=at))[1])
         rig.perturb(PAPER_POUR, at=rig.t + 0.2)
         tr = run_closed_loop(rig, reflex, 0.2 + PAPER_POUR.duration_s + 1.0, compiled=compiled)

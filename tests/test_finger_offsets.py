@@ -14,7 +14,6 @@ from slipreflex.hardware import DAQ_PERIOD_S, FINGER_MAX, TRIPOD, Finger
 from slipreflex.interfaces import DaqSample
 from slipreflex.recording import METADATA_NAME, Recorder, read_recording, replay
 from slipreflex.runtime import run_loop
-
 from test_safe_start import _RigSource
 
 
@@ -117,9 +116,9 @@ def test_a_bad_offset_is_refused_before_anything_is_sent(bad):
     assert hand.sent == []  # not even the safe start's STOP
 
 
+@pytest.mark.slow
 def test_cli_run_with_the_authors_gui_preset_offsets_the_middle_finger_and_replays(tmp_path, capsys):
     from slipreflex.cli import main
-
     from test_safe_start import _run_on_virtual_rig
 
     code, grasp, lowest, path = _run_on_virtual_rig(tmp_path, "thumb=148,index=147,middle=147",

@@ -130,10 +130,9 @@ def test_run_over_the_virtual_rig_watched_live_and_recorded_by_lsl(tmp_path):
     """The whole path: virtual devices -> run_loop -> recording + Foxglove server + LSL outlets."""
     _foxglove()
     pylsl = _pylsl()
-    from test_runtime import _recorder, _reflex, rig_and_drivers
-
     from slipreflex.live import RUN_TOPICS, LiveView
     from slipreflex.lsl import SAMPLE_CHANNELS, LslOutlets
+    from test_runtime import _recorder, _reflex, rig_and_drivers
 
     path = tmp_path / "live.mcap"
     name = f"test-{uuid.uuid4().hex[:8]}"
@@ -273,11 +272,10 @@ def test_virtual_rig_live_publishes_the_rigs_truth(tmp_path):
 
 def test_replay_plays_a_recording_to_a_live_client_as_recorded(tmp_path, capsys):
     _foxglove()
-    from test_runtime import ToyRig
-
     from slipreflex.commands.replay import play
     from slipreflex.devices.virtual import VirtualDevices
     from slipreflex.live import LiveView
+    from test_runtime import ToyRig
 
     path = tmp_path / "r.mcap"
     with VirtualDevices(ToyRig(), schedule=[("drop", 0.3)]) as dev:

@@ -37,10 +37,9 @@ def test_detect_refuses_a_method_its_input_cannot_feed_in_one_line(tmp_path, cap
 
 
 def test_replay_runs_a_registered_method_over_a_recording(tmp_path, capsys):
-    from test_runtime import ToyRig
-
     from slipreflex.devices.virtual import VirtualDevices
     from slipreflex.recording import read_recording
+    from test_runtime import ToyRig
 
     path = tmp_path / "r.mcap"
     with VirtualDevices(ToyRig(), schedule=[("drop", 0.3)]) as dev:
@@ -62,10 +61,9 @@ def test_replay_runs_a_registered_method_over_a_recording(tmp_path, capsys):
 
 
 def test_run_dath_event_over_the_virtual_ilimb_records_and_replays(tmp_path, capsys):
-    from test_runtime import ToyRig
-
     from slipreflex.devices.virtual import VirtualDevices
     from slipreflex.recording import read_recording
+    from test_runtime import ToyRig
 
     path = tmp_path / "ev.mcap"
     with VirtualDevices(ToyRig(), schedule=[("drop", 0.3)]) as dev:

@@ -5,12 +5,10 @@ from __future__ import annotations
 import contextlib
 import errno
 import io
-import os
 import signal
 import subprocess
-import threading
 import sys
-import time
+import threading
 
 import numpy as np
 import pytest
@@ -20,10 +18,10 @@ from slipreflex import hardware as hw
 from slipreflex.chain import SlipReflex
 from slipreflex.cli import main
 from slipreflex.csvfiles import read_slip_csv
+from slipreflex.devices import wire
 from slipreflex.devices.daq import SerialDaq
 from slipreflex.devices.ilimb import ILimb, PacketParser
 from slipreflex.devices.virtual import VirtualDevices
-from slipreflex.devices import wire
 from slipreflex.interfaces import DaqSample
 from slipreflex.recording import METADATA_NAME, Recorder, read_recording, replay
 from slipreflex.runtime import run_loop
@@ -117,6 +115,7 @@ def _run_recorded(tmp_path, daq, hand, reflex, duration):
     return res
 
 
+@pytest.mark.slow
 def test_loop_over_virtual_devices_reacts_records_and_replays_exactly(tmp_path):
     path = tmp_path / "run.mcap"
     reflex = _reflex()
@@ -157,6 +156,7 @@ def test_loop_over_virtual_devices_reacts_records_and_replays_exactly(tmp_path):
     assert main(["detect", str(tmp_path / "run.csv"), "--out", str(tmp_path / "det")]) == 0
 
 
+@pytest.mark.slow
 def test_watchdog_holds_when_the_daq_stops_and_resumes_when_it_restarts(tmp_path):
     script = [(0.5, lambda d: d.pause_daq()), (0.9, lambda d: d.restart_daq())]
     reflex = _reflex()
@@ -176,6 +176,7 @@ def test_watchdog_holds_when_the_daq_stops_and_resumes_when_it_restarts(tmp_path
     assert res.samples > 0.5 * (1.5 - 0.4) * hw.DAQ_FS  # the loop kept running after
 
 
+@pytest.mark.slow
 def test_daq_port_that_disappears_and_comes_back(tmp_path):
     script = [(0.4, lambda d: d.unplug("daq")), (0.8, lambda d: d.replug("daq"))]
     reflex = _reflex()
@@ -190,6 +191,7 @@ def test_daq_port_that_disappears_and_comes_back(tmp_path):
     assert res.samples > 0.5 * (1.4 - 0.4) * hw.DAQ_FS
 
 
+@pytest.mark.slow
 def test_hand_port_that_disappears_and_comes_back(tmp_path):
     script = [(0.5, lambda d: d.unplug("hand")), (0.9, lambda d: d.replug("hand"))]
     reflex = _reflex()
@@ -205,6 +207,7 @@ def test_hand_port_that_disappears_and_comes_back(tmp_path):
     assert max(h[hw.Finger.MIDDLE] for h in history) > P0  # the drop was answered
 
 
+@pytest.mark.slow
 def test_garbage_truncated_and_flipped_frames_while_running(tmp_path):
     bad = bytearray(wire.encode_frame(seq=1, adc=5))
     bad[9] ^= 0x04
@@ -281,6 +284,7 @@ class _FillingDisk(io.RawIOBase):
         return self.n
 
 
+@pytest.mark.slow
 def test_disk_full_mid_run_is_recorded_as_a_fault_and_the_reflex_keeps_running():
     buf = io.BufferedWriter(_FillingDisk(room=30_000))
     rec = Recorder(buf, chunk_size=1_000, compression="none")
@@ -298,6 +302,7 @@ def test_disk_full_mid_run_is_recorded_as_a_fault_and_the_reflex_keeps_running()
     loop.close()
 
 
+@pytest.mark.slow
 def test_cli_run_over_virtual_devices_then_replay(tmp_path, capsys):
     path = tmp_path / "cli.mcap"
     with VirtualDevices(ToyRig(), link_dir=str(tmp_path), schedule=[("drop", 0.3)]) as dev:
@@ -323,6 +328,7 @@ def test_cli_refuses_bad_recording_path_and_bad_p0_before_running(tmp_path, caps
     assert code == 2 and "nodaq" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_ctrl_c_stops_cleanly_and_closes_the_recording(tmp_path):
     path = tmp_path / "int.mcap"
     proc = subprocess.Popen([sys.executable, "-m", "slipreflex", "run", "--daq", "loop://",

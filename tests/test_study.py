@@ -101,6 +101,7 @@ def _rows(path):
     return pq.read_table(path).to_pylist()
 
 
+@pytest.mark.slow
 def test_local_cluster_equals_serial(tmp_path):
     cfg = StudyConfig(plants=2, **TINY)
     serial = run_study(cfg, tmp_path / "s", workers=0, progress=False)
@@ -124,6 +125,7 @@ def _await_line(proc, needle):
     raise AssertionError(f"{proc.args[0]} exited before logging {needle!r}")
 
 
+@pytest.mark.slow
 def test_a_scheduler_and_one_worker_give_the_same_rows(tmp_path):
     env = {**os.environ, "PYTHONPATH": str(Path(__file__).parents[1] / "src")}
     dask = str(Path(sys.executable).with_name("dask"))
@@ -169,6 +171,7 @@ def test_sensitivity_finds_the_deciding_constant_with_sobol_indices():
     assert all(r["sobol_st"] < 0.3 for r in sens if r["constant"] != "hand_latency")
 
 
+@pytest.mark.slow
 def test_outputs_and_figures(tmp_path):
     run = run_study(StudyConfig(plants=3, **TINY), tmp_path, workers=0, progress=False)
     paths = write_outputs(run, figures=True)

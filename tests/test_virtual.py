@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import signal
 import subprocess
-import threading
 import sys
+import threading
 import time
 
 import pytest
@@ -89,6 +89,7 @@ class _From:
         pass
 
 
+@pytest.mark.slow
 def test_run_over_virtual_devices_suppresses_slip_like_the_in_process_simulation(tmp_path):
     without, _ = _in_process(lambda p0: _Hold())
     assert without.fallen  # the pour is enough to lose the bottle without the reflex
@@ -172,6 +173,7 @@ def _readline(proc, want, deadline_s=120.0):
     raise AssertionError(f"no line starting with {want!r}; got {lines}")
 
 
+@pytest.mark.slow
 def test_virtual_rig_command_keys_signals_schedule_and_run(tmp_path, capsys, monkeypatch):
     import slipreflex.runtime as runtime
 

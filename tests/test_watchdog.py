@@ -245,6 +245,7 @@ def test_frames_buffered_while_the_run_sets_up_are_dropped_not_processed_as_a_st
     assert res.daq_stats["frames"] == 100 and res.daq_stats["seq_gaps"] == 0
 
 
+@pytest.mark.slow
 def test_a_sigstopped_loop_raises_a_staleness_fault_and_holds_after_it_resumes(tmp_path):
     rig = subprocess.Popen([sys.executable, "-m", "slipreflex", "virtual-rig", "--link-dir",
                             str(tmp_path), "--duration", "60"],

@@ -126,7 +126,7 @@ def quantize_lowpass(fs: float = hw.DAQ_FS, cutoff: float = 10.0) -> tuple[int, 
     return g, a1, 4 * g - one - a1
 
 
-def board_params_from_json(text: str, where: Any = "board_params") -> "BoardParams":
+def board_params_from_json(text: str, where: Any = "board_params") -> BoardParams:
     """:class:`BoardParams` from the JSON a ``run --board-reflex`` recording stores.
 
     Raises
@@ -221,7 +221,7 @@ class BoardParams:
 
     @classmethod
     def from_chain(cls, params=None, *, adc_min: int = 0, adc_max: int = ADC_MAX,
-                   stuck_after: int = 0, **kwargs) -> "BoardParams":
+                   stuck_after: int = 0, **kwargs) -> BoardParams:
         """Quantise the float chain's parameters (:class:`~slipreflex.ReflexParams`).
 
         Parameters
@@ -247,7 +247,7 @@ class BoardParams:
         >>> BoardParams.from_chain(acc_leak=32.0)
         Traceback (most recent call last):
         ...
-        slipreflex.errors.ParameterError: acc_leak=32.0: the board's fixed-point chain runs the paper's method only (no acc_leak); use the float chain (slipreflex.chain)
+        slipreflex.errors.ParameterError: acc_leak=32.0: the board's fixed-point chain runs the paper's method only ...
         """
         from .chain.params import ReflexParams
 
@@ -277,7 +277,7 @@ class BoardParams:
                    stuck_after=stuck_after, **whole)
 
     @classmethod
-    def firmware(cls, *, dath: bool = True, p0: int = 0) -> "BoardParams":
+    def firmware(cls, *, dath: bool = True, p0: int = 0) -> BoardParams:
         """What the firmware built with ``REFLEX_DATH=dath REFLEX_P0=p0`` runs.
 
         The paper's chain at the board's 333.33 Hz with the firmware's fault rules

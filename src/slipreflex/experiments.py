@@ -53,9 +53,9 @@ from .baselines.calibration import REST_K
 from .baselines.swt import SWT_WINDOW
 from .errors import ParameterError
 from .grid import Cell, grid_result, run_cells
+from .hardware import CONTACT_FORCE_N
 from .interrupts import Interrupted
 from .progress import Progress
-from .hardware import CONTACT_FORCE_N
 from .thresholds import calibrate, calibration_seed
 from .validation import choices, flag, integer, positive, set_field
 
@@ -181,8 +181,7 @@ class ReproduceConfig:
         if self.rest_s < need:
             raise ParameterError(f"rest_s must be >= {need:g} s (the first {OnsetParams().baseline_s * 1e3:g} "
                                  f"ms of rest set the onset threshold), got {self.rest_s!r}")
-        self.drop  # validates the drop and pour through the simulator's own classes
-        self.pour
+        _ = self.drop, self.pour  # validates the drop and pour through the simulator's own classes
 
     @property
     def drop(self):
@@ -380,7 +379,6 @@ def run_trial(cell: Cell, config: ReproduceConfig, thresholds: dict[str, float],
     from .analysis.trial import TrialStreams, analyse_trial
     from .hardware import SLIP_FINGER
     from .sim import run_closed_loop
-
     from .sim.variations import VariationSpread, grasped_rig
 
     plant = {} if config.plant is None else {"rig_kwargs": config.plant.rig_kwargs(),
@@ -467,6 +465,7 @@ def run_reproduce(config: ReproduceConfig | None = None, *, jobs: int | None = N
         raise ParameterError(f"jobs must be >= 1, got {jobs}")
     t0 = time.perf_counter()
     import scipy.signal  # noqa: F401  (once, here: forked workers inherit it; each took ~1 s to import it)
+
     from .sim.calibration import check_grasp
     for b in config.bottles:                    # a grasp that cannot hold a bottle fails here, at once
         check_grasp(config.bottle(b), config.grasp_force_n)

@@ -24,7 +24,8 @@ import numpy as np
 
 from .hardware import Finger
 
-__all__ = ["DaqSample", "SampleSource", "TactileSample", "TactileSource", "Hand", "Reflex", "CompiledReflex", "InputKind", "GraspResult", "Rig"]
+__all__ = ["DaqSample", "SampleSource", "TactileSample", "TactileSource", "Hand", "Reflex", "CompiledReflex",
+           "InputKind", "GraspResult", "Rig"]
 
 #: What a reflex reads: the slip sensor (one float per sample) or the 4 x 4
 #: tactile array (one ``(4, 4)`` float array of newtons per sample).

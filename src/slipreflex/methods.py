@@ -76,7 +76,8 @@ from .interfaces import InputKind, Reflex
 from .validation import choice, flag, positive, text
 
 __all__ = ["MethodSpec", "MethodContext", "Detections", "register", "unregister", "get", "names",
-           "make", "label", "canonical", "chain_method", "applicable", "INPUT_NAMES", "calibrated", "load_plugins", "ENTRY_POINT_GROUP",
+           "make", "label", "canonical", "chain_method", "applicable", "INPUT_NAMES", "calibrated",
+           "load_plugins", "ENTRY_POINT_GROUP",
            "FIXED", "DATH", "NMSD", "SWT", "AUTHORS_GUI", "AUTHORS_CHAIN", "DATH_EVENT",
            "DATH_FLOOR", "DATH_LEAK"]
 
@@ -457,10 +458,10 @@ def applicable(name: str, supplies: tuple[str, ...] | frozenset[str] | set[str],
     --------
     >>> applicable("DATH-event", {"slip"}, "the DAQ").name
     'dath-event'
-    >>> applicable("nmsd", {"slip"}, "the DAQ with an i-Limb")      # doctest: +ELLIPSIS
+    >>> applicable("nmsd", {"slip"}, "the DAQ")      # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    slipreflex.errors.ParameterError: --method nmsd reads tactile frames, which the DAQ with an i-Limb does not supply (methods that apply: dath, fixed, ...)
+    slipreflex.errors.ParameterError: --method nmsd reads tactile frames, which the DAQ does not supply (methods ...)
     """
     spec = get(name)
     if spec.input_kind not in supplies:

@@ -355,7 +355,7 @@ class RunResult:
         return {k: str(v) for k, v in out.items()}
 
 
-def _num(x: Any) -> float | None:
+def _json_float(x: Any) -> float | None:
     """JSON-safe float: NaN/inf/None -> None."""
     if x is None:
         return None
@@ -715,7 +715,7 @@ class _Sink:
                 continue
             self.write("/daq/samples", {"seq": s.seq, "t": s.t, "slip_volts": s.slip_volts,
                                         "flow_pulses": s.flow_pulses, "arrival": arr - self.t0,
-                                        "position": _num(r.position)}, arr)
+                                        "position": _json_float(r.position)}, arr)
             if s.accel_g is not None:
                 ax, ay, az = s.accel_g
                 self.write("/daq/imu", {"seq": s.seq, "t": s.t, "ax": ax, "ay": ay, "az": az}, arr)
@@ -728,8 +728,8 @@ class _Sink:
     def _chain(self, r: SampleRecord, finger_names: list[str]) -> None:
         """What the reflex did with one sample or frame: state, spikes, windows, commands."""
         s, arr = r.sample, r.arrival
-        self.write("/chain/state", {"seq": s.seq, "t": s.t, "filtered": _num(r.filtered),
-                                    "threshold": _num(r.threshold) or 0.0, "event": r.event}, arr)
+        self.write("/chain/state", {"seq": s.seq, "t": s.t, "filtered": _json_float(r.filtered),
+                                    "threshold": _json_float(r.threshold) or 0.0, "event": r.event}, arr)
         if r.event:
             self.write("/chain/events", {"seq": s.seq, "t": s.t}, arr)
         if r.count is not None:
@@ -737,7 +737,7 @@ class _Sink:
         if r.board is not None:
             self.write("/board/state", {"seq": s.seq, "t": s.t, **r.board}, arr)
         if r.command is not None:
-            targets = {f.name.lower(): _num(v) for f, v in (r.targets or {}).items()}
+            targets = {f.name.lower(): _json_float(v) for f, v in (r.targets or {}).items()}
             self.write("/hand/commands", {"seq": s.seq, "t": s.t, "target": float(r.command),
                                           "fingers": finger_names, "targets": targets,
                                           "sent": r.sent, "note": r.note, "latency": r.latency,
@@ -757,7 +757,7 @@ def tactile_message(s: Any, position: float | None = None) -> dict[str, Any]:
     """
     flat = np.asarray(s.frame, dtype=np.float64).reshape(-1)
     return {"seq": s.seq, "t": s.t, "total": float(flat.sum()), "peak": float(flat.max(initial=0.0)),
-            "position": _num(position), **{f"taxel_{k}": float(v) for k, v in enumerate(flat)}}
+            "position": _json_float(position), **{f"taxel_{k}": float(v) for k, v in enumerate(flat)}}
 
 
 class _Loop:
@@ -880,7 +880,7 @@ class _Loop:
         return restarted
 
     # -- step 2: process (the time-critical part) -------------------------------------
-    def process(self, samples: list[DaqSample], arrival: float) -> list[SampleRecord]:
+    def process(self, samples: list[Any], arrival: float) -> list[SampleRecord]:
         reflex, hand, out = self.reflex, self.hand, []
         for s in samples:
             pos = None
@@ -913,7 +913,7 @@ class _Loop:
                 self.hold()
                 self.fault("stale", f"sample seq {r.sample.seq} was {r.age * 1e3:.0f} ms old when "
                            f"processed: the loop was frozen or fell behind", "fingers held; commands "
-                           f"wait for fresh samples")
+                           "wait for fresh samples")
         elif self.stale:
             self.stale = False
             self.fault("stale-clear", f"samples fresh again ({r.age * 1e3:.1f} ms old)", "reflex resumed")

@@ -111,7 +111,7 @@ class Tap:
     def shutdown(self) -> None:
         """Release what the tap holds, after the last message (the closing thread)."""
 
-    def start(self) -> "Tap":
+    def start(self) -> Tap:
         """Start the thread (idempotent); returns self."""
         if self._thread is None:
             self._thread = threading.Thread(target=self._run, name=f"slipreflex-{self.name}", daemon=True)
@@ -156,7 +156,7 @@ class Tap:
             self._shut = True
             self.shutdown()
 
-    def __enter__(self) -> "Tap":
+    def __enter__(self) -> Tap:
         return self.start()
 
     def __exit__(self, *exc: object) -> None:

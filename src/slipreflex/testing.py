@@ -320,7 +320,7 @@ def check_reflex(reflex: Any, *, shape: tuple[int, ...] | None = None, seed: int
     >>> check_reflex(Opens())
     Traceback (most recent call last):
     ...
-    slipreflex.testing.ContractError: Opens (opens): a non-finite sample produced the command 0.0, below ... (it would open the hand)
+    slipreflex.testing.ContractError: Opens (opens): a non-finite sample produced the command 0.0, below ...
     """
     _check_attributes(reflex)
     if shape is None:

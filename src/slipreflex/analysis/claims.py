@@ -55,6 +55,7 @@ from typing import Any
 import numpy as np
 
 from .. import hardware as hw
+from ..csvfiles import cell_bool, cell_float
 from ..methods import DATH, FIXED, NMSD, SWT
 from ..methods import label as _label
 from .paper import BOTTLE_ORDER, EXPERIMENTS, PAPER
@@ -62,7 +63,8 @@ from .paper import BOTTLE_ORDER, EXPERIMENTS, PAPER
 __all__ = [
     "HOLDS", "FAILS", "NOT_TESTABLE", "VERDICTS", "ABOUT_VOLTS", "ABOUT_REL", "ABOUT_RATE_POINTS",
     "ABOUT_RATIO_FACTOR", "NEAR_ML", "MOST", "TOLERANCES", "Claim", "ClaimInput", "ClaimResult",
-    "CLAIMS", "judge", "judge_run", "claims_section", "claims_markdown", "claims_terminal", "Contradiction", "contradictions",
+    "CLAIMS", "judge", "judge_run", "claims_section", "claims_markdown", "claims_terminal",
+    "Contradiction", "contradictions",
     "contradictions_markdown", "window_phase_sd_ms", "drop_slipout_capacity_n",
     "first_slip_capacity_n", "STATIC_OVER_KINETIC_MAX",
 ]
@@ -179,7 +181,7 @@ class ClaimInput:
         ...           ).cell_mean("pour", "TX", "swt", "response_ms")
         80.0
         """
-        v = [x for x in (_num(_get(r, column)) for r in self.cell(experiment, bottle, method)) if x == x]
+        v = [x for x in (_lenient_float(_get(r, column)) for r in self.cell(experiment, bottle, method)) if x == x]
         return float(np.mean(v)) if v else float("nan")
 
     def success(self, experiment: str, bottles: Iterable[str], method: str) -> tuple[float, int]:
@@ -192,7 +194,7 @@ class ClaimInput:
         ...           ).success("drop", ["TR"], "dath")
         (0.5, 2)
         """
-        s = [_truthy(_get(r, "success")) for b in bottles for r in self.cell(experiment, b, method)]
+        s = [cell_bool(_get(r, "success")) for b in bottles for r in self.cell(experiment, b, method)]
         return (float(np.mean(s)), len(s)) if s else (float("nan"), 0)
 
     def bottles(self, experiment: str, method: str) -> list[str]:
@@ -239,25 +241,15 @@ def _get(row: Any, key: str) -> Any:
     return getattr(row, key, None)
 
 
-def _num(x: Any) -> float:
-    if x is None or (isinstance(x, str) and not x.strip()):
-        return float("nan")
-    try:
-        return float(x)
-    except (TypeError, ValueError):
-        return float("nan")
+def _lenient_float(x: Any) -> float:
+    """A cell of a table being judged: blank, missing or unreadable is NaN."""
+    return cell_float(x, lenient=True)
 
 
 def _count(x: Any) -> int:
     """A count cell as int; a missing or unreadable cell counts 0."""
-    v = _num(x)
+    v = _lenient_float(x)
     return int(v) if math.isfinite(v) else 0
-
-
-def _truthy(x: Any) -> bool:
-    if isinstance(x, str):
-        return x.strip().lower() in ("true", "1")
-    return bool(x) and not (isinstance(x, float) and math.isnan(x))
 
 
 def _ms(x: float) -> str:
@@ -326,8 +318,8 @@ def _nmsd_twice(ci: ClaimInput) -> tuple[str, str]:
     bottles = [b for b in BOTTLE_ORDER if ci.cell("drop", b, DATH) and ci.cell("drop", b, NMSD)]
     if not bottles or _need(ci, "drop", (DATH, NMSD), bottles, "total_ms"):
         return NOT_TESTABLE, "needs drop total times of DATH and NMSD"
-    num = [_num(_get(r, "total_ms")) for b in bottles for r in ci.cell("drop", b, NMSD)]
-    den = [_num(_get(r, "total_ms")) for b in bottles for r in ci.cell("drop", b, DATH)]
+    num = [_lenient_float(_get(r, "total_ms")) for b in bottles for r in ci.cell("drop", b, NMSD)]
+    den = [_lenient_float(_get(r, "total_ms")) for b in bottles for r in ci.cell("drop", b, DATH)]
     n, d = float(np.nanmean(num)), float(np.nanmean(den))
     if not d > 0:
         return NOT_TESTABLE, f"DATH's mean drop total is {_ms(d)} ms"
@@ -356,7 +348,7 @@ def _pour_dath(ci: ClaimInput) -> tuple[str, str]:
         for r in t:
             e = _count(_get(r, "event"))
             if e < 2 and _count(_get(r, "n_events")) > e:
-                vols[e].append(_num(_get(r, "load_at_onset")))
+                vols[e].append(_lenient_float(_get(r, "load_at_onset")))
     med = [float(np.nanmedian(v)) if any(x == x for x in v) else float("nan") for v in vols]
     near = all(abs(m - want) <= NEAR_ML for m, want in zip(med, (200.0, 400.0)))
     ok = s == 1.0 and two > MOST and near

@@ -25,8 +25,17 @@ from pathlib import Path
 from typing import Any
 
 from .paper import BOTTLE_ORDER, EXPERIMENTS
-from .report import (SUCCESS_CAPTION, SUMMARY_COLUMNS, bars_caption, discussion_text, report_markdown,
-                     setup_lines, trial_caption, write_csv, zoom_caption)
+from .report import (
+    SUCCESS_CAPTION,
+    SUMMARY_COLUMNS,
+    bars_caption,
+    discussion_text,
+    report_markdown,
+    setup_lines,
+    trial_caption,
+    write_csv,
+    zoom_caption,
+)
 from .trial import RESULT_COLUMNS, TrialRow
 
 __all__ = ["ReproduceResult", "write_outputs", "trial_plot", "paper_part", "not_the_papers", "trial_outcome"]
@@ -255,7 +264,7 @@ def _write_figures(result: ReproduceResult, out: Path, paths: dict[str, Path],
         F._plt()                       # imported once here, so the forked workers start warm
         with ProcessPoolExecutor(max_workers=jobs, initializer=worker_signals) as ex:
             drawn = list(ex.map(_draw, work))
-    for (name, caption, _, _), path in zip(tasks, drawn):
+    for (name, _, _, _), path in zip(tasks, drawn):
         paths[name] = path
     return [(caption, f"figures/{name}") for name, caption, _, _ in tasks]
 

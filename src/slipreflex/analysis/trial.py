@@ -37,8 +37,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -169,7 +169,7 @@ class TrialRow(Mapping):
         return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> "TrialRow":
+    def from_dict(cls, data: dict[str, Any]) -> TrialRow:
         """A row from a dict, e.g. a results.csv line (strings parsed; "" is NaN; unknown keys ignored).
 
         Examples

@@ -31,12 +31,12 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from .._slots import slot
 from ..hardware import FINGER_MAX, FINGER_MIN, NMSD_FS, TACTILE_SHAPE
 from ..validation import number, resolve_params, set_field
-from .._slots import slot
 from . import _layout as _L
-from ._validate import as_frame, frame_shape
 from . import closing as _closing
+from ._validate import as_frame, frame_shape
 from .closing import CLOSE_S, ClosingParams, TriggerMode, _load_kernels
 
 __all__ = ["TactileParams", "TactileReflex"]
@@ -86,7 +86,7 @@ class TactileParams:
         set_field(self, "threshold", number("threshold", self.threshold, lo=0.0, lo_open=True))
         set_field(self, "fs", number("fs", self.fs, lo=0.0, lo_open=True))
         set_field(self, "shape", frame_shape("shape", self.shape))
-        self.closing  # validates speed, close_s, p0, lo, hi
+        _ = self.closing  # validates speed, close_s, p0, lo, hi
 
     @property
     def closing(self) -> ClosingParams:

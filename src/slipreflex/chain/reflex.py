@@ -91,7 +91,7 @@ class SlipReflex:
         self._S = self._S0.copy()
 
     @classmethod
-    def from_params(cls, params: ReflexParams) -> "SlipReflex":
+    def from_params(cls, params: ReflexParams) -> SlipReflex:
         """Build a chain from a :class:`ReflexParams` (e.g. read from a recording).
 
         Examples
@@ -102,7 +102,7 @@ class SlipReflex:
         return cls(params)
 
     @classmethod
-    def from_preset(cls, name: str, fs: float = DAQ_FS, **overrides) -> "SlipReflex":
+    def from_preset(cls, name: str, fs: float = DAQ_FS, **overrides) -> SlipReflex:
         """A chain with a named parameter set (:meth:`ReflexParams.preset`), named after it.
 
         Parameters

@@ -116,10 +116,10 @@ def method_chain(name: str | None) -> tuple[str | None, ReflexParams | None]:
     --------
     >>> method_chain("DATH-event")[1].variants
     ('mpi_mode',)
-    >>> method_chain("swt")
+    >>> method_chain("swt")                       # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    slipreflex.errors.ParameterError: --method swt reads tactile frames, which detect's input (a CSV of slip-sensor volts) does not supply (methods that apply: dath, fixed, dath-board, fixed-board, authors-gui, authors-chain, dath-event, dath-floor, dath-leak)
+    slipreflex.errors.ParameterError: --method swt reads tactile frames, which detect's input ... does not supply ...
     """
     from ..methods import applicable, make
 
@@ -225,7 +225,6 @@ def _prefix(args: argparse.Namespace) -> Path:
 def _run_board(args: argparse.Namespace) -> int:
     """``detect --board``: the Python twin of the firmware over a CSV of ADC counts."""
     from ..board import BoardParams, read_adc_csv, run_board_chain, write_board_outputs
-
     from ..methods import applicable
 
     p0 = 0.0 if args.p0 is None else args.p0

@@ -180,11 +180,10 @@ LONG_RUN_S: float = 600.0
 
 
 def _write(result, out: Path, command: str | None) -> dict:
-    from ..analysis.report import terminal_table
-    from ..experiments import write_outputs
-
     from ..analysis.claims import claims_terminal, judge_run
     from ..analysis.outputs import paper_part
+    from ..analysis.report import terminal_table
+    from ..experiments import write_outputs
 
     paths = write_outputs(result, out, command=command)
     paper, _, notice = paper_part(result)

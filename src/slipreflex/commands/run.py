@@ -22,12 +22,11 @@ from .. import __version__
 from ..errors import ParameterError
 from ..hardware import DAQ_FS, FINGER_MAX, SLIP_FINGER, TRIPOD, Finger
 from ..methods import DATH, FIXED
-
 from ..runtime import WATCHDOG_MAX_S, WATCHDOG_MIN_S, WATCHDOG_S
 from ._live import add_live_arguments, check_live_arguments, close_taps, open_taps
 
 NAME = "run"
-HELP = "run the slip reflex in real time: read the DAQ port (or the hand's touch sensors), drive the hand, record to MCAP"
+HELP = "run the slip reflex in real time: read the DAQ (or the hand's touch sensors), drive the hand, record to MCAP"
 ORDER = 30
 
 
@@ -260,6 +259,7 @@ def run(args: argparse.Namespace) -> int:
     from ..runtime import print_fault, realtime_priority, run_loop
 
     p0 = check_arguments(args)  # everything, before a port opens or a byte is sent
+    reflex: Any
     reflex, board_meta = build_reflex(args, p0)
     tactile = getattr(reflex, "input_kind", "slip") == "tactile"
     if args.board_reflex:
@@ -284,7 +284,7 @@ def run(args: argparse.Namespace) -> int:
                 "fingers": json.dumps([f.name.lower() for f in TRIPOD]),
                 "p0": json.dumps({f.name.lower(): v for f, v in p0.items()}),
                 "daq": str(args.daq), "hand": args.hand, "watchdog_s": repr(args.watchdog),
-                "started": datetime.datetime.now(datetime.timezone.utc).isoformat(), **board_meta}
+                "started": datetime.datetime.now(datetime.UTC).isoformat(), **board_meta}
         recorder = Recorder(path, metadata={METADATA_NAME: meta})  # fails before the ports open
     taps: list[Any] = []
     old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
@@ -296,7 +296,7 @@ def run(args: argparse.Namespace) -> int:
         if tactile:
             topics = ("/tactile/frames",) + tuple(t for t in topics if not t.startswith("/daq/"))
         taps = open_taps(args, topics, lsl_source=args.daq or args.hand, fs=getattr(reflex, "fs", None),
-                         taxels=math.prod(reflex.params.shape) if tactile else 0)
+                         taxels=math.prod(getattr(reflex.params, "shape", ())) if tactile else 0)
         with contextlib.ExitStack() as devices:
             hand = devices.enter_context(open_hand(args.hand_type, args.hand,
                                                    **({"fs": reflex.fs} if tactile else {})))

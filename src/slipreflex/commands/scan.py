@@ -43,9 +43,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run the scan, write the files, print the numbers."""
     from ..errors import ParameterError
-    from ..sim import scan
-
     from ..paths import output_dir
+    from ..sim import scan
 
     if args.speed <= 0 or args.distance <= 0:
         raise ParameterError("--speed and --distance must be > 0")

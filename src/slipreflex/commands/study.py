@@ -50,9 +50,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``slipreflex study``."""
     from .. import methods
     from ..experiments import BOTTLE_NAMES, EXPERIMENTS
-    from ..study import DEFAULT_PLANTS, DEFAULT_TRIALS, DESIGNS
-
     from ..experiments import DEFAULT_SEED as seed
+    from ..study import DEFAULT_PLANTS, DEFAULT_TRIALS, DESIGNS
     p.add_argument("--plants", type=int, default=DEFAULT_PLANTS,
                    help=f"plants to draw (default {DEFAULT_PLANTS}; saltelli rounds up to B(D+2))")
     p.add_argument("--design", choices=DESIGNS, default="sobol", help="design over the constants (default sobol)")
@@ -78,9 +77,37 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-progress", action="store_true", help="no progress output")
 
 
+#: What ``pip install 'slipreflex[study]'`` adds; the base install never imports them.
+STUDY_EXTRA = ("dask", "distributed", "pyarrow", "SALib")
+
+
+def require_study_extra() -> None:
+    """Raise a one-line error naming the ``study`` extra when any of its packages is missing.
+
+    Raises
+    ------
+    SlipreflexError
+        ``needs the optional 'study' extra (not installed: ...)``, before any work starts.
+
+    Examples
+    --------
+    >>> require_study_extra()  # doctest: +SKIP
+    """
+    import importlib.util
+
+    from ..errors import SlipreflexError
+
+    missing = [name for name in STUDY_EXTRA if importlib.util.find_spec(name) is None]
+    if missing:
+        raise SlipreflexError(f"needs the optional 'study' extra (not installed: {', '.join(missing)}); "
+                              "install it with: pip install 'slipreflex[study]'")
+
+
 def run(args: argparse.Namespace) -> int:
     """Run the study, write the outputs, print the claims' fractions."""
     from ..errors import ParameterError
+
+    require_study_extra()
     from ..study import StudyConfig, run_study
     from ..study.analyse import claim_fractions, plant_table, write_outputs
 

@@ -18,11 +18,11 @@ from __future__ import annotations
 
 import argparse
 import select
-from pathlib import Path
 import signal
 import sys
 import threading
 import time
+from pathlib import Path
 
 NAME = "virtual-rig"
 HELP = "simulated rig behind two pseudo-terminals (DAQ and i-Limb) for 'slipreflex run'"
@@ -82,13 +82,10 @@ def run(args: argparse.Namespace) -> int:
     """Grasp, open the ports, run in real time, print a summary at exit."""
     from ..devices.simrig import SimRig
     from ..devices.virtual import VirtualDevices, parse_schedule
-
-    from ..paths import output_dir
-
-    from ._live import check_live_arguments, close_taps, open_taps
-
     from ..hands import get_hand
     from ..methods import applicable
+    from ..paths import output_dir
+    from ._live import check_live_arguments, close_taps, open_taps
 
     schedule = parse_schedule(args.schedule)
     check_live_arguments(args)

@@ -623,7 +623,7 @@ class AbilityHand:
         """Close the port if this driver opened it."""
         self._port.close()
 
-    def __enter__(self) -> "AbilityHand":
+    def __enter__(self) -> AbilityHand:
         return self
 
     def __exit__(self, *exc: object) -> None:

@@ -31,11 +31,20 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..errors import DeviceError, ParameterError
-from ..interfaces import GraspResult
 from ..hardware import (
-    CONTACT_FORCE_N, FINGER_MAX, FINGER_MIN, ILIMB_BAUD, ILIMB_END, ILIMB_START, PWM_MAX,
-    THUMB_ROTATOR_MAX, TRIPOD, Finger, HandCommand,
+    CONTACT_FORCE_N,
+    FINGER_MAX,
+    FINGER_MIN,
+    ILIMB_BAUD,
+    ILIMB_END,
+    ILIMB_START,
+    PWM_MAX,
+    THUMB_ROTATOR_MAX,
+    TRIPOD,
+    Finger,
+    HandCommand,
 )
+from ..interfaces import GraspResult
 from .port import ReconnectingPort
 
 __all__ = [
@@ -462,7 +471,7 @@ class ILimb:
         """
         self._port.close()
 
-    def __enter__(self) -> "ILimb":
+    def __enter__(self) -> ILimb:
         return self
 
     def __exit__(self, *exc: object) -> None:

@@ -87,7 +87,7 @@ class ReconnectingPort:
     >>> ReconnectingPort("/nonexistent/tty", what="DAQ", baudrate=115200)
     Traceback (most recent call last):
     ...
-    slipreflex.errors.DeviceError: /nonexistent/tty: cannot open DAQ port: [Errno 2] could not open port /nonexistent/tty: [Errno 2] No such file or directory: '/nonexistent/tty'
+    slipreflex.errors.DeviceError: /nonexistent/tty: cannot open DAQ port: [Errno 2] could not open port ...
     """
 
     def __init__(self, port: Any, *, what: str, baudrate: int, write_timeout: float | None = None,

@@ -21,7 +21,6 @@ from __future__ import annotations
 from typing import Any
 
 from ..errors import ParameterError
-
 from ..interfaces import DaqSample, GraspResult
 
 __all__ = ["SimRig"]

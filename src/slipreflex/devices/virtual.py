@@ -367,7 +367,7 @@ class VirtualDevices:
         """Seconds since :meth:`start` (NaN before)."""
         return time.perf_counter() - self._t0
 
-    def start(self) -> "VirtualDevices":
+    def start(self) -> VirtualDevices:
         """Start the real-time thread (idempotent); returns self."""
         if self._thread is None:
             self._t0 = time.perf_counter()
@@ -404,7 +404,7 @@ class VirtualDevices:
         """True while the thread runs."""
         return self._thread is not None and self._thread.is_alive()
 
-    def __enter__(self) -> "VirtualDevices":
+    def __enter__(self) -> VirtualDevices:
         return self.start()
 
     def __exit__(self, *exc: object) -> None:

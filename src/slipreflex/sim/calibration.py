@@ -26,8 +26,9 @@ True
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -392,7 +393,7 @@ def plant_lines(bottles: Sequence[Bottle], grasp_force: float = hw.CONTACT_FORCE
     --------
     >>> from slipreflex.sim import BOTTLES
     >>> print(plant_lines([BOTTLES["TR"]])[0][:60])
-    open-loop first pour slip (0.8 N grasp, no reflex, seed 0): 
+    open-loop first pour slip (0.8 N grasp, no reflex, seed 0):
     """
     slips = ", ".join(f"{b.name} {first_slip_ml(b, rig_kwargs=rig_kwargs, seeds=(0,), grasp_force=grasp_force):.0f} ml"
                       for b in bottles)

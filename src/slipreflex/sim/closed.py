@@ -110,9 +110,9 @@ if _CACHE and not any(issubclass(c, _Stamped) for c in _LOCATORS):
 _f1, _i1, _u1 = types.float64[::1], types.int64[::1], types.uint64[::1]
 _f2, _i2, _f3 = types.float64[:, ::1], types.int64[:, ::1], types.float64[:, :, ::1]
 # the arguments every kernel shares: physics, hand, queue, outputs, scratch
-_COMMON = (_f1, _f1, _f1, _i1, _f1, _u1, _f2, _f2, _f1, _f1, _i1, _i1,  # RS RP | S C P keys D W track rates next contact
+_COMMON = (_f1, _f1, _f1, _i1, _f1, _u1, _f2, _f2, _f1, _f1, _i1, _i1,  # RS RP | S C P keys D W track rates next cont
            _f1, _f1, _i2, _f1, _i1, _i1, _f1, _f1,                    # tgt spd q_i q_v masks cmd_g cmd_off cmd_floor
-           _f1, _i1, _f2, _f2, _f2, _f1, _f1, _f2, _f2, _f2, _i1)     # cfg cnt daq ev tac cmd_t cmd_v s_daq s_ev s_tac s_n
+           _f1, _i1, _f2, _f2, _f2, _f1, _f1, _f2, _f2, _f2, _i1)  # cfg cnt daq ev tac cmd_t cmd_v s_daq s_ev s_tac s_n
 
 
 @njit(cache=True, inline="always")

@@ -498,7 +498,6 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
         fallen = S[S_FALLEN] > 0.0
         nc = kn * pen if (pen > 0.0 and not fallen) else 0.0
         S[S_NC] = nc
-        ntot = 3.0 * nc
         # ---- loads
         mw = 0.0
         fjet = 0.0

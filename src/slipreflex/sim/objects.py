@@ -51,10 +51,11 @@ slipreflex.errors.ParameterError: Drop.mass_kg must be a finite number > 0 and <
 from __future__ import annotations
 
 import tomllib
+from collections.abc import Mapping
 from dataclasses import MISSING, dataclass, field, fields
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any, Mapping
+from typing import Any
 
 from ..errors import ParameterError
 from ..validation import number

@@ -57,8 +57,17 @@ from ..interfaces import DaqSample, GraspResult
 from . import kernel as K
 from .contacts import fill_contact_params
 from .objects import BOTTLES, WATER_DENSITY, Bottle, Drop, Pour, Surface
-from .params import (SLOSH_ROOT, WATER_KINEMATIC_VISCOSITY, FlowParams, HandParams, ImuParams, PhysicsParams, SlipSensorParams,
-                     TactileParams, WaterParams)
+from .params import (
+    SLOSH_ROOT,
+    WATER_KINEMATIC_VISCOSITY,
+    FlowParams,
+    HandParams,
+    ImuParams,
+    PhysicsParams,
+    SlipSensorParams,
+    TactileParams,
+    WaterParams,
+)
 from .sensors import Track
 
 __all__ = ["Rig", "SimHand", "TactileSampler", "GraspResult", "DaqBlock", "SlipEvent", "KernelArrays",
@@ -164,7 +173,7 @@ class DaqBlock:
     water_force_lateral: np.ndarray
 
     @classmethod
-    def from_rows(cls, rows: np.ndarray, seq0: int) -> "DaqBlock":
+    def from_rows(cls, rows: np.ndarray, seq0: int) -> DaqBlock:
         """Build from kernel rows (internal layout).
 
         Examples
@@ -280,7 +289,7 @@ class TactileSampler:
     ((4, 4), 27)
     """
 
-    def __init__(self, rig: "Rig", fs: float, finger: Finger, key: np.uint64, keep: bool) -> None:
+    def __init__(self, rig: Rig, fs: float, finger: Finger, key: np.uint64, keep: bool) -> None:
         self.fs = float(fs)
         self.finger = Finger(finger)
         self.gain = rig.tactile_gain(self.finger)
@@ -438,7 +447,7 @@ class SimHand:
     100.0
     """
 
-    def __init__(self, rig: "Rig", params: HandParams) -> None:
+    def __init__(self, rig: Rig, params: HandParams) -> None:
         self._rig = rig
         self.params = params
         self._pending: list[tuple[int, int, HandCommand, tuple[Finger, ...], float]] = []
@@ -808,7 +817,7 @@ class Rig:
         return self._S[K.S_Q0:K.S_Q0 + 3].copy()
 
     @property
-    def samplers(self) -> tuple["TactileSampler", ...]:
+    def samplers(self) -> tuple[TactileSampler, ...]:
         """The tactile samplers now running.
 
         Examples
@@ -818,7 +827,7 @@ class Rig:
         """
         return tuple(self._samplers)
 
-    def detach_sampler(self, sampler: "TactileSampler") -> None:
+    def detach_sampler(self, sampler: TactileSampler) -> None:
         """Stop feeding ``sampler`` (what :meth:`TactileSampler.close` calls).
 
         Examples
@@ -932,7 +941,7 @@ class Rig:
                 return float(rows[-1, K.O_Q0 + hw.TRIPOD.index(Finger(finger))])
         return math.nan
 
-    def kernel_arrays(self) -> "KernelArrays":
+    def kernel_arrays(self) -> KernelArrays:
         """The live arrays of the physics and the hand's servo targets, for a compiled loop.
 
         A loop that advances them with :func:`slipreflex.sim.kernel.step_until`
@@ -950,7 +959,7 @@ class Rig:
                             tac_contact=self._tac_contact, targets=self.hand.targets, speeds=self.hand.speeds)
 
     def record(self, daq_rows: np.ndarray, events: np.ndarray, snapshots: np.ndarray,
-               built: tuple["TactileSampler", np.ndarray, np.ndarray] | None = None) -> None:
+               built: tuple[TactileSampler, np.ndarray, np.ndarray] | None = None) -> None:
         """Take what a compiled loop produced on :meth:`kernel_arrays`: DAQ rows (kept as
         history), physics events and tactile snapshots (turned into frames by each sampler,
         except ``built = (sampler, frames, filter state)``: the frames the loop built from

@@ -20,8 +20,8 @@ Examples
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Sequence
 
 import numpy as np
 import scipy.fft
@@ -132,7 +132,7 @@ class Track:
 
     @classmethod
     def build(cls, layout: Sequence[tuple[Surface, float]], rng: np.random.Generator, *,
-              lead: float = 0.0, sensor: SlipSensorParams | None = None, dx: float = TRACK_DX) -> "Track":
+              lead: float = 0.0, sensor: SlipSensorParams | None = None, dx: float = TRACK_DX) -> Track:
         """Lay surfaces end to end and sample what the sensor sees.
 
         Parameters

@@ -259,7 +259,8 @@ def _plot_fractions(fractions: Sequence[Mapping[str, Any]], path: Path) -> Path:
     ax.bar(n, f, color=_COLORS[HOLDS], label="holds")
     ax.bar(n, fails, bottom=f, color=_COLORS[FAILS], alpha=0.35, label="fails")
     ax.bar(n, nt, bottom=100 - nt, color=_COLORS[NOT_TESTABLE], label="not testable")
-    ax.errorbar(n, f, yerr=[np.maximum(np.nan_to_num(f - lo), 0), np.maximum(np.nan_to_num(hi - f), 0)], fmt="none", ecolor="black",
+    ax.errorbar(n, f, yerr=[np.maximum(np.nan_to_num(f - lo), 0), np.maximum(np.nan_to_num(hi - f), 0)],
+                fmt="none", ecolor="black",
                 capsize=3, label="95 % Wilson interval")
     ax.set(xticks=n, xlabel="claim (SPEC 4.1)", ylabel="% of plants", ylim=(0, 100),
            title="Where the paper's claims hold across plausible plants")
