@@ -47,6 +47,7 @@ def _virtual(tmp_path, pour=None, **kw):
     return VirtualDevices(rig, hand_type="ability", link_dir=str(tmp_path), **kw), grasp
 
 
+@pytest.mark.slow
 def test_driver_against_the_virtual_hand_positions_commands_and_touch(tmp_path):
     dev, grasp = _virtual(tmp_path)
     with dev:
@@ -113,6 +114,7 @@ def _drop_after(dev, commands, timeout=30.0):
     dev.trigger("drop")
 
 
+@pytest.mark.slow
 def test_run_nmsd_on_the_ability_hands_touch_sensors_over_the_virtual_hand(tmp_path, capsys):
     """``run --hand-type ability --method nmsd``: no DAQ, the fingertip is the tactile source."""
     from slipreflex.cli import main
@@ -143,6 +145,7 @@ def test_run_nmsd_on_the_ability_hands_touch_sensors_over_the_virtual_hand(tmp_p
     assert f"nmsd: events {len(rec.topic('/chain/events'))}," in capsys.readouterr().out
 
 
+@pytest.mark.slow
 def test_run_dath_with_the_daq_and_the_ability_hand(tmp_path, capsys):
     """``run --hand-type ability``: the slip sensor on the DAQ, the commands to the Ability Hand."""
     from slipreflex.cli import main

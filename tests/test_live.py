@@ -126,6 +126,7 @@ def test_live_topics_share_the_recording_schemas():
                 assert flat == fields, topic
 
 
+@pytest.mark.slow
 def test_run_over_the_virtual_rig_watched_live_and_recorded_by_lsl(tmp_path):
     """The whole path: virtual devices -> run_loop -> recording + Foxglove server + LSL outlets."""
     _foxglove()
@@ -208,6 +209,7 @@ def test_tap_that_fails_or_falls_behind_never_reaches_the_loop():
     assert tap.dropped == 2 + 2 and isinstance(tap.error, RuntimeError)  # the first raised, two dropped
 
 
+@pytest.mark.slow
 def test_cli_live_and_lsl_options_are_checked_before_anything_runs(tmp_path, capsys):
     base = ["run", "--daq", "loop://", "--hand", "loop://", "--p0", "100", "--no-record", "--duration", "1"]
     assert main(base + ["--live", "host:port"]) == 2
@@ -236,6 +238,7 @@ def test_cli_live_port_in_use_is_one_line_before_the_ports_open(capsys):
     assert len(out.err.strip().splitlines()) == 1
 
 
+@pytest.mark.slow
 def test_virtual_rig_live_publishes_the_rigs_truth(tmp_path):
     """``virtual-rig --live``: a client watching the simulated rig's truth as it runs."""
     import subprocess
@@ -270,6 +273,7 @@ def test_virtual_rig_live_publishes_the_rigs_truth(tmp_path):
     assert max(m["load_mass"] for m in truth) > min(m["load_mass"] for m in truth)  # the drop landed
 
 
+@pytest.mark.slow
 def test_replay_plays_a_recording_to_a_live_client_as_recorded(tmp_path, capsys):
     _foxglove()
     from slipreflex.commands.replay import play
@@ -316,6 +320,7 @@ def test_shipped_layout_is_built_by_its_script_and_plots_recorded_fields():
     assert script.main(["--check"]) == 0
 
 
+@pytest.mark.slow
 def test_lsl_samples_of_a_tactile_run_carry_each_taxel(tmp_path):
     pylsl = _pylsl()
     import numpy as np

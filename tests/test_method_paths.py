@@ -15,6 +15,7 @@ from slipreflex.csvfiles import read_slip_csv
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "slip_example.csv"
 
 
+@pytest.mark.slow  # the chain compiles on first use
 @pytest.mark.parametrize("name", ["dath-event", "dath-floor", "dath-leak", "authors-gui"])
 def test_detect_runs_every_chain_variant_as_registered(tmp_path, name, capsys):
     assert main(["detect", str(EXAMPLE), "--method", name.upper(), "--out", str(tmp_path / "d")]) == 0
@@ -36,6 +37,7 @@ def test_detect_refuses_a_method_its_input_cannot_feed_in_one_line(tmp_path, cap
     assert not (tmp_path / "d.samples.csv").exists()
 
 
+@pytest.mark.slow
 def test_replay_runs_a_registered_method_over_a_recording(tmp_path, capsys):
     from slipreflex.devices.virtual import VirtualDevices
     from slipreflex.recording import read_recording
@@ -60,6 +62,7 @@ def test_replay_runs_a_registered_method_over_a_recording(tmp_path, capsys):
     assert "reads tactile frames" in err and len(err.strip().splitlines()) == 1
 
 
+@pytest.mark.slow
 def test_run_dath_event_over_the_virtual_ilimb_records_and_replays(tmp_path, capsys):
     from slipreflex.devices.virtual import VirtualDevices
     from slipreflex.recording import read_recording
