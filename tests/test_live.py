@@ -82,6 +82,13 @@ class FoxgloveClient:
                 topic = self.channels[self.subs[sub]]["topic"]
                 self.got.setdefault(topic, []).append((log_time, json.loads(data[13:])))
 
+    def wait_subscribed(self, view, timeout: float = 10.0) -> None:
+        """Until the server has taken every subscription (a message logged before is not sent)."""
+        deadline = time.monotonic() + timeout
+        while not view.watched() and time.monotonic() < deadline:
+            self.thread.join(0.01)
+        assert view.watched(), "the server did not take the subscriptions"
+
     def wait_for(self, counts: dict[str, int], timeout: float = 15.0) -> None:
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
@@ -140,6 +147,7 @@ def test_run_over_the_virtual_rig_watched_live_and_recorded_by_lsl(tmp_path):
     reflex = _reflex()
     view = LiveView(("127.0.0.1", 0), RUN_TOPICS).start()
     client = FoxgloveClient(view.url, len(RUN_TOPICS))
+    client.wait_subscribed(view)
     outlets = LslOutlets(name).start()
     inlets = [_resolve(pylsl, f"{outlets.source_id}-{kind}") for kind in ("samples", "markers")]
     try:
@@ -289,6 +297,7 @@ def test_replay_plays_a_recording_to_a_live_client_as_recorded(tmp_path, capsys)
     topics = [t for t in rec.messages if rec.messages[t]]
     with LiveView(("127.0.0.1", 0), topics) as view:
         client = FoxgloveClient(view.url, len(topics))
+        client.wait_subscribed(view)
         n = play(rec, [view], pace=4.0)
         client.wait_for({t: len(rec.topic(t)) for t in topics})
         client.close()

@@ -159,6 +159,18 @@ class LiveView(Tap):
                 topic, schema=foxglove.Schema(name=sname, encoding="jsonschema", data=data),
                 message_encoding="json", context=self.context)
 
+    def watched(self) -> bool:
+        """Whether a client subscribes to every advertised channel (messages logged before a
+        client's subscription reach it are not sent to it).
+
+        Examples
+        --------
+        >>> with LiveView("127.0.0.1:0", ["/faults"]) as view:   # doctest: +SKIP
+        ...     view.watched()
+        False
+        """
+        return all(channel.has_sinks() for channel in self.channels.values())
+
     def handle(self, topic: str, msg: Mapping[str, Any], log_time_ns: int) -> None:
         """Log one message on its channel (the tap's thread)."""
         channel = self.channels.get(topic)

@@ -249,6 +249,21 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_live_arguments(p)
 
 
+def _p0_text(p0: dict[Finger, float]) -> str:
+    return ",".join(f"{f.name.lower()}={v:g}" for f, v in p0.items())
+
+
+def _open_run_taps(args: argparse.Namespace, reflex: Any, tactile: bool) -> list[Any]:
+    """``--live`` / ``--lsl`` for this run: the topics its reflex and source give."""
+    from ..live import RUN_TOPICS
+
+    topics = RUN_TOPICS + (("/board/state",) if args.board_reflex else ())
+    if tactile:
+        topics = ("/tactile/frames",) + tuple(t for t in topics if not t.startswith("/daq/"))
+    return open_taps(args, topics, lsl_source=args.daq or args.hand, fs=getattr(reflex, "fs", None),
+                     taxels=math.prod(getattr(reflex.params, "shape", ())) if tactile else 0)
+
+
 def run(args: argparse.Namespace) -> int:
     """Open the devices and the recording, run the loop, print the summary."""
     import contextlib
@@ -290,13 +305,7 @@ def run(args: argparse.Namespace) -> int:
     old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
     started = False
     try:
-        from ..live import RUN_TOPICS
-
-        topics = RUN_TOPICS + (("/board/state",) if args.board_reflex else ())
-        if tactile:
-            topics = ("/tactile/frames",) + tuple(t for t in topics if not t.startswith("/daq/"))
-        taps = open_taps(args, topics, lsl_source=args.daq or args.hand, fs=getattr(reflex, "fs", None),
-                         taxels=math.prod(getattr(reflex.params, "shape", ())) if tactile else 0)
+        taps = _open_run_taps(args, reflex, tactile)
         with contextlib.ExitStack() as devices:
             hand = devices.enter_context(open_hand(args.hand_type, args.hand,
                                                    **({"fs": reflex.fs} if tactile else {})))
@@ -304,10 +313,8 @@ def run(args: argparse.Namespace) -> int:
             started = True
             print(f"running {reflex.name} reflex: "
                   + (f"touch sensors of the {args.hand_type} hand" if tactile else f"daq {args.daq}")
-                  + f", hand {args.hand_type} on {args.hand}, p0 "
-                  + ",".join(f"{f.name.lower()}={v:g}" for f, v in p0.items())
-                  + (f", recording {recorder.path}" if recorder else "") + " (Ctrl-C stops)",
-                  flush=True)
+                  + f", hand {args.hand_type} on {args.hand}, p0 " + _p0_text(p0)
+                  + (f", recording {recorder.path}" if recorder else "") + " (Ctrl-C stops)", flush=True)
             source: Any = hand if tactile else daq
             if args.board_reflex:
                 from ..board import BoardSource

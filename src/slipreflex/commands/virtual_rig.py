@@ -78,6 +78,61 @@ def _objects(args: argparse.Namespace):
     return table[args.bottle], loads
 
 
+def _announce(dev, grasp, args: argparse.Namespace, hand, method) -> None:
+    """Print the ports, the grasp and the ``run`` line that drives them."""
+    print(f"daq: {dev.daq_path}", flush=True)
+    print(f"hand: {dev.hand_path}", flush=True)
+    print(f"p0: {grasp.p0_text()}", flush=True)
+    print(f"grasp: bottle {args.bottle}, {grasp.force_n:.2f} N per contact, "
+          f"{'stable' if grasp.stable else 'NOT stable'}", flush=True)
+    tactile = method is not None and method.input_kind == "tactile"
+    line = "slipreflex run" + ("" if tactile else f" --daq {dev.daq_path}") + f" --hand {dev.hand_path}"
+    if hand.name != "ilimb":
+        line += f" --hand-type {hand.name}"
+    if method is not None:
+        line += f" --method {method.name}" + (" --tactile-threshold T" if tactile else "")
+    print(f"run: {line} --p0 {grasp.p0_text()}", flush=True)
+    print("keys: d+Enter drop, p+Enter pour, q+Enter quit; SIGUSR1 drop, SIGUSR2 pour", flush=True)
+    if args.realtime:
+        from ..runtime import realtime_priority
+
+        print(f"rig: {realtime_priority()}", flush=True)  # the rig's thread inherits it
+
+
+def _serve(dev, args: argparse.Namespace, stop: threading.Event, pending: list[str]) -> None:
+    """Run until q, a signal, --duration or the rig's end; keys and signals start perturbations."""
+    t0 = time.monotonic()
+    stdin_open = sys.stdin is not None and not sys.stdin.closed
+    while not stop.is_set():
+        if args.duration is not None and time.monotonic() - t0 >= args.duration:
+            break
+        while pending:
+            kind = pending.pop(0)
+            dev.trigger(kind)
+            print(f"{kind} at {dev.elapsed:.2f} s (signal)", flush=True)
+        if not dev.running:
+            break
+        if not stdin_open:
+            stop.wait(0.1)
+            continue
+        try:
+            ready, _, _ = select.select([sys.stdin], [], [], 0.1)
+        except (OSError, ValueError):
+            stdin_open = False
+            continue
+        if ready:
+            line = sys.stdin.readline()
+            if not line:
+                stdin_open = False  # EOF: keep running on schedule and signals
+                continue
+            key = line.strip().lower()[:1]
+            if key == "q":
+                break
+            if key in ("d", "p"):
+                dev.trigger("drop" if key == "d" else "pour")
+                print(f"{'drop' if key == 'd' else 'pour'} at {dev.elapsed:.2f} s", flush=True)
+
+
 def run(args: argparse.Namespace) -> int:
     """Grasp, open the ports, run in real time, print a summary at exit."""
     from ..devices.simrig import SimRig
@@ -124,54 +179,9 @@ def run(args: argparse.Namespace) -> int:
         close_taps(taps)
         raise
     try:
-        print(f"daq: {dev.daq_path}", flush=True)
-        print(f"hand: {dev.hand_path}", flush=True)
-        print(f"p0: {grasp.p0_text()}", flush=True)
-        print(f"grasp: bottle {args.bottle}, {grasp.force_n:.2f} N per contact, "
-              f"{'stable' if grasp.stable else 'NOT stable'}", flush=True)
-        line = "slipreflex run" + ("" if method is not None and method.input_kind == "tactile"
-                                   else f" --daq {dev.daq_path}") + f" --hand {dev.hand_path}"
-        if hand.name != "ilimb":
-            line += f" --hand-type {hand.name}"
-        if method is not None:
-            line += f" --method {method.name}" + (" --tactile-threshold T" if method.input_kind == "tactile" else "")
-        print(f"run: {line} --p0 {grasp.p0_text()}", flush=True)
-        print("keys: d+Enter drop, p+Enter pour, q+Enter quit; SIGUSR1 drop, SIGUSR2 pour", flush=True)
-        if args.realtime:
-            from ..runtime import realtime_priority
-
-            print(f"rig: {realtime_priority()}", flush=True)  # the rig's thread inherits it
+        _announce(dev, grasp, args, hand, method)
         dev.start()
-        t0 = time.monotonic()
-        stdin_open = sys.stdin is not None and not sys.stdin.closed
-        while not stop.is_set():
-            if args.duration is not None and time.monotonic() - t0 >= args.duration:
-                break
-            while pending:
-                kind = pending.pop(0)
-                dev.trigger(kind)
-                print(f"{kind} at {dev.elapsed:.2f} s (signal)", flush=True)
-            if not dev.running:
-                break
-            if stdin_open:
-                try:
-                    ready, _, _ = select.select([sys.stdin], [], [], 0.1)
-                except (OSError, ValueError):
-                    stdin_open = False
-                    continue
-                if ready:
-                    line = sys.stdin.readline()
-                    if not line:
-                        stdin_open = False  # EOF: keep running on schedule and signals
-                        continue
-                    key = line.strip().lower()[:1]
-                    if key == "q":
-                        break
-                    if key in ("d", "p"):
-                        dev.trigger("drop" if key == "d" else "pour")
-                        print(f"{'drop' if key == 'd' else 'pour'} at {dev.elapsed:.2f} s", flush=True)
-            else:
-                stop.wait(0.1)
+        _serve(dev, args, stop, pending)
     finally:
         for s, h in old.items():
             signal.signal(s, h)
