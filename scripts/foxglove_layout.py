@@ -2,7 +2,8 @@
 
 Panels after the paper's Fig. 10: the slip signal (raw, filtered, the threshold in force),
 the spikes and each window's spike count, the MPI command with the position sent to each
-finger, then the simulated rig's truth (``virtual-rig --live``), the IMU and the faults.
+finger, then the simulated rig's truth (``virtual-rig --live``), the IMU, the touch of a
+tactile method and the faults.
 Every series is a path into a topic of :data:`slipreflex.recording.TOPICS`; the layout is
 built with the layout types foxglove-sdk ships (``foxglove.layouts``).
 
@@ -37,6 +38,8 @@ PANELS = [
                                              ("/rig/truth.slip", "slip", "#d62728", "line")]),
     ("IMU", "g", [("/daq/imu.ax", "ax", "#1f77b4", "line"), ("/daq/imu.ay", "ay", "#ff7f0e", "line"),
                   ("/daq/imu.az", "az", "#2ca02c", "line")]),
+    ("Touch (a tactile method)", "N", [("/tactile/frames.total", "total", "#1f77b4", "line"),
+                                       ("/tactile/frames.peak", "peak", "#d62728", "line")]),
 ]
 
 
@@ -63,7 +66,7 @@ def build() -> str:
             time_window_mode="sliding", following_view_width=10.0)))
     fig10 = fl.SplitContainer(direction="column", items=[fl.SplitItem(content=p) for p in plots[:3]])
     side = fl.SplitContainer(direction="column", items=[
-        fl.SplitItem(content=plots[3]), fl.SplitItem(content=plots[4]),
+        fl.SplitItem(content=plots[3]), fl.SplitItem(content=plots[4]), fl.SplitItem(content=plots[5]),
         fl.SplitItem(content=fl.TablePanel(title="Faults", config=fl.TableConfig(topic_path="/faults")))])
     layout = fl.Layout(content=fl.SplitContainer(direction="row", items=[
         fl.SplitItem(proportion=2, content=fig10), fl.SplitItem(proportion=1, content=side)]))

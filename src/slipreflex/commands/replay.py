@@ -49,8 +49,10 @@ def run(args: argparse.Namespace) -> int:
     check_live_arguments(args)
     rec = read_checked(args)
     if args.live is not None or args.lsl is not None:
+        frames = rec.topic("/tactile/frames")
+        taxels = sum(k.startswith("taxel_") for k in frames[0]) if frames else 0
         taps = open_taps(args, [t for t in rec.messages if rec.messages[t]],
-                         lsl_source=str(args.recording))
+                         lsl_source=str(args.recording), taxels=taxels)
         try:
             n = play(rec, taps, args.pace)
         finally:
