@@ -65,7 +65,7 @@ class Tap:
     ...     tap.put("/faults", {}, k)      # not started: the third does not fit
     >>> tap.dropped
     1
-    >>> tap.start(); tap.close(); tap.n, tap.published
+    >>> _ = tap.start(); tap.close(); tap.n, tap.published
     (2, 2)
     """
 
