@@ -1,7 +1,7 @@
 """Write foxglove/slipreflex.json, the Foxglove layout of a run (live or recorded).
 
 Panels after the paper's Fig. 10: the slip signal (raw, filtered, the threshold in force),
-the spikes and each window's spike count, the MPI command with the position sent to each
+the spikes and each window's spike count, the MPI command with the grip it adds to each
 finger, then the simulated rig's truth (``virtual-rig --live``), the IMU, the touch of a
 tactile method and the faults.
 Every series is a path into a topic of :data:`slipreflex.recording.TOPICS`; the layout is
@@ -31,9 +31,9 @@ PANELS = [
     ("Spikes and window counts (Fig. 10b)", "spikes", [("/chain/windows.count", "spikes per window", "#ff7f0e", "line"),
                                                        ("/chain/state.event", "spike", "#2ca02c", "line")]),
     ("MPI command (Fig. 10c)", "i-Limb units", [("/hand/commands.target", "MPI command", "#000000", "line"),
-                                                ("/hand/targets.thumb", "thumb", "#8c564b", "line"),
-                                                ("/hand/targets.index", "index", "#9467bd", "line"),
-                                                ("/hand/targets.middle", "middle", "#17becf", "line")]),
+                                                ("/hand/grip.thumb", "thumb grip", "#8c564b", "line"),
+                                                ("/hand/grip.index", "index grip", "#9467bd", "line"),
+                                                ("/hand/grip.middle", "middle grip", "#17becf", "line")]),
     ("Rig truth (virtual-rig --live)", "m", [("/rig/truth.displacement", "displacement", "#1f77b4", "line"),
                                              ("/rig/truth.slip", "slip", "#d62728", "line")]),
     ("IMU", "g", [("/daq/imu.ax", "ax", "#1f77b4", "line"), ("/daq/imu.ay", "ay", "#ff7f0e", "line"),

@@ -37,6 +37,9 @@ class Hand:
         self.sent.append(dict(targets))
         self.pos.update(targets)
 
+    def close_fingers(self, fingers, speed):
+        self.sent.append(("close", tuple(fingers)))
+
     def positions(self):
         return dict(self.pos)
 

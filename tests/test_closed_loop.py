@@ -73,6 +73,7 @@ def _assert_same(a, b):
     for name in ka.__dataclass_fields__:
         np.testing.assert_array_equal(getattr(ka, name), getattr(kb, name), err_msg=name)
     assert ra.hand.queue() == rb.hand.queue()
+    assert ra.hand.closing_until == rb.hand.closing_until
     assert [s.next_index for s in ra.samplers] == [s.next_index for s in rb.samplers]
 
 
@@ -93,14 +94,29 @@ def test_every_method_of_the_chain_has_a_compiled_step():
             methods.DATH_FLOOR, methods.DATH_LEAK} <= set(COMPILED)
 
 
-def test_finger_offsets_reach_the_offset_finger_only():
-    """authors-gui sends the middle finger 20 units further: the compiled loop splits commands alike."""
-    rig, reflex, tr = _run(methods.AUTHORS_GUI, SHORT_POUR, "TR", 4, compiled=True)
-    assert reflex.finger_offsets == {Finger.MIDDLE: 20.0} and tr.cmd_t.size
-    late = tr.t > tr.cmd_t[-1] + 1.0
-    if late.any():   # settled on the last command: the middle finger 20 units past the others' target
-        assert rig.hand.targets[2] == min(round(tr.cmd_value[-1]) + 20, hw.FINGER_MAX)
-        assert rig.hand.targets[1] == round(tr.cmd_value[-1])
+@pytest.mark.slow
+def test_finger_offsets_reach_the_offset_finger_only(monkeypatch):
+    """authors-gui closes the middle finger 20 units further: at the first command, its group alone
+    closes 20 / 625 s longer; later rises close every finger alike. Both loops split commands alike."""
+    sent = []
+    rig = Rig("TR", seed=4)
+    g = rig.grasp()
+    command = rig.hand.command
+    monkeypatch.setattr(rig.hand, "command", lambda kind, fingers, value=0.0, at=None: (
+        sent.append((kind, tuple(fingers), at)), command(kind, fingers, value, at=at))[1])
+    reflex = methods.make(methods.AUTHORS_GUI, p0=float(round(g.positions[hw.SLIP_FINGER])), context=_context())
+    assert reflex.finger_offsets == {Finger.MIDDLE: 20.0}
+    rig.perturb(SHORT_POUR, at=rig.t + 0.2)
+    tr = run_closed_loop(rig, reflex, 1.0 + SHORT_POUR.duration_s, compiled=False)
+    assert tr.cmd_t.size
+
+    def closing(fingers):  # seconds of closing the group was given: each CLOSE to its STOP
+        mine = [(k, at) for k, f, at in sent if f == fingers]
+        assert [k for k, _ in mine] == [HandCommand.CLOSE, HandCommand.STOP] * (len(mine) // 2)
+        return sum(b - a for (_, a), (_, b) in zip(mine[::2], mine[1::2]))
+
+    others, middle = closing((Finger.THUMB, Finger.INDEX)), closing((Finger.MIDDLE,))
+    assert others > 0 and middle == pytest.approx(others + 20.0 / hw.FINGER_SPEED_UNITS_S)
 
 
 def test_the_reflex_and_the_rig_continue_where_the_compiled_loop_left_them():
@@ -390,10 +406,11 @@ def _never_step(S, P, raw, position):
 # --- the tripod is never opened by a reflex's command ----------------------------------------------
 
 @pytest.mark.parametrize("method", [methods.DATH, methods.AUTHORS_GUI, methods.NMSD])
-def test_no_finger_target_drops_below_its_start_in_a_closed_loop_pour(method, monkeypatch):
+def test_a_reflex_only_ever_closes_the_tripod_in_a_closed_loop_pour(method, monkeypatch):
     """The grasp stops each finger at its own position (here the thumb 2 units further closed than
-    the middle finger the reflex starts from): no target any finger gets is below its start, in either
-    loop, so no finger ever opens (as runtime.run_loop's per-finger floor)."""
+    the middle finger the reflex starts from): the reflex's command reaches the hand only as CLOSE
+    and STOP (the grip-only rule, as runtime.run_loop sends it), in either loop, so no finger ever
+    opens, whatever the command says."""
     from slipreflex.experiments import trial_seed
     from slipreflex.sim.variations import grasped_rig
 
@@ -404,26 +421,26 @@ def test_no_finger_target_drops_below_its_start_in_a_closed_loop_pour(method, mo
         start = rig.hand.positions()
         assert start[Finger.THUMB] > start[Finger.MIDDLE], "the case needs a thumb that stopped further closed"
         reflex = methods.make(method, p0=start[hw.SLIP_FINGER], context=_context())
-        if not compiled:   # the Python loop sends every target through the hand's command: keep them
+        if not compiled:   # the Python loop sends every command through the hand's command: keep them
             command = rig.hand.command
             monkeypatch.setattr(rig.hand, "command", lambda kind, fingers, value=0.0, at=None, command=command: (
-                sent.extend((f, value) for f in fingers), command(kind, fingers, value, at=at))[1])
+                sent.extend((kind, f) for f in fingers), command(kind, fingers, value, at=at))[1])
         rig.perturb(PAPER_POUR, at=rig.t + 0.2)
         tr = run_closed_loop(rig, reflex, 0.2 + PAPER_POUR.duration_s + 1.0, compiled=compiled)
         assert tr.cmd_t.size > 0
-        if method != methods.AUTHORS_GUI:   # (its preset starts above p0) the command alone would open the thumb
-            assert tr.cmd_value.min() < start[Finger.THUMB]
         for i, f in enumerate(hw.TRIPOD):
-            assert np.rint(tr.daq.fingers[:, i]).min() >= start[f], f"{method}: {f.name} opened"
-            assert rig.hand.targets[i] >= start[f]
+            track = np.rint(tr.daq.fingers[:, i])
+            assert track.min() >= start[f], f"{method}: {f.name} opened"
+            assert np.all(np.diff(track) >= 0), f"{method}: {f.name} moved toward open"
         runs.append((rig, reflex, tr))
     _assert_same(*runs)
-    assert {f for f, _ in sent} == set(hw.TRIPOD)
-    assert all(value >= start[f] for f, value in sent), [(f.name, v) for f, v in sent if v < start[f]][:3]
+    assert {f for _, f in sent} == set(hw.TRIPOD)
+    assert {k for k, _ in sent} == {HandCommand.CLOSE, HandCommand.STOP}
 
 
-def test_the_floor_keeps_each_fingers_own_range():
-    """The thumb rotator (0..750) still gets a command above 500; a tripod finger is capped at 500."""
+def test_a_command_out_of_the_finger_range_only_closes_for_its_rise():
+    """A command of 600 from a middle finger at 0 is 600 units of grip: 0.96 s of closing, then STOP;
+    never a position, for a tripod finger and for the thumb rotator alike."""
     class Once:
         name, input_kind, fs = "once", "slip", hw.DAQ_FS
 
@@ -435,4 +452,7 @@ def test_the_floor_keeps_each_fingers_own_range():
 
     rig = Rig("TR")
     run_closed_loop(rig, Once(), 0.1, fingers=(Finger.THUMB_ROTATOR, Finger.INDEX))
-    assert rig.hand.positions()[Finger.THUMB_ROTATOR] == 600.0 and rig.hand.targets[1] == hw.FINGER_MAX
+    pending, _ = rig.hand.queue()
+    assert [(e[2], e[3]) for e in pending] == [(HandCommand.STOP, (Finger.THUMB_ROTATOR, Finger.INDEX))]
+    assert rig.hand.closing_until[Finger.INDEX] == pytest.approx(600.0 / hw.FINGER_SPEED_UNITS_S)
+    assert rig.hand.targets[1] == hw.FINGER_MAX  # closing (the CLOSE runs to the end of the range)

@@ -41,6 +41,12 @@ class _Hand:
     def set_positions(self, t):
         self.pos.update(t)
 
+    def close_fingers(self, fingers, speed):
+        pass
+
+    def hold(self, fingers):
+        pass
+
     def positions(self):
         return dict(self.pos)
 

@@ -159,7 +159,7 @@ def test_run_over_the_virtual_rig_watched_live_and_recorded_by_lsl(tmp_path):
         rec = read_recording(path)
         recorded = {t: rec.topic(t) for t in RUN_TOPICS if rec.topic(t)}
         assert {"/daq/samples", "/chain/state", "/chain/events", "/chain/windows",
-                "/hand/commands", "/hand/targets"} <= set(recorded)
+                "/hand/commands", "/hand/grip"} <= set(recorded)
         assert res.events > 0 and res.commands_sent > 0
         client.wait_for({t: len(m) for t, m in recorded.items()})
 

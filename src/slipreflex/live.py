@@ -39,7 +39,7 @@ DEFAULT_PORT: int = 8765
 WS_SUBPROTOCOLS: tuple[str, ...] = ("foxglove.sdk.v1", "foxglove.websocket.v1")
 #: The topics a ``run`` publishes (a board reflex adds /board/state, a tactile method /tactile/frames).
 RUN_TOPICS: tuple[str, ...] = ("/daq/samples", "/daq/imu", "/daq/flow", "/chain/state", "/chain/events",
-                               "/chain/windows", "/hand/commands", "/hand/targets", "/faults", "/stats")
+                               "/chain/windows", "/hand/commands", "/hand/grip", "/faults", "/stats")
 
 
 def parse_address(text: str, option: str = "--live") -> tuple[str, int]:

@@ -23,18 +23,19 @@ started, on the PC's clock):
 /chain/state       per sample: filtered value, threshold in force, event (bool)
 /chain/events      one message per spike
 /chain/windows     one message per complete window: spike count
-/hand/commands     reflex commands: target (the reflex's output), fingers, targets (the
-                   position sent to each finger: its start plus the rise of the
-                   reflex's command, never below the start), sent (bool), note (why
-                   not sent: "at start", "stale", "rejected", "hand-port"), latency
+/hand/commands     reflex commands: target (the reflex's output), fingers, targets (empty:
+                   the loop sends no positions), grip (the grip, units, the command adds
+                   to each finger, sent as closing time), sent (bool), note (why
+                   not sent: "at start", "no rise", "stale", "rejected", "hand-port"), latency
                    (s from reading the bytes) and frame_latency (s from the frame's
                    own arrival)
 /board/state       (``run --board-reflex``) per sample: what the board's own chain sent
                    (spike, window, fault, hand, v, command, x in Q16 counts) and
                    ``match``, whether its Python twin agreed
-/hand/targets      with every command, the position sent to each finger as flat fields
-                   (``thumb``, ``index``, ``middle``, ...; null for a finger not commanded),
-                   so a plot draws one line per finger
+/hand/grip         with every command, the grip (units) it adds to each finger as flat
+                   fields (``thumb``, ``index``, ``middle``, ...; null for a finger not
+                   commanded): the per-finger form of /hand/commands' ``grip``, one plot
+                   line per finger
 /tactile/frames    (a tactile method) every frame as flat fields: ``total`` and ``peak`` (N),
                    ``position`` (as /daq/samples), then one ``taxel_K`` per taxel (C order)
 /rig/truth         (``virtual-rig --live``) the simulated rig's truth per sample: the
@@ -82,7 +83,7 @@ METADATA_NAME: str = "slipreflex"
 
 _N, _I, _B, _S = (["number", "null"], "integer", "boolean", "string")
 _ACCEL = {"ax": "number", "ay": "number", "az": "number"}
-#: The per-finger fields of /hand/targets and /rig/truth (the hand's fingers by name, lower case).
+#: The per-finger fields of /hand/grip and /rig/truth (the hand's fingers by name, lower case).
 FINGER_FIELDS: tuple[str, ...] = ("thumb", "index", "middle", "ring", "little", "thumb_rotator")
 _TAXEL = {"type": "number"}
 
@@ -99,13 +100,13 @@ TOPICS: dict[str, tuple[str, dict[str, Any]]] = {
     "/chain/windows": ("slipreflex.Window", {"seq": _I, "t": "number", "count": _I}),
     "/hand/commands": ("slipreflex.Command", {"seq": _I, "t": "number", "target": "number",
                                               "fingers": {"type": "array", "items": {"type": _S}},
-                                              "targets": {"type": "object"},
+                                              "targets": {"type": "object"}, "grip": {"type": "object"},
                                               "sent": _B, "note": _S, "latency": _N,
                                               "frame_latency": _N}),
     "/board/state": ("slipreflex.BoardState", {"seq": _I, "t": "number", "spike": _B, "window": _B,
                                                "fault": _B, "hand": _B, "v": _I, "command": _I,
                                                "x": _I, "match": _B}),
-    "/hand/targets": ("slipreflex.FingerTargets", {"seq": _I, "t": "number", "sent": _B,
+    "/hand/grip": ("slipreflex.FingerGrip", {"seq": _I, "t": "number", "sent": _B,
                                                    **{f: _N for f in FINGER_FIELDS}}),
     "/tactile/frames": ("slipreflex.TactileFrame", {"seq": _I, "t": "number", "total": "number",
                                                     "peak": "number", "position": _N}),

@@ -52,7 +52,7 @@ from collections.abc import Iterable
 from typing import Any
 
 from ..errors import DeviceError, ParameterError
-from ..hardware import DAQ_PERIOD_S, Finger, HandCommand
+from ..hardware import DAQ_PERIOD_S, FINGER_SPEED_UNITS_S, PWM_MAX, Finger, HandCommand
 from . import wire
 from .ilimb import PacketParser, value_range
 
@@ -261,10 +261,12 @@ class VirtualDevices:
     :meth:`start`, writes each new sample's frame to the DAQ port, and
     applies every i-Limb packet that arrives on the hand port to
     ``rig.hand``: through ``rig.hand.command(kind, fingers, value)`` if the
-    hand has it (the simulated i-Limb does), else as position targets
-    (stop: hold the measured position; close/open: move to the end of the
-    range). Perturbations run when :meth:`trigger` is called or their
-    scheduled time comes.
+    hand has it (the simulated i-Limb does), else through its
+    :class:`~slipreflex.interfaces.Hand` methods (position: ``set_positions``;
+    close: ``close_fingers`` at the PWM's share of the documented speed; stop:
+    ``hold``), falling back to position targets for a hand without them (stop:
+    hold the measured position; close/open: move to the end of the range).
+    Perturbations run when :meth:`trigger` is called or their scheduled time comes.
 
     Parameters
     ----------
@@ -489,7 +491,11 @@ class VirtualDevices:
             hold = [c.finger for c in cmds if c.command == HandCommand.STOP]
             measured = hand.positions() if hold else {}
             for c in cmds:
-                if c.command == HandCommand.POSITION:
+                if c.command == HandCommand.STOP and hasattr(hand, "hold"):
+                    hand.hold([c.finger])
+                elif c.command == HandCommand.CLOSE and hasattr(hand, "close_fingers"):
+                    hand.close_fingers([c.finger], FINGER_SPEED_UNITS_S * c.value / PWM_MAX)
+                elif c.command == HandCommand.POSITION:
                     targets[c.finger] = float(c.value)
                 elif c.command == HandCommand.STOP:
                     if c.finger in measured:

@@ -453,6 +453,9 @@ class SimHand:
         self._pending: list[tuple[int, int, HandCommand, tuple[Finger, ...], float]] = []
         self._count = 0
         self._others: dict[Finger, float] = {f: 0.0 for f in Finger if f not in hw.TRIPOD}
+        #: When the closing a closed loop started for each finger ends (rig time, s; the grip
+        #: rule of :mod:`slipreflex.grip`: a later rise extends it rather than cutting it short).
+        self.closing_until: dict[Finger, float] = {}
         #: Servo targets and speed limits of thumb, index and middle (the rig hands them to the physics).
         self.targets = np.zeros(len(hw.TRIPOD))
         self.speeds = np.full(len(hw.TRIPOD), params.speed_units_s)
@@ -518,6 +521,32 @@ class SimHand:
             by_value.setdefault(float(v), []).append(f)
         for v, fingers in by_value.items():
             self.command(HandCommand.POSITION, fingers, v, at=at)
+
+    def close_fingers(self, fingers: Iterable[Finger], speed: float, at: float | None = None) -> None:
+        """CLOSE ``fingers`` at ``speed`` units/s (the PWM duty ``speed / speed_units_s * 297``).
+
+        Examples
+        --------
+        >>> from slipreflex.sim import Rig
+        >>> rig = Rig("TR"); rig.hand.close_fingers([Finger.INDEX], 625.0)
+        >>> rig.hand.queue()[0][0][2:]
+        (<HandCommand.CLOSE: 1>, (<Finger.INDEX: 1>,), 297.0)
+        """
+        if not (math.isfinite(speed) and speed > 0):
+            raise ParameterError(f"closing speed must be a number > 0 units/s, got {speed!r}")
+        pwm = min(float(hw.PWM_MAX), speed / self.params.speed_units_s * hw.PWM_MAX)
+        self.command(HandCommand.CLOSE, fingers, pwm, at=at)
+
+    def hold(self, fingers: Iterable[Finger], at: float | None = None) -> None:
+        """STOP ``fingers`` where they are.
+
+        Examples
+        --------
+        >>> from slipreflex.sim import Rig
+        >>> rig = Rig("TR"); rig.hand.hold([Finger.INDEX]); rig.hand.queue()[0][0][2]
+        <HandCommand.STOP: 0>
+        """
+        self.command(HandCommand.STOP, fingers, 0.0, at=at)
 
     def positions(self) -> dict[Finger, float]:
         """Measured positions (rounded to whole units, as the control unit reports them).
