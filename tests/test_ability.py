@@ -166,3 +166,54 @@ def test_run_dath_with_the_daq_and_the_ability_hand(tmp_path, capsys):
     assert sent and dev.emulator.commands > len(sent) and dev.emulator.rejected == 0
     assert closed[Finger.MIDDLE] > grasp.positions[Finger.MIDDLE]  # the reflex closed the hand
     assert all(closed[f] >= grasp.positions[f] - 0.5 for f in (Finger.THUMB, Finger.INDEX, Finger.MIDDLE))
+
+
+def test_while_a_reflex_runs_the_driver_refuses_a_position_that_would_open():
+    from slipreflex.devices.ability import AbilityHand
+
+    class Port:  # the hand's side, in memory: replies to every frame with the grasp
+        def __init__(self):
+            self.hand = ab.VirtualAbilityHand(self)
+            self.pos = {Finger.INDEX: 200.0, Finger.MIDDLE: 200.0, Finger.THUMB: 200.0}
+            self.out = b""
+            self.written = []
+
+        # the rig the virtual hand answers from
+        def positions(self):
+            return dict(self.pos)
+
+        def set_positions(self, t):
+            self.pos.update(t)
+
+        # a pyserial-like port
+        timeout, port = 0, "mem://ability"
+
+        @property
+        def in_waiting(self):
+            return len(self.out)
+
+        def write(self, data):
+            self.written.append(bytes(data))
+            self.out += self.hand.feed(bytes(data))
+            return len(data)
+
+        def flush(self):
+            pass
+
+        def read(self, n):
+            data, self.out = self.out[:n], self.out[n:]
+            return data
+
+    port = Port()
+    port.hand.rig = type("Rig", (), {"hand": port})()
+    hand = AbilityHand(port, reply_timeout=0.5)
+    assert hand.positions()[Finger.INDEX] == pytest.approx(200.0, abs=0.05)
+    hand.reflex_running()
+    sent = len(port.written)
+    with pytest.raises(ParameterError, match="refused while a reflex runs"):
+        hand.set_positions({Finger.INDEX: 150.0})
+    assert len(port.written) == sent  # nothing written
+    hand.close_fingers([Finger.INDEX], 625.0)
+    hand.hold([Finger.INDEX])
+    hand.reflex_running(False)
+    hand.set_positions({Finger.INDEX: 150.0})  # a grasp routine may open again

@@ -83,6 +83,8 @@ _VSCALE = 32767 / 3000  # int16 counts per degree per second (ICD 3.4.2)
 _REPLY_LEN = 1 + 24 + 45 + 1  # header, position/current pairs, touch, status (checksum apart)
 _FSR_C1, _FSR_C2 = 121591.0, 0.878894
 _ADC_V, _ADC_COUNTS, _R_TOP, _R_BOTTOM = 3.3, 4096, 33000.0, 10000.0
+#: Finger units a hold may sit below the last measurement (one int16 count is 0.023 units).
+_HOLD_SLACK = 0.05
 
 
 def checksum(data: bytes | Iterable[int]) -> int:
@@ -468,6 +470,7 @@ class AbilityHand:
         self._measured: dict[Finger, float] = {}
         self._targets: dict[Finger, float] = {}
         self._closing: dict[Finger, float] = {}  # finger -> closing speed, degrees/s
+        self._reflex = False  # the grip-only guard (reflex_running)
         self._next_request = -math.inf
         self._t0 = time.perf_counter()
         self._seq = 0
@@ -544,6 +547,10 @@ class AbilityHand:
             if not (math.isfinite(v) and FINGER_MIN <= v <= FINGER_MAX):
                 raise ParameterError(f"Ability Hand: {f.name} position must be in {FINGER_MIN}..{FINGER_MAX}, "
                                      f"got {v!r}")
+            held = self._measured.get(f)
+            if self._reflex and held is not None and v < held - _HOLD_SLACK:
+                raise ParameterError(f"Ability Hand: {f.name} position {v:g} refused while a reflex runs "
+                                     f"(below its measured {held:g})")
             full[f] = v
         return encode_positions([degrees_of(f, full.get(f, 0.0)) for f in ORDER]), full
 
@@ -598,6 +605,12 @@ class AbilityHand:
             return
         self._closing = {}
         self.set_positions({f: self._measured[f] for f in fs if f in self._measured})
+
+    def reflex_running(self, running: bool = True) -> None:
+        """Switch the grip-only guard on (a reflex runs) or off: while on, a position below a
+        finger's measured one is refused before a byte is written (closing and holding never open).
+        """
+        self._reflex = bool(running)
 
     def positions(self) -> dict[Finger, float]:
         """The positions of the last reply, in finger units."""
