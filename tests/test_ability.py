@@ -213,7 +213,12 @@ def test_while_a_reflex_runs_the_driver_refuses_a_position_that_would_open():
     with pytest.raises(ParameterError, match="refused while a reflex runs"):
         hand.set_positions({Finger.INDEX: 150.0})
     assert len(port.written) == sent  # nothing written
+    with pytest.raises(ParameterError, match="refused while a reflex runs"):
+        hand.set_positions({Finger.INDEX: 250.0})  # not even upward: closing and holding only
     hand.close_fingers([Finger.INDEX], 625.0)
     hand.hold([Finger.INDEX])
+    # the hold is velocity 0 for every finger (a position at a stale reading could open one)
+    _, header, speeds = ab.decode_command(ab.unstuff(port.written[-1])[0])
+    assert header == 0x20 and speeds == [0.0] * 6
     hand.reflex_running(False)
     hand.set_positions({Finger.INDEX: 150.0})  # a grasp routine may open again

@@ -83,8 +83,6 @@ _VSCALE = 32767 / 3000  # int16 counts per degree per second (ICD 3.4.2)
 _REPLY_LEN = 1 + 24 + 45 + 1  # header, position/current pairs, touch, status (checksum apart)
 _FSR_C1, _FSR_C2 = 121591.0, 0.878894
 _ADC_V, _ADC_COUNTS, _R_TOP, _R_BOTTOM = 3.3, 4096, 33000.0, 10000.0
-#: Finger units a hold may sit below the last measurement (one int16 count is 0.023 units).
-_HOLD_SLACK = 0.05
 
 
 def checksum(data: bytes | Iterable[int]) -> int:
@@ -547,10 +545,9 @@ class AbilityHand:
             if not (math.isfinite(v) and FINGER_MIN <= v <= FINGER_MAX):
                 raise ParameterError(f"Ability Hand: {f.name} position must be in {FINGER_MIN}..{FINGER_MAX}, "
                                      f"got {v!r}")
-            held = self._measured.get(f)
-            if self._reflex and held is not None and v < held - _HOLD_SLACK:
+            if self._reflex:
                 raise ParameterError(f"Ability Hand: {f.name} position {v:g} refused while a reflex runs "
-                                     f"(below its measured {held:g})")
+                                     f"(it adds grip only by closing and holding)")
             full[f] = v
         return encode_positions([degrees_of(f, full.get(f, 0.0)) for f in ORDER]), full
 
@@ -593,22 +590,22 @@ class AbilityHand:
         self._closing = closing
 
     def hold(self, fingers: Iterable[Finger] = ()) -> None:
-        """Hold ``fingers`` where they were last measured (never opens the hand); fingers still
-        closing keep closing."""
+        """Stop ``fingers`` where they are: velocity 0 (never opens the hand); fingers still
+        closing keep closing.
+
+        Not a position at the last measurement: a finger that closed since that reply would
+        be sent back, i.e. opened.
+        """
         fs = [Finger(f) for f in fingers]
         closing = {f: v for f, v in self._closing.items() if f not in fs}
-        if closing:
-            self._write(encode_velocities([closing.get(f, 0.0) * (-1 if f == Finger.THUMB_ROTATOR else 1)
-                                           for f in ORDER]))
-            self._command_sent()
-            self._closing = closing
-            return
-        self._closing = {}
-        self.set_positions({f: self._measured[f] for f in fs if f in self._measured})
+        self._write(encode_velocities([closing.get(f, 0.0) * (-1 if f == Finger.THUMB_ROTATOR else 1)
+                                       for f in ORDER]))
+        self._command_sent()
+        self._closing = closing
 
     def reflex_running(self, running: bool = True) -> None:
-        """Switch the grip-only guard on (a reflex runs) or off: while on, a position below a
-        finger's measured one is refused before a byte is written (closing and holding never open).
+        """Switch the grip-only guard on (a reflex runs) or off: while on, every position command
+        is refused before a byte is written (a reflex adds grip only by closing and holding).
         """
         self._reflex = bool(running)
 
