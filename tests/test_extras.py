@@ -10,6 +10,8 @@ import sys
 import tomllib
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 STUDY_ONLY = ("dask", "distributed", "pyarrow", "SALib")
 
@@ -56,6 +58,7 @@ def test_the_study_packages_are_an_extra_not_a_dependency():
         assert name in study, f"{name} is missing from the study extra"
 
 
+@pytest.mark.slow
 def test_the_base_install_and_the_other_commands_load_no_study_package(tmp_path):
     res = _python(IMPORT_ALL, str(tmp_path))
     assert res.returncode == 0, res.stderr
@@ -63,6 +66,7 @@ def test_the_base_install_and_the_other_commands_load_no_study_package(tmp_path)
     assert loaded == ["LOADED: "], f"importing slipreflex or running detect loaded {loaded}"
 
 
+@pytest.mark.slow
 def test_study_without_its_extra_is_a_one_line_error_naming_it(tmp_path):
     code = WITHOUT_EXTRA + (
         "from slipreflex.cli import main\n"

@@ -32,20 +32,25 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from . import hardware as hw
 from .chain.encoder import dath_update
 from .errors import DataError, ParameterError
+from .methods import Detections, MethodContext
 from .validation import instance
+
+if TYPE_CHECKING:
+    from .interfaces import InputKind
 
 __all__ = [
     "COEF_Q", "SIG_Q", "H_MAX", "BoardParams", "BoardChain", "BoardReflex", "BoardResult",
     "run_board_chain", "adc_counts", "quantize_lowpass", "volts_to_q16", "board_detections",
     "FIRMWARE_ADC_MIN", "FIRMWARE_ADC_MAX", "FIRMWARE_STUCK_AFTER", "read_adc_csv",
     "write_board_outputs", "CheckedBoardReflex", "BoardSource", "board_params_from_json",
+    "build_board_method", "board_method_detections",
 ]
 
 #: Fractional bits of the filter coefficients.
@@ -270,6 +275,7 @@ class BoardParams:
                 raise ParameterError(f"{name} must be a whole number for the board, got {value!r}")
             whole[name] = int(value)
         g, a1, a2 = quantize_lowpass(p.fs, p.cutoff)
+        assert p.reset_after is not None, "an MPI that never resets is a variant, refused above"
         return cls(g=g, a1=a1, a2=a2, theta0=volts_to_q16(p.threshold), filter=p.filter,
                    dath=p.dath, dath_samples=p.dath_samples, dath_floor=volts_to_q16(p.dath_floor),
                    x0=None if p.x0 is None else volts_to_q16(p.x0), n=p.n,
@@ -552,7 +558,7 @@ class BoardReflex:
     100.0
     """
 
-    input_kind = "slip"
+    input_kind: InputKind = "slip"
 
     def __init__(self, params: BoardParams | None = None, *, fs: float = hw.DAQ_FS,
                  **kwargs) -> None:
@@ -834,3 +840,28 @@ class BoardSource:
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self.daq, name)
+
+
+# --- the registry's board methods (slipreflex.methods names these by entry point) ------------
+
+def build_board_method(dath: bool, p0: float, context: MethodContext, **params: Any) -> BoardReflex:
+    """The registry's ``dath-board`` / ``fixed-board``: a :class:`BoardReflex` at the rounded ``p0``.
+
+    Examples
+    --------
+    >>> build_board_method(True, 99.6, MethodContext()).params.p0
+    100
+    """
+    return BoardReflex(**{"dath": dath, **params, "p0": int(np.floor(p0 + 0.5))})
+
+
+def board_method_detections(reflex: BoardReflex, volts: np.ndarray) -> Detections:
+    """What a trial figure draws for a board method: its Q16 low-pass and its spikes.
+
+    Examples
+    --------
+    >>> board_method_detections(build_board_method(True, 100.0, MethodContext()), np.full(64, 0.4)).event_label
+    'events (spikes)'
+    """
+    x, events = board_detections(reflex, volts)
+    return Detections(x, "slip sensor on the board, Q16 low-pass (V)", events, "events (spikes)")

@@ -233,6 +233,7 @@ def read_recording(path: str | os.PathLike, fs: float | None = None) -> Recordin
             if k and t[k] <= t[k - 1]:
                 raise DataError(f"{path}, line {line}: time not increasing ({t[k]!r} after {t[k - 1]!r})")
     if it is None:
+        assert fs is not None, "refused above: no t column and no fs"
         t = np.arange(len(body)) / float(fs)
     lines = np.array([line for line, _ in body], dtype=int)
     return Recording(path, t, x, lines, it is not None, read_preamble(path))
@@ -288,7 +289,7 @@ def read_preamble(path: str | os.PathLike) -> dict[str, str]:
     return out
 
 
-def write_columns(path: str | os.PathLike, columns: Mapping[str, Sequence], *,
+def write_columns(path: str | os.PathLike, columns: Mapping[str, Sequence | np.ndarray], *,
                   preamble: Mapping[str, str] | None = None) -> None:
     """Write equal-length columns to a CSV atomically.
 

@@ -641,7 +641,7 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
         raise ParameterError(f"run_loop: the hand has no {', '.join(missing)}: a reflex adds grip only by "
                              f"closing and holding (slipreflex.interfaces.Hand)")
     fingers = tuple(Finger(f) for f in fingers)
-    ref0 = getattr(reflex, "command", None)  # the reflex's own start (SlipReflex: clip(p0))
+    ref0: Any = getattr(reflex, "command", None)  # the reflex's own start (SlipReflex: clip(p0))
     ref_ok = isinstance(ref0, (int, float)) and math.isfinite(ref0)
     if p0 is None and not ref_ok:
         raise ParameterError("run_loop: give p0 (the reflex has no initial command)")
@@ -652,7 +652,8 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
         start, start_error = safe_start(hand, given, fingers), None
     except DeviceError as err:  # the STOP did not go out: the fingers stay as the grasp left them
         start, start_error = given, err
-    dropped = source.drop_buffered() if hasattr(source, "drop_buffered") else 0
+    drop_buffered = getattr(source, "drop_buffered", None)   # optional in the SampleSource protocol
+    dropped = drop_buffered() if drop_buffered is not None else 0
     loop = _Loop(source, hand, reflex, start=start,
                  ref0=float(ref0) if ref_ok else start.get(SLIP_FINGER, next(iter(start.values()))),
                  recorder=recorder, duration=duration, watchdog=watchdog, poll=poll, stop=stop,
@@ -940,7 +941,7 @@ class _Loop:
             if pos is not None:
                 pos -= self.slip_shift  # in the reflex's frame
             cmd = reflex.step(s.slip_volts if self.slip else s.frame, pos)
-            r = SampleRecord(s, arrival, self.clock() - (s.t + self.offset), pos, cmd,
+            r = SampleRecord(s, arrival, self.clock() - (s.t + (self.offset or 0.0)), pos, cmd,
                              filtered=reflex.last_filtered, threshold=reflex.last_threshold,
                              event=bool(reflex.last_event), count=reflex.last_count,
                              board=getattr(reflex, "last_board", None))
@@ -1037,7 +1038,7 @@ class _Loop:
             return
         now = self.clock()
         r.sent, r.latency = True, now - r.arrival
-        r.frame_latency = now - (r.sample.t + self.offset)
+        r.frame_latency = now - (r.sample.t + (self.offset or 0.0))  # offset: set by the first read
         self.latencies.append(r.latency)
         self.frame_latencies.append(r.frame_latency)
 

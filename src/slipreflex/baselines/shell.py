@@ -27,7 +27,7 @@ from __future__ import annotations
 import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
@@ -38,6 +38,9 @@ from . import _layout as _L
 from . import closing as _closing
 from ._validate import as_frame, frame_shape
 from .closing import CLOSE_S, ClosingParams, TriggerMode, _load_kernels
+
+if TYPE_CHECKING:
+    from ..interfaces import InputKind
 
 __all__ = ["TactileParams", "TactileReflex"]
 
@@ -137,11 +140,11 @@ class TactileReflex(ABC):
     True
     """
 
-    name: ClassVar[str]
+    name: str
     params_class: ClassVar[type]
     mode: ClassVar[TriggerMode]
     kind: ClassVar[float]
-    input_kind: ClassVar[str] = "tactile"
+    input_kind: InputKind = "tactile"
 
     def __init__(self, params: Any = None, **kwargs: Any) -> None:
         self.params = resolve_params(self.params_class, params, kwargs)

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -27,6 +28,9 @@ from ..hardware import DAQ_FS, SLIP_FINGER, Finger
 from . import _layout as _k
 from ._checks import as_samples
 from .params import ReflexParams
+
+if TYPE_CHECKING:
+    from ..interfaces import InputKind
 
 __all__ = ["SlipReflex", "run_chain", "ChainResult"]
 
@@ -75,7 +79,7 @@ class SlipReflex:
     (True, 1)
     """
 
-    input_kind = "slip"
+    input_kind: InputKind = "slip"
     __slots__ = ("params", "name", "_P", "_S", "_S0")
 
     def __init__(self, params: ReflexParams | None = None, **kwargs) -> None:
@@ -205,7 +209,7 @@ class SlipReflex:
 
 
 _NAN = math.nan
-_chain_step = None  # the compiled step, imported with the first chain (numba stays out of `import`)
+_chain_step: Any = None  # the compiled step, imported with the first chain (numba stays out of `import`)
 
 
 def _load_step() -> None:

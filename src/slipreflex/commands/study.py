@@ -26,16 +26,18 @@ import argparse
 import shlex
 import sys
 from pathlib import Path
+from typing import Any
 
 NAME = "study"
 HELP = "map where the paper's claims hold across plausible plants (Dask; resumable)"
 ORDER = 35
 
 
-def _list(kind: str, known):
+def _list(kind: str, known: Any):
     def parse(text: str) -> tuple[str, ...]:
         items = tuple(x.strip() for x in text.split(",") if x.strip())
-        names = known() if callable(known) else known
+        listed: Any = known() if callable(known) else known
+        names = tuple(listed)
         if kind == "methods":   # method names match in any case (the registry's rule)
             items = tuple(x.lower() for x in items)
         bad = [x for x in items if x not in names]
@@ -48,7 +50,7 @@ def _list(kind: str, known):
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``slipreflex study``."""
-    from .. import methods
+    from .. import experiment_specs, methods
     from ..experiments import BOTTLE_NAMES, EXPERIMENTS
     from ..experiments import DEFAULT_SEED as seed
     from ..study import DEFAULT_PLANTS, DEFAULT_TRIALS, DESIGNS
@@ -61,7 +63,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help=f"comma-separated bottles (default {','.join(BOTTLE_NAMES)})")
     p.add_argument("--methods", type=_list("methods", methods.names), default=methods.names(paper=True),
                    help=f"comma-separated methods (default {','.join(methods.names(paper=True))})")
-    p.add_argument("--experiments", type=_list("experiments", EXPERIMENTS), default=EXPERIMENTS,
+    p.add_argument("--experiments", type=_list("experiments", experiment_specs.names), default=EXPERIMENTS,
                    help=f"comma-separated experiments (default {','.join(EXPERIMENTS)})")
     p.add_argument("--seed", type=int, default=seed, help=f"design and trial master seed (default {seed})")
     p.add_argument("--out", type=Path, default=Path("out/study"), help="output directory (default out/study)")

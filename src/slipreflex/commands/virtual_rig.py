@@ -116,11 +116,11 @@ def _serve(dev, args: argparse.Namespace, stop: threading.Event, pending: list[s
             stop.wait(0.1)
             continue
         try:
-            ready, _, _ = select.select([sys.stdin], [], [], 0.1)
+            ready, _, _ = select.select([sys.stdin], [], [], 0.1)  # pyright: ignore[reportArgumentType]
         except (OSError, ValueError):
             stdin_open = False
             continue
-        if ready:
+        if ready and sys.stdin is not None:
             line = sys.stdin.readline()
             if not line:
                 stdin_open = False  # EOF: keep running on schedule and signals

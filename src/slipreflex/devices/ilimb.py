@@ -267,7 +267,7 @@ class PacketParser:
                 self._reject(buf)
                 continue
             try:
-                cmds = tuple(FingerCommand(buf[i], buf[i + 1], (buf[i + 2] << 8) | buf[i + 3])
+                cmds = tuple(FingerCommand(buf[i], buf[i + 1], (buf[i + 2] << 8) | buf[i + 3])  # pyright: ignore[reportArgumentType] (ints, converted and checked)
                              for i in range(2, n + 2, BYTES_PER_FINGER))
                 if len({c.finger for c in cmds}) != len(cmds):
                     raise ParameterError("repeated finger")

@@ -49,7 +49,7 @@ def _keep_input_class() -> type:
 
         def _reset_input_buffer(self) -> None:
             if not self._opening:
-                super()._reset_input_buffer()
+                super()._reset_input_buffer()  # pyright: ignore[reportAttributeAccessIssue] (pyserial's, untyped)
 
     return KeepInputSerial
 
@@ -107,7 +107,7 @@ class ReconnectingPort:
         import serial
 
         name = self.port_name
-        kw = dict(baudrate=self.baudrate, timeout=0, write_timeout=self.write_timeout)
+        kw: dict[str, Any] = dict(baudrate=self.baudrate, timeout=0, write_timeout=self.write_timeout)
         try:
             if "://" in name:
                 return serial.serial_for_url(name, **kw)

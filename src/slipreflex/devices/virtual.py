@@ -51,6 +51,7 @@ import tty
 from collections.abc import Iterable
 from typing import Any
 
+from .. import experiment_specs
 from ..errors import DeviceError, ParameterError
 from ..hardware import DAQ_PERIOD_S, FINGER_SPEED_UNITS_S, PWM_MAX, Finger, HandCommand
 from . import wire
@@ -232,7 +233,7 @@ def parse_schedule(text: str) -> list[tuple[str, float]]:
     >>> parse_schedule("jump@1")
     Traceback (most recent call last):
     ...
-    slipreflex.errors.ParameterError: schedule item 'jump@1': kind must be drop or pour
+    slipreflex.errors.ParameterError: schedule item 'jump@1': kind must be one of drop, pour
     """
     out = []
     for item in (s.strip() for s in text.split(",")):
@@ -242,8 +243,8 @@ def parse_schedule(text: str) -> list[tuple[str, float]]:
         kind = kind.strip().lower()
         if not sep:
             raise ParameterError(f"schedule item {item!r}: expected kind@seconds, e.g. drop@2.0")
-        if kind not in ("drop", "pour"):
-            raise ParameterError(f"schedule item {item!r}: kind must be drop or pour")
+        if kind not in experiment_specs.names():
+            raise ParameterError(f"schedule item {item!r}: kind must be one of {', '.join(experiment_specs.names())}")
         try:
             t = float(at)
         except ValueError:
@@ -431,8 +432,8 @@ class VirtualDevices:
         ParameterError
             For another kind.
         """
-        if kind not in ("drop", "pour"):
-            raise ParameterError(f"unknown perturbation {kind!r}: drop or pour")
+        if kind not in experiment_specs.names():
+            raise ParameterError(f"unknown perturbation {kind!r} (known: {', '.join(experiment_specs.names())})")
         self._request("perturb", kind)
 
     def inject_daq(self, data: bytes) -> None:

@@ -302,7 +302,7 @@ def _across_jump(f, lo, hi, target: float, band_ml, name: str) -> tuple[tuple[fl
     jump = (f"the open-loop first slip of bottle {name} jumps from {lo[1]:.1f} to {hi[1]:.1f} ml at pad mu_s "
             f"{hi[0]:.4g} (a gross slip starts only at a slip of the middle finger's cuff)")
     inside = [p for p in (lo, hi) if band_ml is not None and band_ml[0] <= p[1] <= band_ml[1]]
-    if not inside:
+    if not inside or band_ml is None:
         within = "" if band_ml is None else f", nor in {band_ml[0]:g}-{band_ml[1]:g} ml"
         raise ParameterError(f"calibration: {jump}: no pad mu_s puts it at {target:g} ml{within}")
     edge = min(inside, key=lambda p: abs(p[1] - target))

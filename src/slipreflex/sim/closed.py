@@ -40,6 +40,7 @@ import hashlib
 import math
 import os
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numba import njit, types
@@ -99,7 +100,7 @@ class _Stamped:
     def from_function(cls, py_func, py_file):
         if os.path.abspath(py_file) != os.path.abspath(__file__):
             return None
-        return super().from_function(py_func, py_file)
+        return super().from_function(py_func, py_file)  # pyright: ignore[reportAttributeAccessIssue] (numba's locator, mixed in)
 
 
 _LOCATORS = getattr(getattr(_caching, "CacheImpl", None), "_locator_classes", None)
@@ -345,7 +346,7 @@ _SIGNATURES = {
 }
 
 
-def _kernel(kind: str):
+def _kernel(kind: str) -> Any:
     """The loop kernel for ``kind``, compiled (or loaded from the cache) for its one signature.
 
     Its compilation is then disabled, so every reflex's step is passed as a

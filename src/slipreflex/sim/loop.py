@@ -244,7 +244,7 @@ def _fmt(v: object) -> str:
     return "" if math.isnan(f) else repr(f)
 
 
-def _trace(rig: Rig, t0: float, method: str, cmd_t: list[float], cmd_v: list[float],
+def _trace(rig: Rig, t0: float, method: str, cmd_t: Sequence[float] | np.ndarray, cmd_v: Sequence[float] | np.ndarray,
            tac_t: np.ndarray, tac: np.ndarray) -> SimTrace:
     d = rig.daq_history(since=t0)
     ons = rig.onsets

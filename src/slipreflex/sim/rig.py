@@ -204,7 +204,8 @@ class DaqBlock:
         """
         out = []
         for i in range(self.t.size):
-            acc = tuple(float(a) for a in self.accel[i]) if self.accel_fresh[i] else None
+            acc = (float(self.accel[i][0]), float(self.accel[i][1]), float(self.accel[i][2])) \
+                if self.accel_fresh[i] else None
             out.append(DaqSample(seq=int(self.seq[i]), t=float(self.t[i]), slip_volts=float(self.volts[i]),
                                  accel_g=acc, flow_pulses=int(self.flow_pulses[i])))
         return out
@@ -730,21 +731,16 @@ class Rig:
         self.track = Track.build([(surf, self.physics.track_length_m)], np.random.default_rng(tex_ss),
                                  lead=0.01, sensor=self.slip_sensor)
         self._P = self._params(flow_k, flow_phase)
-        self._S = np.zeros(K.S_SIZE)
-        self._S[K.S_STUCK] = 1.0
-        self._S[K.S_DIR] = 1.0
+        self._S = K.STATE.new()   # the layout's initial values; NaN in the slots set here
         for i in range(3):
-            self._S[K.S_C0 + i * K.SC_SIZE + K.SC_STUCK] = 1.0
-            self._S[K.S_C0 + i * K.SC_SIZE + K.SC_DIR] = 1.0
-            self._S[K.S_C0 + i * K.SC_SIZE + K.SC_PHI] = 1.0
-        self._S[K.S_SUPPORTED] = 1.0
+            self._S[K.S_C0 + i * K.SC_SIZE:K.S_C0 + (i + 1) * K.SC_SIZE] = K.CONTACT.new()
         self._S[K.S_MASS] = bottle.mass_kg
         self._S[K.S_SPD0:K.S_SPD0 + 3] = self.hand_params.speed_units_s
-        self._S[K.S_TFALL] = np.nan
         # the splash noise starts stationary on its 1 ms grid (stream keys[5])
         self._S[K.S_SPL0] = K.normal(self._keys[5], 0)
         P = self._P
         self._S[K.S_SPL1] = P[K.P_SPL_RHO] * self._S[K.S_SPL0] + P[K.P_SPL_SIG] * K.normal(self._keys[5], 1)
+        K.STATE.check(self._S)
         self._C = np.zeros(K.C_SIZE, dtype=np.int64)
         self._D = np.zeros((0, K.D_SIZE))
         self._W = np.zeros((0, K.W_SIZE))
@@ -769,7 +765,7 @@ class Rig:
     # ------------------------------------------------------------------ setup
     def _params(self, flow_k: float, flow_phase: float) -> np.ndarray:
         b, h, s, imu, ph = self.bottle, self.hand_params, self.slip_sensor, self.imu, self.physics
-        P = np.zeros(K.P_SIZE)
+        P = K.PARAMS.new()   # NaN until filled: checked complete below
         P[K.P_DT] = ph.dt
         P[K.P_G] = hw.GRAVITY
         P[K.P_MB] = b.mass_kg
@@ -794,7 +790,7 @@ class Rig:
         P[K.P_FLOW_K] = flow_k
         P[K.P_FLOW_PHASE] = flow_phase
         self._water_params(P)
-        return P
+        return K.PARAMS.check(P)
 
     def _water_params(self, P: np.ndarray) -> None:
         """The water's splash and slosh constants (:class:`WaterParams`) and the grasp's sideways stiffness."""
@@ -1249,16 +1245,16 @@ class Rig:
         if isinstance(what, Drop):
             zeta = -math.log(max(what.restitution, 1e-6)) / math.sqrt(math.pi**2 + math.log(max(what.restitution,
                                                                                                   1e-6))**2)
-            row = np.zeros(K.D_SIZE)
+            row = K.DROP.new()
             row[K.D_REL] = at
             row[K.D_M] = what.mass_kg
             row[K.D_H0] = self.bottle.height_m + what.height_m
             row[K.D_KC] = what.contact_stiffness_n_m
             row[K.D_CC] = 2.0 * zeta * math.sqrt(what.contact_stiffness_n_m * what.mass_kg)
-            self._D = np.vstack([self._D, row])
+            self._D = np.vstack([self._D, K.DROP.check(row)])
         elif isinstance(what, Pour):
             rate_l_s = what.rate_l_min / 60.0
-            row = np.zeros(K.W_SIZE)
+            row = K.POUR.new()
             row[K.W_START] = at
             row[K.W_RATE_L_S] = rate_l_s
             row[K.W_RATE_KG_S] = rate_l_s * 1e-3 * WATER_DENSITY
@@ -1266,7 +1262,7 @@ class Rig:
             row[K.W_TOTAL_KG] = what.volume_ml * 1e-6 * WATER_DENSITY
             row[K.W_DELAY] = math.sqrt(2.0 * what.fall_height_m / g)
             row[K.W_JET_N] = row[K.W_RATE_KG_S] * math.sqrt(2.0 * g * what.fall_height_m)
-            self._W = np.vstack([self._W, row])
+            self._W = np.vstack([self._W, K.POUR.check(row)])
         else:
             raise ParameterError(f"perturb: expected a Drop or a Pour, got {what!r}")
         self.perturbations.append((at, what))

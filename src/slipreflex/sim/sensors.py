@@ -72,7 +72,7 @@ def texture(n: int, dx: float, exponent: float, min_wavelength: float, max_wavel
     coef = (rng.standard_normal(k.size) + 1j * rng.standard_normal(k.size)) * amp
     # scipy's FFT: the same numbers as numpy's here, about twice as fast on a track's awkward length
     # (26002 = 2 x 13001, a prime)
-    out = scipy.fft.irfft(coef, n)
+    out = np.asarray(scipy.fft.irfft(coef, n))
     sd = out.std()
     return out / sd if sd > 0 else out
 

@@ -420,7 +420,7 @@ def plant_from_values(values: Mapping[str, float] | None = None, *,
             else:
                 raise ParameterError(f"{name}: unknown target {target!r}")
     for b, fld, val, ratio_of in ratios:
-        base = bottle_set[b].get(ratio_of, getattr(BOTTLES[b], ratio_of))
+        base = bottle_set[b][ratio_of] if ratio_of in bottle_set[b] else getattr(BOTTLES[b], ratio_of)
         bottle_set[b][fld] = val * base
     defaults = {"hand": HandParams, "slip_sensor": SlipSensorParams, "imu": ImuParams,
                 "tactile": TactileParams, "flow": FlowParams, "physics": PhysicsParams, "water": WaterParams}
