@@ -31,6 +31,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from .errors import ParameterError
+from .methods import EntryPoint
 from .validation import choice, flag, text
 
 __all__ = ["HandSpec", "register_hand", "get_hand", "hand_names", "open_hand", "ILIMB", "ABILITY"]
@@ -137,24 +138,7 @@ def open_hand(name: str, port: Any, **options: Any) -> Any:
     return get_hand(name).open(port, **options)
 
 
-def _open_ilimb(port: Any, **options: Any) -> Any:
-    from .devices.ilimb import ILimb
-
-    return ILimb(port)
-
-
-def _open_ability(port: Any, **options: Any) -> Any:
-    from .devices.ability import AbilityHand
-
-    return AbilityHand(port, **options)
-
-
-def _virtual_ability(rig: Any) -> Any:
-    from .devices.ability import VirtualAbilityHand
-
-    return VirtualAbilityHand(rig)
-
-
-register_hand(HandSpec(ILIMB, "i-Limb", _open_ilimb))
-register_hand(HandSpec(ABILITY, "Ability Hand", _open_ability, tactile=True,
-                       virtual=_virtual_ability, tactile_shape=(6,)))
+# The drivers sit above the registry: named by entry point, imported when a hand is opened.
+register_hand(HandSpec(ILIMB, "i-Limb", EntryPoint("slipreflex.devices.ilimb:ILimb")))
+register_hand(HandSpec(ABILITY, "Ability Hand", EntryPoint("slipreflex.devices.ability:AbilityHand"), tactile=True,
+                       virtual=EntryPoint("slipreflex.devices.ability:VirtualAbilityHand"), tactile_shape=(6,)))
