@@ -1,4 +1,4 @@
-"""A new user's first hour (issue 11): the steps after set-up that the README promises."""
+"""A new user's first hour: the steps after set-up that the README promises."""
 
 import os
 import subprocess
@@ -55,12 +55,12 @@ def _one_line_exit_2(capsys, argv, *fragments):
 
 
 def test_virtual_rig_link_dir_that_cannot_be_made_is_one_line(capsys, tmp_path):
-    _one_line_exit_2(capsys, ["virtual-rig", "--link-dir", "/proc/nope", "--duration", "0"],
+    _one_line_exit_2(capsys, ["virtual-rig", "--link-dir", "/proc/nope", "--duration", "1"],
                      "--link-dir /proc/nope", "cannot create the directory")
     (tmp_path / "f").write_text("x")
-    _one_line_exit_2(capsys, ["virtual-rig", "--link-dir", str(tmp_path / "f"), "--duration", "0"],
+    _one_line_exit_2(capsys, ["virtual-rig", "--link-dir", str(tmp_path / "f"), "--duration", "1"],
                      f"--link-dir {tmp_path / 'f'}: is a file, not a directory")
-    _one_line_exit_2(capsys, ["virtual-rig", "--link-dir", str(tmp_path / "f" / "sub"), "--duration", "0"],
+    _one_line_exit_2(capsys, ["virtual-rig", "--link-dir", str(tmp_path / "f" / "sub"), "--duration", "1"],
                      "--link-dir", "Not a directory")
 
 

@@ -1,6 +1,6 @@
 """The paper's experiments on the simulated rig: protocol, trial grid, parallel runs.
 
-One *trial* (SPEC 4): build the rig for a bottle with the trial's seed, grasp
+One *trial* (docs/method.md section 4): build the rig for a bottle with the trial's seed, grasp
 to 0.8 N and settle, record ``rest_s`` of the bottle at rest, then apply the
 perturbation (the sudden 10 g drop, or the 500 ml pour at 1 L/min) while the
 method's reflex runs in closed loop, and record every stream until
@@ -57,7 +57,7 @@ from .interrupts import Interrupted
 from .paper_experiments import LANDING_S
 from .progress import Progress
 from .thresholds import calibrate, calibration_seed
-from .validation import choices, flag, integer, positive, set_field
+from .validation import choices, flag, integer, set_field, within
 
 __all__ = [
     "METHODS", "EXPERIMENTS", "BOTTLE_NAMES", "DEFAULT_SEED", "ReproduceConfig", "Cell",
@@ -167,15 +167,14 @@ class ReproduceConfig:
     def __post_init__(self) -> None:
         for name in ("variations", "independent_seeds"):
             set_field(self, name, flag(name, getattr(self, name)))
-        set_field(self, "trials", integer("trials", self.trials, lo=1))
+        set_field(self, "trials", within("trials", self.trials))
         set_field(self, "seed", integer("seed", self.seed, lo=0))
         known_bottles = tuple(self.plant.bottles) if self.plant is not None else BOTTLE_NAMES
         for name, known in (("bottles", known_bottles), ("experiments", experiment_specs.names())):
             set_field(self, name, choices(name, getattr(self, name), known))
         set_field(self, "methods", choices("methods", self.methods, methods.names(), any_case=True))
-        for name in ("rest_s", "after_s", "calibration_s", "rest_k", "grasp_force_n"):
-            set_field(self, name, positive(name, getattr(self, name)))
-        set_field(self, "swt_persist", integer("swt_persist", self.swt_persist, lo=0))
+        for name in ("rest_s", "after_s", "calibration_s", "rest_k", "grasp_force_n", "swt_persist"):
+            set_field(self, name, within(name, getattr(self, name)))
         from .analysis.onset import OnsetParams
 
         need = OnsetParams().baseline_s + 0.05

@@ -256,7 +256,7 @@ def load_plugins() -> tuple[str, ...]:
     ``pyproject.toml``::
 
         [project.entry-points."slipreflex.methods"]
-        my-method = "my_package.methods:SPEC"
+        my-method = "my_package.methods:MY_METHODS"
 
     where the object is a :class:`MethodSpec`, a sequence of them, or a
     function returning either. Entry points are read in name order the first

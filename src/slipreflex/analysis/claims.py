@@ -1,6 +1,6 @@
-"""The paper's claims as data, judged from a results table (SPEC 4.1), and its self-contradictions.
+"""The paper's claims as data, judged from a results table (docs/method.md section 4.1), and its self-contradictions.
 
-Each of the ten claims of shared SPEC section 4.1 is a :class:`Claim` with a
+Each of the ten claims of docs/method.md section 4.1 is a :class:`Claim` with a
 judge function over a :class:`ClaimInput` (the per-slip result rows of a
 run, and the characterization scan's numbers for claims 1-2). :func:`judge`
 returns one :class:`ClaimResult` per claim: *holds*, *fails* or *not testable
@@ -25,7 +25,7 @@ Means are over slip events (one row per slip, NaN responses left out), as
 the paper averages its slips; success rates are over rows.
 
 :func:`contradictions` computes where the paper's numbers cannot all be true
-(SPEC 4.1, last paragraph): the largest static capacity at which an open-loop
+(docs/method.md section 4.1, last paragraph): the largest static capacity at which an open-loop
 10 g drop could end in complete slippage beside the capacity the pour's first
 slip implies; the fixed and DATH pour totals identical to the digit; response
 standard deviations below what a free-running 48 ms window allows; and the
@@ -107,7 +107,7 @@ class ClaimResult:
     Attributes
     ----------
     number : int
-        1..10 (SPEC 4.1).
+        1..10 (docs/method.md section 4.1).
     text : str
         The claim in words.
     verdict : str
@@ -215,7 +215,7 @@ class Claim:
     Attributes
     ----------
     number : int
-        Its number in the paper's list of claims (SPEC 4.1).
+        Its number in the paper's list of claims (docs/method.md section 4.1).
     text : str
         The claim in the paper's words.
     tolerance : str
@@ -408,7 +408,7 @@ def _tx_best(ci: ClaimInput) -> tuple[str, str]:
 
 _STRICT = TOLERANCES["under, faster, slowest"]
 
-#: The ten claims of SPEC 4.1, in order.
+#: The ten claims of docs/method.md section 4.1, in order.
 CLAIMS: tuple[Claim, ...] = (
     Claim(1, "Scan: white about 0.3-0.5 V, black about 3.32-3.35 V", TOLERANCES["about a voltage range"],
           _scan_levels),
@@ -494,7 +494,7 @@ def claims_section(results: Sequence[ClaimResult], items: Sequence[Contradiction
     "## The paper's claims, judged on this run"
     """
     lines = ["## The paper's claims, judged on this run", "",
-             "Each claim of the paper (SPEC 4.1) judged from this run's results.csv and a "
+             "Each claim of the paper (docs/method.md section 4.1) judged from this run's results.csv and a "
              "characterization scan (`slipreflex.analysis.claims`): *holds*, *fails*, or *not testable "
              "here* (the run lacks the cells or values it needs).", "", claims_markdown(results), "",
              "Tolerances (one definition each): " + "; ".join(f"{k}: {v}" for k, v in TOLERANCES.items())
@@ -527,10 +527,11 @@ def claims_terminal(results: Sequence[ClaimResult]) -> str:
     Examples
     --------
     >>> print(claims_terminal(judge([])).splitlines()[0])
-    paper's claims (SPEC 4.1): 0 hold, 0 fail, 10 not testable here
+    paper's claims (docs/method.md section 4.1): 0 hold, 0 fail, 10 not testable here
     """
     n = {v: sum(r.verdict == v for r in results) for v in VERDICTS}
-    lines = [f"paper's claims (SPEC 4.1): {n[HOLDS]} hold, {n[FAILS]} fail, {n[NOT_TESTABLE]} not testable here"]
+    lines = [f"paper's claims (docs/method.md section 4.1): {n[HOLDS]} hold, {n[FAILS]} fail, "
+             f"{n[NOT_TESTABLE]} not testable here"]
     for r in results:
         lines += [f"{r.number:>3} {r.verdict:17} {r.text}", f"{'':21}{r.numbers}"]
     return "\n".join(lines)
@@ -697,7 +698,7 @@ def _own_table() -> list[Contradiction]:
 
 def contradictions(first_slip_ml: float = 200.0, *, plant: Any = None, simulate: bool = True
                    ) -> list[Contradiction]:
-    """Where the paper's numbers contradict each other (SPEC 4.1), computed.
+    """Where the paper's numbers contradict each other (docs/method.md section 4.1), computed.
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""The paper's per-slip metrics on recorded streams (SPEC 4).
+"""The paper's per-slip metrics on recorded streams (docs/method.md section 4).
 
 All times are in seconds on the recording's clock.
 

@@ -1,4 +1,4 @@
-"""The composed reflex: filter -> encoder -> windows -> MPI (SPEC 1, Fig. 3).
+"""The composed reflex: filter -> encoder -> windows -> MPI (docs/method.md section 1, Fig. 3).
 
 :class:`SlipReflex` is the one object that runs in simulation, on hardware and
 in replay: one raw sample in, a new finger command out on the samples that

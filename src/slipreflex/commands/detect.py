@@ -184,6 +184,10 @@ def _saturation(res, t: np.ndarray, params: ReflexParams) -> str | None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the chain and write the two CSVs; print a summary."""
+    from ..validation import within
+
+    if args.fs is not None:
+        within("fs_hz", args.fs, "--fs")
     if args.board:
         if args.preset:
             raise ParameterError("--preset and --board: the board runs the paper's chain only")
@@ -226,9 +230,11 @@ def _prefix(args: argparse.Namespace) -> Path:
 def _run_board(args: argparse.Namespace) -> int:
     """``detect --board``: the Python twin of the firmware over a CSV of ADC counts."""
     from ..board import BoardParams, read_adc_csv, run_board_chain, write_board_outputs
+    from ..hardware import FINGER_MAX
     from ..methods import applicable
+    from ..validation import number
 
-    p0 = 0.0 if args.p0 is None else args.p0
+    p0 = number("--p0", 0.0 if args.p0 is None else args.p0, lo=0, hi=FINGER_MAX)
     method = applicable(args.method or DATH, {"slip"}, _INPUT).name
     method = {"dath-board": DATH, "fixed-board": FIXED}.get(method, method)
     if method not in (FIXED, DATH):

@@ -195,8 +195,11 @@ def build_reflex(args: argparse.Namespace, p0: dict[Finger, float]) -> tuple[Any
 
 def check_arguments(args: argparse.Namespace) -> dict[Finger, float]:
     """Check every option of ``run`` (before any port is opened); return the per-finger p0."""
-    if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
-        raise ParameterError(f"--duration must be a number of seconds > 0, got {args.duration}")
+    from ..validation import within
+
+    if args.duration is not None:
+        within("duration_s", args.duration, "--duration")
+    within("fs_hz", args.fs, "--fs")
     if not (WATCHDOG_MIN_S <= args.watchdog <= WATCHDOG_MAX_S):
         raise ParameterError(f"--watchdog must be in {WATCHDOG_MIN_S:g}..{WATCHDOG_MAX_S:g} s "
                              f"(a hold needs a bounded wait), got {args.watchdog}")
@@ -247,7 +250,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "middle finger's p0, and the hand only ever gets the command's rises as "
                         "closing time (no OPEN, no position; docs/runtime.md)")
     p.add_argument("--record", type=Path, default=None,
-                   help="MCAP file to record to (default: run-YYYYmmdd-HHMMSS.mcap here)")
+                   help="new MCAP file to record to, never an existing one (default: run-YYYYmmdd-HHMMSS.mcap "
+                        "here, -2, -3... when taken); written as NAME.part and named NAME when the run ends")
     p.add_argument("--no-record", action="store_true", help="do not record")
     p.add_argument("--duration", type=float, default=None, help="stop after this many seconds")
     p.add_argument("--watchdog", type=float, default=WATCHDOG_S,
@@ -281,13 +285,47 @@ def _open_run_taps(args: argparse.Namespace, reflex: Any, tactile: bool) -> list
                      taxels=math.prod(getattr(reflex.params, "shape", ())) if tactile else 0)
 
 
+def _recorder(path: Path | None, meta: dict):
+    """A new recording: ``path`` (never an existing file), or a free ``run-YYYYmmdd-HHMMSS[-N].mcap`` here."""
+    from ..paths import unique_name
+    from ..recording import METADATA_NAME, PART_SUFFIX, Recorder, RecordingError
+
+    if path is not None:
+        return Recorder(path, metadata={METADATA_NAME: meta})
+    stem = f"run-{datetime.datetime.now():%Y%m%d-%H%M%S}"
+    for _ in range(100):      # two runs started in the same second get -2, -3...
+        try:
+            return Recorder(unique_name(".", stem, ".mcap", also=(PART_SUFFIX,)),
+                            metadata={METADATA_NAME: meta})
+        except RecordingError as err:
+            if "exists" not in str(err):
+                raise
+    raise ParameterError(f"no free recording name {stem}-N.mcap here; give --record")
+
+
+def _metadata(args: argparse.Namespace, reflex: Any, p0: dict[Finger, float],
+              board_meta: dict[str, str]) -> dict[str, str]:
+    """The run's facts for the recording's metadata."""
+    from ..recording import PLANNED_SAMPLES
+
+    fs = float(getattr(reflex, "fs", DAQ_FS))
+    meta = {"version": __version__, "reflex": reflex.name, "hand_type": args.hand_type,
+            "fingers": json.dumps([f.name.lower() for f in TRIPOD]),
+            "p0": json.dumps({f.name.lower(): v for f, v in p0.items()}),
+            "daq": str(args.daq), "hand": args.hand, "watchdog_s": repr(args.watchdog),
+            "started": datetime.datetime.now(datetime.UTC).isoformat(), "rate_hz": repr(fs),
+            **board_meta}
+    if args.duration is not None:   # a reader of a file cut short then knows what it misses
+        meta[PLANNED_SAMPLES] = str(round(args.duration * fs))
+    return meta
+
+
 def run(args: argparse.Namespace) -> int:
     """Open the devices and the recording, run the loop, print the summary."""
     import contextlib
 
     from ..devices.daq import SerialDaq
     from ..hands import open_hand
-    from ..recording import METADATA_NAME, Recorder
     from ..runtime import drop_capabilities, print_fault, realtime_priority, run_loop
 
     p0 = check_arguments(args)  # everything, before a port opens or a byte is sent
@@ -314,13 +352,7 @@ def run(args: argparse.Namespace) -> int:
 
     recorder = None
     if not args.no_record:
-        path = args.record or Path(f"run-{datetime.datetime.now():%Y%m%d-%H%M%S}.mcap")
-        meta = {"version": __version__, "reflex": reflex.name, "hand_type": args.hand_type,
-                "fingers": json.dumps([f.name.lower() for f in TRIPOD]),
-                "p0": json.dumps({f.name.lower(): v for f, v in p0.items()}),
-                "daq": str(args.daq), "hand": args.hand, "watchdog_s": repr(args.watchdog),
-                "started": datetime.datetime.now(datetime.UTC).isoformat(), **board_meta}
-        recorder = Recorder(path, metadata={METADATA_NAME: meta})  # fails before the ports open
+        recorder = _recorder(args.record, _metadata(args, reflex, p0, board_meta))  # before the ports open
     taps: list[Any] = []
     old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
     started = False
@@ -348,9 +380,10 @@ def run(args: argparse.Namespace) -> int:
             signal.signal(s, h)
         close_taps(taps)
         if recorder is not None:
-            recorder.close()
-            if not started:  # the ports did not open: leave no empty recording behind
-                Path(recorder.path).unlink(missing_ok=True)
+            if started:
+                recorder.close()
+            else:  # the ports did not open: remove the recording this run created, nothing else
+                recorder.discard()
     if stop.is_set():
         print("stopped by signal", flush=True)
     print(res.summary(), flush=True)

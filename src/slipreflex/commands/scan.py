@@ -43,24 +43,37 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the scan, write the files, print the numbers."""
-    from ..errors import ParameterError
-    from ..paths import output_dir
+    from ..hardware import DAQ_FS
+    from ..paths import OutputSet
     from ..sim import scan
+    from ..validation import number, within
 
-    if args.speed <= 0 or args.distance <= 0:
-        raise ParameterError("--speed and --distance must be > 0")
-    out: Path = output_dir(args.out, "--out")
+    within("scan_speed_mm_s", args.speed, "--speed")
+    within("scan_distance_mm", args.distance, "--distance")
+    within("scan_samples", int(args.distance / args.speed * DAQ_FS) + 1, "--distance / --speed x the DAQ rate")
+    number("--threshold", args.threshold, lo=0.0, hi=10.0)
+    outputs = OutputSet(args.out, NAME)
+    outputs.check(OUTPUT_NAMES)
     kw: dict[str, Any] = {"layout": _layout(args)} if args.layout is not None else {}
     result = scan(seed=args.seed, speed=args.speed * 1e-3, distance=args.distance * 1e-3, **kw)
     summary = result.analyse(threshold=args.threshold)
+    staged = outputs.stage()
+    try:
+        frame = result.to_frame()
+        with (staged / "scan.csv").open("w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(list(frame))
+            cols = [np.asarray(v) for v in frame.values()]
+            for i in range(result.t.size):
+                w.writerow([repr(float(c[i])) if c.dtype.kind == "f" else str(int(c[i])) for c in cols])
+        if not args.no_figure:
+            _figure(result, summary, staged / "scan.png", args.threshold)
+        outputs.commit(staged)
+    except BaseException:
+        outputs.abort(staged)
+        raise
+    out = outputs.folder
     csv_path = out / "scan.csv"
-    frame = result.to_frame()
-    with csv_path.open("w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(list(frame))
-        cols = [np.asarray(v) for v in frame.values()]
-        for i in range(result.t.size):
-            w.writerow([repr(float(c[i])) if c.dtype.kind == "f" else str(int(c[i])) for c in cols])
     print(f"scan: {args.distance:g} mm at {args.speed:g} mm/s, seed {args.seed}, {result.t.size} samples")
     shown = _shown(summary)
     for region in shown:
@@ -76,10 +89,12 @@ def run(args: argparse.Namespace) -> int:
         print(f"  on {region}: " + "; ".join(parts))
     print(f"  wrote {csv_path}")
     if not args.no_figure:
-        png = out / "scan.png"
-        _figure(result, summary, png, args.threshold)
-        print(f"  wrote {png}")
+        print(f"  wrote {out / 'scan.png'}")
     return 0
+
+
+#: What ``scan`` writes into ``--out``, replaced as one set (slipreflex.paths.OutputSet).
+OUTPUT_NAMES: tuple[str, ...] = ("scan.csv", "scan.png")
 
 
 def _layout(args: argparse.Namespace) -> list:
@@ -93,6 +108,8 @@ def _layout(args: argparse.Namespace) -> list:
     if objs:
         extra.update({n: b.surface for n, b in objs.bottles.items()})
     out = []
+    if not args.layout.replace(",", "").strip():
+        raise ParameterError("--layout: empty; give NAME:MM parts, e.g. 'stand:5,white:10,black:30,stand:5'")
     for i, part in enumerate(p.strip() for p in args.layout.split(",") if p.strip()):
         name, sep, mm = part.partition(":")
         try:

@@ -17,6 +17,7 @@ p0: thumb=213,index=212,middle=212
 from __future__ import annotations
 
 import argparse
+import os
 import select
 import signal
 import sys
@@ -42,7 +43,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--seed", type=int, default=0, help="random seed of the simulation (0)")
     p.add_argument("--schedule", default="", help='perturbations, e.g. "drop@2.0,pour@5.0" (s after start)')
     p.add_argument("--link-dir", default=None,
-                   help="also create DIR/daq and DIR/hand symlinks to the ports (stable paths; DIR is created)")
+                   help="also create DIR/daq and DIR/hand symlinks to the ports (stable paths; DIR is created; "
+                        "existing DIR/daq or DIR/hand is an error, and only the links made are removed at exit)")
     p.add_argument("--duration", type=float, default=None, help="exit after this many seconds")
     from ..hands import hand_names
     from ._live import add_live_arguments
@@ -133,24 +135,40 @@ def _serve(dev, args: argparse.Namespace, stop: threading.Event, pending: list[s
                 print(f"{'drop' if key == 'd' else 'pour'} at {dev.elapsed:.2f} s", flush=True)
 
 
+def _check_arguments(args: argparse.Namespace) -> None:
+    """Bounded --duration and --grasp-force; a --link-dir whose daq/hand names are free (before the grasp)."""
+    from ..errors import ParameterError
+    from ..paths import output_dir
+    from ..validation import within
+
+    if args.duration is not None:
+        within("duration_s", args.duration, "--duration")
+    if args.grasp_force is not None:
+        within("grasp_force_n", args.grasp_force, "--grasp-force")
+    if args.link_dir is not None:
+        link_dir = output_dir(args.link_dir, "--link-dir")      # before the grasp: a bad DIR costs one line
+        for name in ("daq", "hand"):
+            if os.path.lexists(link_dir / name):
+                raise ParameterError(f"--link-dir {args.link_dir}: {name} exists; the rig makes its links "
+                                     f"new and removes only those (move it or choose another --link-dir)")
+
+
 def run(args: argparse.Namespace) -> int:
     """Grasp, open the ports, run in real time, print a summary at exit."""
     from ..devices.simrig import SimRig
     from ..devices.virtual import VirtualDevices, parse_schedule
     from ..hands import get_hand
     from ..methods import applicable
-    from ..paths import output_dir
     from ._live import check_live_arguments, close_taps, open_taps
 
     schedule = parse_schedule(args.schedule)
+    _check_arguments(args)
     check_live_arguments(args)
     hand = get_hand(args.hand_type)
     method = None
     if args.method is not None:
         method = applicable(args.method, {"slip", "tactile"} if hand.tactile else {"slip"},
                             f"the virtual rig with the {hand.label}")
-    if args.link_dir is not None:
-        output_dir(args.link_dir, "--link-dir")      # before the grasp: a bad DIR costs one line
     bottle, loads = _objects(args)
     rig = SimRig(bottle=bottle, seed=args.seed, **loads)
     grasp = rig.grasp(args.grasp_force)

@@ -71,7 +71,9 @@ class PtyPort:
     ----------
     link : str, optional
         Also make this symlink point to the slave (kept up to date across
-        :meth:`unplug` / :meth:`replug`); :attr:`path` is then the link.
+        :meth:`unplug` / :meth:`replug`); :attr:`path` is then the link. It is
+        created new (anything already there is an error, never replaced) and
+        removed at the end only while it is still this port's symlink.
 
     Examples
     --------
@@ -128,13 +130,18 @@ class PtyPort:
         tty.setraw(slave)
         os.set_blocking(master, False)
         self.master, self._slave = master, slave
-        self.slave_name = os.ttyname(slave)
+        old_slave, self.slave_name = self.slave_name, os.ttyname(slave)
         if self.link:
-            tmp = f"{self.link}.tmp{os.getpid()}"
-            if os.path.lexists(tmp):
-                os.unlink(tmp)
-            os.symlink(self.slave_name, tmp)
-            os.replace(tmp, self.link)
+            try:
+                os.symlink(self.slave_name, self.link)   # never replaces what is there
+            except FileExistsError:
+                if not self._is_our_link(old_slave):
+                    self.close()
+                    raise ParameterError(f"{self.link}: exists and is not this rig's link; move it or "
+                                         f"choose another --link-dir") from None
+                tmp = f"{self.link}.tmp{os.getpid()}"
+                os.symlink(self.slave_name, tmp)
+                os.replace(tmp, self.link)
 
     def unplug(self) -> None:
         """Make the device vanish: close the pty (and remove the link).
@@ -147,12 +154,18 @@ class PtyPort:
         False
         >>> p.close()
         """
-        if self.link and os.path.lexists(self.link):
-            os.unlink(self.link)
+        if self.link and self._is_our_link(self.slave_name):
+            os.unlink(self.link)   # only the symlink this port made, never a file put there since
         for fd in (self.master, self._slave):
             if fd is not None:
                 os.close(fd)
         self.master = self._slave = None
+
+    def _is_our_link(self, target: str) -> bool:
+        try:
+            return bool(target and self.link) and os.readlink(str(self.link)) == target
+        except OSError:   # gone, or not a symlink
+            return False
 
     def write(self, data: bytes) -> bool:
         """Write without blocking; bytes that do not fit are dropped and counted.
@@ -335,7 +348,11 @@ class VirtualDevices:
         self.on_advance = on_advance
         self.period = period
         self.daq = PtyPort(os.path.join(link_dir, "daq") if link_dir else None)
-        self.hand = PtyPort(os.path.join(link_dir, "hand") if link_dir else None)
+        try:
+            self.hand = PtyPort(os.path.join(link_dir, "hand") if link_dir else None)
+        except BaseException:
+            self.daq.close()      # removes only the daq link it made
+            raise
         self.hand_parser = PacketParser()
         self.frames_written = 0
         self.hand_packets = 0

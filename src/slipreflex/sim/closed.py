@@ -47,6 +47,7 @@ from numba import njit, types
 from numba.core import caching as _caching
 
 from .. import hardware as hw
+from .._numba_cache import CACHE
 from ..errors import ParameterError
 from ..hardware import Finger, HandCommand
 from . import kernel as K
@@ -104,8 +105,8 @@ class _Stamped:
 
 
 _LOCATORS = getattr(getattr(_caching, "CacheImpl", None), "_locator_classes", None)
-_CACHE = isinstance(_LOCATORS, list)   # another numba: no cache rather than a stale one
-if _CACHE and not any(issubclass(c, _Stamped) for c in _LOCATORS):
+_CACHE = CACHE and isinstance(_LOCATORS, list)   # another numba: no cache rather than a stale one
+if CACHE and isinstance(_LOCATORS, list) and not any(issubclass(c, _Stamped) for c in _LOCATORS):
     _LOCATORS[:0] = [type(f"_Stamped{base.__name__}", (_Stamped, base), {})
                      for base in (_caching.UserProvidedCacheLocator, _caching.InTreeCacheLocator,
                                   _caching.UserWideCacheLocator)]
@@ -118,7 +119,7 @@ _COMMON = (_f1, _f1, _f1, _i1, _f1, _u1, _f2, _f2, _f1, _f1, _i1, _i1,  # RS RP 
            _f1, _i1, _f2, _f2, _f2, _f1, _f1, _f2, _f2, _f2, _i1)  # cfg cnt daq ev tac cmd_t cmd_v s_daq s_ev s_tac s_n
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _apply_due(n, S, tgt, spd, q_i, q_v, masks, cnt, speed):
     """SimHand.apply_due(n) on the array queue, then the rig's copy into S."""
     head = cnt[N_QHEAD]
@@ -148,7 +149,7 @@ def _apply_due(n, S, tgt, spd, q_i, q_v, masks, cnt, speed):
         S[K.S_SPD0 + i] = spd[i]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _enqueue(q_i, q_v, cnt, step, kind, group, value):
     """bisect.insort by (due step, sequence number), as SimHand.command queues."""
     count = cnt[N_COUNT]
@@ -168,14 +169,14 @@ def _enqueue(q_i, q_v, cnt, step, kind, group, value):
     cnt[N_QLEN] += 1
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _due(at, n, cfg):
     """SimHand.command's due step for a command sent at ``at``."""
     step = np.int64(np.ceil((at + cfg[CF_LAT]) / cfg[CF_DT] - _ROUND))
     return n if step < n else step
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _command(c, ts, n, cfg, q_i, q_v, cnt, cmd_g, cmd_off, g_level, g_until, cmd_t, cmd_v):
     """The loop's grip sender for command ``c`` at ``ts`` (sim/loop.py's ``_grip_sender``: per finger
     group, a rise becomes CLOSE at ``max(ts, until)`` and STOP ``rise / speed`` later) and its record."""
@@ -195,7 +196,7 @@ def _command(c, ts, n, cfg, q_i, q_v, cnt, cmd_g, cmd_off, g_level, g_until, cmd
     cnt[N_CMD] = k + 1
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _room(C, D, tac_rates, cfg, cnt, q_i, q_v, daq, ev, tac, cmd_t, n_groups, horizon, fs_in):
     """Whether every output can take what advancing to ``horizon`` may produce (else the caller grows them)."""
     dt = cfg[CF_DT]
@@ -221,7 +222,7 @@ def _room(C, D, tac_rates, cfg, cnt, q_i, q_v, daq, ev, tac, cmd_t, n_groups, ho
             and cnt[N_QLEN] + 2.0 * inputs * n_groups <= q_i.shape[0])
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _append(out, filled, rows, n):
     """Copy the first ``n`` rows of ``rows`` after the ``filled`` rows of ``out``; the new fill."""
     for r in range(n):
@@ -230,7 +231,7 @@ def _append(out, filled, rows, n):
     return filled + n
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _advance(horizon, S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, tgt, spd, q_i, q_v,
              masks, cfg, cnt, daq, ev, tac, s_daq, s_ev, s_tac, s_n):
     """Rig._advance_rows(horizon): apply due commands, run the physics to the next due step or the end."""

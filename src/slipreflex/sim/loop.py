@@ -223,10 +223,12 @@ class SimTrace:
         >>> p.read_text().splitlines()[0].split(",")[:3]
         ['t', 'volts', 'accel_x']
         """
+        from ..paths import new_file
+
         path = Path(path)
         frame = self.to_frame()
         cols = list(frame)
-        with path.open("w", newline="") as fh:
+        with new_file(path, "w", replace=True) as fh:
             w = csv.writer(fh)
             w.writerow(cols)
             arrs = [np.asarray(frame[c]) for c in cols]

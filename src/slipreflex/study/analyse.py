@@ -189,7 +189,9 @@ def _cell(v: Any) -> str:
 
 
 def _write_csv(path: Path, rows: Sequence[Mapping[str, Any]], columns: Sequence[str]) -> Path:
-    with path.open("w", newline="") as fh:
+    from ..paths import new_file
+
+    with new_file(path, "w", replace=True) as fh:
         w = csv.writer(fh, lineterminator="\n")
         w.writerow(columns)
         for r in rows:
@@ -262,7 +264,7 @@ def _plot_fractions(fractions: Sequence[Mapping[str, Any]], path: Path) -> Path:
     ax.errorbar(n, f, yerr=[np.maximum(np.nan_to_num(f - lo), 0), np.maximum(np.nan_to_num(hi - f), 0)],
                 fmt="none", ecolor="black",
                 capsize=3, label="95 % Wilson interval")
-    ax.set(xticks=n, xlabel="claim (SPEC 4.1)", ylabel="% of plants", ylim=(0, 100),
+    ax.set(xticks=n, xlabel="claim (docs/method.md section 4.1)", ylabel="% of plants", ylim=(0, 100),
            title="Where the paper's claims hold across plausible plants")
     ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.0, 1.0))
     fig.savefig(path, dpi=100)
