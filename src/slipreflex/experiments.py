@@ -44,15 +44,16 @@ from typing import Any
 import numpy as np
 
 from . import experiment_specs, methods
+from .analysis.onset import OnsetParams
 from .analysis.outputs import ReproduceResult, trial_plot, write_outputs
 from .analysis.paper import BOTTLE_ORDER, bottle_key
 from .analysis.paper import EXPERIMENTS as PAPER_EXPERIMENTS
-from .analysis.trial import RESULT_COLUMNS
+from .analysis.trial import RESULT_COLUMNS, TrialStreams, analyse_trial
 from .baselines.calibration import REST_K
 from .baselines.swt import SWT_WINDOW
 from .errors import ParameterError
 from .grid import Cell, grid_result, run_cells
-from .hardware import CONTACT_FORCE_N
+from .hardware import CONTACT_FORCE_N, SLIP_FINGER
 from .interrupts import Interrupted
 from .paper_experiments import LANDING_S
 from .progress import Progress
@@ -175,7 +176,6 @@ class ReproduceConfig:
         set_field(self, "methods", choices("methods", self.methods, methods.names(), any_case=True))
         for name in ("rest_s", "after_s", "calibration_s", "rest_k", "grasp_force_n", "swt_persist"):
             set_field(self, name, within(name, getattr(self, name)))
-        from .analysis.onset import OnsetParams
 
         need = OnsetParams().baseline_s + 0.05
         if self.rest_s < need:
@@ -192,7 +192,7 @@ class ReproduceConfig:
         >>> ReproduceConfig(drop_mass_kg=0.02).drop.mass_kg
         0.02
         """
-        from .sim import PAPER_DROP
+        from .sim import PAPER_DROP  # deferred: heavy (numba kernels)
 
         return _override(self.drop_object or PAPER_DROP, mass_kg=self.drop_mass_kg, height_m=self.drop_height_m)
 
@@ -205,7 +205,7 @@ class ReproduceConfig:
         >>> round(ReproduceConfig(pour_volume_ml=100).pour.duration_s, 1)
         6.0
         """
-        from .sim import PAPER_POUR
+        from .sim import PAPER_POUR  # deferred: heavy (numba kernels)
 
         return _override(self.pour_object or PAPER_POUR, rate_l_min=self.pour_rate_l_min, volume_ml=self.pour_volume_ml)
 
@@ -217,7 +217,7 @@ class ReproduceConfig:
         >>> ReproduceConfig().bottle("TX").name
         'TX'
         """
-        from .sim import BOTTLES
+        from .sim import BOTTLES  # deferred: heavy (numba kernels)
 
         return (self.plant.bottles if self.plant is not None else BOTTLES)[name]
 
@@ -379,10 +379,8 @@ def run_trial(cell: Cell, config: ReproduceConfig, thresholds: dict[str, float],
     >>> rows[0].n_events, rows[0].success
     (1, True)
     """
-    from .analysis.trial import TrialStreams, analyse_trial
-    from .hardware import SLIP_FINGER
-    from .sim import run_closed_loop
-    from .sim.variations import VariationSpread, grasped_rig
+    from .sim import run_closed_loop  # deferred: heavy (numba kernels)
+    from .sim.variations import VariationSpread, grasped_rig  # deferred: heavy (numba kernels)
 
     plant = {} if config.plant is None else {"rig_kwargs": config.plant.rig_kwargs(),
                                              "bottles": dict(config.plant.bottles)}
@@ -457,9 +455,8 @@ def run_reproduce(config: ReproduceConfig | None = None, *, jobs: int | None = N
     if jobs < 1:
         raise ParameterError(f"jobs must be >= 1, got {jobs}")
     t0 = time.perf_counter()
-    import scipy.signal  # noqa: F401  (once, here: forked workers inherit it; each took ~1 s to import it)
 
-    from .sim.calibration import check_grasp
+    from .sim.calibration import check_grasp  # deferred: heavy (numba kernels)
     for b in config.bottles:                    # a grasp that cannot hold a bottle fails here, at once
         check_grasp(config.bottle(b), config.grasp_force_n)
     thresholds = calibrate(config) if set(config.methods) & set(methods.calibrated()) else {}

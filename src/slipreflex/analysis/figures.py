@@ -30,7 +30,7 @@ import numpy as np
 
 from .. import experiment_specs
 from .. import methods as _registry
-from .paper import BOTTLE_ORDER, paper_value
+from .paper import BOTTLE_ORDER, PAPER_SUCCESS, paper_value
 
 __all__ = ["TrialPlot", "plot_trial", "bar_chart", "success_chart"]
 
@@ -41,10 +41,10 @@ def _color(m: str) -> str:
 
 
 def _plt():
-    import matplotlib
+    import matplotlib  # deferred: heavy (matplotlib)
 
     matplotlib.use("Agg", force=True)
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # deferred: heavy (matplotlib)
 
     return plt
 
@@ -223,8 +223,8 @@ def bar_chart(summary: Sequence[dict[str, Any]], experiment: str, metric: str,
     """
     plt = _plt()
     by, bottles, methods = _present(summary, experiment)
-    from matplotlib.lines import Line2D
-    from matplotlib.patches import Patch
+    from matplotlib.lines import Line2D  # deferred: heavy (matplotlib)
+    from matplotlib.patches import Patch  # deferred: heavy (matplotlib)
 
     fig, ax = plt.subplots(figsize=(7.8, 3.4))
     width = 0.8 / max(1, len(methods))
@@ -264,7 +264,6 @@ def bar_chart(summary: Sequence[dict[str, Any]], experiment: str, metric: str,
 
 def _paper_rate(experiment: str, bottle: str, method: str) -> tuple[float, str] | None:
     """The paper's stated success (percent, marker): "D" a value, "v" an upper bound."""
-    from .paper import PAPER_SUCCESS
 
     text = PAPER_SUCCESS.get((experiment, bottle, method)) or PAPER_SUCCESS.get((experiment, "all", method))
     if not text:
@@ -287,8 +286,8 @@ def success_chart(summary: Sequence[dict[str, Any]], path: str | Path) -> Path:
     True
     """
     plt = _plt()
-    from matplotlib.lines import Line2D
-    from matplotlib.patches import Patch
+    from matplotlib.lines import Line2D  # deferred: heavy (matplotlib)
+    from matplotlib.patches import Patch  # deferred: heavy (matplotlib)
 
     exps = [e for e in experiment_specs.names() if any(s["experiment"] == e for s in summary)]
     exps += sorted({s["experiment"] for s in summary} - set(exps))

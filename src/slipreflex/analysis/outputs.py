@@ -21,11 +21,17 @@ from __future__ import annotations
 import dataclasses
 import functools
 from collections.abc import Sequence
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from .. import experiment_specs
+from ..interrupts import worker_signals
+from . import figures as F
+from .claims import judge_run
+from .figures import TrialPlot
+from .onset import OnsetParams, accel_envelope
 from .paper import BOTTLE_ORDER
 from .report import (
     SUCCESS_CAPTION,
@@ -34,6 +40,7 @@ from .report import (
     discussion_text,
     report_markdown,
     setup_lines,
+    terminal_table,
     trial_caption,
     write_csv,
     zoom_caption,
@@ -145,7 +152,6 @@ def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str 
                "and no figures were drawn nor claims judged."] if partial else []
     paper, others, notice = paper_part(result)
     notices += [notice] if notice else []
-    from .claims import judge_run
 
     md = report_markdown(summary=paper.summary, rows=paper.rows, figures=figs,
                          setup=setup_lines(result, command), notices=notices,
@@ -153,7 +159,6 @@ def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str 
                          claims=() if partial or not paper.rows else judge_run(
                              paper.rows, seed=result.config.seed, plant=result.config.plant))
     if others:
-        from .report import terminal_table
 
         md += ("\n## Your objects (no paper values)\n\n```\n" + terminal_table(others) + "\n```\n")
     paths["report"] = out / "report.md"
@@ -174,7 +179,7 @@ def not_the_papers(config: Any) -> list[str]:
     >>> not_the_papers(ReproduceConfig(drop_mass_kg=0.02))
     ['drop (20 g from 2 cm)']
     """
-    from ..sim import BOTTLES
+    from ..sim import BOTTLES  # deferred: heavy (numba kernels)
 
     out = [f"bottle {b}" for b in config.bottles if b not in BOTTLES or config.bottle(b) != BOTTLES[b]]
     for e in config.experiments:
@@ -217,7 +222,6 @@ def paper_part(result: ReproduceResult) -> tuple[ReproduceResult, list[dict[str,
 
 def _figure_tasks(result: ReproduceResult, fig_dir: Path) -> list[tuple[str, str, Any, tuple]]:
     """(file name, caption, drawing function, its arguments before the path) of every figure of a run."""
-    from . import figures as F
 
     tasks: list[tuple[str, str, Any, tuple]] = []
     order = experiment_specs.names()
@@ -253,7 +257,6 @@ def _write_figures(result: ReproduceResult, out: Path, paths: dict[str, Path],
     The figures are independent, so ``jobs`` > 1 draws them in that many processes (a
     figure costs a few tenths of a second, mostly matplotlib's text layout).
     """
-    from . import figures as F
 
     fig_dir = out / "figures"
     tasks = _figure_tasks(result, fig_dir)
@@ -262,9 +265,7 @@ def _write_figures(result: ReproduceResult, out: Path, paths: dict[str, Path],
     if jobs == 1:
         drawn = [_draw(w) for w in work]
     else:
-        from concurrent.futures import ProcessPoolExecutor
 
-        from ..interrupts import worker_signals
 
         F._plt()                       # imported once here, so the forked workers start warm
         with ProcessPoolExecutor(max_workers=jobs, initializer=worker_signals) as ex:
@@ -301,8 +302,6 @@ def trial_plot(cell: Any, spec: Any, tr: Any, reflex: Any, rows: Sequence[Any], 
     >>> plot.event_label, plot.sensor.shape == plot.sensor_t.shape
     ('NMSD detections', True)
     """
-    from .figures import TrialPlot
-    from .onset import OnsetParams, accel_envelope
 
     axis = rows[0].axis
     env = accel_envelope(tr.t, tr.accel[:, axis], OnsetParams())

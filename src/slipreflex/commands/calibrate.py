@@ -21,6 +21,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from .. import hardware as hw
+from ..errors import ParameterError
+
 NAME = "calibrate"
 HELP = "open-loop calibration: first pour slip and friction per bottle (paper: first slip near 200 ml)"
 ORDER = 45
@@ -38,11 +41,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Calibrate or check each bottle and print one line per bottle."""
-    from .. import hardware as hw
-    from ..errors import ParameterError
-    from ..sim import BOTTLES, HandParams, load_objects
-    from ..sim.calibration import PAPER_FIRST_SLIP_ML, calibrate_bottle, first_slip_ml
-    from ..sim.contacts import grip_gain, static_capacity
+    from ..sim import BOTTLES, HandParams, load_objects  # deferred: heavy (numba kernels)
+    from ..sim.calibration import (  # deferred: heavy (numba kernels)
+        PAPER_FIRST_SLIP_ML,
+        calibrate_bottle,
+        first_slip_ml,
+    )
+    from ..sim.contacts import grip_gain, static_capacity  # deferred: heavy (numba kernels)
 
     own = load_objects(args.objects).bottles if args.objects is not None else {}
     known = {**BOTTLES, **own}
@@ -57,7 +62,7 @@ def run(args: argparse.Namespace) -> int:
     print(f"open-loop calibration: {hw.CONTACT_FORCE_N} N grasp, 500 ml at 1 L/min, no reflex "
           f"(paper: first slip near {PAPER_FIRST_SLIP_ML:g} ml)")
     print("bottle  first slip   pad mu_s/mu_k   cuff mu_s/mu_k  law          N/contact  capacity  gain")
-    from ..sim import Rig
+    from ..sim import Rig  # deferred: heavy (numba kernels)
 
     for n in names:
         bottle = known[n]

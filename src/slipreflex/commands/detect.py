@@ -15,12 +15,15 @@ from pathlib import Path
 
 import numpy as np
 
+from ..board import BoardParams, read_adc_csv, run_board_chain, write_board_outputs
 from ..chain import ReflexParams, run_chain
 from ..chain.params import PRESETS
 from ..csvfiles import Recording, irregular_steps, read_recording, write_columns
 from ..errors import DataError, ParameterError
+from ..hardware import FINGER_MAX
 from ..methods import DATH, FIXED
 from ..paths import output_dir
+from ..validation import number, within
 
 NAME = "detect"
 HELP = "run the slip-detection chain over a CSV recording of slip-sensor samples"
@@ -148,7 +151,6 @@ def _saturation(res, t: np.ndarray, params: ReflexParams) -> str | None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the chain and write the two CSVs; print a summary."""
-    from ..validation import within
 
     if args.fs is not None:
         within("fs_hz", args.fs, "--fs")
@@ -191,9 +193,6 @@ def _prefix(args: argparse.Namespace) -> Path:
 
 def _run_board(args: argparse.Namespace) -> int:
     """``detect --board``: the Python twin of the firmware over a CSV of ADC counts."""
-    from ..board import BoardParams, read_adc_csv, run_board_chain, write_board_outputs
-    from ..hardware import FINGER_MAX
-    from ..validation import number
 
     p0 = number("--p0", 0.0 if args.p0 is None else args.p0, lo=0, hi=FINGER_MAX)
     method = args.method or DATH

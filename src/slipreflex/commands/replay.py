@@ -12,7 +12,11 @@ commands: recorded 1249, replayed 1249 - identical
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
+
+from ..errors import DataError
+from ..recording import read_recording, replay
 
 NAME = "replay"
 HELP = "re-run the chain over a recording (MCAP) and compare with the recorded events and commands"
@@ -26,7 +30,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Replay; exit 0 if identical, 1 if not, 2 for a partial recording without --allow-partial."""
-    from ..recording import replay
 
     res = replay(read_checked(args))
     print(res.summary())
@@ -42,7 +45,6 @@ def add_recording_arguments(p: argparse.ArgumentParser, partial_help: str) -> No
 
 def read_checked(args: argparse.Namespace):
     """The recording ``args.recording``, partial ones refused unless ``args.allow_partial``."""
-    from ..recording import read_recording
 
     rec = read_recording(args.recording)
     check_partial(rec, args.allow_partial)
@@ -51,9 +53,7 @@ def read_checked(args: argparse.Namespace):
 
 def check_partial(rec, allow: bool) -> None:
     """A recording with gaps is an error naming them, or with ``allow`` a warning on stderr."""
-    import sys
 
-    from ..errors import DataError
 
     gaps = rec.gaps()
     if gaps and not allow:

@@ -13,10 +13,30 @@ Examples
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import shlex
 import sys
 from pathlib import Path
+
+from .. import experiment_specs, methods
+from ..analysis.claims import claims_terminal, judge_run
+from ..analysis.outputs import paper_part
+from ..analysis.report import terminal_table
+from ..errors import ParameterError
+from ..experiments import (
+    BOTTLE_NAMES,
+    EXPERIMENTS,
+    METHODS,
+    ReproduceConfig,
+    estimate_wall_s,
+    run_reproduce,
+    write_outputs,
+)
+from ..interrupts import Interrupted, signals_ignored, sigterm_interrupts
+from ..paths import OutputSet
+from ..progress import format_duration
+from ..validation import choices, within
 
 NAME = "reproduce"
 HELP = "run the paper's drop and pour experiments on the simulated rig and write a report"
@@ -26,8 +46,6 @@ ORDER = 30
 def _csv_list(kind: str, known, *, any_case: bool = False):
     """An argparse type: a comma-separated list of ``known()`` names (checked when parsed)."""
     def parse(text: str) -> tuple[str, ...]:
-        from ..errors import ParameterError
-        from ..validation import choices
 
         try:
             return choices(kind, [x.strip() for x in text.split(",") if x.strip()], known(),
@@ -48,8 +66,7 @@ def own_objects(args: argparse.Namespace) -> dict:
     Every name is checked here, before any work: an unknown one is one line naming the
     option, the file and the names it has.
     """
-    from ..errors import ParameterError
-    from ..sim import load_objects
+    from ..sim import load_objects  # deferred: heavy (numba kernels)
 
     objs = load_objects(args.objects) if args.objects is not None else None
     out: dict = {}
@@ -63,8 +80,8 @@ def own_objects(args: argparse.Namespace) -> dict:
             raise ParameterError(f"{option} {name}: no such {kind[:-1]} ({where})")
         out[f"{option[2:]}_object"] = table[name]
     if objs is not None and objs.bottles:
-        from ..sim import BOTTLES
-        from ..sim.uncertain import Plant
+        from ..sim import BOTTLES  # deferred: heavy (numba kernels)
+        from ..sim.uncertain import Plant  # deferred: heavy (numba kernels)
 
         out["plant"] = Plant(bottles={**BOTTLES, **objs.bottles})
     return out
@@ -72,10 +89,7 @@ def own_objects(args: argparse.Namespace) -> dict:
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``slipreflex reproduce``: every count and load parameter."""
-    import dataclasses
 
-    from .. import experiment_specs, methods
-    from ..experiments import BOTTLE_NAMES, EXPERIMENTS, METHODS, ReproduceConfig
 
     d = {f.name: f.default for f in dataclasses.fields(ReproduceConfig)}
     p.add_argument("--out", type=Path, default=Path("out/reproduce"),
@@ -138,10 +152,6 @@ def run(args: argparse.Namespace) -> int:
     Ctrl-C or SIGTERM stops the run within about two seconds and writes what finished,
     marked partial; exit status 130.
     """
-    from ..experiments import ReproduceConfig, estimate_wall_s, run_reproduce
-    from ..interrupts import Interrupted, signals_ignored, sigterm_interrupts
-    from ..paths import OutputSet
-    from ..progress import format_duration
 
     check_limits(args, _LIMITED)
     config = ReproduceConfig(
@@ -187,7 +197,6 @@ _LIMITED = (("--trials", "trials", "trials"), ("--rest", "rest", "rest_s"), ("--
 
 def check_limits(args: argparse.Namespace, limited) -> None:
     """Every bounded option within its plausible range (before any work), named by its option."""
-    from ..validation import within
 
     for option, dest, limit in limited:
         value = getattr(args, dest, None)
@@ -205,10 +214,6 @@ def _write(result, outputs, command: str | None) -> dict | None:
     Ctrl-C while writing leaves the previous outputs untouched: one "interrupted" line,
     and None (the caller exits 130).
     """
-    from ..analysis.claims import claims_terminal, judge_run
-    from ..analysis.outputs import paper_part
-    from ..analysis.report import terminal_table
-    from ..experiments import write_outputs
 
     staged = outputs.stage()
     try:

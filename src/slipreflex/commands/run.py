@@ -18,10 +18,26 @@ from pathlib import Path
 from typing import Any
 
 from .. import __version__
+from ..board import BoardParams, BoardSource, CheckedBoardReflex
+from ..chain import ReflexParams, SlipReflex
+from ..devices.daq import SerialDaq
+from ..devices.ilimb import ILimb
 from ..errors import ParameterError
 from ..hardware import DAQ_FS, FINGER_MAX, FINGER_MIN, SLIP_FINGER, TRIPOD, Finger
 from ..methods import DATH, FIXED
-from ..runtime import WATCHDOG_MAX_S, WATCHDOG_MIN_S, WATCHDOG_S
+from ..paths import unique_name
+from ..recording import METADATA_NAME, PART_SUFFIX, PLANNED_SAMPLES, Recorder, RecordingError
+from ..runtime import (
+    WATCHDOG_MAX_S,
+    WATCHDOG_MIN_S,
+    WATCHDOG_S,
+    drop_capabilities,
+    print_fault,
+    realtime_priority,
+    run_loop,
+    start_positions,
+)
+from ..validation import within
 
 NAME = "run"
 HELP = "run the slip reflex in real time: read the DAQ port, drive the i-Limb port, record to MCAP"
@@ -30,7 +46,6 @@ ORDER = 30
 
 def add_chain_arguments(p: argparse.ArgumentParser) -> None:
     """Chain options shared by ``run`` (defaults: the paper's)."""
-    from ..chain import ReflexParams
 
     d = ReflexParams()
     g = p.add_argument_group("reflex chain")
@@ -67,7 +82,6 @@ def chain_params(args: argparse.Namespace, p0: float):
     ``p0`` is the MPI's bookkeeping only (the hand gets the command's rises as closing time,
     :mod:`slipreflex.grip`), so the command's ceiling is ``p0`` plus one whole finger travel:
     whatever ``p0`` says, the reflex can add the same grip (the hand's end stop ends it)."""
-    from ..chain import ReflexParams
 
     hi = p0 + (FINGER_MAX - FINGER_MIN)
     if getattr(args, "preset", None):
@@ -98,7 +112,6 @@ def parse_p0(text: str) -> dict[Finger, float]:
     ...
     slipreflex.errors.ParameterError: --p0 'thumb=148,thumb=14,index=147,middle=147': finger thumb is given twice
     """
-    from ..runtime import start_positions
 
     items = [x.strip() for x in str(text).split(",") if x.strip()]
     if not items:
@@ -124,7 +137,6 @@ def parse_p0(text: str) -> dict[Finger, float]:
 
 def check_arguments(args: argparse.Namespace) -> dict[Finger, float]:
     """Check every option of ``run`` (before any port is opened); return the per-finger p0."""
-    from ..validation import within
 
     if args.duration is not None:
         within("duration_s", args.duration, "--duration")
@@ -141,7 +153,6 @@ def check_arguments(args: argparse.Namespace) -> dict[Finger, float]:
 
 def _check_board_arguments(args: argparse.Namespace) -> None:
     """``--board-reflex`` runs the chain the board was built with: only --method may change."""
-    from ..chain import ReflexParams
 
     if args.preset:
         raise ParameterError(f"--preset {args.preset} cannot be used with --board-reflex: the board "
@@ -191,8 +202,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def _recorder(path: Path | None, meta: dict):
     """A new recording: ``path`` (never an existing file), or a free ``run-YYYYmmdd-HHMMSS[-N].mcap`` here."""
-    from ..paths import unique_name
-    from ..recording import METADATA_NAME, PART_SUFFIX, Recorder, RecordingError
 
     if path is not None:
         return Recorder(path, metadata={METADATA_NAME: meta})
@@ -209,11 +218,6 @@ def _recorder(path: Path | None, meta: dict):
 
 def run(args: argparse.Namespace) -> int:
     """Open the devices and the recording, run the loop, print the summary."""
-    from ..chain import SlipReflex
-    from ..devices.daq import SerialDaq
-    from ..devices.ilimb import ILimb
-    from ..recording import PLANNED_SAMPLES
-    from ..runtime import drop_capabilities, print_fault, realtime_priority, run_loop
 
     p0 = check_arguments(args)  # everything, before a port opens or a byte is sent
     params = chain_params(args, p0[SLIP_FINGER])
@@ -222,7 +226,6 @@ def run(args: argparse.Namespace) -> int:
         reflex.name = args.preset
     board_meta: dict[str, str] = {}
     if args.board_reflex:
-        from ..board import BoardParams, CheckedBoardReflex
 
         bparams = BoardParams.firmware(dath=args.method == DATH, p0=args.board_p0)
         reflex = CheckedBoardReflex(bparams)
@@ -262,7 +265,6 @@ def run(args: argparse.Namespace) -> int:
                   flush=True)
             source: Any = daq
             if args.board_reflex:
-                from ..board import BoardSource
 
                 source = BoardSource(daq, reflex)
             # run_loop starts with STOP: the fingers stay where the grasp left them

@@ -18,7 +18,11 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import ParameterError
+from ..hardware import DAQ_FS
 from ..methods import DATH, FIXED
+from ..paths import OutputSet
+from ..validation import number, within
 
 NAME = "scan"
 HELP = "simulate the slip sensor's characterization scan (paper Fig. 4-9): CSV, figure, numbers"
@@ -43,10 +47,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the scan, write the files, print the numbers."""
-    from ..hardware import DAQ_FS
-    from ..paths import OutputSet
-    from ..sim import scan
-    from ..validation import number, within
+    from ..sim import scan  # deferred: heavy (numba kernels)
 
     within("scan_speed_mm_s", args.speed, "--speed")
     within("scan_distance_mm", args.distance, "--distance")
@@ -99,9 +100,8 @@ OUTPUT_NAMES: tuple[str, ...] = ("scan.csv", "scan.png")
 
 def _layout(args: argparse.Namespace) -> list:
     """``--layout`` as (Surface, length_m) pairs; names from the built-ins or ``--objects``."""
-    from ..errors import ParameterError
-    from ..sim import load_objects
-    from ..sim.objects import resolve_surface
+    from ..sim import load_objects  # deferred: heavy (numba kernels)
+    from ..sim.objects import resolve_surface  # deferred: heavy (numba kernels)
 
     objs = load_objects(args.objects) if args.objects is not None else None
     extra: dict[str, Any] = dict(objs.surfaces) if objs else {}
@@ -130,10 +130,10 @@ def _shown(summary) -> list[str]:
 
 
 def _figure(result, summary, path: Path, threshold: float) -> None:
-    import matplotlib
+    import matplotlib  # deferred: heavy (matplotlib)
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # deferred: heavy (matplotlib)
 
     pos = result.position * 1000.0
     x = result.analysis["filtered"]

@@ -25,6 +25,14 @@ import threading
 import time
 from pathlib import Path
 
+from ..devices.simrig import SimRig
+from ..devices.virtual import VirtualDevices, parse_schedule
+from ..errors import ParameterError
+from ..paths import output_dir
+from ..runtime import realtime_priority
+from ..validation import within
+from .reproduce import own_objects
+
 NAME = "virtual-rig"
 HELP = "simulated rig behind two pseudo-terminals (DAQ and i-Limb) for 'slipreflex run'"
 ORDER = 31
@@ -53,10 +61,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def _objects(args: argparse.Namespace):
     """The bottle and the drop / pour to use, by name, from the paper's or ``--objects``."""
-    from ..errors import ParameterError
-    from ..sim import BOTTLES, load_objects
-    from ..sim.calibration import check_grasp
-    from .reproduce import own_objects
+    from ..sim import BOTTLES, load_objects  # deferred: heavy (numba kernels)
+    from ..sim.calibration import check_grasp  # deferred: heavy (numba kernels)
 
     objs = load_objects(args.objects) if args.objects is not None else None
     table = {**BOTTLES, **(objs.bottles if objs is not None else {})}
@@ -72,9 +78,6 @@ def _objects(args: argparse.Namespace):
 
 def _check_arguments(args: argparse.Namespace) -> None:
     """Bounded --duration and --grasp-force; a --link-dir whose daq/hand names are free (before the grasp)."""
-    from ..errors import ParameterError
-    from ..paths import output_dir
-    from ..validation import within
 
     if args.duration is not None:
         within("duration_s", args.duration, "--duration")
@@ -90,8 +93,6 @@ def _check_arguments(args: argparse.Namespace) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Grasp, open the ports, run in real time, print a summary at exit."""
-    from ..devices.simrig import SimRig
-    from ..devices.virtual import VirtualDevices, parse_schedule
 
     schedule = parse_schedule(args.schedule)
     _check_arguments(args)
@@ -120,7 +121,6 @@ def run(args: argparse.Namespace) -> int:
               flush=True)
         print("keys: d+Enter drop, p+Enter pour, q+Enter quit; SIGUSR1 drop, SIGUSR2 pour", flush=True)
         if args.realtime:
-            from ..runtime import realtime_priority
 
             print(f"rig: {realtime_priority()}", flush=True)  # the rig's thread inherits it
         dev.start()

@@ -46,7 +46,7 @@ class SimRig:
     """
 
     def __init__(self, bottle: Any = "TR", seed: int = 0, *, drop: Any = None, pour: Any = None) -> None:
-        from ..sim import PAPER_DROP, PAPER_POUR, Rig
+        from ..sim import PAPER_DROP, PAPER_POUR, Rig  # deferred: heavy (numba kernels)
 
         self.rig = Rig(bottle, seed=seed)
         self.drop = drop if drop is not None else PAPER_DROP
