@@ -29,7 +29,6 @@ from typing import Any
 from .. import experiment_specs
 from ..interrupts import worker_signals
 from . import figures as F
-from .claims import judge_run
 from .figures import TrialPlot
 from .onset import OnsetParams, accel_envelope
 from .paper import BOTTLE_ORDER
@@ -152,6 +151,7 @@ def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str 
                "and no figures were drawn nor claims judged."] if partial else []
     paper, others, notice = paper_part(result)
     notices += [notice] if notice else []
+    from .claims import judge_run  # deferred: late-bound (tests patch slipreflex.analysis.claims.judge_run)
 
     md = report_markdown(summary=paper.summary, rows=paper.rows, figures=figs,
                          setup=setup_lines(result, command), notices=notices,

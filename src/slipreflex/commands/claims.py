@@ -19,7 +19,6 @@ import argparse
 import csv
 from pathlib import Path
 
-from ..analysis.claims import claims_terminal, judge_run
 from ..analysis.trial import TrialRow
 from ..errors import ParameterError
 from ..experiments import ReproduceConfig
@@ -69,6 +68,10 @@ def read_rows(path: Path) -> list:
 
 def run(args: argparse.Namespace) -> int:
     """Print the claims table of ``args.results``."""
+    from ..analysis.claims import (  # deferred: late-bound (tests patch slipreflex.analysis.claims.judge_run)
+        claims_terminal,
+        judge_run,
+    )
 
     rows = read_rows(args.results)
     print(f"{len(rows)} rows of {args.results}")

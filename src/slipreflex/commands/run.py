@@ -20,23 +20,13 @@ from typing import Any
 from .. import __version__
 from ..board import BoardParams, BoardSource, CheckedBoardReflex
 from ..chain import ReflexParams, SlipReflex
-from ..devices.daq import SerialDaq
 from ..devices.ilimb import ILimb
 from ..errors import ParameterError
 from ..hardware import DAQ_FS, FINGER_MAX, FINGER_MIN, SLIP_FINGER, TRIPOD, Finger
 from ..methods import DATH, FIXED
 from ..paths import unique_name
 from ..recording import METADATA_NAME, PART_SUFFIX, PLANNED_SAMPLES, Recorder, RecordingError
-from ..runtime import (
-    WATCHDOG_MAX_S,
-    WATCHDOG_MIN_S,
-    WATCHDOG_S,
-    drop_capabilities,
-    print_fault,
-    realtime_priority,
-    run_loop,
-    start_positions,
-)
+from ..runtime import WATCHDOG_MAX_S, WATCHDOG_MIN_S, WATCHDOG_S, start_positions
 from ..validation import within
 
 NAME = "run"
@@ -218,6 +208,13 @@ def _recorder(path: Path | None, meta: dict):
 
 def run(args: argparse.Namespace) -> int:
     """Open the devices and the recording, run the loop, print the summary."""
+    from ..devices.daq import SerialDaq  # deferred: late-bound (tests patch slipreflex.devices.daq.SerialDaq)
+    from ..runtime import (  # deferred: late-bound (tests patch slipreflex.runtime.run_loop)
+        drop_capabilities,
+        print_fault,
+        realtime_priority,
+        run_loop,
+    )
 
     p0 = check_arguments(args)  # everything, before a port opens or a byte is sent
     params = chain_params(args, p0[SLIP_FINGER])

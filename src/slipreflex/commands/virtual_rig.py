@@ -25,7 +25,6 @@ import threading
 import time
 from pathlib import Path
 
-from ..devices.simrig import SimRig
 from ..devices.virtual import VirtualDevices, parse_schedule
 from ..errors import ParameterError
 from ..paths import output_dir
@@ -93,6 +92,7 @@ def _check_arguments(args: argparse.Namespace) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Grasp, open the ports, run in real time, print a summary at exit."""
+    from ..devices.simrig import SimRig  # deferred: late-bound (tests patch slipreflex.devices.simrig.SimRig)
 
     schedule = parse_schedule(args.schedule)
     _check_arguments(args)

@@ -51,9 +51,8 @@ from types import MappingProxyType
 from typing import Any
 
 from .. import __version__, methods
-from ..analysis.claims import judge, judge_run
 from ..errors import ParameterError
-from ..experiments import BOTTLE_NAMES, DEFAULT_SEED, EXPERIMENTS, ReproduceConfig, run_trial
+from ..experiments import BOTTLE_NAMES, DEFAULT_SEED, EXPERIMENTS, ReproduceConfig
 from ..interrupts import signals_ignored
 from ..paths import new_file
 from ..progress import Progress
@@ -291,6 +290,11 @@ def run_plant(index: int, values: Mapping[str, float], config: StudyConfig) -> P
     >>> out.error, len(out.rows), out.claims[2][1]
     ('', 1, 'not testable here')
     """
+    from ..analysis.claims import (  # deferred: late-bound (tests patch slipreflex.analysis.claims.judge_run)
+        judge,
+        judge_run,
+    )
+    from ..experiments import run_trial  # deferred: late-bound (tests patch slipreflex.experiments.run_trial)
     from ..sim.uncertain import plant_from_values  # deferred: heavy (numba kernels)
 
     values = {k: float(v) for k, v in values.items()}
