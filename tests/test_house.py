@@ -5,6 +5,7 @@ from __future__ import annotations
 import enum
 import importlib
 import inspect
+import re
 import sys
 from pathlib import Path
 
@@ -131,3 +132,12 @@ def test_a_realtime_test_skips_only_on_an_overloaded_machine_and_says_why(monkey
     assert realtime_overload() is None
     monkeypatch.setattr(os, "getloadavg", lambda: (7.3, 0.0, 0.0))
     assert "load average 7.3 on 2 cores" in realtime_overload()
+
+
+def test_the_readme_is_a_five_minute_read():
+    """README.md stays under 10 KB: long explanations belong in docs/, which it links."""
+    readme = Path(__file__).resolve().parent.parent / "README.md"
+    size = len(readme.read_bytes())
+    assert size <= 10 * 1024, f"README.md is {size} bytes; move the long parts to docs/"
+    for link in re.findall(r"\]\((docs/[^)#]+)", readme.read_text(encoding="utf-8")):
+        assert (readme.parent / link).is_file(), f"README links to {link}, which does not exist"

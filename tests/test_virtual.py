@@ -208,7 +208,8 @@ def test_virtual_rig_command_keys_signals_schedule_and_run(tmp_path, capsys, mon
     # the textured bottle: its drop slip fires spikes under the rate-state contacts; the schedule's
     # pour at 0.2 s only starts the water (its first slip comes seconds later)
     proc = subprocess.Popen([sys.executable, "-m", "slipreflex", "virtual-rig", "--link-dir", str(tmp_path),
-                             "--bottle", "TX", "--schedule", "pour@0.2", "--duration", "60"],
+                             "--bottle", "TX", "--schedule", "pour@0.2", "--schedule-from", "start",
+                             "--duration", "60"],
                             stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
     killer = threading.Timer(90, proc.kill)  # bounds the test if the child hangs
     killer.start()

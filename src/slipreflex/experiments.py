@@ -44,25 +44,25 @@ from typing import Any
 import numpy as np
 
 from . import experiment_specs, methods
-from .analysis.onset import OnsetParams
 from .analysis.outputs import ReproduceResult, trial_plot, write_outputs
 from .analysis.paper import BOTTLE_ORDER, bottle_key
 from .analysis.paper import EXPERIMENTS as PAPER_EXPERIMENTS
-from .analysis.trial import RESULT_COLUMNS, TrialStreams, analyse_trial
+from .analysis.trial import RESULT_COLUMNS
 from .baselines.calibration import REST_K
 from .baselines.swt import SWT_WINDOW
 from .errors import ParameterError
 from .grid import Cell, grid_result, run_cells
-from .hardware import CONTACT_FORCE_N, SLIP_FINGER
+from .hardware import CONTACT_FORCE_N
 from .interrupts import Interrupted
 from .paper_experiments import LANDING_S
 from .progress import Progress
 from .thresholds import calibrate, calibration_seed
 from .validation import choices, flag, integer, set_field, within
+from .warmup import STARTUP_S, TRIAL_SIM_SPEED, estimate_wall_s  # noqa: F401  (public here too)
 
 __all__ = [
     "METHODS", "EXPERIMENTS", "BOTTLE_NAMES", "DEFAULT_SEED", "ReproduceConfig", "Cell",
-    "trial_seed", "calibration_seed", "estimate_wall_s", "TRIAL_SIM_SPEED", "closing_speed", "calibrate",
+    "trial_seed", "calibration_seed", "estimate_wall_s", "TRIAL_SIM_SPEED", "grasp_seeds", "closing_speed", "calibrate",
     "run_trial",
     "ReproduceResult", "run_reproduce", "write_outputs", "method_context",
     "RESULTS_CSV_COLUMNS", "LANDING_S",
@@ -176,6 +176,7 @@ class ReproduceConfig:
         set_field(self, "methods", choices("methods", self.methods, methods.names(), any_case=True))
         for name in ("rest_s", "after_s", "calibration_s", "rest_k", "grasp_force_n", "swt_persist"):
             set_field(self, name, within(name, getattr(self, name)))
+        from .analysis.onset import OnsetParams
 
         need = OnsetParams().baseline_s + 0.05
         if self.rest_s < need:
@@ -192,7 +193,7 @@ class ReproduceConfig:
         >>> ReproduceConfig(drop_mass_kg=0.02).drop.mass_kg
         0.02
         """
-        from .sim import PAPER_DROP  # deferred: heavy (numba kernels)
+        from .sim import PAPER_DROP
 
         return _override(self.drop_object or PAPER_DROP, mass_kg=self.drop_mass_kg, height_m=self.drop_height_m)
 
@@ -205,7 +206,7 @@ class ReproduceConfig:
         >>> round(ReproduceConfig(pour_volume_ml=100).pour.duration_s, 1)
         6.0
         """
-        from .sim import PAPER_POUR  # deferred: heavy (numba kernels)
+        from .sim import PAPER_POUR
 
         return _override(self.pour_object or PAPER_POUR, rate_l_min=self.pour_rate_l_min, volume_ml=self.pour_volume_ml)
 
@@ -217,7 +218,7 @@ class ReproduceConfig:
         >>> ReproduceConfig().bottle("TX").name
         'TX'
         """
-        from .sim import BOTTLES  # deferred: heavy (numba kernels)
+        from .sim import BOTTLES
 
         return (self.plant.bottles if self.plant is not None else BOTTLES)[name]
 
@@ -278,6 +279,18 @@ def trial_seed(master: int, experiment: str, bottle: str, trial: int, method: st
     return _seed63(child)
 
 
+def grasp_seeds(config: ReproduceConfig, bottle: str) -> list[int]:
+    """The trial seeds of ``bottle`` in a run, trial by trial (what its grasp check simulates).
+
+    Examples
+    --------
+    >>> len(grasp_seeds(ReproduceConfig(trials=3), "TR"))
+    6
+    """
+    return list(dict.fromkeys(trial_seed(config.seed, e, bottle, k) for k in range(config.trials)
+                              for e in config.experiments))
+
+
 @functools.lru_cache(maxsize=64)
 def _cell_sequence(master: int, e: int, b: int) -> tuple[Any, tuple[int, ...], int]:
     """(entropy, spawn_key, pool_size) of ``SeedSequence(master).spawn(2)[e].spawn(3)[b]``.
@@ -297,34 +310,6 @@ def _cell_sequence(master: int, e: int, b: int) -> tuple[Any, tuple[int, ...], i
 def _seed63(ss: np.random.SeedSequence) -> int:
     """A seed sequence as the 63-bit integer results.csv records."""
     return int(ss.generate_state(2, dtype=np.uint64)[0] >> np.uint64(1))
-
-
-#: Simulated seconds per wall second of one trial (simulation, reflex, analysis) on one
-#: worker, for the run-time estimate printed before a reproduction starts.
-#: ``python benchmarks/bench_reproduce.py --jobs 2`` prints it as simulated s per CPU s (798 at load
-#: average 1.4, 514-562 at 2.9-3.8, default grid, compiled closed loop, an AMD EPYC core); 600
-#: leaves a margin. A busy machine runs slower, and the progress lines say so.
-TRIAL_SIM_SPEED: float = 600.0
-#: Wall seconds before the first trial: imports, threshold calibration, worker start.
-STARTUP_S: float = 3.0
-
-
-def estimate_wall_s(config: ReproduceConfig, jobs: int) -> float:
-    """A rough run time (s) of ``config`` on ``jobs`` workers, before it starts.
-
-    From the simulated time of every trial and :data:`TRIAL_SIM_SPEED`; the progress
-    lines then measure the real pace.
-
-    Examples
-    --------
-    >>> small = ReproduceConfig(trials=1, bottles=("TR",), methods=("dath",))
-    >>> estimate_wall_s(small, 1) < estimate_wall_s(ReproduceConfig(), 1)
-    True
-    """
-    per_trial = [config.duration(e) for e in config.experiments]
-    sim_s = sum(per_trial) * config.trials * len(config.bottles) * len(config.methods)
-    cells = config.trials * len(config.bottles) * len(config.methods) * len(config.experiments)
-    return STARTUP_S + sim_s / (TRIAL_SIM_SPEED * max(1, min(jobs, cells)))
 
 
 def closing_speed() -> float:
@@ -379,8 +364,10 @@ def run_trial(cell: Cell, config: ReproduceConfig, thresholds: dict[str, float],
     >>> rows[0].n_events, rows[0].success
     (1, True)
     """
-    from .sim import run_closed_loop  # deferred: heavy (numba kernels)
-    from .sim.variations import VariationSpread, grasped_rig  # deferred: heavy (numba kernels)
+    from .analysis.trial import TrialStreams, analyse_trial
+    from .hardware import SLIP_FINGER
+    from .sim import run_closed_loop
+    from .sim.variations import VariationSpread, grasped_rig
 
     plant = {} if config.plant is None else {"rig_kwargs": config.plant.rig_kwargs(),
                                              "bottles": dict(config.plant.bottles)}
@@ -407,8 +394,13 @@ def run_trial(cell: Cell, config: ReproduceConfig, thresholds: dict[str, float],
         load_t=tr.t if exp.records_load else None, load=tr.water_ml if exp.records_load else None,
         threshold=float("nan") if threshold is None else float(threshold))
     truth = {round(e.onset, 9): e for e in tr.slip_events}
+    before = tr.fall_time is not None and tr.fall_time < t_pert      # fell in the grasp or the rest
+    from .analysis.metrics import grip_without_slip
+
+    unslipped = grip_without_slip(tr.cmd_t, tr.cmd_value, p0, tr.slip_events)
     rows = [dataclasses.replace(r, grasp_position=p0, grasp_force_n=float(grasp.force_n),
-                                perturbation_s=t_pert, **_true_slip(truth.get(round(r.true_onset_s, 9))))
+                                perturbation_s=t_pert, fell_before_load=before, grip_without_slip=unslipped,
+                                **_true_slip(truth.get(round(r.true_onset_s, 9))))
             for r in analyse_trial(streams)]
     plot = trial_plot(cell, spec, tr, reflex, rows, t_pert) if keep_plot else None
     return rows, plot
@@ -455,16 +447,26 @@ def run_reproduce(config: ReproduceConfig | None = None, *, jobs: int | None = N
     if jobs < 1:
         raise ParameterError(f"jobs must be >= 1, got {jobs}")
     t0 = time.perf_counter()
+    import scipy.signal  # noqa: F401  (once, here: forked workers inherit it; each took ~1 s to import it)
 
-    from .sim.calibration import check_grasp  # deferred: heavy (numba kernels)
+    from .grasping import check_run_grasp
+    from .warmup import warm_kernels
+
     for b in config.bottles:                    # a grasp that cannot hold a bottle fails here, at once
-        check_grasp(config.bottle(b), config.grasp_force_n)
+        check_run_grasp(config, b, grasp_seeds(config, b))
     thresholds = calibrate(config) if set(config.methods) & set(methods.calibrated()) else {}
     specs = {m: methods.get(m) for m in config.methods}
+    if jobs > 1:       # compiled here once: the forked workers inherit it (each compiled its own before)
+        warm_kernels(config, method_context(config, thresholds), specs,
+                     trial_seed(config.seed, config.experiments[0], config.bottles[0], 0))
     t_cal = time.perf_counter() - t0
     cells = config.cells()
     plot_method = methods.DATH if methods.DATH in config.methods else config.methods[0]
-    want = {c.key for c in cells if plots and c.trial == 0 and c.method == plot_method}
+    # every bottle's first trial with DATH (the paper's Figs. 10-12, 15); NMSD's and SWT-SD's on the
+    # first bottle, so their detections are seen too
+    extra = {methods.NMSD, methods.SWT} & set(config.methods)
+    want = {c.key for c in cells if plots and c.trial == 0
+            and (c.method == plot_method or (c.method in extra and c.bottle == config.bottles[0]))}
     # the methods of one trial seed (consecutive cells) run in one call and share its grasp
     groups = [tuple(g) for _, g in itertools.groupby(cells, lambda c: (c.experiment, c.bottle, c.trial, c.seed))]
     calls = {g: functools.partial(_run_paired, g, config, thresholds, frozenset(want), specs) for g in groups}

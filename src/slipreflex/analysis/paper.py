@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 from ..methods import DATH, FIXED, NMSD, SWT
 
-__all__ = ["Reported", "PAPER", "PAPER_SUCCESS", "PAPER_NOTES", "paper_value",
+__all__ = ["PAPER_SCAN_VOLTS", "Reported", "PAPER", "PAPER_SUCCESS", "PAPER_NOTES", "paper_value",
            "EXPERIMENTS", "METRICS", "BOTTLE_ORDER", "bottle_key"]
 
 EXPERIMENTS: tuple[str, ...] = ("drop", "pour")
@@ -144,3 +144,8 @@ def paper_value(experiment: str, metric: str, bottle: str, method: str) -> Repor
     743.0
     """
     return PAPER.get((experiment, metric, bottle, method))
+
+
+#: The paper's characterization scan (section II, Figs. 6-9): the filtered slip-sensor output on the
+#: white and on the black part of the test surface, volts (low, high).
+PAPER_SCAN_VOLTS: dict[str, tuple[float, float]] = {"white": (0.3, 0.5), "black": (3.32, 3.35)}

@@ -13,21 +13,10 @@ Examples
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import os
 import shlex
 import sys
 from pathlib import Path
-
-from .. import experiment_specs, methods
-from ..analysis.outputs import paper_part
-from ..analysis.report import terminal_table
-from ..errors import ParameterError
-from ..experiments import BOTTLE_NAMES, EXPERIMENTS, METHODS, ReproduceConfig
-from ..interrupts import Interrupted, signals_ignored, sigterm_interrupts
-from ..paths import OutputSet
-from ..progress import format_duration
-from ..validation import choices, within
 
 NAME = "reproduce"
 HELP = "run the paper's drop and pour experiments on the simulated rig and write a report"
@@ -37,9 +26,11 @@ ORDER = 30
 def _csv_list(kind: str, known, *, any_case: bool = False):
     """An argparse type: a comma-separated list of ``known()`` names (checked when parsed)."""
     def parse(text: str) -> tuple[str, ...]:
+        from ..errors import ParameterError
+        from ..validation import choices
 
         try:
-            return choices(kind, [x.strip() for x in text.split(",") if x.strip()], known(),
+            return choices(kind, list(_names(text)), known(),
                            any_case=any_case)
         except ParameterError as err:
             raise argparse.ArgumentTypeError(str(err)) from None
@@ -48,7 +39,9 @@ def _csv_list(kind: str, known, *, any_case: bool = False):
 
 def _names(text: str) -> tuple[str, ...]:
     """A comma-separated list of names, checked later against the run's objects."""
-    return tuple(x.strip() for x in text.split(",") if x.strip())
+    from ._lists import names_list
+
+    return names_list(text)
 
 
 def own_objects(args: argparse.Namespace) -> dict:
@@ -57,7 +50,8 @@ def own_objects(args: argparse.Namespace) -> dict:
     Every name is checked here, before any work: an unknown one is one line naming the
     option, the file and the names it has.
     """
-    from ..sim import load_objects  # deferred: heavy (numba kernels)
+    from ..errors import ParameterError
+    from ..sim import load_objects
 
     objs = load_objects(args.objects) if args.objects is not None else None
     out: dict = {}
@@ -71,8 +65,8 @@ def own_objects(args: argparse.Namespace) -> dict:
             raise ParameterError(f"{option} {name}: no such {kind[:-1]} ({where})")
         out[f"{option[2:]}_object"] = table[name]
     if objs is not None and objs.bottles:
-        from ..sim import BOTTLES  # deferred: heavy (numba kernels)
-        from ..sim.uncertain import Plant  # deferred: heavy (numba kernels)
+        from ..sim import BOTTLES
+        from ..sim.uncertain import Plant
 
         out["plant"] = Plant(bottles={**BOTTLES, **objs.bottles})
     return out
@@ -80,7 +74,10 @@ def own_objects(args: argparse.Namespace) -> dict:
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``slipreflex reproduce``: every count and load parameter."""
+    import dataclasses
 
+    from .. import experiment_specs, methods
+    from ..experiments import BOTTLE_NAMES, EXPERIMENTS, METHODS, ReproduceConfig
 
     d = {f.name: f.default for f in dataclasses.fields(ReproduceConfig)}
     p.add_argument("--out", type=Path, default=Path("out/reproduce"),
@@ -107,14 +104,16 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    default=EXPERIMENTS,
                    help=f"comma-separated experiments (default: {','.join(EXPERIMENTS)})")
     p.add_argument("--seed", type=int, default=d["seed"], help=f"master seed (default {d['seed']})")
+    from ..sim import PAPER_DROP, PAPER_POUR
+
     p.add_argument("--drop-mass", type=float, default=None, metavar="KG",
-                   help="dropped mass in kg (default: the paper's, slipreflex.sim.PAPER_DROP)")
+                   help=f"dropped mass in kg (default {PAPER_DROP.mass_kg:g}, the paper's)")
     p.add_argument("--drop-height", type=float, default=None, metavar="M",
-                   help="drop height above the opening in m (default: the paper's, PAPER_DROP)")
+                   help=f"drop height above the opening in m (default {PAPER_DROP.height_m:g}, the paper's)")
     p.add_argument("--pour-rate", type=float, default=None, metavar="L_MIN",
-                   help="pour rate in L/min (default: the paper's, slipreflex.sim.PAPER_POUR)")
+                   help=f"pour rate in L/min (default {PAPER_POUR.rate_l_min:g}, the paper's)")
     p.add_argument("--pour-volume", type=float, default=None, metavar="ML",
-                   help="poured volume in ml (default: the paper's, PAPER_POUR)")
+                   help=f"poured volume in ml (default {PAPER_POUR.volume_ml:g}, the paper's)")
     p.add_argument("--rest", type=float, default=d["rest_s"], metavar="S",
                    help=f"rest recorded before the perturbation, s (default {d['rest_s']:g})")
     p.add_argument("--after", type=float, default=d["after_s"], metavar="S",
@@ -143,11 +142,10 @@ def run(args: argparse.Namespace) -> int:
     Ctrl-C or SIGTERM stops the run within about two seconds and writes what finished,
     marked partial; exit status 130.
     """
-    from ..experiments import (  # deferred: late-bound (tests patch slipreflex.experiments.run_reproduce)
-        ReproduceConfig,
-        estimate_wall_s,
-        run_reproduce,
-    )
+    from ..experiments import ReproduceConfig, estimate_wall_s, run_reproduce
+    from ..interrupts import Interrupted, signals_ignored, sigterm_interrupts
+    from ..paths import OutputSet
+    from ..progress import format_duration
 
     check_limits(args, _LIMITED)
     config = ReproduceConfig(
@@ -159,9 +157,19 @@ def run(args: argparse.Namespace) -> int:
         independent_seeds=args.independent_seeds, grasp_force_n=args.grasp_force, **own_objects(args))
     outputs = OutputSet(args.out, NAME)             # before the first trial, not after the last
     outputs.check(OUTPUT_NAMES)
+    from ..experiments import grasp_seeds
+    from ..grasping import check_run_grasp
+
+    for b in config.bottles:                         # a grasp that cannot hold: one line, before the estimate
+        check_run_grasp(config, b, grasp_seeds(config, b))
     jobs = int(args.jobs or os.cpu_count() or 1)
-    n, estimate = len(config.cells()), estimate_wall_s(config, jobs)
+    from ..warmup import COLD_COMPILE_S, cold_kernels
+
+    cold = bool(cold_kernels())
+    n, estimate = len(config.cells()), estimate_wall_s(config, jobs, cold=cold)
     print(f"{n} trials on {jobs} worker(s): about {format_duration(estimate)}"
+          + (f" (first run: about {COLD_COMPILE_S:g} s of it compiles the kernels once; later runs "
+             "load them from numba's cache)" if cold else "")
           + (" (a long run: fewer --trials, --bottles or --methods shorten it)" if estimate > LONG_RUN_S else ""),
           file=sys.stderr, flush=True)
     command = "slipreflex " + " ".join(shlex.quote(a) for a in sys.argv[1:]) if sys.argv[1:] else None
@@ -193,6 +201,7 @@ _LIMITED = (("--trials", "trials", "trials"), ("--rest", "rest", "rest_s"), ("--
 
 def check_limits(args: argparse.Namespace, limited) -> None:
     """Every bounded option within its plausible range (before any work), named by its option."""
+    from ..validation import within
 
     for option, dest, limit in limited:
         value = getattr(args, dest, None)
@@ -210,11 +219,10 @@ def _write(result, outputs, command: str | None) -> dict | None:
     Ctrl-C while writing leaves the previous outputs untouched: one "interrupted" line,
     and None (the caller exits 130).
     """
-    from ..analysis.claims import (  # deferred: late-bound (tests patch slipreflex.analysis.claims.judge_run)
-        claims_terminal,
-        judge_run,
-    )
-    from ..experiments import write_outputs  # deferred: late-bound (tests patch slipreflex.experiments.write_outputs)
+    from ..analysis.claims import claims_terminal, judge_run
+    from ..analysis.outputs import paper_part, scored
+    from ..analysis.report import terminal_table
+    from ..experiments import write_outputs
 
     staged = outputs.stage()
     try:
@@ -234,7 +242,7 @@ def _write(result, outputs, command: str | None) -> dict | None:
         print(notice)
     print(terminal_table(result.summary))
     if not result.partial_note and paper.rows:
-        print(claims_terminal(judge_run(paper.rows, seed=result.config.seed)))
+        print(claims_terminal(judge_run(scored(paper.rows), seed=result.config.seed)))
     print(f"{len(result.rows)} rows from {result.trials_finished} trials in {result.wall_s:.1f} s "
           f"({result.jobs} jobs); wrote {outputs.folder}/"
           "{results.csv, summary.csv, report.md" + ("" if result.partial_note else ", figures/") + "}")

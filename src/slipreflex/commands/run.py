@@ -41,17 +41,20 @@ def add_chain_arguments(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("reflex chain")
     g.add_argument("--method", choices=(FIXED, DATH), default=DATH,
                    help="fixed threshold or Dynamic Adaptive Threshold (default: dath)")
-    g.add_argument("--preset", choices=("authors-gui", "dath-event"), default=None,
-                   help="a named chain instead of the options below: authors-gui is the authors' rig "
-                        "code (the middle finger gets the command + 20), dath-event DATH with the "
-                        "event-driven MPI (docs/method.md); only --fs may be given with it")
+    from ..chain.params import PRESETS
+
+    g.add_argument("--preset", choices=sorted(PRESETS), default=None,
+                   help="a named chain instead of the options below (the presets of 'detect'): "
+                        "authors-gui is the authors' rig code (the middle finger gets the command + 20), "
+                        "dath-event DATH with the event-driven MPI (docs/method.md); only --fs may be "
+                        "given with it")
     g.add_argument("--fs", type=float, default=DAQ_FS,
                    help=f"sampling rate the chain assumes, Hz (the DAQ's {DAQ_FS:.2f})")
     g.add_argument("--cutoff", type=float, default=d.cutoff, help=f"low-pass cutoff, Hz ({d.cutoff:g})")
     g.add_argument("--no-filter", action="store_true", help="input is already filtered")
     g.add_argument("--threshold", type=float, default=d.threshold, help=f"theta0 in V ({d.threshold:g})")
     g.add_argument("--dath-samples", type=int, default=d.dath_samples, help=f"DATH duration D ({d.dath_samples})")
-    g.add_argument("--dath-floor", type=float, default=d.dath_floor, help="DATH floor in V (0)")
+    g.add_argument("--dath-floor", type=float, default=d.dath_floor, help=f"DATH floor in V ({d.dath_floor:g})")
     g.add_argument("--n", type=int, default=d.n, help=f"samples per window ({d.n})")
     g.add_argument("--kp", type=float, default=d.kp, help=f"proportional gain ({d.kp:g})")
     g.add_argument("--ki", type=float, default=d.ki, help=f"integral gain ({d.ki:g})")
@@ -165,7 +168,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--hand", required=True, help="i-Limb control unit serial port (e.g. /dev/ttyUSB0)")
     p.add_argument("--p0", required=True,
                    help="position (0..500) at which each tripod finger holds the object, as the grasp "
-                        "routine left it: thumb=149,index=147,middle=147 (virtual-rig prints this), "
+                        "routine left it: thumb=148,index=148,middle=148 (virtual-rig prints this line for "
+                        "its default bottle), "
                         "or one value for all three (each finger once). Bookkeeping only: the loop "
                         "starts with STOP (fingers stay where they are), the MPI starts from the "
                         "middle finger's p0, and the hand only ever gets the command's rises as "

@@ -3,7 +3,10 @@
 Prints the two device paths and the grasp position, then runs in real time
 until ``q``, Ctrl-C, SIGTERM or ``--duration``. A drop or a pour is triggered
 by a key (``d`` / ``p`` then Enter), a signal (SIGUSR1 / SIGUSR2) or a
-schedule (``--schedule "drop@2.0,pour@5.0"``, seconds after start).
+schedule (``--schedule "drop@2.0,pour@5.0"``, seconds after ``slipreflex run`` connects,
+or after the rig's start with ``--schedule-from start``); each is announced as it starts.
+At exit the summary gives the fall's time (if the bottle fell) on the rig's clock, and the
+slide capped at the grip's fall-out travel.
 
 Examples
 --------
@@ -48,7 +51,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--grasp-force", type=float, default=None, metavar="N",
                    help="contact force at which the grasp stops closing, N (default: the paper's 0.8)")
     p.add_argument("--seed", type=int, default=0, help="random seed of the simulation (0)")
-    p.add_argument("--schedule", default="", help='perturbations, e.g. "drop@2.0,pour@5.0" (s after start)')
+    p.add_argument("--schedule", default="",
+                   help='perturbations, e.g. "drop@2.0,pour@5.0" (s after --schedule-from)')
+    p.add_argument("--schedule-from", choices=("connect", "start"), default="connect",
+                   help="the schedule counts from when 'slipreflex run' connects (its first hand packet; "
+                        "the default) or from the rig's start")
     p.add_argument("--link-dir", default=None,
                    help="also create DIR/daq and DIR/hand symlinks to the ports (stable paths; DIR is created; "
                         "existing DIR/daq or DIR/hand is an error, and only the links made are removed at exit)")
@@ -73,6 +80,21 @@ def _objects(args: argparse.Namespace):
     else:
         check_grasp(table[args.bottle])
     return table[args.bottle], loads
+
+
+def _banner(args: argparse.Namespace, dev, grasp, schedule) -> None:
+    """The lines a user needs first: the ports, p0, the grasp, the run command, keys, schedule."""
+    print(f"daq: {dev.daq_path}", flush=True)
+    print(f"hand: {dev.hand_path}", flush=True)
+    print(f"p0: {grasp.p0_text()}", flush=True)
+    print(f"grasp: bottle {args.bottle}, {grasp.force_n:.2f} N per contact, "
+          f"{'stable' if grasp.stable else 'NOT stable'}", flush=True)
+    print(f"run: slipreflex run --daq {dev.daq_path} --hand {dev.hand_path} --p0 {grasp.p0_text()}",
+          flush=True)
+    print("keys: d+Enter drop, p+Enter pour, q+Enter quit; SIGUSR1 drop, SIGUSR2 pour", flush=True)
+    if schedule:
+        when = "after 'run' connects" if args.schedule_from == "connect" else "after now"
+        print("schedule: " + ", ".join(f"{k} {t:g} s" for k, t in schedule) + f" {when}", flush=True)
 
 
 def _check_arguments(args: argparse.Namespace) -> None:
@@ -110,16 +132,14 @@ def run(args: argparse.Namespace) -> int:
 
     old = {s: signal.signal(s, on_signal)
            for s in (signal.SIGINT, signal.SIGTERM, signal.SIGUSR1, signal.SIGUSR2)}
-    dev = VirtualDevices(rig, link_dir=args.link_dir, schedule=schedule)
+
+    def announce(text: str) -> None:
+        print(text, flush=True)
+
+    dev = VirtualDevices(rig, link_dir=args.link_dir, schedule=schedule, schedule_from=args.schedule_from,
+                         on_event=announce)
     try:
-        print(f"daq: {dev.daq_path}", flush=True)
-        print(f"hand: {dev.hand_path}", flush=True)
-        print(f"p0: {grasp.p0_text()}", flush=True)
-        print(f"grasp: bottle {args.bottle}, {grasp.force_n:.2f} N per contact, "
-              f"{'stable' if grasp.stable else 'NOT stable'}", flush=True)
-        print(f"run: slipreflex run --daq {dev.daq_path} --hand {dev.hand_path} --p0 {grasp.p0_text()}",
-              flush=True)
-        print("keys: d+Enter drop, p+Enter pour, q+Enter quit; SIGUSR1 drop, SIGUSR2 pour", flush=True)
+        _banner(args, dev, grasp, schedule)
         if args.realtime:
 
             print(f"rig: {realtime_priority()}", flush=True)  # the rig's thread inherits it
@@ -130,9 +150,7 @@ def run(args: argparse.Namespace) -> int:
             if args.duration is not None and time.monotonic() - t0 >= args.duration:
                 break
             while pending:
-                kind = pending.pop(0)
-                dev.trigger(kind)
-                print(f"{kind} at {dev.elapsed:.2f} s (signal)", flush=True)
+                dev.trigger(pending.pop(0), "signal")
             if not dev.running:
                 break
             if stdin_open:
@@ -150,8 +168,7 @@ def run(args: argparse.Namespace) -> int:
                     if key == "q":
                         break
                     if key in ("d", "p"):
-                        dev.trigger("drop" if key == "d" else "pour")
-                        print(f"{'drop' if key == 'd' else 'pour'} at {dev.elapsed:.2f} s", flush=True)
+                        dev.trigger("drop" if key == "d" else "pour", "key")
             else:
                 stop.wait(0.1)
     finally:

@@ -57,7 +57,10 @@ from ..hardware import DAQ_PERIOD_S, FINGER_SPEED_UNITS_S, PWM_MAX, Finger, Hand
 from . import wire
 from .ilimb import PacketParser, value_range
 
-__all__ = ["PtyPort", "VirtualDevices", "parse_schedule"]
+__all__ = ["PtyPort", "VirtualDevices", "parse_schedule", "SCHEDULE_FROM"]
+
+#: What a schedule's times may count from: the rig's start or the client's first hand packet.
+SCHEDULE_FROM: tuple[str, ...] = ("connect", "start")
 
 
 class PtyPort:
@@ -289,7 +292,14 @@ class VirtualDevices:
     link_dir : str, optional
         Directory in which ``daq`` and ``hand`` symlinks name the ports.
     schedule : iterable of (kind, seconds), optional
-        Perturbations at fixed times after :meth:`start`.
+        Perturbations at fixed times after ``schedule_from``.
+    schedule_from : {"start", "connect"}
+        What the schedule's times count from: :meth:`start`, or the first packet on the
+        hand port (a client such as ``slipreflex run`` connected: it sends STOP first).
+    on_event : callable, optional
+        ``on_event(text)`` is called in the rig's thread with one line for each
+        perturbation as it starts (``"drop at 5.00 s (schedule)"``) and when the client
+        connects.
     period : float
         Sample period (s) used to wake up; the rig decides the sample times.
     script : iterable of (seconds, callable), optional
@@ -329,7 +339,14 @@ class VirtualDevices:
 
     def __init__(self, rig: Any, *, link_dir: str | None = None,
                  schedule: Iterable[tuple[str, float]] = (), period: float = DAQ_PERIOD_S,
-                 script: Iterable[tuple[float, Any]] = ()) -> None:
+                 script: Iterable[tuple[float, Any]] = (), schedule_from: str = "start",
+                 on_event: Any = None) -> None:
+        if schedule_from not in SCHEDULE_FROM:
+            raise ParameterError(f"schedule_from must be one of {', '.join(SCHEDULE_FROM)}, got {schedule_from!r}")
+        self.schedule_from = schedule_from
+        self.on_event = on_event
+        #: Seconds since :meth:`start` when the client connected (its first hand packet), NaN before.
+        self.connected_at = math.nan
         self.rig = rig
         self.period = period
         self.daq = PtyPort(os.path.join(link_dir, "daq") if link_dir else None)
@@ -343,8 +360,8 @@ class VirtualDevices:
         self.hand_packets = 0
         self.hand_errors = 0
         self.triggered: list[tuple[str, float]] = []
-        self._schedule = sorted([(t, ("perturb", kind)) for kind, t in schedule]
-                                + [(t, ("script", fn)) for t, fn in script], key=lambda x: x[0])
+        self._schedule = sorted([(t, ("perturb", kind, "schedule")) for kind, t in schedule], key=lambda x: x[0])
+        self._script = sorted([(t, ("script", fn)) for t, fn in script], key=lambda x: x[0])
         self._requests: queue.SimpleQueue = queue.SimpleQueue()
         self._stop = threading.Event()
         self._wake_r, self._wake_w = os.pipe()
@@ -426,8 +443,8 @@ class VirtualDevices:
         self._requests.put(item)
         self._wake()
 
-    def trigger(self, kind: str) -> None:
-        """Start a perturbation ("drop" or "pour") now.
+    def trigger(self, kind: str, source: str = "key") -> None:
+        """Start a perturbation ("drop" or "pour") now; ``source`` names who asked (announced).
 
         Raises
         ------
@@ -436,7 +453,7 @@ class VirtualDevices:
         """
         if kind not in experiment_specs.names():
             raise ParameterError(f"unknown perturbation {kind!r} (known: {', '.join(experiment_specs.names())})")
-        self._request("perturb", kind)
+        self._request("perturb", kind, source)
 
     def inject_daq(self, data: bytes) -> None:
         """Send raw bytes on the DAQ port between frames (garbage, torn frames)."""
@@ -468,6 +485,7 @@ class VirtualDevices:
         if kind == "perturb":
             self.rig.perturb(item[1])
             self.triggered.append((item[1], self.elapsed))
+            self._announce(f"{item[1]} at {self.elapsed:.2f} s ({item[2] if len(item) > 2 else 'key'})")
         elif kind == "inject":
             self.daq.write(item[1])
         elif kind == "pause":
@@ -482,6 +500,10 @@ class VirtualDevices:
             item[1](self.rig)
         elif kind == "script":
             item[1](self)
+
+    def _announce(self, text: str) -> None:
+        if self.on_event is not None:
+            self.on_event(text)
 
     def _apply_packet(self, cmds: tuple) -> None:
         hand = self.rig.hand
@@ -526,11 +548,14 @@ class VirtualDevices:
                 return
 
     def _loop(self) -> None:
-        schedule = list(self._schedule)
+        schedule, script = list(self._schedule), list(self._script)
         while not self._stop.is_set():
             t = time.perf_counter() - self._t0
-            while schedule and schedule[0][0] <= t:
+            origin = 0.0 if self.schedule_from == "start" else self.connected_at
+            while schedule and schedule[0][0] <= t - origin:      # NaN origin: not yet connected
                 self._handle(schedule.pop(0)[1])
+            while script and script[0][0] <= t:
+                self._handle(script.pop(0)[1])
             self._drain()
             for s in self.rig.advance_to(t):
                 self._last_seq = s.seq
@@ -556,4 +581,8 @@ class VirtualDevices:
                 data = self.hand.read()
                 for cmds in self.hand_parser.feed(data):
                     self.hand_packets += 1
+                    if self.hand_packets == 1:
+                        self.connected_at = self.elapsed
+                        waiting = " (the schedule starts now)" if self.schedule_from == "connect" and schedule else ""
+                        self._announce(f"client connected at {self.connected_at:.2f} s{waiting}")
                     self._apply_packet(cmds)
