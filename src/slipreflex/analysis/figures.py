@@ -383,7 +383,7 @@ def grip_chart(summary: Sequence[dict[str, Any]], path: str | Path) -> Path:
     True
     """
     plt = _plt()
-    from matplotlib.patches import Patch
+    from matplotlib.patches import Patch  # deferred: heavy (matplotlib)
 
     exps = [e for e in ("drop", "pour") if any(s["experiment"] == e for s in summary)] or ["drop"]
     fig, axes = plt.subplots(1, len(exps), figsize=(4.4 * len(exps) + 1.6, 3.4), squeeze=False)

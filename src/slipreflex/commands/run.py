@@ -20,6 +20,7 @@ from typing import Any
 from .. import __version__
 from ..board import BoardParams, BoardSource, CheckedBoardReflex
 from ..chain import ReflexParams, SlipReflex
+from ..chain.params import PRESETS
 from ..devices.ilimb import ILimb
 from ..errors import ParameterError
 from ..hardware import DAQ_FS, FINGER_MAX, FINGER_MIN, SLIP_FINGER, TRIPOD, Finger
@@ -41,7 +42,6 @@ def add_chain_arguments(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("reflex chain")
     g.add_argument("--method", choices=(FIXED, DATH), default=DATH,
                    help="fixed threshold or Dynamic Adaptive Threshold (default: dath)")
-    from ..chain.params import PRESETS
 
     g.add_argument("--preset", choices=sorted(PRESETS), default=None,
                    help="a named chain instead of the options below (the presets of 'detect'): "
