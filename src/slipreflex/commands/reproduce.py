@@ -29,7 +29,6 @@ from ..interrupts import Interrupted, signals_ignored, sigterm_interrupts
 from ..paths import OutputSet
 from ..progress import format_duration
 from ..validation import choices, within
-from ..warmup import COLD_COMPILE_S, cold_kernels
 from ._lists import names_list
 
 NAME = "reproduce"
@@ -169,6 +168,10 @@ def run(args: argparse.Namespace) -> int:
     for b in config.bottles:                         # a grasp that cannot hold: one line, before the estimate
         check_run_grasp(config, b, grasp_seeds(config, b))
     jobs = int(args.jobs or os.cpu_count() or 1)
+    from ..warmup import (  # deferred: late-bound (tests patch slipreflex.warmup.cold_kernels)
+        COLD_COMPILE_S,
+        cold_kernels,
+    )
 
     cold = bool(cold_kernels())
     n, estimate = len(config.cells()), estimate_wall_s(config, jobs, cold=cold)
