@@ -23,18 +23,32 @@ started, on the PC's clock):
 /chain/state       per sample: filtered value, threshold in force, event (bool)
 /chain/events      one message per spike
 /chain/windows     one message per complete window: spike count
-/hand/commands     reflex commands: target (the reflex's output), fingers, targets (the
-                   position sent to each finger: its start plus the rise of the
-                   reflex's command, never below the start), sent (bool), note (why
-                   not sent: "at start", "stale", "rejected", "hand-port"), latency
+/hand/commands     reflex commands: target (the reflex's output), fingers, targets (empty:
+                   the loop sends no positions), grip (the grip, units, the command adds
+                   to each finger, sent as closing time), sent (bool), note (why
+                   not sent: "at start", "no rise", "stale", "rejected", "hand-port"), latency
                    (s from reading the bytes) and frame_latency (s from the frame's
                    own arrival)
 /board/state       (``run --board-reflex``) per sample: what the board's own chain sent
                    (spike, window, fault, hand, v, command, x in Q16 counts) and
                    ``match``, whether its Python twin agreed
+/hand/grip         with every command, the grip (units) it adds to each finger as flat
+                   fields (``thumb``, ``index``, ``middle``, ...; null for a finger not
+                   commanded): the per-finger form of /hand/commands' ``grip``, one plot
+                   line per finger
+/tactile/frames    (a tactile method) every frame as flat fields: ``total`` and ``peak`` (N),
+                   ``position`` (as /daq/samples), then one ``taxel_K`` per taxel (C order)
+/rig/truth         (``virtual-rig --live``) the simulated rig's truth per sample: the
+                   object's displacement and slip (m), velocity (m/s), the normal force
+                   per contact (N), its load (kg), slipping, fallen, and the measured
+                   finger positions
 /faults            watchdog, device and recording faults, with the action taken
 /stats             periodic DAQ and loop counters
 =================  ===========================================================
+
+Every field of a topic but ``/hand/commands`` (``fingers``, ``targets``) and ``/stats``
+(``counters``) is a scalar: what a live plot (``--live``, :mod:`slipreflex.live`) draws as
+one line. :func:`schema` gives a topic's schema, the one the recording and the live view share.
 
 Examples
 --------
@@ -68,8 +82,8 @@ from .paths import create_new, new_file, publish
 from .validation import LIMITS
 
 __all__ = [
-    "TOPICS", "METADATA_NAME", "RecordingError", "Recorder", "Recording", "read_recording",
-    "PART_SUFFIX", "CHECKSUM_KEY", "LIBRARY", "sealed", "verify", "PLANNED_SAMPLES",
+    "TOPICS", "METADATA_NAME", "RecordingError", "Recorder", "Recording", "read_recording", "schema",
+    "FINGER_FIELDS", "PART_SUFFIX", "CHECKSUM_KEY", "LIBRARY", "sealed", "verify", "PLANNED_SAMPLES",
 ]
 
 #: Key, in the :data:`METADATA_NAME` record, of the number of samples a run with a planned
@@ -122,6 +136,9 @@ def verify(name: str, data: Mapping[str, str]) -> bool:
 
 _N, _I, _B, _S = (["number", "null"], "integer", "boolean", "string")
 _ACCEL = {"ax": "number", "ay": "number", "az": "number"}
+#: The per-finger fields of /hand/grip and /rig/truth (the hand's fingers by name, lower case).
+FINGER_FIELDS: tuple[str, ...] = ("thumb", "index", "middle", "ring", "little", "thumb_rotator")
+_TAXEL = {"type": "number"}
 
 #: Every topic: its schema name and its fields with JSON-schema types.
 TOPICS: dict[str, tuple[str, dict[str, Any]]] = {
@@ -136,12 +153,20 @@ TOPICS: dict[str, tuple[str, dict[str, Any]]] = {
     "/chain/windows": ("slipreflex.Window", {"seq": _I, "t": "number", "count": _I}),
     "/hand/commands": ("slipreflex.Command", {"seq": _I, "t": "number", "target": "number",
                                               "fingers": {"type": "array", "items": {"type": _S}},
-                                              "targets": {"type": "object"},
+                                              "targets": {"type": "object"}, "grip": {"type": "object"},
                                               "sent": _B, "note": _S, "latency": _N,
                                               "frame_latency": _N}),
     "/board/state": ("slipreflex.BoardState", {"seq": _I, "t": "number", "spike": _B, "window": _B,
                                                "fault": _B, "hand": _B, "v": _I, "command": _I,
                                                "x": _I, "match": _B}),
+    "/hand/grip": ("slipreflex.FingerGrip", {"seq": _I, "t": "number", "sent": _B,
+                                                   **{f: _N for f in FINGER_FIELDS}}),
+    "/tactile/frames": ("slipreflex.TactileFrame", {"seq": _I, "t": "number", "total": "number",
+                                                    "peak": "number", "position": _N}),
+    "/rig/truth": ("slipreflex.RigTruth", {"t": "number", "displacement": "number", "slip": "number",
+                                           "velocity": "number", "normal_force": "number",
+                                           "load_mass": "number", "slipping": _B, "fallen": _B,
+                                           **{f: _N for f in FINGER_FIELDS}}),
     "/faults": ("slipreflex.Fault", {"time": "number", "kind": _S, "message": _S, "action": _S}),
     "/stats": ("slipreflex.Stats", {"time": "number", "counters": {"type": "object"}}),
 }
@@ -157,10 +182,46 @@ class RecordingError(SlipreflexError, OSError):
     """
 
 
-def _schema(name: str, fields: dict[str, Any]) -> bytes:
+def _schema(name: str, fields: dict[str, Any], extra: dict[str, Any] | None = None) -> bytes:
     props = {k: (v if isinstance(v, dict) else {"type": v}) for k, v in fields.items()}
     return json.dumps({"$schema": "http://json-schema.org/draft-07/schema#", "title": name,
-                       "type": "object", "properties": props}).encode()
+                       "type": "object", "properties": props, **(extra or {})}).encode()
+
+
+#: Topics with fields beyond their listed ones: /tactile/frames has one number per taxel.
+_EXTRA: dict[str, dict[str, Any]] = {
+    "/tactile/frames": {"patternProperties": {"^taxel_[0-9]+$": _TAXEL}},
+}
+
+
+def schema(topic: str) -> tuple[str, bytes]:
+    """The name and JSON schema (bytes) of a topic: the one definition the recording and the
+    live view (:mod:`slipreflex.live`) both use.
+
+    Parameters
+    ----------
+    topic : str
+        One of :data:`TOPICS`.
+
+    Returns
+    -------
+    (str, bytes)
+
+    Raises
+    ------
+    RecordingError
+        For an unknown topic.
+
+    Examples
+    --------
+    >>> name, data = schema("/chain/windows")
+    >>> name, json.loads(data)["properties"]["count"]
+    ('slipreflex.Window', {'type': 'integer'})
+    """
+    if topic not in TOPICS:
+        raise RecordingError(f"unknown topic {topic!r} (known: {', '.join(TOPICS)})")
+    name, fields = TOPICS[topic]
+    return name, _schema(name, fields, _EXTRA.get(topic))
 
 
 class Recorder:
@@ -250,9 +311,9 @@ class Recorder:
             self._writer = Writer(self._fh, chunk_size=chunk_size, compression=comp)
             self._writer.start(profile="", library=LIBRARY)
             self._channels: dict[str, int] = {}
-            for topic, (name, fields) in TOPICS.items():
-                sid = self._writer.register_schema(name=name, encoding="jsonschema",
-                                                   data=_schema(name, fields))
+            for topic in TOPICS:
+                name, data = schema(topic)
+                sid = self._writer.register_schema(name=name, encoding="jsonschema", data=data)
                 self._channels[topic] = self._writer.register_channel(
                     topic=topic, message_encoding="json", schema_id=sid)
             for name, data in (metadata or {}).items():

@@ -28,13 +28,6 @@ import threading
 import time
 from pathlib import Path
 
-from ..devices.virtual import VirtualDevices, parse_schedule
-from ..errors import ParameterError
-from ..paths import output_dir
-from ..runtime import realtime_priority
-from ..validation import within
-from .reproduce import own_objects
-
 NAME = "virtual-rig"
 HELP = "simulated rig behind two pseudo-terminals (DAQ and i-Limb) for 'slipreflex run'"
 ORDER = 31
@@ -60,6 +53,16 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="also create DIR/daq and DIR/hand symlinks to the ports (stable paths; DIR is created; "
                         "existing DIR/daq or DIR/hand is an error, and only the links made are removed at exit)")
     p.add_argument("--duration", type=float, default=None, help="exit after this many seconds")
+    from ..hands import hand_names
+    from ._live import add_live_arguments
+
+    p.add_argument("--hand-type", default="ilimb", choices=hand_names(),
+                   help="the hand behind the hand port (default ilimb; ability: the Ability Hand's UART, "
+                        "with its fingertip touch sensors fed from the simulated tactile arrays)")
+    p.add_argument("--method", default=None,
+                   help="the method 'run' will use: checked against what this rig supplies (the slip "
+                        "sensor; tactile frames with --hand-type ability) and put in the printed run line")
+    add_live_arguments(p, lsl=False)
     p.add_argument("--realtime", action="store_true",
                    help="run the rig's real-time thread under SCHED_FIFO (it stands in for hardware "
                         "that a busy PC cannot slow; Linux, needs privileges)")
@@ -67,8 +70,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def _objects(args: argparse.Namespace):
     """The bottle and the drop / pour to use, by name, from the paper's or ``--objects``."""
-    from ..sim import BOTTLES, load_objects  # deferred: heavy (numba kernels)
-    from ..sim.calibration import check_grasp  # deferred: heavy (numba kernels)
+    from ..errors import ParameterError
+    from ..sim import BOTTLES, load_objects
+    from ..sim.calibration import check_grasp
+    from .reproduce import own_objects
 
     objs = load_objects(args.objects) if args.objects is not None else None
     table = {**BOTTLES, **(objs.bottles if objs is not None else {})}
@@ -82,23 +87,66 @@ def _objects(args: argparse.Namespace):
     return table[args.bottle], loads
 
 
-def _banner(args: argparse.Namespace, dev, grasp, schedule) -> None:
-    """The lines a user needs first: the ports, p0, the grasp, the run command, keys, schedule."""
+def _announce(dev, grasp, args: argparse.Namespace, hand, method, schedule) -> None:
+    """The lines a user needs first: the ports, p0, the grasp, the run line, keys, the schedule."""
     print(f"daq: {dev.daq_path}", flush=True)
     print(f"hand: {dev.hand_path}", flush=True)
     print(f"p0: {grasp.p0_text()}", flush=True)
     print(f"grasp: bottle {args.bottle}, {grasp.force_n:.2f} N per contact, "
           f"{'stable' if grasp.stable else 'NOT stable'}", flush=True)
-    print(f"run: slipreflex run --daq {dev.daq_path} --hand {dev.hand_path} --p0 {grasp.p0_text()}",
-          flush=True)
+    tactile = method is not None and method.input_kind == "tactile"
+    line = "slipreflex run" + ("" if tactile else f" --daq {dev.daq_path}") + f" --hand {dev.hand_path}"
+    if hand.name != "ilimb":
+        line += f" --hand-type {hand.name}"
+    if method is not None:
+        line += f" --method {method.name}" + (" --tactile-threshold T" if tactile else "")
+    print(f"run: {line} --p0 {grasp.p0_text()}", flush=True)
     print("keys: d+Enter drop, p+Enter pour, q+Enter quit; SIGUSR1 drop, SIGUSR2 pour", flush=True)
     if schedule:
         when = "after 'run' connects" if args.schedule_from == "connect" else "after now"
         print("schedule: " + ", ".join(f"{k} {t:g} s" for k, t in schedule) + f" {when}", flush=True)
+    if args.realtime:
+        from ..runtime import realtime_priority
+
+        print(f"rig: {realtime_priority()}", flush=True)  # the rig's thread inherits it
+
+
+def _serve(dev, args: argparse.Namespace, stop: threading.Event, pending: list[str]) -> None:
+    """Run until q, a signal, --duration or the rig's end; keys and signals start perturbations."""
+    t0 = time.monotonic()
+    stdin_open = sys.stdin is not None and not sys.stdin.closed
+    while not stop.is_set():
+        if args.duration is not None and time.monotonic() - t0 >= args.duration:
+            break
+        while pending:
+            dev.trigger(pending.pop(0), "signal")
+        if not dev.running:
+            break
+        if not stdin_open:
+            stop.wait(0.1)
+            continue
+        try:
+            ready, _, _ = select.select([sys.stdin], [], [], 0.1)  # pyright: ignore[reportArgumentType]
+        except (OSError, ValueError):
+            stdin_open = False
+            continue
+        if ready and sys.stdin is not None:
+            line = sys.stdin.readline()
+            if not line:
+                stdin_open = False  # EOF: keep running on schedule and signals
+                continue
+            key = line.strip().lower()[:1]
+            if key == "q":
+                break
+            if key in ("d", "p"):
+                dev.trigger("drop" if key == "d" else "pour", "key")
 
 
 def _check_arguments(args: argparse.Namespace) -> None:
     """Bounded --duration and --grasp-force; a --link-dir whose daq/hand names are free (before the grasp)."""
+    from ..errors import ParameterError
+    from ..paths import output_dir
+    from ..validation import within
 
     if args.duration is not None:
         within("duration_s", args.duration, "--duration")
@@ -114,10 +162,20 @@ def _check_arguments(args: argparse.Namespace) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Grasp, open the ports, run in real time, print a summary at exit."""
-    from ..devices.simrig import SimRig  # deferred: late-bound (tests patch slipreflex.devices.simrig.SimRig)
+    from ..devices.simrig import SimRig
+    from ..devices.virtual import VirtualDevices, parse_schedule
+    from ..hands import get_hand
+    from ..methods import applicable
+    from ._live import check_live_arguments, close_taps, open_taps
 
     schedule = parse_schedule(args.schedule)
     _check_arguments(args)
+    check_live_arguments(args)
+    hand = get_hand(args.hand_type)
+    method = None
+    if args.method is not None:
+        method = applicable(args.method, {"slip", "tactile"} if hand.tactile else {"slip"},
+                            f"the virtual rig with the {hand.label}")
     bottle, loads = _objects(args)
     rig = SimRig(bottle=bottle, seed=args.seed, **loads)
     grasp = rig.grasp(args.grasp_force)
@@ -136,47 +194,34 @@ def run(args: argparse.Namespace) -> int:
     def announce(text: str) -> None:
         print(text, flush=True)
 
-    dev = VirtualDevices(rig, link_dir=args.link_dir, schedule=schedule, schedule_from=args.schedule_from,
-                         on_event=announce)
-    try:
-        _banner(args, dev, grasp, schedule)
-        if args.realtime:
+    taps = open_taps(args, ("/rig/truth",))
 
-            print(f"rig: {realtime_priority()}", flush=True)  # the rig's thread inherits it
+    def publish_truth(_rig: object) -> None:  # the rig's thread: one /rig/truth per advance
+        msg = rig.truth()
+        for tap in taps:
+            tap.put("/rig/truth", msg, time.time_ns())
+
+    try:
+        dev = VirtualDevices(rig, link_dir=args.link_dir, schedule=schedule, schedule_from=args.schedule_from,
+                             on_event=announce, on_advance=publish_truth if taps else None,
+                             hand_type=hand.name)
+    except BaseException:
+        close_taps(taps)
+        raise
+    try:
+        _announce(dev, grasp, args, hand, method, schedule)
         dev.start()
-        t0 = time.monotonic()
-        stdin_open = sys.stdin is not None and not sys.stdin.closed
-        while not stop.is_set():
-            if args.duration is not None and time.monotonic() - t0 >= args.duration:
-                break
-            while pending:
-                dev.trigger(pending.pop(0), "signal")
-            if not dev.running:
-                break
-            if stdin_open:
-                try:
-                    ready, _, _ = select.select([sys.stdin], [], [], 0.1)  # pyright: ignore[reportArgumentType]
-                except (OSError, ValueError):
-                    stdin_open = False
-                    continue
-                if ready and sys.stdin is not None:
-                    line = sys.stdin.readline()
-                    if not line:
-                        stdin_open = False  # EOF: keep running on schedule and signals
-                        continue
-                    key = line.strip().lower()[:1]
-                    if key == "q":
-                        break
-                    if key in ("d", "p"):
-                        dev.trigger("drop" if key == "d" else "pour", "key")
-            else:
-                stop.wait(0.1)
+        _serve(dev, args, stop, pending)
     finally:
         for s, h in old.items():
             signal.signal(s, h)
-        dev.stop()
+        try:
+            dev.stop()
+        finally:
+            close_taps(taps)
     print(f"stopped after {dev.elapsed:.1f} s: {dev.frames_written} frames sent, "
-          f"{dev.hand_packets} hand packets applied ({dev.hand_parser.rejected} rejected), "
+          f"{dev.hand_packets} hand packets applied "
+          f"({(dev.emulator or dev.hand_parser).rejected} rejected), "
           f"perturbations {[(k, round(t, 2)) for k, t in dev.triggered]}", flush=True)
     print(rig.status(), flush=True)
     return 0

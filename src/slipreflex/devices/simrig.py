@@ -99,6 +99,36 @@ class SimRig:
                 from None
         self.rig.perturb(exp.perturbation(self), at=self.rig.t)   # reads this rig's drop and pour
 
+    def tactile(self, finger: Any) -> Any:
+        """One ``(4, 4)`` tactile frame (N) of a tripod finger now (the virtual Ability Hand's touch).
+
+        Examples
+        --------
+        >>> from slipreflex.hardware import Finger
+        >>> r = SimRig("TR"); _ = r.grasp(); float(r.tactile(Finger.INDEX).sum()) > 0.5
+        True
+        """
+        return self.rig.tactile(finger)
+
+    def truth(self) -> dict[str, Any]:
+        """The rig's truth now, as a ``/rig/truth`` message (:data:`slipreflex.recording.TOPICS`).
+
+        Examples
+        --------
+        >>> r = SimRig("TR"); _ = r.grasp(); m = r.truth()
+        >>> m["fallen"], m["middle"] > 0, m["ring"] is None
+        (False, True, True)
+        """
+        from ..hardware import TRIPOD
+        from ..recording import FINGER_FIELDS
+
+        r = self.rig
+        pos = r.hand.positions()
+        fingers = {f.name.lower(): float(v) for f, v in pos.items() if f in TRIPOD}
+        return {"t": r.t, "displacement": r.displacement, "slip": r.slip, "velocity": r.velocity,
+                "normal_force": r.normal_force, "load_mass": r.load_mass, "slipping": bool(r.slipping),
+                "fallen": bool(r.fallen), **{f: fingers.get(f) for f in FINGER_FIELDS}}
+
     def status(self) -> str:
         """One line of truth: displacement, slip, load, and held or when it fell.
 

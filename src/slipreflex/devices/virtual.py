@@ -306,6 +306,13 @@ class VirtualDevices:
         Actions ``fn(devices)`` run in the rig's thread at fixed times after
         :meth:`start` (e.g. ``(1.0, lambda d: d.unplug("hand"))``), for
         scripted fault tests.
+    hand_type : str
+        The hand behind the hand port, a name of :mod:`slipreflex.hands` ("ilimb": i-Limb
+        packets applied to ``rig.hand``; "ability": the Ability Hand's UART, each command
+        answered with the measured positions and touch sites).
+    on_advance : callable, optional
+        ``on_advance(rig)``, called in the rig's thread after each advance (``virtual-rig
+        --live`` puts the rig's truth on its live view); it must not block.
 
     Attributes
     ----------
@@ -340,14 +347,21 @@ class VirtualDevices:
     def __init__(self, rig: Any, *, link_dir: str | None = None,
                  schedule: Iterable[tuple[str, float]] = (), period: float = DAQ_PERIOD_S,
                  script: Iterable[tuple[float, Any]] = (), schedule_from: str = "start",
-                 on_event: Any = None) -> None:
+                 on_event: Any = None, on_advance: Any = None, hand_type: str = "ilimb") -> None:
+        from ..hands import get_hand
+
         if schedule_from not in SCHEDULE_FROM:
             raise ParameterError(f"schedule_from must be one of {', '.join(SCHEDULE_FROM)}, got {schedule_from!r}")
         self.schedule_from = schedule_from
         self.on_event = on_event
         #: Seconds since :meth:`start` when the client connected (its first hand packet), NaN before.
         self.connected_at = math.nan
+        spec = get_hand(hand_type)
+        self.hand_type = spec.name
+        #: the hand's side of its protocol (None: the i-Limb's packets, applied below)
+        self.emulator = spec.virtual(rig) if spec.virtual is not None else None
         self.rig = rig
+        self.on_advance = on_advance
         self.period = period
         self.daq = PtyPort(os.path.join(link_dir, "daq") if link_dir else None)
         try:
@@ -547,6 +561,12 @@ class VirtualDevices:
             except queue.Empty:
                 return
 
+    def _connected(self, schedule: list) -> None:
+        """The client's first hand packet: the clock a ``connect`` schedule counts from starts now."""
+        self.connected_at = self.elapsed
+        waiting = " (the schedule starts now)" if self.schedule_from == "connect" and schedule else ""
+        self._announce(f"client connected at {self.connected_at:.2f} s{waiting}")
+
     def _loop(self) -> None:
         schedule, script = list(self._schedule), list(self._script)
         while not self._stop.is_set():
@@ -557,13 +577,16 @@ class VirtualDevices:
             while script and script[0][0] <= t:
                 self._handle(script.pop(0)[1])
             self._drain()
-            for s in self.rig.advance_to(t):
+            samples = self.rig.advance_to(t)
+            for s in samples:
                 self._last_seq = s.seq
                 if self._daq_paused:
                     continue
                 seq = s.seq - self._seq_offset
                 self.daq.write(wire.encode_sample(dataclasses.replace(s, seq=seq)))
                 self.frames_written += 1
+            if samples and self.on_advance is not None:
+                self.on_advance(self.rig)
             # Sleep until the next sample is due, waking early for hand packets.
             t = time.perf_counter() - self._t0
             timeout = max(0.0, (math.floor(t / self.period) + 1) * self.period - t)
@@ -579,10 +602,16 @@ class VirtualDevices:
                     pass
             if self.hand.master is not None and self.hand.master in ready:
                 data = self.hand.read()
+                if self.emulator is not None:
+                    reply = self.emulator.feed(data)
+                    self.hand_packets = self.emulator.commands
+                    if self.hand_packets and math.isnan(self.connected_at):
+                        self._connected(schedule)
+                    if reply:
+                        self.hand.write(reply)
+                    continue
                 for cmds in self.hand_parser.feed(data):
                     self.hand_packets += 1
                     if self.hand_packets == 1:
-                        self.connected_at = self.elapsed
-                        waiting = " (the schedule starts now)" if self.schedule_from == "connect" and schedule else ""
-                        self._announce(f"client connected at {self.connected_at:.2f} s{waiting}")
+                        self._connected(schedule)
                     self._apply_packet(cmds)
