@@ -22,7 +22,9 @@ from typing import Any
 
 from .. import experiment_specs
 from ..errors import ParameterError
+from ..hardware import TRIPOD
 from ..interfaces import DaqSample, GraspResult
+from ..recording import FINGER_FIELDS
 
 __all__ = ["SimRig"]
 
@@ -119,8 +121,6 @@ class SimRig:
         >>> m["fallen"], m["middle"] > 0, m["ring"] is None
         (False, True, True)
         """
-        from ..hardware import TRIPOD
-        from ..recording import FINGER_FIELDS
 
         r = self.rig
         pos = r.hand.positions()
