@@ -23,6 +23,7 @@ from __future__ import annotations
 import csv
 import math
 import os
+from array import array
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -30,6 +31,8 @@ from pathlib import Path
 import numpy as np
 
 from .errors import DataError
+from .paths import new_file
+from .validation import LIMITS
 
 __all__ = ["INPUT_COLUMNS", "SAMPLE_COLUMNS", "WINDOW_COLUMNS", "read_slip_csv", "write_columns",
            "read_preamble", "PREAMBLE_PREFIX", "Recording", "read_recording", "irregular_steps",
@@ -195,9 +198,7 @@ def read_recording(path: str | os.PathLike, fs: float | None = None) -> Recordin
     >>> read_recording("examples/slip_example.csv").x.size > 0
     True
     """
-    from array import array
 
-    from .validation import LIMITS
 
     path = Path(path)
     cap = int(LIMITS["csv_samples"].hi)
@@ -257,7 +258,6 @@ def read_recording(path: str | os.PathLike, fs: float | None = None) -> Recordin
 def _lines(path: Path):
     """``(line number, text)`` of a CSV, streamed: a line over ``LIMITS["csv_line_bytes"]``, a NUL
     byte or bytes that are not UTF-8 are one :class:`DataError` (a binary file, /dev/zero)."""
-    from .validation import LIMITS
 
     limit = int(LIMITS["csv_line_bytes"].hi)
     line_no = 0
@@ -363,7 +363,6 @@ def write_columns(path: str | os.PathLike, columns: Mapping[str, Sequence | np.n
     cols = [np.asarray(columns[n]) for n in names]
     if len({c.shape[0] for c in cols}) > 1:
         raise ValueError(f"columns of {path} differ in length: {[c.shape[0] for c in cols]}")
-    from .paths import new_file
 
     with new_file(path, "w", replace=replace) as fh:
         for key, value in (preamble or {}).items():

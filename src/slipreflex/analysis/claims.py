@@ -479,7 +479,7 @@ def judge_run(rows: Sequence[Any], *, seed: int = 0, plant: Any = None) -> list[
 @functools.lru_cache(maxsize=4)
 def _scan_analysis(seed: int, sensor: Any):
     """The analysed characterization scan of a run (kept: the report and the terminal both judge it)."""
-    from ..sim import scan
+    from ..sim import scan  # deferred: heavy (numba kernels)
 
     return scan(seed=seed, sensor=sensor).analyse()
 
@@ -618,7 +618,7 @@ STATIC_OVER_KINETIC_MAX: float = 2.0
 
 def _capacity_contradiction(first_slip_ml: float = 200.0, plant: Any = None, simulate: bool = True
                             ) -> Contradiction:
-    from ..sim import BOTTLES, PAPER_DROP, PAPER_POUR
+    from ..sim import BOTTLES, PAPER_DROP, PAPER_POUR  # deferred: heavy (numba kernels)
 
     bottles = BOTTLES if plant is None else plant.bottles
     parts, worst = [], 0.0
@@ -634,7 +634,7 @@ def _capacity_contradiction(first_slip_ml: float = 200.0, plant: Any = None, sim
     text = ("; ".join(parts) + f" (C <= r[(M+m)g + mgh/d] with r = {STATIC_OVER_KINETIC_MAX:g} static/sliding, "
             "no impact loss; C = (M + rho V)g + rho Q sqrt(2 g h_jet)).")
     if simulate:
-        from ..sim.calibration import drop_fall_capacity
+        from ..sim.calibration import drop_fall_capacity  # deferred: heavy (numba kernels)
 
         kw = None if plant is None else plant.rig_kwargs()
         sim = drop_fall_capacity(bottles["TR"], rig_kwargs=kw, iterations=8)

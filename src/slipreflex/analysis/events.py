@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import DataError
+from .onset import episodes
 
 __all__ = ["MERGE_S", "LEAD_S", "SlipEvent", "segment_events"]
 
@@ -105,7 +106,6 @@ def segment_events(t, envelope, threshold: float, interval: tuple[float, float],
     env = np.asarray(envelope, dtype=np.float64)
     if t.shape != env.shape or t.ndim != 1:
         raise DataError(f"times and envelope must be 1-D of equal length, got {t.shape}, {env.shape}")
-    from .onset import episodes
 
     lo, hi = float(interval[0]), float(interval[1])
     eps = episodes(t, env, threshold, (lo, hi), params)

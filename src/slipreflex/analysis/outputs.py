@@ -21,12 +21,17 @@ from __future__ import annotations
 import dataclasses
 import functools
 from collections.abc import Sequence
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from .. import experiment_specs
+from ..interrupts import worker_signals
 from ..methods import DATH
+from . import figures as F
+from .figures import TrialPlot
+from .onset import OnsetParams, accel_envelope
 from .paper import BOTTLE_ORDER
 from .report import (
     GRIP_CAPTION,
@@ -36,7 +41,9 @@ from .report import (
     discussion_text,
     report_markdown,
     setup_lines,
+    terminal_table,
     trial_caption,
+    void,
     write_csv,
     zoom_caption,
 )
@@ -148,7 +155,7 @@ def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str 
                "and no figures were drawn nor claims judged."] if partial else []
     paper, others, notice = paper_part(result)
     notices += [notice] if notice else []
-    from .claims import judge_run
+    from .claims import judge_run  # deferred: late-bound (tests patch slipreflex.analysis.claims.judge_run)
 
     md = report_markdown(summary=paper.summary, rows=paper.rows, figures=figs,
                          setup=setup_lines(result, command), notices=notices,
@@ -156,7 +163,6 @@ def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str 
                          claims=() if partial or not paper.rows else judge_run(
                              scored(paper.rows), seed=result.config.seed, plant=result.config.plant))
     if others:
-        from .report import terminal_table
 
         md += ("\n## Your objects (no paper values)\n\n```\n" + terminal_table(others) + "\n```\n")
     paths["report"] = out / "report.md"
@@ -172,7 +178,6 @@ def scored(rows: Sequence[Any]) -> list[Any]:
     >>> scored([{"fell_before_load": True}, {"fell_before_load": False}])
     [{'fell_before_load': False}]
     """
-    from .report import void
 
     return [r for r in rows if not void(r)]
 
@@ -190,7 +195,7 @@ def not_the_papers(config: Any) -> list[str]:
     >>> not_the_papers(ReproduceConfig(drop_mass_kg=0.02))
     ['drop (20 g from 2 cm)']
     """
-    from ..sim import BOTTLES
+    from ..sim import BOTTLES  # deferred: heavy (numba kernels)
 
     out = [f"bottle {b}" for b in config.bottles if b not in BOTTLES or config.bottle(b) != BOTTLES[b]]
     for e in config.experiments:
@@ -233,7 +238,6 @@ def paper_part(result: ReproduceResult) -> tuple[ReproduceResult, list[dict[str,
 
 def _figure_tasks(result: ReproduceResult, fig_dir: Path) -> list[tuple[str, str, Any, tuple]]:
     """(file name, caption, drawing function, its arguments before the path) of every figure of a run."""
-    from . import figures as F
 
     tasks: list[tuple[str, str, Any, tuple]] = []
     order = experiment_specs.names()
@@ -300,7 +304,6 @@ def _write_figures(result: ReproduceResult, out: Path, paths: dict[str, Path],
     The figures are independent, so ``jobs`` > 1 draws them in that many processes (a
     figure costs a few tenths of a second, mostly matplotlib's text layout).
     """
-    from . import figures as F
 
     fig_dir = out / "figures"
     tasks = _figure_tasks(result, fig_dir)
@@ -309,9 +312,7 @@ def _write_figures(result: ReproduceResult, out: Path, paths: dict[str, Path],
     if jobs == 1:
         drawn = [_draw(w) for w in work]
     else:
-        from concurrent.futures import ProcessPoolExecutor
 
-        from ..interrupts import worker_signals
 
         F._plt()                       # imported once here, so the forked workers start warm
         with ProcessPoolExecutor(max_workers=jobs, initializer=worker_signals) as ex:
@@ -348,9 +349,7 @@ def trial_plot(cell: Any, spec: Any, tr: Any, reflex: Any, rows: Sequence[Any], 
     >>> plot.event_label, plot.sensor.shape == plot.sensor_t.shape
     ('NMSD detections the reflex computed', True)
     """
-    from ..sim.loop import reflex_log
-    from .figures import TrialPlot
-    from .onset import OnsetParams, accel_envelope
+    from ..sim.loop import reflex_log  # deferred: heavy (numba kernels)
 
     axis = rows[0].axis
     env = accel_envelope(tr.t, tr.accel[:, axis], OnsetParams())

@@ -20,7 +20,16 @@ Examples (shell)::
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
+
+import numpy as np
+
+from .. import hardware as hw
+from ..analysis.figures import _plt, _save
+from ..errors import ParameterError
+from ..paths import output_dir
+from ._lists import names_list
 
 NAME = "calibrate"
 HELP = "open-loop calibration: first pour slip and friction per bottle (paper: first slip near 200 ml)"
@@ -30,7 +39,6 @@ ORDER = 45
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Command-line options of ``slipreflex calibrate``."""
     parser.add_argument("--objects", type=Path, default=None, help="TOML file of your own bottles and surfaces")
-    from ._lists import names_list
 
     parser.add_argument("--bottles", type=names_list, default=None,
                         help="comma-separated bottles to calibrate (default: the paper's TR,DK,TX, plus every "
@@ -45,11 +53,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Calibrate or check each bottle and print one line per bottle."""
-    from .. import hardware as hw
-    from ..errors import ParameterError
-    from ..sim import BOTTLES, HandParams, load_objects
-    from ..sim.calibration import PAPER_FIRST_SLIP_ML, calibrate_bottle, first_slip_ml
-    from ..sim.contacts import grip_gain, static_capacity
+    from ..sim import BOTTLES, HandParams, load_objects  # deferred: heavy (numba kernels)
+    from ..sim.calibration import (  # deferred: heavy (numba kernels)
+        PAPER_FIRST_SLIP_ML,
+        calibrate_bottle,
+        first_slip_ml,
+    )
+    from ..sim.contacts import grip_gain, static_capacity  # deferred: heavy (numba kernels)
 
     own = load_objects(args.objects).bottles if args.objects is not None else {}
     known = {**BOTTLES, **own}
@@ -61,7 +71,6 @@ def run(args: argparse.Namespace) -> int:
     if target is not None and not 0 < target < 500:
         raise ParameterError(f"--first-slip-ml must be in (0, 500) ml, got {target!r}")
     if args.figure is not None:
-        from ..paths import output_dir
 
         output_dir(args.figure.parent, "--figure")      # before the work: a bad folder costs one line
     hand = HandParams()
@@ -69,7 +78,7 @@ def run(args: argparse.Namespace) -> int:
     print(f"open-loop calibration: {hw.CONTACT_FORCE_N} N grasp, 500 ml at 1 L/min, no reflex "
           f"(paper: first slip near {PAPER_FIRST_SLIP_ML:g} ml)")
     print("bottle  first slip   pad mu_s/mu_k   cuff mu_s/mu_k  law          N/contact  capacity  gain")
-    from ..sim import Rig
+    from ..sim import Rig  # deferred: heavy (numba kernels)
 
     for n in names:
         bottle = known[n]
@@ -110,12 +119,9 @@ def open_loop_pour(bottle, seed: int, *, rest_s: float = 0.5, after_s: float = 3
     >>> 150 < first < 250 and ml.shape == mm.shape
     True
     """
-    import math
 
-    import numpy as np
 
-    from .. import hardware as hw
-    from ..sim import PAPER_POUR, Rig, simulate_open_loop
+    from ..sim import PAPER_POUR, Rig, simulate_open_loop  # deferred: heavy (numba kernels)
 
     rig = Rig(bottle, seed=seed)
     rig.grasp(hw.CONTACT_FORCE_N)
@@ -144,10 +150,8 @@ def calibration_figure(drawn: dict, path: Path) -> Path:
 
     ``drawn`` maps a bottle's name to (Bottle, its first slip in ml as printed).
     """
-    import numpy as np
 
-    from ..analysis.figures import _plt, _save
-    from ..sim.calibration import CALIBRATION_SEEDS, PAPER_FIRST_SLIP_ML
+    from ..sim.calibration import CALIBRATION_SEEDS, PAPER_FIRST_SLIP_ML  # deferred: heavy (numba kernels)
 
     plt = _plt()
     names = list(drawn)

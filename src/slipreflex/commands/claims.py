@@ -19,6 +19,11 @@ import argparse
 import csv
 from pathlib import Path
 
+from ..analysis.trial import TrialRow
+from ..errors import ParameterError
+from ..experiments import ReproduceConfig
+from ..paths import read_text
+
 NAME = "claims"
 HELP = "judge the paper's claims on a results.csv (yours, or an earlier run's)"
 ORDER = 47
@@ -29,7 +34,6 @@ NEEDED = ("experiment", "bottle", "method", "trial", "event", "n_events", "respo
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Command-line options of ``slipreflex claims``."""
-    from ..experiments import ReproduceConfig
 
     parser.add_argument("results", type=Path, help="a results.csv (one row per trial and slip event)")
     parser.add_argument("--seed", type=int, default=ReproduceConfig().seed,
@@ -42,9 +46,6 @@ def read_rows(path: Path) -> list:
     Raises :class:`~slipreflex.errors.ParameterError` naming the file (and line) when it
     is missing, lacks a column the claims read, or holds a value that does not parse.
     """
-    from ..analysis.trial import TrialRow
-    from ..errors import ParameterError
-    from ..paths import read_text
 
     if not path.exists():
         raise ParameterError(f"{path}: no such results file")
@@ -67,7 +68,10 @@ def read_rows(path: Path) -> list:
 
 def run(args: argparse.Namespace) -> int:
     """Print the claims table of ``args.results``."""
-    from ..analysis.claims import claims_terminal, judge_run
+    from ..analysis.claims import (  # deferred: late-bound (tests patch slipreflex.analysis.claims.judge_run)
+        claims_terminal,
+        judge_run,
+    )
 
     rows = read_rows(args.results)
     print(f"{len(rows)} rows of {args.results}")

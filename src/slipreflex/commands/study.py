@@ -24,10 +24,20 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import importlib.util
 import shlex
 import sys
 from pathlib import Path
 from typing import Any
+
+from .. import experiment_specs, methods
+from ..errors import SlipreflexError
+from ..experiments import BOTTLE_NAMES, EXPERIMENTS
+from ..experiments import DEFAULT_SEED as seed
+from ..paths import OutputSet
+from ..study import DEFAULT_PLANTS, DEFAULT_TRIALS, DESIGNS, read_parts
+from ..study.analyse import claim_fractions, plant_table, write_outputs
+from ..validation import within
 
 NAME = "study"
 HELP = "map where the paper's claims hold across plausible plants (Dask; resumable)"
@@ -57,10 +67,6 @@ OUTPUT_NAMES: tuple[str, ...] = ("results.parquet", "results.csv", "plants.csv",
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``slipreflex study``."""
-    from .. import experiment_specs, methods
-    from ..experiments import BOTTLE_NAMES, EXPERIMENTS
-    from ..experiments import DEFAULT_SEED as seed
-    from ..study import DEFAULT_PLANTS, DEFAULT_TRIALS, DESIGNS
     p.add_argument("--plants", type=int, default=DEFAULT_PLANTS,
                    help=f"plants to draw (default {DEFAULT_PLANTS}; saltelli rounds up to B(D+2))")
     p.add_argument("--design", choices=DESIGNS, default="sobol", help="design over the constants (default sobol)")
@@ -105,9 +111,7 @@ def require_study_extra() -> None:
     --------
     >>> require_study_extra()  # doctest: +SKIP
     """
-    import importlib.util
 
-    from ..errors import SlipreflexError
 
     missing = [name for name in STUDY_EXTRA if importlib.util.find_spec(name) is None]
     if missing:
@@ -118,10 +122,7 @@ def require_study_extra() -> None:
 def run(args: argparse.Namespace) -> int:
     """Run the study, write the outputs, print the claims' fractions."""
     require_study_extra()
-    from ..paths import OutputSet
-    from ..study import StudyConfig, run_study
-    from ..study.analyse import claim_fractions, plant_table, write_outputs
-    from ..validation import within
+    from ..study import StudyConfig, run_study  # deferred: late-bound (tests patch slipreflex.study.run_study)
 
     within("trials", args.trials, "--trials")
     within("plants", args.plants, "--plants")
@@ -136,7 +137,6 @@ def run(args: argparse.Namespace) -> int:
         result = run_study(config, args.out, workers=args.workers, scheduler=args.scheduler,
                            progress=not args.no_progress, dashboard=args.dashboard)
     except KeyboardInterrupt:
-        from ..study import read_parts
 
         done = len(read_parts(args.out, config.fingerprint()))
         print(f"slipreflex study: interrupted; {done} finished plant(s) kept in {args.out}/parts, "

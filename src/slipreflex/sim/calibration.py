@@ -36,6 +36,7 @@ from .. import hardware as hw
 from ..errors import ParameterError
 from .contacts import static_capacity
 from .objects import PAPER_DROP, PAPER_POUR, WATER_DENSITY, Bottle, Drop, Pour
+from .rig import Rig
 
 __all__ = ["PAPER_FIRST_SLIP_ML", "CALIBRATION_SEEDS", "first_slip_ml", "calibrate_bottle", "Calibration",
            "drop_falls", "drop_fall_capacity", "GraspFailed", "check_grasp", "plant_lines"]
@@ -58,7 +59,6 @@ class GraspFailed(ParameterError):
 
 
 def _holds(bottle: Bottle, force: float, rig_kwargs: dict[str, Any] | None, seed: int):
-    from .rig import Rig
 
     rig = Rig(bottle, seed=seed, **(rig_kwargs or {}))
     return rig, rig.grasp(force)
@@ -109,7 +109,6 @@ def check_grasp(bottle: Bottle, force: float = hw.CONTACT_FORCE_N, *, rig_kwargs
 
 
 def _rig(bottle: Bottle, seed: int, rig_kwargs: dict[str, Any] | None, grasp_force: float):
-    from .rig import Rig
 
     rig = Rig(bottle, seed=seed, **(rig_kwargs or {}))
     rig.grasp(grasp_force)

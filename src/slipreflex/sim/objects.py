@@ -57,6 +57,7 @@ from types import MappingProxyType
 from typing import Any
 
 from ..errors import ParameterError
+from ..paths import read_toml
 from ..validation import number
 
 __all__ = [
@@ -525,7 +526,6 @@ def load_objects(path: str | Path) -> Objects:
     >>> load_objects(p).bottles["B"].surface.name
     'DK'
     """
-    from ..paths import read_toml
 
     path = Path(path)
     doc = read_toml(path, "")

@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import hardware as hw
+from ..chain import encode_trace, lowpass
 from ..errors import ParameterError
 from ..methods import DATH, FIXED
 from . import kernel as K
@@ -107,7 +108,6 @@ class ScanResult:
         >>> s.spikes["dath"] > s.spikes["fixed"]
         True
         """
-        from ..chain import encode_trace, lowpass
 
         x = lowpass(self.volts, fs=self.fs, cutoff=cutoff)
         fixed = encode_trace(x, threshold=threshold, dath=False)

@@ -47,8 +47,10 @@ from types import MappingProxyType
 from typing import Any
 
 from ..errors import ParameterError
+from ..paths import read_toml
 from .objects import BOTTLES, Bottle
 from .params import FlowParams, HandParams, ImuParams, PhysicsParams, SlipSensorParams, TactileParams, WaterParams
+from .rig import Rig
 
 __all__ = ["UncertainConstant", "UNCERTAIN", "Plant", "plant_from_values", "load_ranges", "nominal_values",
            "DISTRIBUTIONS", "markdown_table", "WIDEN_LIMIT", "plausible_limits"]
@@ -318,7 +320,10 @@ class Plant:
         >>> p.bottles["TR"].mu_s < Plant().bottles["TR"].mu_s
         True
         """
-        from .calibration import CALIBRATION_SEEDS, calibrate_bottle
+        from .calibration import (  # deferred: late-bound (tests patch slipreflex.sim.calibration.calibrate_bottle)
+            CALIBRATION_SEEDS,
+            calibrate_bottle,
+        )
 
         kw = self.rig_kwargs()
         bottles = {n: calibrate_bottle(b, self.first_slip_ml, rig_kwargs=kw,
@@ -343,7 +348,6 @@ class Plant:
         >>> Plant().rig("DK", seed=3).bottle.name
         'DK'
         """
-        from .rig import Rig
 
         if isinstance(bottle, str):
             if bottle not in self.bottles:
@@ -478,7 +482,6 @@ def load_ranges(path: str | Path, table: Mapping[str, UncertainConstant] | None 
     (True, 0.02)
     """
     table = UNCERTAIN if table is None else table
-    from ..paths import read_toml
 
     path = Path(path)
     doc = read_toml(path, "")

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import csv
 import math
+import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -33,7 +34,9 @@ from typing import Any
 import numpy as np
 
 from ..analysis.claims import CLAIMS, FAILS, HOLDS, NOT_TESTABLE
+from ..paths import new_file
 from .design import varying
+from .runner import _arrow_table
 
 __all__ = ["wilson", "plant_table", "claim_fractions", "sensitivity", "top_constants", "write_outputs",
            "study_markdown", "CLAIMS_COLUMNS", "SENSITIVITY_COLUMNS", "Z95"]
@@ -107,7 +110,7 @@ def claim_fractions(plants: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]
 
 def _sobol(plants: Sequence[Mapping[str, Any]], names: list[str], table: Mapping, claim: int,
            seed: int) -> dict[str, tuple[float, float, float, float]]:
-    from SALib.analyze import sobol
+    from SALib.analyze import sobol  # deferred: optional extra (study: SALib)
 
     d = len(names)
     if not names or len(plants) % (d + 2):
@@ -116,7 +119,6 @@ def _sobol(plants: Sequence[Mapping[str, Any]], names: list[str], table: Mapping
     if y.std() == 0:
         return {}
     problem = {"num_vars": d, "names": names, "bounds": [[0.0, 1.0]] * d}
-    import warnings
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
@@ -138,7 +140,7 @@ def sensitivity(plants: Sequence[Mapping[str, Any]], table: Mapping, *, design: 
     >>> top["constant"], top["spearman_rho"] < -0.8
     ('hand_latency', True)
     """
-    from scipy.stats import spearmanr
+    from scipy.stats import spearmanr  # deferred: heavy (scipy.stats)
 
     names = [k for k in varying(table) if all(k in p for p in plants)]
     ok = [p for p in plants if not p.get("error")]
@@ -189,7 +191,6 @@ def _cell(v: Any) -> str:
 
 
 def _write_csv(path: Path, rows: Sequence[Mapping[str, Any]], columns: Sequence[str]) -> Path:
-    from ..paths import new_file
 
     with new_file(path, "w", replace=True) as fh:
         w = csv.writer(fh, lineterminator="\n")
@@ -214,10 +215,10 @@ _COLORS = {HOLDS: "#2ca02c", FAILS: "#d62728", NOT_TESTABLE: "0.75", "error": "b
 
 
 def _plot_claim(plants, claim: Any, xy: list[str], table: Mapping, path: Path) -> Path:
-    import matplotlib
+    import matplotlib  # deferred: heavy (matplotlib)
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # deferred: heavy (matplotlib)
 
     fig, ax = plt.subplots(figsize=(5.5, 4.2), constrained_layout=True)
     for verdict, color in _COLORS.items():
@@ -231,7 +232,7 @@ def _plot_claim(plants, claim: Any, xy: list[str], table: Mapping, path: Path) -
         c = table[name]
         getattr(ax, f"set_{axis}label")(f"{name} ({c.unit})")
         if c.distribution == "loguniform":
-            from matplotlib import ticker
+            from matplotlib import ticker  # deferred: heavy (matplotlib)
 
             getattr(ax, f"set_{axis}scale")("log")
             a = getattr(ax, f"{axis}axis")
@@ -246,10 +247,10 @@ def _plot_claim(plants, claim: Any, xy: list[str], table: Mapping, path: Path) -
 
 
 def _plot_fractions(fractions: Sequence[Mapping[str, Any]], path: Path) -> Path:
-    import matplotlib
+    import matplotlib  # deferred: heavy (matplotlib)
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # deferred: heavy (matplotlib)
 
     fig, ax = plt.subplots(figsize=(8.5, 4.2), constrained_layout=True)
     n = [r["claim"] for r in fractions]
@@ -291,9 +292,8 @@ def write_outputs(run: Any, *, figures: bool = True, command: str | None = None)
     >>> sorted(paths)
     ['claims', 'plants', 'results_csv', 'results_parquet', 'sensitivity', 'study_md']
     """
-    import pyarrow.parquet as pq
+    import pyarrow.parquet as pq  # deferred: optional extra (study: pyarrow)
 
-    from .runner import _arrow_table
 
     out = Path(run.out)
     rows = [r for i in sorted(run.parts) for r in run.parts[i][1]]

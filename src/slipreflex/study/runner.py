@@ -35,16 +35,29 @@ import contextlib
 import dataclasses
 import hashlib
 import json
+import logging
 import os
+import signal
+import socket
+import struct
 import sys
+import threading
 import time
 import traceback
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
+from types import MappingProxyType
 from typing import Any
 
+from .. import __version__, methods
 from ..errors import ParameterError
+from ..experiments import BOTTLE_NAMES, DEFAULT_SEED, EXPERIMENTS, ReproduceConfig
+from ..interrupts import signals_ignored
+from ..paths import new_file
+from ..progress import Progress
+from ..thresholds import calibrate
+from ..validation import within
 from .design import DESIGNS, draw_design
 
 __all__ = ["StudyConfig", "PlantOutcome", "run_plant", "run_study", "StudyRun", "PARTS_DIR",
@@ -66,8 +79,6 @@ CALIBRATION_SEEDS: tuple[int, ...] = (0,)
 
 def _grid_defaults() -> tuple:
     """The reproduce defaults: every bottle, the paper's methods, both experiments, the master seed."""
-    from .. import methods
-    from ..experiments import BOTTLE_NAMES, DEFAULT_SEED, EXPERIMENTS
 
     return BOTTLE_NAMES, methods.names(paper=True), EXPERIMENTS, DEFAULT_SEED
 
@@ -116,11 +127,10 @@ class StudyConfig:
     _table: Any = field(default=None, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        from ..sim.uncertain import UNCERTAIN, load_ranges
+        from ..sim.uncertain import UNCERTAIN, load_ranges  # deferred: heavy (numba kernels)
 
         if self.design not in DESIGNS:
             raise ParameterError(f"design: unknown {self.design!r} (known: {', '.join(DESIGNS)})")
-        from ..validation import within
 
         object.__setattr__(self, "plants", within("plants", self.plants))
         if self.ranges is not None:
@@ -148,7 +158,6 @@ class StudyConfig:
         >>> StudyConfig(plants=1, trials=2).reproduce_config().trials
         2
         """
-        from ..experiments import ReproduceConfig
 
         return ReproduceConfig(trials=self.trials, bottles=tuple(self.bottles), methods=tuple(self.methods),
                                experiments=tuple(self.experiments), seed=self.seed, plant=plant)
@@ -182,7 +191,6 @@ class StudyConfig:
         >>> StudyConfig(plants=2).fingerprint() != StudyConfig(plants=3).fingerprint()
         True
         """
-        from .. import __version__
 
         rc = self.reproduce_config()
         doc = {"version": __version__, "plants": self.plants, "design": self.design, "seed": self.seed,
@@ -251,11 +259,9 @@ def _calibrated(plant: Any, table: Mapping) -> tuple[Any, dict[str, Any]]:
     ``calibrated_mu_s_<bottle>``, ``calibrated_first_slip_ml_<bottle>`` and
     ``calibration_note`` (``""``, or the jumps the calibration fell back on).
     """
-    from dataclasses import replace
-    from types import MappingProxyType
 
-    from ..sim.calibration import CALIBRATION_SEEDS as DEFAULT_SEEDS
-    from ..sim.calibration import calibrate_bottle
+    from ..sim.calibration import CALIBRATION_SEEDS as DEFAULT_SEEDS  # deferred: heavy (numba kernels)
+    from ..sim.calibration import calibrate_bottle  # deferred: heavy (numba kernels)
 
     c = table["first_slip_ml"]
     kw = plant.rig_kwargs()
@@ -284,10 +290,12 @@ def run_plant(index: int, values: Mapping[str, float], config: StudyConfig) -> P
     >>> out.error, len(out.rows), out.claims[2][1]
     ('', 1, 'not testable here')
     """
-    from ..analysis.claims import judge, judge_run
-    from ..experiments import run_trial
-    from ..sim.uncertain import plant_from_values
-    from ..thresholds import calibrate
+    from ..analysis.claims import (  # deferred: late-bound (tests patch slipreflex.analysis.claims.judge_run)
+        judge,
+        judge_run,
+    )
+    from ..experiments import run_trial  # deferred: late-bound (tests patch slipreflex.experiments.run_trial)
+    from ..sim.uncertain import plant_from_values  # deferred: heavy (numba kernels)
 
     values = {k: float(v) for k, v in values.items()}
     try:
@@ -296,7 +304,6 @@ def run_plant(index: int, values: Mapping[str, float], config: StudyConfig) -> P
         if config.calibrate:
             plant, extra = _calibrated(plant, config.table)
         rc = config.reproduce_config(plant)
-        from .. import methods
 
         thresholds = calibrate(rc) if set(rc.methods) & set(methods.calibrated()) else {}
         rows = []
@@ -324,7 +331,7 @@ def part_path(out: Path, index: int) -> Path:
 
 
 def _arrow_table(rows: Sequence[Mapping[str, Any]]):
-    import pyarrow as pa
+    import pyarrow as pa  # deferred: optional extra (study: pyarrow)
 
     cols: list[str] = []
     for r in rows:
@@ -334,7 +341,7 @@ def _arrow_table(rows: Sequence[Mapping[str, Any]]):
 
 def write_part(out: Path, outcome: PlantOutcome, fingerprint: str) -> Path:
     """Write one plant's rows and verdicts as a Parquet part (temporary name, then rename)."""
-    import pyarrow.parquet as pq
+    import pyarrow.parquet as pq  # deferred: optional extra (study: pyarrow)
 
     table = _arrow_table(outcome.rows)
     meta = {"fingerprint": fingerprint, "plant": outcome.plant, "error": outcome.error,
@@ -357,7 +364,7 @@ def read_parts(out: Path, fingerprint: str | None = None) -> dict[int, tuple[dic
     >>> read_parts(Path("/nonexistent"))
     {}
     """
-    import pyarrow.parquet as pq
+    import pyarrow.parquet as pq  # deferred: optional extra (study: pyarrow)
 
     found = {}
     for p in sorted((Path(out) / PARTS_DIR).glob("plant-*.parquet")):
@@ -416,7 +423,6 @@ class _Progress:
     """Plants and trials done: two bars on a terminal, a line per tenth of the plants in a log."""
 
     def __init__(self, plants: int, trials: int, done: int, enabled: bool):
-        from ..progress import Progress
 
         self.trials = trials
         self.plants = Progress(plants, desc="plants", unit="plant", enabled=enabled)
@@ -443,7 +449,6 @@ _OPTIONS = {"plants": "--plants", "design": "--design", "trials": "--trials", "b
 
 def _differences(old: Mapping[str, Any], config: StudyConfig) -> list[str]:
     """What differs between the study recorded in study.json and ``config``, as options."""
-    from .. import __version__
 
     new = config.to_dict()
     was = old.get("config", {}) if isinstance(old.get("config"), dict) else {}
@@ -463,7 +468,6 @@ def _differences(old: Mapping[str, Any], config: StudyConfig) -> list[str]:
 def _check_out(out: Path, config: StudyConfig) -> bool:
     """Refuse an --out that holds another study (before any work), naming the arguments that
     differ; record this one. True if this call created study.json (a failed start removes it)."""
-    from .. import __version__
 
     meta = out / "study.json"
     fp = config.fingerprint()
@@ -481,7 +485,6 @@ def _check_out(out: Path, config: StudyConfig) -> bool:
         return False
     try:
         out.mkdir(parents=True, exist_ok=True)
-        from ..paths import new_file
 
         with new_file(meta, replace=True) as fh:
             fh.write(json.dumps({"fingerprint": fp, "version": __version__, "config": config.to_dict()},
@@ -519,8 +522,6 @@ def probe_scheduler(address: str, timeout: float | None = None) -> None:
     ...
     slipreflex.errors.ParameterError: --scheduler tcp://127.0.0.1:1: cannot connect (...)
     """
-    import socket
-    import struct
 
     timeout = SCHEDULER_TIMEOUT_S if timeout is None else timeout
     where = f"--scheduler {address}"
@@ -565,10 +566,8 @@ def probe_scheduler(address: str, timeout: float | None = None) -> None:
 
 
 def _client(workers: int | None, scheduler: str | None, dashboard: str | None = None):
-    import logging
-    import signal
 
-    from dask.distributed import Client, LocalCluster
+    from dask.distributed import Client, LocalCluster  # deferred: optional extra (study: dask)
 
     if scheduler:
         probe_scheduler(scheduler)
@@ -597,7 +596,6 @@ def _client(workers: int | None, scheduler: str | None, dashboard: str | None = 
 
 
 def _main_thread() -> bool:
-    import threading
 
     return threading.current_thread() is threading.main_thread()
 
@@ -642,7 +640,6 @@ def run_study(config: StudyConfig, out: str | Path, *, workers: int | None = Non
     if workers is not None and workers < 0:
         raise ParameterError(f"--workers must be >= 0, got {workers}")
     if workers is not None:
-        from ..validation import within
 
         if workers != 0:
             within("jobs", workers, "--workers")
@@ -692,12 +689,9 @@ _STOP_CLOSE_S: float = 3.0
 def _run_dask(todo: list[int], plants: list[dict], config: StudyConfig, workers: int | None,
               scheduler: str | None, finished: Callable[[PlantOutcome], None], fp: str,
               dashboard: str | None = None) -> str:
-    import logging
-    import signal
 
-    from dask.distributed import as_completed
+    from dask.distributed import as_completed  # deferred: optional extra (study: dask)
 
-    from ..interrupts import signals_ignored
 
     client, cluster, where = _client(workers, scheduler, dashboard)
     futures = []
