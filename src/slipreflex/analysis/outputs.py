@@ -110,7 +110,8 @@ def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str 
     Returns
     -------
     dict
-        Paths by name ("results", "summary", "report", and one per figure).
+        Paths by name ("results", "summary", "report", "claims" (claims.csv: the paper's claims
+        judged, unless the run is partial or has none of the paper's cells), and one per figure).
 
     Examples
     --------
@@ -120,7 +121,7 @@ def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str 
     >>> res = run_reproduce(cfg, jobs=1, progress=False)
     >>> paths = write_outputs(res, tempfile.mkdtemp())
     >>> sorted(p for p in paths if not p.endswith(".png"))
-    ['report', 'results', 'summary']
+    ['claims', 'report', 'results', 'summary']
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -134,13 +135,16 @@ def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str 
                "and no figures were drawn nor claims judged."] if partial else []
     paper, others, notice = paper_part(result)
     notices += [notice] if notice else []
-    from .claims import judge_run
+    from .claims import judge_run, write_claims_csv
 
+    claims = () if partial or not paper.rows else judge_run(paper.rows, seed=result.config.seed,
+                                                            plant=result.config.plant)
+    if claims:
+        paths["claims"] = write_claims_csv(out / "claims.csv", claims)
     md = report_markdown(summary=paper.summary, rows=paper.rows, figures=figs,
                          setup=setup_lines(result, command), notices=notices,
                          discussion=list(discussion) if discussion is not None else discussion_text(paper),
-                         claims=() if partial or not paper.rows else judge_run(
-                             paper.rows, seed=result.config.seed, plant=result.config.plant))
+                         claims=claims)
     if others:
         from .report import terminal_table
 

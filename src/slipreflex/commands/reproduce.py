@@ -2,7 +2,8 @@
 
 Runs every trial (by default 10 trials x 3 bottles x 2 experiments x 4
 methods) in parallel, analyses them as the paper does, and writes
-``results.csv``, ``summary.csv``, ``report.md`` and PNG figures to ``--out``.
+``results.csv``, ``summary.csv``, ``report.md``, ``claims.csv`` (the paper's claims, each
+with its verdict class, reason and interval) and PNG figures to ``--out``.
 
 Examples
 --------
@@ -192,8 +193,9 @@ def _write(result, out: Path, command: str | None) -> dict:
         print(notice)
     print(terminal_table(result.summary))
     if not result.partial_note and paper.rows:
-        print(claims_terminal(judge_run(paper.rows, seed=result.config.seed)))
+        print(claims_terminal(judge_run(paper.rows, seed=result.config.seed, plant=result.config.plant)))
     print(f"{len(result.rows)} rows from {result.trials_finished} trials in {result.wall_s:.1f} s "
           f"({result.jobs} jobs); wrote {paths['results'].parent}/"
-          "{results.csv, summary.csv, report.md" + ("" if result.partial_note else ", figures/") + "}")
+          "{results.csv, summary.csv, report.md" + (", claims.csv" if "claims" in paths else "")
+          + ("" if result.partial_note else ", figures/") + "}")
     return paths
