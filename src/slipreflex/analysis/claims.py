@@ -506,18 +506,32 @@ def _ci(lo: float, hi: float, digits: int = 0) -> str:
     return "no interval" if lo != lo else f"[{_f(lo, digits)}, {_f(hi, digits)}]"
 
 
-def _side(lo: float, hi: float, ok: Callable[[float], bool], *, physics: str, what: str) -> str:
-    """HOLDS when both ends satisfy ``ok``, FAILS_PLANT when neither does, else UNRESOLVED."""
+INF = math.inf
+
+
+def _side(lo: float, hi: float, band: tuple[float, float], strict: tuple[bool, bool]) -> str:
+    """HOLDS when the interval lies inside ``band``, FAILS_PLANT when it misses it, else UNRESOLVED.
+
+    ``strict`` says which ends of the band are open.
+    """
     if lo != lo:
         return UNRESOLVED
-    a, b = ok(lo), ok(hi)
-    return HOLDS if a and b else FAILS_PLANT if not a and not b else UNRESOLVED
+    a, b = band
+
+    def inside(x: float) -> bool:
+        return (x > a if strict[0] else x >= a) and (x < b if strict[1] else x <= b)
+
+    if inside(lo) and inside(hi):
+        return HOLDS
+    below = hi < a or (strict[0] and hi == a)
+    above = lo > b or (strict[1] and lo == b)
+    return FAILS_PLANT if below or above else UNRESOLVED
 
 
-def _part(lo: float, hi: float, ok: Callable[[float], bool], value: float, criterion: str, numbers: str,
-          physics: str) -> Part:
-    """A part decided by an interval: holds / fails on this plant (``physics``) / unresolved."""
-    v = _side(lo, hi, ok, physics=physics, what=criterion)
+def _part(lo: float, hi: float, band: tuple[float, float], value: float, criterion: str, numbers: str,
+          physics: str, strict: tuple[bool, bool] = (True, True)) -> Part:
+    """A part decided by an interval against ``band``: holds / fails on this plant (``physics``) / unresolved."""
+    v = _side(lo, hi, band, strict)
     reason = {HOLDS: numbers, FAILS_PLANT: f"{numbers}; on this plant: {physics}",
               UNRESOLVED: f"{numbers}: the {100 * CONFIDENCE:g} % interval {_ci(lo, hi, 2)} straddles "
                           f"the criterion ({criterion})"}[v]
@@ -573,15 +587,17 @@ def _scan_levels(ci: ClaimInput) -> list[Part]:
     e = ci.scan
     if e is None:
         return [Part(NOT_DECIDABLE, "this run judged no characterization scan")]
-    want = (("white_lo", "0.3"), ("white_hi", "0.5"), ("black_lo", "3.32"), ("black_hi", "3.35"))
+    # as the paper states them: "300 to 500 mV" (its results text) and "3.32 and 3.35 V"
+    want = (("white_lo", 0.3, "300"), ("white_hi", 0.5, "500"), ("black_lo", 3.32, "3.32"),
+            ("black_hi", 3.35, "3.35"))
     inside, parts = [], []
-    for stat, text in want:
+    tol = {stat: VOLT_TOL(text) for stat, _, text in want}
+    for stat, volts, text in want:
         lo, hi = e.band(stat, CENTRAL)
-        tol = VOLT_TOL(text)
-        inside.append(lo - tol <= float(text) <= hi + tol)
-        parts.append(f"{stat.replace('_', ' ')} {lo:.3f}-{hi:.3f} V (paper {text})")
-    ok = ((e.white_lo >= 0.3 - VOLT_TOL("0.3")) & (e.white_hi <= 0.5 + VOLT_TOL("0.5"))
-          & (e.black_lo >= 3.32 - VOLT_TOL("3.32")) & (e.black_hi <= 3.35 + VOLT_TOL("3.35")))
+        inside.append(lo - tol[stat] <= volts <= hi + tol[stat])
+        parts.append(f"{stat.replace('_', ' ')} {lo:.3f}-{hi:.3f} V (paper {volts:g})")
+    ok = ((e.white_lo >= 0.3 - tol["white_lo"]) & (e.white_hi <= 0.5 + tol["white_hi"])
+          & (e.black_lo >= 3.32 - tol["black_lo"]) & (e.black_hi <= 3.35 + tol["black_hi"]))
     frac, flo, fhi = proportion_interval(int(ok.sum()), len(e))
     criterion = (f"each paper level inside the model's central {100 * CENTRAL:g} % over {len(e)} texture seeds "
                  "(± the voltage tolerance)")
@@ -619,7 +635,7 @@ def _scan_spikes(ci: ClaimInput) -> list[Part]:
                           f"DATH's smallest spacing: central 90 % {dlo:.3f}-{dhi:.3f} mm", dfrac))
     more = e.dath_spikes > e.fixed_spikes
     m, mlo, mhi = proportion_interval(int(more.sum()), len(e))
-    parts.append(_part(mlo, mhi, lambda x: x > MOST, m, "DATH more spikes than fixed on most seeds",
+    parts.append(_part(mlo, mhi, (MOST, INF), m, "DATH more spikes than fixed on most seeds",
                        f"DATH gives more spikes than fixed on {100 * m:.0f} % of seeds", PHYSICS[2]))
     return parts
 
@@ -650,15 +666,15 @@ def _faster(ci: ClaimInput, experiment: str, bottle: str, fast: str, slow: str, 
     d, lo, hi, n = difference_interval(a, b, paired=True) if paired else difference_interval(xs, ys)
     numbers = (f"{bottle}: {_label(fast)} {_f(float(np.mean(xs)))} vs {_label(slow)} {_f(float(np.mean(ys)))} ms, "
                f"{'paired' if paired else 'unpaired'} difference {_f(d, 1)} {_ci(lo, hi, 1)} (n {n})")
-    return _part(lo, hi, lambda x: x < 0, d, crit, numbers, physics)
+    return _part(lo, hi, (-INF, 0.0), d, crit, numbers, physics)
 
 
 def _drop_faster(ci: ClaimInput) -> list[Part]:
-    if gone := _missing(ci, "drop", (DATH, FIXED)):
-        return gone
-    out = [_faster(ci, "drop", b, DATH, FIXED, PHYSICS[3]) for b in BOTTLE_ORDER]
     bad = [f"drop {b} DATH {_paper_mean('drop', b, DATH):g} vs fixed {_paper_mean('drop', b, FIXED):g}"
            for b in BOTTLE_ORDER if not _paper_mean("drop", b, DATH) < _paper_mean("drop", b, FIXED)]
+    if gone := _missing(ci, "drop", (DATH, FIXED)):
+        return _paper_part(bad, "DATH not faster") + gone
+    out = [_faster(ci, "drop", b, DATH, FIXED, PHYSICS[3]) for b in BOTTLE_ORDER]
     return _paper_part(bad, "DATH not faster") + [
         Part(p.verdict, p.reason, p.value, p.criterion + " on every bottle", p.low, p.high) for p in out]
 
@@ -801,9 +817,10 @@ def _drop_success(ci: ClaimInput) -> list[Part]:
         return [Part(NOT_DECIDABLE, "this run has no drop trials of DATH or of the fixed threshold")]
     d, dlo, dhi = proportion_interval(kd, nd)
     f, flo, fhi = proportion_interval(kf, nf)
-    parts = [_part(dlo, dhi, lambda x: abs(x - 0.8) <= ABOUT_RATE_POINTS + 1e-12, d,
-                   "DATH's drop success within 80 ± 10 %", f"DATH {kd}/{nd} ({100 * d:.0f} %)", "see the bounds"),
-             _part(flo, fhi, lambda x: x < 0.5, f, "fixed's drop success under 50 %",
+    parts = [_part(dlo, dhi, (0.8 - ABOUT_RATE_POINTS - 1e-12, 0.8 + ABOUT_RATE_POINTS + 1e-12), d,
+                   "DATH's drop success within 80 ± 10 %", f"DATH {kd}/{nd} ({100 * d:.0f} %)", "see the bounds",
+                   (False, False)),
+             _part(flo, fhi, (-INF, 0.5), f, "fixed's drop success under 50 %",
                    f"fixed {kf}/{nf} ({100 * f:.0f} %)", "see the bounds")]
     if all(p.verdict == HOLDS for p in parts):
         return parts
@@ -829,9 +846,9 @@ def _nmsd_twice(ci: ClaimInput) -> list[Part]:
     if r != r:
         return [Part(NOT_DECIDABLE, "no drop totals of DATH (or none above 0 ms) or of NMSD in this run")]
     crit = f"NMSD / DATH mean drop total within {2 / ABOUT_RATIO_FACTOR:.2f}-{2 * ABOUT_RATIO_FACTOR:g}"
-    return [_part(lo, hi, lambda x: 2 / ABOUT_RATIO_FACTOR <= x <= 2 * ABOUT_RATIO_FACTOR, r, crit,
+    return [_part(lo, hi, (2 / ABOUT_RATIO_FACTOR, 2 * ABOUT_RATIO_FACTOR), r, crit,
                   f"drop total NMSD {_f(float(np.mean(num)))} ms / DATH {_f(float(np.mean(den)))} ms = {r:.2f} "
-                  f"{_ci(lo, hi, 2)} ({', '.join(bottles)})", PHYSICS[5])]
+                  f"{_ci(lo, hi, 2)} ({', '.join(bottles)})", PHYSICS[5], (False, False))]
 
 
 def _dath_pours(ci: ClaimInput) -> list[list[Any]]:
@@ -853,7 +870,7 @@ def _pour_dath(ci: ClaimInput) -> list[Part]:
         s, "every DATH pour succeeds", slo, shi)]
     two = sum(_count(_get(t[0], "n_events")) >= 2 for t in pours)
     f, flo, fhi = proportion_interval(two, len(pours))
-    parts.append(_part(flo, fhi, lambda x: x > MOST, f, "more than half of DATH's pours show two slips",
+    parts.append(_part(flo, fhi, (MOST, INF), f, "more than half of DATH's pours show two slips",
                        f"{two} of {len(pours)} DATH pours show two or more slips", PHYSICS[6]))
     for e, want in ((0, 200.0), (1, 400.0)):
         vols = [_num(_get(r, "load_at_onset")) for t in pours for r in t
@@ -862,35 +879,35 @@ def _pour_dath(ci: ClaimInput) -> list[Part]:
         if not nv:
             parts.append(Part(NOT_DECIDABLE, f"no DATH pour shows a slip {e + 1}"))
             continue
-        parts.append(_part(lo, hi, lambda x: abs(x - want) <= NEAR_ML, m,
+        parts.append(_part(lo, hi, (want - NEAR_ML, want + NEAR_ML), m,
                            f"median volume at slip {e + 1} within {want:g} ± {NEAR_ML:g} ml",
                            f"slip {e + 1} at a median {_f(m)} ml {_ci(lo, hi)} (n {nv})",
-                           "the plant's capacity after the reflex's tightening"))
+                           "the plant's capacity after the reflex's tightening", (False, False)))
     return parts
 
 
 def _pour_faster(ci: ClaimInput) -> list[Part]:
     fast, slow = (DATH, SWT), (NMSD, FIXED)
-    if gone := _missing(ci, "pour", fast + slow):
-        return gone
-    parts = [_faster(ci, "pour", b, f, s, PHYSICS[7]) for b in BOTTLE_ORDER for f in fast for s in slow]
     bad = [f"pour {b} {_label(f)} {_paper_mean('pour', b, f):g} vs {_label(s)} {_paper_mean('pour', b, s):g}"
            for b in BOTTLE_ORDER for f in fast for s in slow
            if _paper_mean("pour", b, f) >= _paper_mean("pour", b, s)]
+    if gone := _missing(ci, "pour", fast + slow):
+        return _paper_part(bad, "not faster") + gone
+    parts = [_faster(ci, "pour", b, f, s, PHYSICS[7]) for b in BOTTLE_ORDER for f in fast for s in slow]
     return _paper_part(bad, "not faster") + parts
 
 
 def _under_85(ci: ClaimInput) -> list[Part]:
     cells = [(e, b) for e in EXPERIMENTS for b in BOTTLE_ORDER if ci.values(e, b, DATH, "response_ms")]
-    if not cells:
-        return [Part(NOT_DECIDABLE, "this run has no DATH responses")]
     limit = UNDER_MS + TIME_TOL_MS
     bad = [f"{e} {b} {_paper_mean(e, b, DATH):g} ms" for e in EXPERIMENTS for b in BOTTLE_ORDER
            if not _paper_mean(e, b, DATH) < limit]
     parts = _paper_part(bad, f"not under {UNDER_MS:g} ms + {TIME_TOL_MS:.0f} ms")
+    if not cells:
+        return parts + [Part(NOT_DECIDABLE, "this run has no DATH responses")]
     for e, b in cells:
         m, lo, hi, n = mean_interval(ci.values(e, b, DATH, "response_ms"))
-        parts.append(_part(lo, hi, lambda x: x < limit, m, f"DATH mean response < {UNDER_MS:g} ms (+ one sample)",
+        parts.append(_part(lo, hi, (-INF, limit), m, f"DATH mean response < {UNDER_MS:g} ms (+ one sample)",
                            f"{e} {b} {_f(m)} ms {_ci(lo, hi)} (n {n})", PHYSICS[8]))
     return parts
 
@@ -905,7 +922,7 @@ def _order_parts(ci: ClaimInput, bottle: str, slower: bool, physics: str) -> lis
             d, lo, hi, n = difference_interval(ci.values(e, bottle, DATH, "response_ms"),
                                                ci.values(e, other, DATH, "response_ms"))
             crit = f"{bottle} minus other bottles' DATH mean response {'>' if slower else '<'} 0 ms"
-            parts.append(_part(lo, hi, (lambda x: x > 0) if slower else (lambda x: x < 0), d, crit,
+            parts.append(_part(lo, hi, (0.0, INF) if slower else (-INF, 0.0), d, crit,
                                f"{e} {bottle} - {other} {_f(d, 1)} ms {_ci(lo, hi, 1)}", physics))
     return parts or [Part(NOT_DECIDABLE, "this run has no experiment with DATH responses on TR, DK and TX")]
 
