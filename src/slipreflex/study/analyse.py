@@ -15,7 +15,7 @@
   p-value; it needs no particular design and any N, and a rank measure fits a
   yes/no outcome of constants with log-uniform ranges. For the ``saltelli``
   design, also SALib's first-order and total Sobol' indices of the same
-  indicator (not testable and errors count as 0).
+  indicator (every other verdict and errors count as 0).
 * :func:`write_outputs` - results.parquet / results.csv, plants.csv,
   claims.csv, sensitivity.csv, figures and study.md from a
   :class:`~slipreflex.study.StudyRun`.
