@@ -1,4 +1,4 @@
-"""The paper's reported results, kept as data in one place (SPEC 4).
+"""The paper's reported results, kept as data in one place (its section III).
 
 ``PAPER`` maps ``(experiment, metric, bottle, method)`` to a
 :class:`Reported` value (mean and sd in ms, or a note where the paper gives
@@ -82,7 +82,7 @@ def _r(mean: float, sd: float, note: str = "") -> Reported:
     return Reported(float(mean), float(sd), note)
 
 
-#: The paper's table (SPEC 4), ms.
+#: The paper's table (its section III), ms.
 PAPER: dict[tuple[str, str, str, str], Reported] = {
     ("drop", "response_ms", "TR", DATH): _r(50, 6.48),
     ("drop", "response_ms", "TR", FIXED): _r(55, 9.16),

@@ -397,7 +397,7 @@ def report_markdown(*, summary: Sequence[dict[str, Any]], rows: Sequence[dict[st
     lines += [line for n in notices for line in (f"**{n}**", "")]
     lines += ["## Run", ""] + [f"- {s}" for s in setup] + [""]
     lines += ["## The paper's table beside ours", "",
-              "Mean ± sd (n) in ms; *paper* columns are the paper's section III / SPEC 4 values, "
+              "Mean ± sd (n) in ms; *paper* columns are the paper's section III values, "
               "*ours* come from `results.csv` (one value per slip event). Response time: onset "
               "(accelerometer) to the first increase of the commanded finger position. Total: first "
               "to last change of the command for that slip (fixed, DATH) or the closing time the "
@@ -685,7 +685,7 @@ def _fixed_vs_dath(d: _Rows) -> str:
     same = sum(1 for v in both if abs(v[F] - v[D]) < 1e-6)
     return (f"**Fixed threshold vs DATH response.** In {same} of {len(both)} paired slips "
             "(same seed, same bottle) the two chains responded at exactly the same time. That "
-            "follows from the method (SPEC 1.2): DATH changes the threshold only after the first "
+            "follows from the method (docs/method.md): DATH changes the threshold only after the first "
             "spike, and the MPI raises the command at the end of the first window holding a spike, "
             "so on the same input the first response cannot differ. The paper's fixed and DATH "
             "trials were separate physical runs, so their response times differ by trial-to-trial "

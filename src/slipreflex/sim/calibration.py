@@ -216,8 +216,9 @@ def first_slip(bottle: Bottle, *, rig_kwargs: dict[str, Any] | None = None, seed
         rig.perturb(pour, at=t0)
         end = t0 + pour.duration_s + 1.0
         n0 = rig.onsets.size
-        stop = end
-        while rig.t < stop:
+        stop, last = end, -1.0
+        while rig.t < stop and rig.t > last:      # (the rig stops on its own time grid, at or before `stop`)
+            last = rig.t
             rig.advance_block(min(stop, rig.t + 0.5))
             if rig.fallen:
                 stop = min(stop, float(rig.fall_time) + _AFTER_FALL_S)
