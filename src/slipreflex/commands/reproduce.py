@@ -1,6 +1,6 @@
 """``slipreflex reproduce``: the paper's drop and pour experiments on the simulated rig.
 
-Runs every trial (by default 10 trials x 3 bottles x 2 experiments x 4
+Runs every trial (by default 20 trials x 3 bottles x 2 experiments x 4
 methods) in parallel, analyses them as the paper does, and writes
 ``results.csv``, ``summary.csv``, ``report.md``, ``claims.csv`` (the paper's claims, each
 with its verdict class, reason and interval) and PNG figures to ``--out``.
