@@ -137,7 +137,8 @@ def test_the_paper_bottles_are_calibrated_to_the_first_pour_slip():
 def test_a_different_plant_recalibrates_instead_of_moving_the_volume():
     soft = {"hand": HandParams(latency_s=0.025, pad_normal_stiffness_n_m=1500.0)}
     coulomb = dataclasses.replace(BOTTLES["TR"], friction_law="coulomb", cuff_friction_law="coulomb")
-    for bottle, kw, tol in ((BOTTLES["TR"], soft, 1.0), (coulomb, None, 5.0)):
+    # the observed first slip moves in flow-sensor pulses (2.2 ml): within the calibration's 2 %
+    for bottle, kw, tol in ((BOTTLES["TR"], soft, 0.02 * 250.0), (coulomb, None, 0.02 * 250.0)):
         c = calibrate_bottle(bottle, 250.0, rig_kwargs=kw, seeds=(0,))
         assert first_slip_ml(c.bottle, rig_kwargs=kw, seeds=(0,)) == pytest.approx(250.0, abs=tol)
         assert c.mu_k / c.mu_s == pytest.approx(bottle.mu_k / bottle.mu_s)

@@ -542,10 +542,9 @@ def _combine(number: int, text: str, tolerance: str, parts: list[Part]) -> Claim
     order = {v: i for i, v in enumerate(VERDICTS)}
     parts = parts or [Part(NOT_DECIDABLE, "nothing to judge")]
     d = min(parts, key=lambda p: order[p.verdict])
-    numbers = "; ".join(p.reason for p in parts if p.verdict == HOLDS) if d.verdict != HOLDS else \
-        "; ".join(p.reason for p in parts)
-    return ClaimResult(number, text, d.verdict, d.reason, d.value, d.low, d.high, d.criterion,
-                       numbers, tolerance)
+    numbers = "; ".join(p.reason for p in parts)
+    reason = numbers if d.verdict == HOLDS else d.reason      # a claim holds on all its parts: say them all
+    return ClaimResult(number, text, d.verdict, reason, d.value, d.low, d.high, d.criterion, numbers, tolerance)
 
 
 # --- the paper's own numbers -----------------------------------------------------------------

@@ -351,12 +351,16 @@ def _search(f, lo, hi, target: float, tol: float):
 def calibrate_bottle(bottle: Bottle, target_ml: float = PAPER_FIRST_SLIP_ML, *,
                      rig_kwargs: dict[str, Any] | None = None, seeds=CALIBRATION_SEEDS, pour: Pour = PAPER_POUR,
                      grasp_force: float = hw.CONTACT_FORCE_N, tol_ml: float = 1.0,
-                     band_ml: tuple[float, float] | None = None) -> Calibration:
+                     band_ml: tuple[float, float] | None = None, observed: bool = True) -> Calibration:
     """Calibrate the pads' static friction so that the observed open-loop first pour slip comes at ``target_ml``.
 
     The first slip calibrated is the one the paper's instruments saw
     (:func:`first_slip`: the accelerometer recipe's onset, the flow sensor's
-    volume), not the simulator's earlier true onset.
+    volume), not the simulator's earlier true onset (``observed=False``
+    calibrates that one instead: :attr:`Calibration.first_slip_ml` is then the
+    true volume). On a plant whose middle-finger cuff sticks and slips, the
+    accelerometer sees the cuff's first slip: the observed first slip stays
+    there whatever the pads' friction, and no pad friction meets a later target.
 
     The first slip grows with ``mu_s`` (``mu_k / mu_s`` kept), but in steps:
     the bottle slips grossly only when all three contacts slide, and the
@@ -400,7 +404,8 @@ def calibrate_bottle(bottle: Bottle, target_ml: float = PAPER_FIRST_SLIP_ML, *,
     def f(mu: float) -> float:   # a bottle that does not slip during the pour counts as twice its volume
         s = seen[mu] = first_slip(with_mu(mu), rig_kwargs=rig_kwargs, seeds=seeds, pour=pour,
                                   grasp_force=grasp_force)
-        return pour.volume_ml * 2 if math.isnan(s.observed_ml) else s.observed_ml
+        v = s.observed_ml if observed else s.true_ml
+        return pour.volume_ml * 2 if math.isnan(v) else v
 
     tol = max(tol_ml, 0.02 * target_ml)
     best, lo, hi = _search(f, *_bracket(f, bottle.mu_s, target_ml, bottle.name), target_ml, tol)
