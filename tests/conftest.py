@@ -1,9 +1,74 @@
-"""Helpers shared by the test modules (fixtures; pytest finds them by name)."""
+"""Helpers shared by the test modules (fixtures; pytest finds them by name).
+
+Tiers: ``pytest -m "not slow"`` is the fast tier (docs/development.md); the slow tier
+(``-m slow``) is what a full run adds. Tests that build or run the firmware declare the
+tools they need with ``@pytest.mark.needs_tools("make", "avr-gcc", ...)`` or, in a
+fixture, ``require_tools(...)``: where a tool is absent they skip, naming it, unless
+``SLIPREFLEX_REQUIRE_TOOLS=1`` (``scripts/bootstrap.sh test`` sets it, so CI, which
+installs the tools, fails instead of skipping).
+"""
 
 from __future__ import annotations
 
+import functools
+import os
+import shutil
+import subprocess
+
 import numpy as np
 import pytest
+
+#: How each tool a test may need is found. ``simavr`` is the library and headers the
+#: firmware's harness links against (libsimavr-dev, libelf-dev), found by pkg-config.
+TOOLS = {
+    "make": "make", "cc": "cc", "avr-gcc": "avr-gcc", "avrdude": "avrdude", "pkg-config": "pkg-config",
+}
+
+
+@functools.cache
+def missing_tool(name: str) -> str | None:
+    """Why ``name`` is unusable here (a one-line reason), or None when it is present."""
+    if name == "simavr":
+        if shutil.which("pkg-config") is None:
+            return "pkg-config is not on PATH (needed to find simavr)"
+        ok = subprocess.run(["pkg-config", "--exists", "simavr"], capture_output=True).returncode == 0
+        return None if ok else "simavr (libsimavr-dev) is not known to pkg-config"
+    if name == "avr-libc":
+        return None if os.path.exists("/usr/lib/avr/include/avr/io.h") else "avr-libc is not installed"
+    if name not in TOOLS:
+        raise ValueError(f"unknown tool {name!r} (known: {', '.join([*TOOLS, 'simavr', 'avr-libc'])})")
+    return None if shutil.which(TOOLS[name]) else f"{TOOLS[name]} is not on PATH"
+
+
+def require_tools(*names: str) -> None:
+    """Skip the calling test or fixture, naming what is missing, when a tool is absent.
+
+    With ``SLIPREFLEX_REQUIRE_TOOLS=1`` a missing tool fails the test instead.
+    """
+    reasons = [r for r in map(missing_tool, names) if r]
+    if not reasons:
+        return
+    message = "needs " + ", ".join(names) + ": " + "; ".join(reasons) + " (scripts/bootstrap.sh installs them)"
+    if os.environ.get("SLIPREFLEX_REQUIRE_TOOLS") == "1":
+        pytest.fail(message)
+    pytest.skip(message)
+
+
+#: The firmware's tool sets, for ``needs_tools`` and ``require_tools``.
+HOST_C = ("make", "cc")
+AVR = ("make", "avr-gcc", "avr-libc")
+SIMAVR = ("make", "cc", "avr-gcc", "avr-libc", "simavr")
+
+
+def pytest_runtest_setup(item):
+    for mark in item.iter_markers("needs_tools"):
+        require_tools(*mark.args)
+
+
+@pytest.fixture(scope="session")
+def tools():
+    """``tools(*names)``: skip (or, under ``SLIPREFLEX_REQUIRE_TOOLS=1``, fail) unless every tool is here."""
+    return require_tools
 
 
 def _stream(reflex, samples, positions=None) -> np.ndarray:

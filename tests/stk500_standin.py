@@ -48,7 +48,7 @@ class Bootloader:
         self._buffer = bytearray()
         self._thread = threading.Thread(target=self._serve, daemon=True)
 
-    def __enter__(self) -> "Bootloader":
+    def __enter__(self) -> Bootloader:
         self._thread.start()
         return self
 

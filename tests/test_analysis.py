@@ -8,12 +8,17 @@ import numpy as np
 import pytest
 
 from slipreflex.analysis.events import segment_events
-from slipreflex.analysis.metrics import (controller_activity, increases, response_time,
-                                         suppressed)
+from slipreflex.analysis.metrics import controller_activity, increases, response_time, suppressed
 from slipreflex.analysis.onset import OnsetParams, accel_envelope, detect_onset, select_axis
 from slipreflex.analysis.paper import PAPER, paper_value
-from slipreflex.analysis.report import (SUMMARY_COLUMNS, comparison_markdown, read_csv,
-                                        summarize, terminal_table, write_csv)
+from slipreflex.analysis.report import (
+    SUMMARY_COLUMNS,
+    comparison_markdown,
+    read_csv,
+    summarize,
+    terminal_table,
+    write_csv,
+)
 from slipreflex.analysis.trial import RESULT_COLUMNS, TrialStreams, analyse_trial
 from slipreflex.errors import DataError, ParameterError
 

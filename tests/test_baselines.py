@@ -6,8 +6,20 @@ import numpy as np
 import pytest
 
 from slipreflex.baselines import (
-    NMSD, SWTSD, ClosingParams, NMSDParams, SWTParams, closing_commands, nmsd_commands,
-    nmsd_detections, nmsd_statistic, rest_threshold, swt_commands, swt_on, swt_statistic)
+    NMSD,
+    SWTSD,
+    ClosingParams,
+    NMSDParams,
+    SWTParams,
+    closing_commands,
+    nmsd_commands,
+    nmsd_detections,
+    nmsd_statistic,
+    rest_threshold,
+    swt_commands,
+    swt_on,
+    swt_statistic,
+)
 from slipreflex.errors import DataError, ParameterError
 from slipreflex.hardware import NMSD_FS, SWT_FS
 from slipreflex.interfaces import Reflex
@@ -28,6 +40,7 @@ def _synthetic(fs: float, seconds: float, seed: int, noise: float = 0.005) -> np
     return f
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_nmsd_streaming_equals_batch(seed, stream, assert_same_commands):
     frames = _synthetic(NMSD_FS, 2.0, seed)

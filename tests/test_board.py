@@ -39,8 +39,9 @@ gen = _load("slipreflex_fw_gen_board_vectors", FIRMWARE / "test" / "gen_board_ve
 
 
 @pytest.fixture(scope="module")
-def host_build(tmp_path_factory):
+def host_build(tmp_path_factory, tools):
     """The two host builds of the core's vector checker (right and wrong rounding)."""
+    tools("make", "cc")
     out = tmp_path_factory.mktemp("board") / "build"
     targets = [f"{out}/test_board_vectors", f"{out}/test_board_vectors-wrong-rounding"]
     proc = subprocess.run(["make", "-C", str(FIRMWARE), f"BUILD={out}", *targets],
@@ -55,11 +56,11 @@ def _run_c(exe: Path, vectors: Path) -> subprocess.CompletedProcess:
 
 
 def _read_vectors(path: Path) -> list[dict]:
-    lines = [l for l in path.read_text().splitlines() if l and not l.startswith("#")]
+    lines = [ln for ln in path.read_text().splitlines() if ln and not ln.startswith("#")]
     out = []
     for i in range(0, len(lines), 7):
-        rec = {l[0]: l[2:] for l in lines[i:i + 7]}
-        assert "".join(l[0] for l in lines[i:i + 7]) == "VPIQXEW"
+        rec = {ln[0]: ln[2:] for ln in lines[i:i + 7]}
+        assert "".join(ln[0] for ln in lines[i:i + 7]) == "VPIQXEW"
         out.append(rec)
     return out
 
@@ -107,6 +108,7 @@ def test_twin_reproduces_every_vector():
     assert ":500" in text and "f" in "".join(r["E"] for r in recs)
 
 
+@pytest.mark.slow
 def test_c_core_reproduces_every_vector(host_build):
     proc = _run_c(host_build / "test_board_vectors", VECTORS)
     assert proc.returncode == 0, proc.stdout + proc.stderr
@@ -117,14 +119,14 @@ def test_negative_control_wrong_rounding_is_rejected(host_build):
     """The core built with truncation instead of round-half-up fails the same checker."""
     proc = _run_c(host_build / "test_board_vectors-wrong-rounding", VECTORS)
     assert proc.returncode == 1, proc.stdout
-    fails = [l for l in proc.stdout.splitlines() if l.startswith("FAIL")]
-    assert len(fails) >= 10 and all(" x " in l for l in fails), proc.stdout
+    fails = [ln for ln in proc.stdout.splitlines() if ln.startswith("FAIL")]
+    assert len(fails) >= 10 and all(" x " in ln for ln in fails), proc.stdout
 
 
 @pytest.mark.parametrize("line, mutate", [("X", "x"), ("E", "event"), ("W", "command")])
 def test_c_checker_catches_a_wrong_vector(host_build, tmp_path, line, mutate):
     lines = VECTORS.read_text().splitlines()
-    i = next(i for i, l in enumerate(lines) if l == "V walk_dath") + "VPIQXEW".index(line)
+    i = next(i for i, ln in enumerate(lines) if ln == "V walk_dath") + "VPIQXEW".index(line)
     if mutate == "x":
         vals = lines[i][2:].split(",")
         vals[700] = str(int(vals[700]) + 1)
@@ -263,6 +265,7 @@ def test_integral_saturation_is_output_neutral():
     assert c.h == board.H_MAX and c.command == hardware.FINGER_MAX
 
 
+@pytest.mark.slow
 def test_agrees_with_float_chain_on_quantised_signals():
     rng = np.random.default_rng(5)
     for dath in (False, True):
@@ -320,6 +323,7 @@ def test_bad_input_is_named():
     assert math.isfinite(board.volts_to_q16(0.0))
 
 
+@pytest.mark.slow
 def test_board_methods_run_in_reproduce_beside_the_float_chain():
     from slipreflex import methods
     from slipreflex.experiments import ReproduceConfig, run_reproduce

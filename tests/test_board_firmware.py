@@ -39,7 +39,8 @@ gen = _load("gen_board_vectors")
 
 
 @pytest.fixture(scope="module")
-def build(tmp_path_factory):
+def build(tmp_path_factory, tools):
+    tools("make", "cc", "avr-gcc", "avr-libc", "simavr")
     out = tmp_path_factory.mktemp("fwb") / "build"
     targets = [f"{out}/{t}" for t in ("daq-reflex.elf", "daq-reflex-wrong-rounding.elf",
                                       "hand2560.elf", "harness")]
@@ -75,6 +76,7 @@ def test_reflex_config_header_is_the_twins():
     assert (FIRMWARE / "reflex" / "reflex_config.h").read_text() == gen.config_header()
 
 
+@pytest.mark.slow
 def test_board_reflex_equals_twin_on_every_sample(build, tmp_path):
     """Random full-range readings (every conversion, 10 s): the DAQ part is as clean as
     the plain firmware's and every frame carries the twin's chain output."""
@@ -87,6 +89,7 @@ def test_board_reflex_equals_twin_on_every_sample(build, tmp_path):
     assert cap.busy_share < 0.15                      # DAQ + chain within the budget
 
 
+@pytest.mark.slow
 def test_standalone_mega_drives_the_hand(build, tmp_path):
     """ATmega2560: injected slip-like signal with a sensor fault and a stuck converter;
     the hand packets are valid, carry the rising commands, none during a fault, and leave
@@ -109,6 +112,7 @@ def test_standalone_mega_drives_the_hand(build, tmp_path):
         assert pos == res.commands[(sample + 1) // 16 - 1]
 
 
+@pytest.mark.slow
 def test_negative_control_wrong_rounding_is_rejected_under_simavr(build, tmp_path):
     out = _harness(build, "daq-reflex-wrong-rounding.elf", tmp_path, 3)
     assert check_capture.check(out).ok                # the DAQ itself is fine ...
@@ -117,6 +121,7 @@ def test_negative_control_wrong_rounding_is_rejected_under_simavr(build, tmp_pat
     assert any("filtered sample differs" in e for e in rep.errors), rep.errors
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("damage", ["hand_byte", "hand_dropped", "frame_command"])
 def test_checker_rejects_damaged_captures(build, tmp_path, damage):
     adc = slip_like(2, 3000)
@@ -145,6 +150,8 @@ def test_checker_rejects_damaged_captures(build, tmp_path, damage):
     assert not rep.ok, rep.summary()
 
 
+@pytest.mark.slow
+@pytest.mark.needs_tools("make", "cc", "avr-gcc", "avr-libc", "simavr")
 def test_runner_and_detect_board_write_the_same_files(tmp_path, capsys):
     """Item 5: the simavr runner on a CSV of counts and `detect --board` on the same file."""
     adc = slip_like(3, 1500)

@@ -15,10 +15,11 @@ from pathlib import Path
 import pytest
 import serial
 
-from slipreflex import board, hardware as hw
+from slipreflex import board
+from slipreflex import hardware as hw
 from slipreflex.cli import main
-from slipreflex.devices.daq import SerialDaq
 from slipreflex.devices import wire
+from slipreflex.devices.daq import SerialDaq
 from slipreflex.recording import METADATA_NAME, Recorder, read_recording, replay
 from slipreflex.runtime import run_loop
 
@@ -36,6 +37,9 @@ class Hand:
         self.sent.append(dict(targets))
         self.pos.update(targets)
 
+    def close_fingers(self, fingers, speed):
+        self.sent.append(("close", tuple(fingers)))
+
     def positions(self):
         return dict(self.pos)
 
@@ -44,8 +48,9 @@ class Hand:
 
 
 @pytest.fixture(scope="module")
-def captures(tmp_path_factory):
+def captures(tmp_path_factory, tools):
     """UART bytes of the reflex firmware and of its wrong-rounding build, 1.5 s each."""
+    tools("make", "cc", "avr-gcc", "avr-libc", "simavr")
     root = tmp_path_factory.mktemp("host")
     build = root / "build"
     elves = ["daq-reflex.elf", "daq-reflex-wrong-rounding.elf"]
@@ -86,6 +91,7 @@ def _run(data: bytes, path: Path | None):
     return res, twin, hand
 
 
+@pytest.mark.slow
 def test_live_check_of_the_real_firmware_finds_no_mismatch_and_records_it(captures, tmp_path):
     data = captures["daq-reflex.elf"]
     n = len(data) // wire.FRAME_LEN_REFLEX
@@ -106,6 +112,7 @@ def test_live_check_of_the_real_firmware_finds_no_mismatch_and_records_it(captur
     assert "board commands" in rp.summary()
 
 
+@pytest.mark.slow
 def test_a_board_with_the_wrong_rounding_is_a_recorded_fault(captures, tmp_path):
     res, twin, _ = _run(captures["daq-reflex-wrong-rounding.elf"], tmp_path / "bad.mcap")
     bad = [f for f in res.faults if f.kind == "board-mismatch"]
@@ -115,6 +122,7 @@ def test_a_board_with_the_wrong_rounding_is_a_recorded_fault(captures, tmp_path)
     assert any(f["kind"] == "board-mismatch" for f in faults)
 
 
+@pytest.mark.slow
 def test_one_corrupted_command_is_caught_and_replay_shows_it(captures, tmp_path):
     frames = wire.FrameParser().feed(captures["daq-reflex.elf"])
     k = next(i for i, f in enumerate(frames) if f.reflex.window and i > 100)
@@ -133,6 +141,7 @@ def test_one_corrupted_command_is_caught_and_replay_shows_it(captures, tmp_path)
     assert not rp.identical and "board commands" in rp.summary() and "DIFFERENT" in rp.summary()
 
 
+@pytest.mark.slow
 def test_a_version_1_board_is_named(tmp_path):
     data = b"".join(wire.encode_frame(seq=k, adc=300) for k in range(40))
     res, twin, _ = _run(data, None)

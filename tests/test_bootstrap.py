@@ -8,7 +8,6 @@ asked (the real Debian packages are checked by ``scripts/fresh_debian_check.sh``
 runs the whole bootstrap in a freshly debootstrapped Debian 12).
 """
 
-import os
 import stat
 import subprocess
 import sys
@@ -111,6 +110,7 @@ requires_system_python = pytest.mark.skipif(
     not SYSTEM_PYTHON.exists(), reason="no distribution python3 in /usr/bin on this machine")
 
 
+@pytest.mark.slow
 @requires_system_python
 def test_system_python_is_refused_by_pip_outside_a_venv(tmp_path):
     """The premise: on Debian 12 the distribution's python3 is externally managed."""
@@ -122,6 +122,7 @@ def test_system_python_is_refused_by_pip_outside_a_venv(tmp_path):
     assert "externally-managed-environment" in r.stderr or "No module named pip" in r.stderr
 
 
+@pytest.mark.slow
 @requires_system_python
 def test_bootstrap_with_the_system_python_makes_and_uses_dot_venv(standin):
     proj, shims, log = standin
@@ -141,11 +142,13 @@ def test_bootstrap_with_the_system_python_makes_and_uses_dot_venv(standin):
     assert again.returncode == 0 and "creating" not in again.stdout + again.stderr
 
 
+@pytest.mark.slow
 @requires_system_python
 def test_bootstrap_installs_python3_venv_when_ensurepip_is_missing(standin, tmp_path):
     """Debian's python3 without python3-venv: bootstrap asks apt for it, then makes the venv."""
     proj, shims, log = standin
-    real = subprocess.run([str(SYSTEM_PYTHON), "-c", "import sys; print(f'{sys.version_info[0]}.{sys.version_info[1]}')"],
+    version = "import sys; print(f'{sys.version_info[0]}.{sys.version_info[1]}')"
+    real = subprocess.run([str(SYSTEM_PYTHON), "-c", version],
                           capture_output=True, text=True, check=True).stdout.strip()
     mark = tmp_path / "venv-installed"
     _script(shims / "python3", f"""
@@ -161,6 +164,7 @@ def test_bootstrap_installs_python3_venv_when_ensurepip_is_missing(standin, tmp_
     assert f"standin ran in {proj / '.venv'}" in out
 
 
+@pytest.mark.slow
 def test_bootstrap_with_a_user_installed_python(standin):
     """A Python that is not the distribution's (pyenv, python.org): the venv comes from it."""
     proj, shims, log = standin
@@ -186,6 +190,7 @@ def test_bootstrap_bad_input_is_one_line_exit_2(standin, args, env, message):
     assert not (proj / ".venv").exists()
 
 
+@pytest.mark.slow
 def test_bootstrap_as_a_user_goes_through_sudo(standin, tmp_path):
     proj, shims, log = standin
     _script(shims / "dpkg", '[ "$2" = avrdude ] && exit 1\nexit 0\n')

@@ -16,7 +16,7 @@ from slipreflex.errors import ParameterError
 from slipreflex.sim.calibration import calibrate_bottle, first_slip_ml
 from slipreflex.sim.uncertain import nominal_values, plant_from_values
 from slipreflex.study import StudyConfig
-from slipreflex.study.analyse import plant_table, claim_fractions
+from slipreflex.study.analyse import claim_fractions, plant_table
 from slipreflex.study.runner import run_plant
 
 #: A plausible plant (every constant inside the uncertain table's ranges) with a stick-slipping cuff.

@@ -1,7 +1,6 @@
 """Every rule of SPEC section 1, with examples worked by hand and written out."""
 
 import numpy as np
-import pytest
 from scipy.signal import butter, sosfilt, sosfilt_zi
 
 import slipreflex as sr

@@ -57,6 +57,7 @@ def test_single_column_needs_fs(tmp_path, capsys, monkeypatch):
     assert sorted(x.name for x in p.parent.iterdir()) == ["one.csv"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("content,needle", [
     ("", "empty"),
     ("t,y\n0,1\n", "line 1: missing column(s) x"),

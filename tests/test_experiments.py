@@ -12,8 +12,17 @@ from slipreflex.baselines import NMSD, SWTSD
 from slipreflex.chain import SlipReflex
 from slipreflex.errors import ParameterError
 from slipreflex.experiments import (
-    RESULTS_CSV_COLUMNS, Cell, ReproduceConfig, calibrate, calibration_seed, closing_speed,
-    method_context, run_reproduce, run_trial, trial_seed)
+    RESULTS_CSV_COLUMNS,
+    Cell,
+    ReproduceConfig,
+    calibrate,
+    calibration_seed,
+    closing_speed,
+    method_context,
+    run_reproduce,
+    run_trial,
+    trial_seed,
+)
 from slipreflex.sim import PAPER_DROP, PAPER_POUR, HandParams
 
 
@@ -97,6 +106,7 @@ def test_a_drop_trial_is_deterministic_and_complete():
     assert plot is not None and len(plot.cmd_t) > 0
 
 
+@pytest.mark.slow
 def test_parallel_and_serial_runs_give_the_same_rows():
     cfg = ReproduceConfig(trials=2, bottles=("TR", "TX"), methods=("fixed", "nmsd"),
                           experiments=("drop",), calibration_s=1.0)

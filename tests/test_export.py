@@ -41,6 +41,12 @@ class _Hand:
     def set_positions(self, t):
         self.pos.update(t)
 
+    def close_fingers(self, fingers, speed):
+        pass
+
+    def hold(self, fingers):
+        pass
+
     def positions(self):
         return dict(self.pos)
 
@@ -57,6 +63,7 @@ def _recorded_run(tmp_path):
     return path
 
 
+@pytest.mark.slow
 def test_export_preamble_carries_p0_and_the_chain_so_the_commands_can_be_rerun(tmp_path, capsys):
     path = _recorded_run(tmp_path)
     assert main(["export", str(path)]) == 0
@@ -72,6 +79,7 @@ def test_export_preamble_carries_p0_and_the_chain_so_the_commands_can_be_rerun(t
     assert max(recorded) > P0["middle"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("out, says", [
     ("{tmp}", "not a regular file"), ("{tmp}/missing/x.csv", "does not exist"),
     ("/proc/version", "cannot write"), ("{tmp}/fifo", "not a regular file"),

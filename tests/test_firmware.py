@@ -1,7 +1,8 @@
 """The AVR firmware: build, shared test vectors in C, and runs under simavr.
 
 Needs avr-gcc, avr-libc, simavr, libsimavr-dev, libelf-dev and pkg-config (installed by
-scripts/bootstrap.sh); without them these tests fail, they do not skip.
+scripts/bootstrap.sh); without them these tests skip, naming the missing tool, except under
+``SLIPREFLEX_REQUIRE_TOOLS=1`` (set by ``scripts/bootstrap.sh test``, so CI never skips them).
 """
 
 from __future__ import annotations
@@ -38,8 +39,9 @@ checker = _load_checker()
 
 
 @pytest.fixture(scope="module")
-def build(tmp_path_factory):
+def build(tmp_path_factory, tools):
     """Build everything into a private directory; return (dir, make output)."""
+    tools("make", "cc", "avr-gcc", "avr-libc", "simavr")
     out = tmp_path_factory.mktemp("fw") / "build"
     proc = subprocess.run(["make", "-C", str(FIRMWARE), f"BUILD={out}"],
                           capture_output=True, text=True)
@@ -62,6 +64,7 @@ def good_capture(build, tmp_path_factory):
     return out
 
 
+@pytest.mark.slow
 def test_build_is_strict_and_reports_size(build):
     build_dir, log = build
     assert "-Wall -Wextra -Werror" in log
@@ -94,6 +97,7 @@ def test_c_header_matches_python():
     }
 
 
+@pytest.mark.slow
 def test_c_encoder_passes_shared_vectors(build):
     proc = subprocess.run([str(build[0] / "test_vectors"), str(VECTORS)],
                           capture_output=True, text=True)
@@ -102,19 +106,20 @@ def test_c_encoder_passes_shared_vectors(build):
                      proc.stdout), proc.stdout
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("mutate", ["field", "reason", "hex"])
 def test_c_vector_test_catches_a_wrong_vector(build, tmp_path, mutate):
     lines = VECTORS.read_text().splitlines()
     if mutate == "field":      # a good frame whose decoded adc is off by one
-        i = next(i for i, l in enumerate(lines) if l.startswith("F basic "))
+        i = next(i for i, ln in enumerate(lines) if ln.startswith("F basic "))
         parts = lines[i].split(" ")
         parts[5] = str(int(parts[5]) + 1)
     elif mutate == "reason":   # a bad-CRC frame declared truncated
-        i = next(i for i, l in enumerate(lines) if l.startswith("B crc_low_bit "))
+        i = next(i for i, ln in enumerate(lines) if ln.startswith("B crc_low_bit "))
         parts = lines[i].split(" ")
         parts[3] = "truncated"
     else:                      # a good frame with one bit flipped in its bytes
-        i = next(i for i, l in enumerate(lines) if l.startswith("F zero "))
+        i = next(i for i, ln in enumerate(lines) if ln.startswith("F zero "))
         parts = lines[i].split(" ")
         parts[2] = parts[2][:10] + ("1" if parts[2][10] != "1" else "0") + parts[2][11:]
     lines[i] = " ".join(parts)
@@ -125,6 +130,7 @@ def test_c_vector_test_catches_a_wrong_vector(build, tmp_path, mutate):
     assert proc.returncode == 1 and "FAIL" in proc.stdout, proc.stdout
 
 
+@pytest.mark.slow
 def test_simavr_run_is_clean_and_on_time(good_capture):
     rep = checker.check(good_capture)
     assert rep.ok, rep.summary()
@@ -138,20 +144,22 @@ def test_simavr_run_is_clean_and_on_time(good_capture):
     assert 0 < rep.busy_share <= 0.05                # issue 13's DAQ budget (simulated cycles)
 
 
+@pytest.mark.slow
 def test_decoded_samples_carry_injected_values(good_capture):
     """End to end through DaqSample: volts, g and time, against the harness's log."""
     parser = wire.FrameParser()
     samples = [f.to_sample() for f in parser.feed((good_capture / "uart.bin").read_bytes())]
     events = (good_capture / "events.txt").read_text().splitlines()
-    counts = [int(l.split()[2]) for l in events if l.startswith("A ")][: len(samples)]
+    counts = [int(ln.split()[2]) for ln in events if ln.startswith("A ")][: len(samples)]
     np.testing.assert_allclose([s.slip_volts for s in samples],
                                np.array(counts) * hardware.ADC_LSB)
     assert samples[-1].t == pytest.approx((len(samples) - 1) * hardware.DAQ_PERIOD_S)
-    first = next(l for l in events if l.startswith("I ")).split()[2:]
+    first = next(ln for ln in events if ln.startswith("I ")).split()[2:]
     fresh = next(s for s in samples if s.accel_g is not None)
     assert fresh.accel_g == tuple(int(v) / wire.ACCEL_LSB_PER_G for v in first)
 
 
+@pytest.mark.slow
 def test_negative_control_wrong_build_is_rejected(build, tmp_path):
     """Firmware built with an off-by-one timer compare value (3.0005 ms, +167 ppm)."""
     _harness(build[0], "daq-wrong-period.elf", tmp_path, SECONDS)
@@ -166,6 +174,7 @@ def _copy(src: Path, dst: Path) -> Path:
     return dst
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("damage, words", [
     ("flip", "crc errors"),
     ("drop", "seq gaps"),
@@ -187,7 +196,7 @@ def test_negative_control_corrupted_capture_is_rejected(good_capture, tmp_path, 
     elif damage in ("value", "accel", "pulse"):  # the log disagrees with what came back
         ev = (out / "events.txt").read_text().splitlines()
         kind = {"value": "A ", "accel": "I ", "pulse": "P "}[damage]
-        i = [j for j, l in enumerate(ev) if l.startswith(kind)][1234]
+        i = [j for j, ln in enumerate(ev) if ln.startswith(kind)][1234]
         parts = ev[i].split(" ")
         if damage == "pulse":    # one pulse the firmware counted never happened
             del ev[i]
@@ -205,6 +214,7 @@ def test_negative_control_corrupted_capture_is_rejected(good_capture, tmp_path, 
     assert any(words in e for e in rep.errors), rep.errors
 
 
+@pytest.mark.slow
 def test_without_imu_frames_keep_coming_flagged(build, tmp_path):
     _harness(build[0], "daq.elf", tmp_path, 10, "--no-imu")
     rep = checker.check(tmp_path, imu=False)
@@ -214,6 +224,7 @@ def test_without_imu_frames_keep_coming_flagged(build, tmp_path):
     assert any("IMU_ERROR" in e for e in checker.check(tmp_path, imu=True).errors)
 
 
+@pytest.mark.slow
 def test_imu_plugged_in_later_is_configured_and_read(build, tmp_path):
     """No IMU for the first second, then one appears (asleep, as at power-on): the
     firmware keeps streaming, flags IMU_ERROR meanwhile, then configures and reads it."""
@@ -224,7 +235,7 @@ def test_imu_plugged_in_later_is_configured_and_read(build, tmp_path):
     plug = round(1.0 / hardware.DAQ_PERIOD_S)
     assert all(f.imu_error and not f.accel_fresh for f in frames[:plug])
     assert all(f.accel_fresh and not f.imu_error for f in frames[plug + 5:])
-    writes = [l.split() for l in (tmp_path / "events.txt").read_text().splitlines()
-              if l.startswith("W ")]
+    writes = [ln.split() for ln in (tmp_path / "events.txt").read_text().splitlines()
+              if ln.startswith("W ")]
     assert [(int(r), int(v)) for _, _, r, v in writes] == list(checker.IMU_CONFIG.items())
     assert all(int(c) > hardware.F_CPU for _, c, _, _ in writes)

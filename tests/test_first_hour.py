@@ -18,6 +18,8 @@ def _flash(board: Bootloader, build: Path) -> subprocess.CompletedProcess:
                           capture_output=True, text=True, timeout=300)
 
 
+@pytest.mark.slow
+@pytest.mark.needs_tools("make", "avr-gcc", "avr-libc", "avrdude")
 def test_make_flash_programs_an_uno_through_avrdude(tmp_path):
     """README: `make -C firmware flash PORT=...` builds the hex and avrdude writes and verifies it."""
     with Bootloader() as board:
@@ -30,6 +32,8 @@ def test_make_flash_programs_an_uno_through_avrdude(tmp_path):
     assert "bytes of flash verified" in r.stderr
 
 
+@pytest.mark.slow
+@pytest.mark.needs_tools("make", "avr-gcc", "avr-libc", "avrdude")
 def test_make_flash_refuses_a_board_that_is_not_an_uno(tmp_path):
     """The stand-in's answers matter: a Mega's signature stops avrdude before it writes."""
     with Bootloader(signature=bytes([0x1E, 0x98, 0x01])) as board:
@@ -162,10 +166,11 @@ def _reproduce_then_signal(tmp_path, send):
     except subprocess.TimeoutExpired:
         os.killpg(proc.pid, sig.SIGKILL)
         proc.communicate()
-        raise AssertionError("reproduce did not stop after the signal")
+        raise AssertionError("reproduce did not stop after the signal") from None
     return proc.returncode, "".join(err) + rest, out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("send", [
     lambda p, sig: os.killpg(p.pid, sig.SIGINT),        # Ctrl-C reaches the parent and every worker
     lambda p, sig: p.send_signal(sig.SIGTERM),          # kill PID: the parent only
@@ -213,6 +218,7 @@ def test_method_names_take_any_case(tmp_path, capsys):
     assert args.methods == ("dath", "fixed", "nmsd", "swt")
 
 
+@pytest.mark.slow
 def test_seeds_are_derived_in_time_linear_in_the_trials(monkeypatch):
     """3000 trials: every seed comes from O(1) spawned children (it was O(trials) each)."""
     import numpy as np
@@ -236,6 +242,7 @@ def test_seeds_are_derived_in_time_linear_in_the_trials(monkeypatch):
     assert trial_seed(11, "pour", "TX", 7) == int(ss.generate_state(2, dtype=np.uint64)[0] >> np.uint64(1))
 
 
+@pytest.mark.slow
 def test_reproduce_estimates_its_run_time_before_starting(tmp_path, capsys, monkeypatch):
     import slipreflex.experiments as ex
     from slipreflex.cli import main
@@ -246,8 +253,8 @@ def test_reproduce_estimates_its_run_time_before_starting(tmp_path, capsys, monk
     monkeypatch.setattr(ex, "run_reproduce", stop)
     assert main(["reproduce", "--out", str(tmp_path), "--trials", "3000", "--jobs", "2"]) == 2
     err = capsys.readouterr().err.splitlines()
-    from slipreflex.progress import format_duration
     from slipreflex.commands.reproduce import LONG_RUN_S
+    from slipreflex.progress import format_duration
 
     est = ex.estimate_wall_s(ex.ReproduceConfig(trials=3000), 2)
     assert est > LONG_RUN_S
@@ -281,6 +288,7 @@ def _objects_file(tmp_path, mu_s=1.2, mu_k=1.0):
     return p
 
 
+@pytest.mark.slow
 def test_reproduce_with_own_objects_compares_with_the_paper_only_where_they_are_the_papers(tmp_path, capsys):
     from slipreflex.analysis.report import read_csv
     from slipreflex.cli import main
@@ -307,7 +315,8 @@ def test_own_objects_names_are_checked_before_any_work(tmp_path, capsys):
     for argv, says in [
         (["reproduce", "--drop", "HEAVY"], "--drop HEAVY: no such drop (give --objects FILE.toml)"),
         (["reproduce", "--objects", str(objs), "--pour", "SLOW"], f"--pour SLOW: no such pour ({objs} has FAST)"),
-        (["reproduce", "--objects", str(objs), "--bottles", "JAR,XX"], "bottles: unknown 'XX' (known: TR, DK, TX, JAR)"),
+        (["reproduce", "--objects", str(objs), "--bottles", "JAR,XX"],
+         "bottles: unknown 'XX' (known: TR, DK, TX, JAR)"),
         (["reproduce", "--objects", str(tmp_path)], f"{tmp_path}: is a directory, not a TOML file"),
         (["virtual-rig", "--objects", str(objs), "--bottle", "POT"], "--bottle POT: unknown (known: TR, DK, TX, JAR)"),
         (["virtual-rig", "--objects", str(objs), "--drop", "NOPE"], f"--drop NOPE: no such drop ({objs} has HEAVY)"),
@@ -396,6 +405,7 @@ def test_trial_figure_says_what_happened_keeps_legends_off_the_data_and_zooms_ev
     assert 14.3 * 500 / 30 - 20 < lo and hi < 15.3 * 500 / 30 + 20   # scaled to the zoom, not 0..500
 
 
+@pytest.mark.slow
 def test_scan_figure_names_its_regions_and_shows_both_thresholds(tmp_path, monkeypatch):
     import matplotlib
     matplotlib.use("Agg", force=True)

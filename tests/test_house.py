@@ -93,3 +93,29 @@ def test_the_default_sampling_rate_is_the_daq_s_everywhere():
              "LowPass": inspect.signature(sr.LowPass).parameters["fs"].default,
              "lowpass": inspect.signature(sr.lowpass).parameters["fs"].default}
     assert rates == dict.fromkeys(rates, hw.DAQ_FS)
+
+
+def _marked_slow(node) -> bool:
+    import ast
+
+    return any("mark.slow" in ast.unparse(d) for d in node.decorator_list)
+
+
+def test_every_test_module_keeps_a_fast_test_and_the_tier_markers_are_registered():
+    """The fast tier (`pytest -m "not slow"`, docs/development.md) covers every test module."""
+    import ast
+    import tomllib
+
+    without = []
+    for path in sorted((ROOT / "tests").glob("test_*.py")):
+        tree = ast.parse(path.read_text())
+        if any(isinstance(n, ast.Assign) and any(getattr(t, "id", "") == "pytestmark" for t in n.targets)
+               and "slow" in ast.unparse(n.value) for n in tree.body):
+            without.append(path.name)
+            continue
+        tests = [n for n in tree.body if isinstance(n, ast.FunctionDef) and n.name.startswith("test_")]
+        if tests and all(_marked_slow(n) for n in tests):
+            without.append(path.name)
+    assert not without, f"test modules with no test in the fast tier: {without}"
+    markers = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["pytest"]["ini_options"]["markers"]
+    assert {m.split(":")[0].split("(")[0] for m in markers} >= {"slow", "needs_tools"}

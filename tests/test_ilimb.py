@@ -10,7 +10,12 @@ import serial
 
 from slipreflex import hardware as hw
 from slipreflex.devices.ilimb import (
-    FingerCommand, GraspResult, ILimb, PacketParser, encode_packet, tripod_grasp,
+    FingerCommand,
+    GraspResult,
+    ILimb,
+    PacketParser,
+    encode_packet,
+    tripod_grasp,
 )
 from slipreflex.devices.virtual import PtyPort
 from slipreflex.errors import DeviceError, ParameterError

@@ -8,15 +8,19 @@ import io
 import json
 import os
 import subprocess
-import threading
 import sys
 import textwrap
+import threading
 import time
 
 import pytest
 
 from slipreflex.recording import (
-    METADATA_NAME, TOPICS, Recorder, RecordingError, read_recording,
+    METADATA_NAME,
+    TOPICS,
+    Recorder,
+    RecordingError,
+    read_recording,
 )
 
 
@@ -65,6 +69,7 @@ _CHILD = textwrap.dedent("""
 """)
 
 
+@pytest.mark.slow
 def test_sigkill_leaves_a_file_readable_up_to_about_a_second_before(tmp_path):
     path = tmp_path / "killed.mcap"
     proc = subprocess.Popen([sys.executable, "-c", _CHILD, str(path)], stdout=subprocess.PIPE,
@@ -148,6 +153,7 @@ def test_disk_full_mid_run_stops_recording_without_raising():
         buf.close()
 
 
+@pytest.mark.slow
 def test_sigkilled_run_leaves_a_recording_that_replays(tmp_path):
     """End to end: `slipreflex run` on the virtual rig, killed with SIGKILL mid-run."""
     from slipreflex.devices.simrig import SimRig

@@ -12,7 +12,6 @@ import subprocess
 import sys
 import threading
 
-
 import pytest
 from mcap.reader import NonSeekingReader, make_reader
 
@@ -65,6 +64,7 @@ def _chunk_offsets(data):
     return out
 
 
+@pytest.mark.slow
 def test_a_sigkilled_recording_opens_with_make_reader_after_recover(tmp_path, capsys):
     path = tmp_path / "killed.mcap"
     proc = subprocess.Popen([sys.executable, "-c", _CHILD, str(path)], stdout=subprocess.PIPE, text=True)
@@ -96,6 +96,7 @@ def test_a_sigkilled_recording_opens_with_make_reader_after_recover(tmp_path, ca
     assert again.complete and not again.gaps() and again.topic("/chain/events") == ours.topic("/chain/events")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("keep", [0.37, 0.61, 0.93, 0.999])
 def test_a_recording_cut_anywhere_is_recovered_up_to_its_last_complete_chunk(tmp_path, keep):
     whole = _run_recording(tmp_path / "whole.mcap").read_bytes()

@@ -20,6 +20,7 @@ def run_dir(tmp_path_factory):
     return out
 
 
+@pytest.mark.slow
 def test_files_and_columns(run_dir, capsys):
     for name in ("results.csv", "summary.csv", "report.md"):
         assert (run_dir / name).stat().st_size > 0
@@ -30,6 +31,7 @@ def test_files_and_columns(run_dir, capsys):
     assert len(summary) == len(EXPERIMENTS) * len(BOTTLE_NAMES) * len(METHODS)
 
 
+@pytest.mark.slow
 def test_every_method_bottle_and_experiment_ran(run_dir):
     rows = read_csv(run_dir / "results.csv")
     ran = {(r["experiment"], r["bottle"], r["method"], r["trial"]) for r in rows}
@@ -42,6 +44,7 @@ def test_every_method_bottle_and_experiment_ran(run_dir):
     assert all(r["onset_s"] != "" for r in drops)
 
 
+@pytest.mark.slow
 def test_report_has_the_paper_table_ours_and_the_figures(run_dir):
     md = (run_dir / "report.md").read_text()
     assert "| drop, response ms | TR | 50 ± 6.48 |" in md

@@ -1,4 +1,5 @@
-"""The characterization scan matches the paper's numbers (levels, DATH > fixed, ~0.09 mm spacing) and the CLI writes its files."""
+"""The characterization scan matches the paper's numbers (levels, DATH > fixed, ~0.09 mm spacing)
+and the CLI writes its files."""
 
 import numpy as np
 import pytest
@@ -28,6 +29,7 @@ def test_scan_only_moves_with_the_surface():
     assert still.volts.std() < 2 * hw.ADC_LSB
 
 
+@pytest.mark.slow
 def test_scan_command_writes_csv_and_figure(tmp_path, capsys):
     assert main(["scan", "--out", str(tmp_path), "--seed", "1"]) == 0
     out = capsys.readouterr().out

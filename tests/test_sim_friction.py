@@ -11,8 +11,13 @@ import slipreflex
 from slipreflex import hardware as hw
 from slipreflex.sim import BOTTLES, Drop, HandParams, PhysicsParams, Pour, Rig, run_closed_loop, simulate_open_loop
 from slipreflex.sim import kernel as K
-from slipreflex.sim.calibration import (PAPER_FIRST_SLIP_ML, calibrate_bottle, drop_fall_capacity, drop_falls,
-                                        first_slip_ml)
+from slipreflex.sim.calibration import (
+    PAPER_FIRST_SLIP_ML,
+    calibrate_bottle,
+    drop_fall_capacity,
+    drop_falls,
+    first_slip_ml,
+)
 from slipreflex.sim.contacts import static_capacity
 
 G = hw.GRAVITY
@@ -49,6 +54,7 @@ def test_steady_sliding_speed_under_a_constant_excess_load_is_the_laws():
     assert tr.daq.velocity[-1] == pytest.approx(expected, rel=0.01)
 
 
+@pytest.mark.slow
 def test_slide_speed_solver_converges_and_solves_the_balance():
     C = np.zeros(K.C_SIZE, dtype=np.int64)
     rng = np.random.default_rng(0)

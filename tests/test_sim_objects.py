@@ -6,8 +6,18 @@ import numpy as np
 import pytest
 
 from slipreflex.errors import ParameterError
-from slipreflex.sim import (BOTTLES, SURFACES, Bottle, Drop, HandParams, Pour, Rig, Surface, load_objects,
-                            simulate_open_loop)
+from slipreflex.sim import (
+    BOTTLES,
+    SURFACES,
+    Bottle,
+    Drop,
+    HandParams,
+    Pour,
+    Rig,
+    Surface,
+    load_objects,
+    simulate_open_loop,
+)
 
 
 def test_user_objects_from_python_run_without_editing_the_package():

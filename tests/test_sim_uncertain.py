@@ -56,7 +56,8 @@ def test_bottle_selectors_and_ratio_targets():
                                                        ("bottle[TX].mu_s",))}
     p = plant_from_values({"tx_only": 1.2, "pad_mu_k_ratio": 0.5, "pad_mu_k_ratio_TX": 0.5}, table=table)
     assert p.bottles["TX"].mu_s == 1.2 and p.bottles["TR"].mu_s == BOTTLES["TR"].mu_s
-    assert p.bottles["TX"].mu_k == pytest.approx(0.6) and p.bottles["TR"].mu_k == pytest.approx(0.5 * BOTTLES["TR"].mu_s)
+    assert p.bottles["TX"].mu_k == pytest.approx(0.6)
+    assert p.bottles["TR"].mu_k == pytest.approx(0.5 * BOTTLES["TR"].mu_s)
 
 
 def test_first_slip_target_recalibrates_the_pads():

@@ -7,8 +7,7 @@ from slipreflex.errors import ParameterError
 from slipreflex.experiments import ReproduceConfig, trial_seed
 from slipreflex.hardware import SLIP_FINGER
 from slipreflex.sim import BOTTLES, HandParams
-from slipreflex.sim.variations import (TrialVariation, VariationSpread, apply_variation, draw_variation,
-                                       trial_rig)
+from slipreflex.sim.variations import TrialVariation, VariationSpread, apply_variation, draw_variation, trial_rig
 
 
 def test_same_seed_same_variation_and_rig_bits():
@@ -69,7 +68,6 @@ def test_a_grasp_that_cannot_hold_is_an_error_before_any_trial(monkeypatch):
     import dataclasses
 
     from slipreflex import experiments
-    from slipreflex.sim import calibration
     from slipreflex.sim.calibration import GraspFailed, check_grasp
 
     jar = dataclasses.replace(BOTTLES["TR"], name="JAR", mass_kg=0.25, mu_s=0.4, mu_k=0.3)

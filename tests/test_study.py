@@ -101,6 +101,7 @@ def _rows(path):
     return pq.read_table(path).to_pylist()
 
 
+@pytest.mark.slow
 def test_local_cluster_equals_serial(tmp_path):
     cfg = StudyConfig(plants=2, **TINY)
     serial = run_study(cfg, tmp_path / "s", workers=0, progress=False)
@@ -124,6 +125,7 @@ def _await_line(proc, needle):
     raise AssertionError(f"{proc.args[0]} exited before logging {needle!r}")
 
 
+@pytest.mark.slow
 def test_a_scheduler_and_one_worker_give_the_same_rows(tmp_path):
     env = {**os.environ, "PYTHONPATH": str(Path(__file__).parents[1] / "src")}
     dask = str(Path(sys.executable).with_name("dask"))
@@ -157,7 +159,8 @@ def test_claim_fractions_and_wilson():
     plants.append({"error": "ValueError: x"})
     plants.append({"error": "", "rejected": "observed first slip outside 170-230 ml: TR 240 ml", "claim_3": "holds"})
     r = claim_fractions(plants)[2]
-    assert (r["plants"], r["errors"], r["rejected"], r["holds"], r["fails_plant"], r["unresolved"]) == (5, 1, 1, 3, 1, 1)
+    got = (r["plants"], r["errors"], r["rejected"], r["holds"], r["fails_plant"], r["unresolved"])
+    assert got == (5, 1, 1, 3, 1, 1)
     assert r["value"] == 0.6 and r["verdict"] == "unresolved" and "3 of 5 plants" in r["reason"]
 
 
@@ -181,6 +184,7 @@ def test_sensitivity_finds_the_deciding_constant_with_sobol_indices():
     assert all(r["sobol_st"] < 0.3 for r in sens if r["constant"] != "hand_latency")
 
 
+@pytest.mark.slow
 def test_outputs_and_figures(tmp_path):
     run = run_study(StudyConfig(plants=3, **TINY), tmp_path, workers=0, progress=False)
     paths = write_outputs(run, figures=True)
@@ -201,7 +205,8 @@ def test_every_plant_scans_its_own_texture_seeds_and_the_study_pools_them(tmp_pa
     assert len(a.scan["seeds"]) == cfg.scan_seeds and set(a.scan["seeds"]).isdisjoint(b.scan["seeds"])
     run = run_study(cfg, tmp_path, workers=0, progress=False)
     assert len(pooled_scan(run.parts)) == 2 * cfg.scan_seeds
-    assert "scans pooled over the plants" in claim_fractions(plant_table(run.parts), pooled_scan(run.parts))[0]["reason"]
+    first = claim_fractions(plant_table(run.parts), pooled_scan(run.parts))[0]
+    assert "scans pooled over the plants" in first["reason"]
 
 
 def test_a_plant_whose_observed_first_slip_leaves_the_band_is_counted_apart(monkeypatch):

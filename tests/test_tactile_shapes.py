@@ -5,8 +5,16 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from slipreflex.baselines import (NMSD, SWTSD, NMSDParams, SWTParams, nmsd_commands, rest_statistic,
-                                  rest_threshold, swt_commands)
+from slipreflex.baselines import (
+    NMSD,
+    SWTSD,
+    NMSDParams,
+    SWTParams,
+    nmsd_commands,
+    rest_statistic,
+    rest_threshold,
+    swt_commands,
+)
 from slipreflex.errors import DataError, ParameterError
 from slipreflex.hardware import NMSD_FS, SWT_FS
 

@@ -328,18 +328,29 @@ def test_window_mpi_without_reset_matches_oracle_and_stream():
 # --- the authors' hand rule in the simulated closed loop -----------------------------------------
 
 def test_closed_loop_sends_the_middle_finger_its_offset():
-    from slipreflex.hardware import TRIPOD, Finger, HandCommand
-    from slipreflex.sim.loop import _finger_command, command_groups
+    """The middle finger's + 20 is extra closing time at the first command; rises close all alike."""
+    from slipreflex.hardware import FINGER_SPEED_UNITS_S, TRIPOD, Finger, HandCommand
+    from slipreflex.sim.loop import _grip_sender, grip_groups
 
-    sent = []
-    record = lambda kind, fingers, value, at=None: sent.append((tuple(fingers), value))  # noqa: E731
-    reflex = SlipReflex.from_preset("authors-gui")
-    send = _finger_command(record, command_groups(TRIPOD, reflex.finger_offsets))
-    send(HandCommand.POSITION, TRIPOD, 150.0, at=0.0)
-    send(HandCommand.POSITION, TRIPOD, 495.0, at=0.1)
-    assert sent == [((Finger.THUMB, Finger.INDEX), 150.0), ((Finger.MIDDLE,), 170.0),
-                    ((Finger.THUMB, Finger.INDEX), 495.0), ((Finger.MIDDLE,), 500.0)]
-    assert command_groups(TRIPOD, SlipReflex(dath=True).finger_offsets) == [(TRIPOD, 0.0, 0.0)]
+    class Hand:
+        closing_until: dict = {}
+
+        def __init__(self):
+            self.sent = []
+
+        def command(self, kind, fingers, value, at=None):
+            self.sent.append((kind, tuple(fingers), round(at, 9)))
+
+    hand = Hand()
+    reflex = SlipReflex.from_preset("authors-gui", p0=150.0)
+    send = _grip_sender(hand, grip_groups(TRIPOD, reflex.finger_offsets), 150.0)
+    send(150.0, 0.0)    # no rise: only the middle finger's offset
+    send(162.5, 0.1)    # 12.5 units for every finger: 20 ms
+    ti, m = (Finger.THUMB, Finger.INDEX), (Finger.MIDDLE,)
+    c, s = HandCommand.CLOSE, HandCommand.STOP
+    assert hand.sent == [(c, m, 0.0), (s, m, round(20 / FINGER_SPEED_UNITS_S, 9)),
+                         (c, ti, 0.1), (s, ti, 0.12), (c, m, 0.1), (s, m, 0.12)]
+    assert grip_groups(TRIPOD, SlipReflex(dath=True).finger_offsets) == [(TRIPOD, 0.0)]
 
 
 def test_registered_variants_build_their_chains():

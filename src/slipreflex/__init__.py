@@ -14,9 +14,25 @@ Examples
 """
 
 from .chain import (
-    ChainResult, EncoderParams, EncoderTrace, EventEncoder, FilterParams, LowPass, MPIController,
-    MPIParams, ReflexParams, SlipReflex, WindowCounter, WindowParams, count_windows, design_lowpass,
-    encode, encode_trace, lowpass, mpi, run_chain,
+    ChainResult,
+    EncoderParams,
+    EncoderTrace,
+    EventEncoder,
+    FilterParams,
+    LowPass,
+    MPIController,
+    MPIParams,
+    ReflexParams,
+    SlipReflex,
+    WindowCounter,
+    WindowParams,
+    count_windows,
+    design_lowpass,
+    encode,
+    encode_trace,
+    lowpass,
+    mpi,
+    run_chain,
 )
 from .errors import DataError, DeviceError, ParameterError, SlipreflexError
 

@@ -32,20 +32,25 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from . import hardware as hw
 from .chain.encoder import dath_update
 from .errors import DataError, ParameterError
+from .methods import Detections, MethodContext
 from .validation import instance
+
+if TYPE_CHECKING:
+    from .interfaces import InputKind
 
 __all__ = [
     "COEF_Q", "SIG_Q", "H_MAX", "BoardParams", "BoardChain", "BoardReflex", "BoardResult",
     "run_board_chain", "adc_counts", "quantize_lowpass", "volts_to_q16", "board_detections",
     "FIRMWARE_ADC_MIN", "FIRMWARE_ADC_MAX", "FIRMWARE_STUCK_AFTER", "read_adc_csv",
     "write_board_outputs", "CheckedBoardReflex", "BoardSource", "board_params_from_json",
+    "build_board_method", "board_method_detections",
 ]
 
 #: Fractional bits of the filter coefficients.
@@ -126,7 +131,7 @@ def quantize_lowpass(fs: float = hw.DAQ_FS, cutoff: float = 10.0) -> tuple[int, 
     return g, a1, 4 * g - one - a1
 
 
-def board_params_from_json(text: str, where: Any = "board_params") -> "BoardParams":
+def board_params_from_json(text: str, where: Any = "board_params") -> BoardParams:
     """:class:`BoardParams` from the JSON a ``run --board-reflex`` recording stores.
 
     Raises
@@ -221,7 +226,7 @@ class BoardParams:
 
     @classmethod
     def from_chain(cls, params=None, *, adc_min: int = 0, adc_max: int = ADC_MAX,
-                   stuck_after: int = 0, **kwargs) -> "BoardParams":
+                   stuck_after: int = 0, **kwargs) -> BoardParams:
         """Quantise the float chain's parameters (:class:`~slipreflex.ReflexParams`).
 
         Parameters
@@ -247,7 +252,7 @@ class BoardParams:
         >>> BoardParams.from_chain(acc_leak=32.0)
         Traceback (most recent call last):
         ...
-        slipreflex.errors.ParameterError: acc_leak=32.0: the board's fixed-point chain runs the paper's method only (no acc_leak); use the float chain (slipreflex.chain)
+        slipreflex.errors.ParameterError: acc_leak=32.0: the board's fixed-point chain runs the paper's method only ...
         """
         from .chain.params import ReflexParams
 
@@ -270,6 +275,7 @@ class BoardParams:
                 raise ParameterError(f"{name} must be a whole number for the board, got {value!r}")
             whole[name] = int(value)
         g, a1, a2 = quantize_lowpass(p.fs, p.cutoff)
+        assert p.reset_after is not None, "an MPI that never resets is a variant, refused above"
         return cls(g=g, a1=a1, a2=a2, theta0=volts_to_q16(p.threshold), filter=p.filter,
                    dath=p.dath, dath_samples=p.dath_samples, dath_floor=volts_to_q16(p.dath_floor),
                    x0=None if p.x0 is None else volts_to_q16(p.x0), n=p.n,
@@ -277,7 +283,7 @@ class BoardParams:
                    stuck_after=stuck_after, **whole)
 
     @classmethod
-    def firmware(cls, *, dath: bool = True, p0: int = 0) -> "BoardParams":
+    def firmware(cls, *, dath: bool = True, p0: int = 0) -> BoardParams:
         """What the firmware built with ``REFLEX_DATH=dath REFLEX_P0=p0`` runs.
 
         The paper's chain at the board's 333.33 Hz with the firmware's fault rules
@@ -552,7 +558,7 @@ class BoardReflex:
     100.0
     """
 
-    input_kind = "slip"
+    input_kind: InputKind = "slip"
 
     def __init__(self, params: BoardParams | None = None, *, fs: float = hw.DAQ_FS,
                  **kwargs) -> None:
@@ -834,3 +840,28 @@ class BoardSource:
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self.daq, name)
+
+
+# --- the registry's board methods (slipreflex.methods names these by entry point) ------------
+
+def build_board_method(dath: bool, p0: float, context: MethodContext, **params: Any) -> BoardReflex:
+    """The registry's ``dath-board`` / ``fixed-board``: a :class:`BoardReflex` at the rounded ``p0``.
+
+    Examples
+    --------
+    >>> build_board_method(True, 99.6, MethodContext()).params.p0
+    100
+    """
+    return BoardReflex(**{"dath": dath, **params, "p0": int(np.floor(p0 + 0.5))})
+
+
+def board_method_detections(reflex: BoardReflex, volts: np.ndarray) -> Detections:
+    """What a trial figure draws for a board method: its Q16 low-pass and its spikes.
+
+    Examples
+    --------
+    >>> board_method_detections(build_board_method(True, 100.0, MethodContext()), np.full(64, 0.4)).event_label
+    'events (spikes)'
+    """
+    x, events = board_detections(reflex, volts)
+    return Detections(x, "slip sensor on the board, Q16 low-pass (V)", events, "events (spikes)")

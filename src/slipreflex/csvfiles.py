@@ -34,7 +34,7 @@ from .errors import DataError
 
 __all__ = ["INPUT_COLUMNS", "SAMPLE_COLUMNS", "WINDOW_COLUMNS", "read_slip_csv", "write_columns",
            "read_preamble", "PREAMBLE_PREFIX", "Recording", "read_recording", "irregular_steps",
-           "JITTER_TOLERANCE"]
+           "JITTER_TOLERANCE", "cell_float", "cell_bool"]
 
 #: A time step further than this fraction from the median step is a gap or jitter
 #: (the chain assumes uniform sampling; a missing 3 ms sample is a 100 % step).
@@ -233,6 +233,7 @@ def read_recording(path: str | os.PathLike, fs: float | None = None) -> Recordin
             if k and t[k] <= t[k - 1]:
                 raise DataError(f"{path}, line {line}: time not increasing ({t[k]!r} after {t[k - 1]!r})")
     if it is None:
+        assert fs is not None, "refused above: no t column and no fs"
         t = np.arange(len(body)) / float(fs)
     lines = np.array([line for line, _ in body], dtype=int)
     return Recording(path, t, x, lines, it is not None, read_preamble(path))
@@ -288,7 +289,7 @@ def read_preamble(path: str | os.PathLike) -> dict[str, str]:
     return out
 
 
-def write_columns(path: str | os.PathLike, columns: Mapping[str, Sequence], *,
+def write_columns(path: str | os.PathLike, columns: Mapping[str, Sequence | np.ndarray], *,
                   preamble: Mapping[str, str] | None = None) -> None:
     """Write equal-length columns to a CSV atomically.
 
@@ -332,3 +333,48 @@ def write_columns(path: str | os.PathLike, columns: Mapping[str, Sequence], *,
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
+
+
+def cell_float(x: object, *, lenient: bool = False) -> float:
+    """A results-table cell as a float: None and a blank cell (how NaN is written) are NaN.
+
+    Parameters
+    ----------
+    x : object
+        A cell as read from a CSV (str) or as a run produced it (number, None).
+    lenient : bool
+        True: a cell that is not a number is NaN too (for judging a table someone
+        else wrote); False (default): it raises ``ValueError``.
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> cell_float("12.5"), cell_float(""), cell_float(None)
+    (12.5, nan, nan)
+    >>> cell_float("n/a", lenient=True)
+    nan
+    """
+    if x is None or (isinstance(x, str) and not x.strip()):
+        return float("nan")
+    try:
+        return float(x)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        if lenient:
+            return float("nan")
+        raise
+
+
+def cell_bool(x: object) -> bool:
+    """A results-table cell as a truth value: "true"/"1" (any case) are True, NaN is False.
+
+    Examples
+    --------
+    >>> cell_bool("True"), cell_bool("0"), cell_bool(1), cell_bool(float("nan"))
+    (True, False, True, False)
+    """
+    if isinstance(x, str):
+        return x.strip().lower() in ("true", "1")
+    return bool(x) and not (isinstance(x, float) and math.isnan(x))

@@ -35,7 +35,6 @@ from __future__ import annotations
 import dataclasses
 import functools
 import itertools
-import math
 import os
 import time
 from collections.abc import Callable
@@ -44,7 +43,7 @@ from typing import Any
 
 import numpy as np
 
-from . import methods
+from . import experiment_specs, methods
 from .analysis.outputs import ReproduceResult, trial_plot, write_outputs
 from .analysis.paper import BOTTLE_ORDER, bottle_key
 from .analysis.paper import EXPERIMENTS as PAPER_EXPERIMENTS
@@ -53,9 +52,10 @@ from .baselines.calibration import REST_K
 from .baselines.swt import SWT_WINDOW
 from .errors import ParameterError
 from .grid import Cell, grid_result, run_cells
-from .interrupts import Interrupted
-from .progress import Progress
 from .hardware import CONTACT_FORCE_N
+from .interrupts import Interrupted
+from .paper_experiments import LANDING_S
+from .progress import Progress
 from .thresholds import calibrate, calibration_seed
 from .validation import choices, flag, integer, positive, set_field
 
@@ -70,7 +70,8 @@ __all__ = [
 #: The paper's methods, in the one method order of :mod:`slipreflex.methods` (run by default;
 #: any registered method may be chosen).
 METHODS: tuple[str, ...] = methods.names(paper=True)
-#: Experiments: sudden load and gradual load (the paper's, from :mod:`slipreflex.analysis.paper`).
+#: The experiments run by default: the paper's sudden and gradual load (any registered
+#: experiment, :mod:`slipreflex.experiment_specs`, may be chosen).
 EXPERIMENTS: tuple[str, ...] = PAPER_EXPERIMENTS
 #: The paper's bottles (keys of ``slipreflex.sim.BOTTLES``), in the canonical order used for seeds.
 BOTTLE_NAMES: tuple[str, ...] = BOTTLE_ORDER
@@ -170,7 +171,7 @@ class ReproduceConfig:
         set_field(self, "trials", integer("trials", self.trials, lo=1))
         set_field(self, "seed", integer("seed", self.seed, lo=0))
         known_bottles = tuple(self.plant.bottles) if self.plant is not None else BOTTLE_NAMES
-        for name, known in (("bottles", known_bottles), ("experiments", EXPERIMENTS)):
+        for name, known in (("bottles", known_bottles), ("experiments", experiment_specs.names())):
             set_field(self, name, choices(name, getattr(self, name), known))
         set_field(self, "methods", choices("methods", self.methods, methods.names(), any_case=True))
         for name in ("rest_s", "after_s", "calibration_s", "rest_k", "grasp_force_n"):
@@ -182,8 +183,7 @@ class ReproduceConfig:
         if self.rest_s < need:
             raise ParameterError(f"rest_s must be >= {need:g} s (the first {OnsetParams().baseline_s * 1e3:g} "
                                  f"ms of rest set the onset threshold), got {self.rest_s!r}")
-        self.drop  # validates the drop and pour through the simulator's own classes
-        self.pour
+        _ = self.drop, self.pour  # validates the drop and pour through the simulator's own classes
 
     @property
     def drop(self):
@@ -231,11 +231,11 @@ class ReproduceConfig:
         >>> ReproduceConfig().duration("drop")
         2.5
         """
-        load = 0.0 if experiment == "drop" else self.pour.duration_s
-        return self.rest_s + load + self.after_s
+        exp = experiment_specs.get(experiment)
+        return self.rest_s + exp.load_s(exp.perturbation(self)) + self.after_s
 
     def cells(self) -> list[Cell]:
-        """Every trial to run, longest first (pours before drops) for load balance.
+        """Every trial to run, the longest experiments first (pours before drops) for load balance.
 
         Examples
         --------
@@ -243,7 +243,7 @@ class ReproduceConfig:
         ['pour', 'drop']
         """
         out = []
-        for e in sorted(self.experiments, key=lambda x: x != "pour"):
+        for e in sorted(self.experiments, key=lambda x: -self.duration(x)):
             for b in self.bottles:
                 for k in range(self.trials):
                     seed = trial_seed(self.seed, e, b, k)
@@ -269,7 +269,8 @@ def trial_seed(master: int, experiment: str, bottle: str, trial: int, method: st
     >>> trial_seed(1, "pour", "TX", 2) == trial_seed(1, "pour", "TX", 2)
     True
     """
-    entropy, spawn_key, pool_size = _cell_sequence(master, EXPERIMENTS.index(experiment), bottle_key(bottle))
+    entropy, spawn_key, pool_size = _cell_sequence(master, experiment_specs.seed_branch(experiment),
+                                                   bottle_key(bottle))
     # The child spawn(trial + 1)[trial] would make, built directly: the same bits in O(1),
     # so a grid's seeds take time linear in its trials (spawning them was quadratic).
     child = np.random.SeedSequence(entropy, spawn_key=(*spawn_key, trial), pool_size=pool_size)
@@ -286,7 +287,9 @@ def _cell_sequence(master: int, e: int, b: int) -> tuple[Any, tuple[int, ...], i
     A bottle that is not the paper's (``b`` >= 3) gets the child with spawn key ``b``,
     built directly, so its seeds do not depend on which other bottles run.
     """
-    parent = np.random.SeedSequence(master).spawn(len(EXPERIMENTS))[e]
+    root = np.random.SeedSequence(master)   # a registered experiment's branch, built directly
+    parent = root.spawn(len(EXPERIMENTS))[e] if e < len(EXPERIMENTS) else np.random.SeedSequence(
+        root.entropy, spawn_key=(e,), pool_size=root.pool_size)
     if b >= len(BOTTLE_NAMES):
         return parent.entropy, (*parent.spawn_key, b), parent.pool_size
     ss = parent.spawn(len(BOTTLE_NAMES))[b]
@@ -381,7 +384,6 @@ def run_trial(cell: Cell, config: ReproduceConfig, thresholds: dict[str, float],
     from .analysis.trial import TrialStreams, analyse_trial
     from .hardware import SLIP_FINGER
     from .sim import run_closed_loop
-
     from .sim.variations import VariationSpread, grasped_rig
 
     plant = {} if config.plant is None else {"rig_kwargs": config.plant.rig_kwargs(),
@@ -393,19 +395,20 @@ def run_trial(cell: Cell, config: ReproduceConfig, thresholds: dict[str, float],
     reflex = spec.build(p0, dataclasses.replace(method_context(config, thresholds), method=spec.name))
     threshold = reflex.last_threshold          # the threshold it starts with, for results.csv
     t_pert = rig.t + config.rest_s
-    pour = cell.experiment == "pour"
-    rig.perturb(config.pour if pour else config.drop, at=t_pert)
+    exp = experiment_specs.get(cell.experiment)
+    what = exp.perturbation(config)
+    rig.perturb(what, at=t_pert)
     tr = run_closed_loop(rig, reflex, config.duration(cell.experiment))
-    # a pour induces slip once the water has landed; the jet's landing knock is not a slip
-    start = t_pert + (_jet_fall_s(config.pour) + LANDING_S if pour else 0.0)
-    end = t_pert + (config.pour.duration_s if pour else 0.0) + config.after_s
+    # slips are looked for from when the load can first cause one (a pour: once the water has landed)
+    start = t_pert + exp.settle_s(what)
+    end = t_pert + exp.load_s(what) + config.after_s
     streams = TrialStreams(
         experiment=cell.experiment, method=cell.method, bottle=cell.bottle, seed=cell.seed,
         trial=cell.trial, accel_t=tr.t, accel=tr.accel, cmd_t=tr.cmd_t, cmd_v=tr.cmd_value,
         base_command=p0, induction=(start, end), t_end=tr.t_end,
         fell_out_time=float("nan") if tr.fall_time is None else float(tr.fall_time),
         true_onsets=[e.onset for e in tr.slip_events], method_fs=float(reflex.fs), ramp=spec.ramp,
-        load_t=tr.t if pour else None, load=tr.water_ml if pour else None,
+        load_t=tr.t if exp.records_load else None, load=tr.water_ml if exp.records_load else None,
         threshold=float("nan") if threshold is None else float(threshold))
     truth = {round(e.onset, 9): e for e in tr.slip_events}
     rows = [dataclasses.replace(r, grasp_position=p0, grasp_force_n=float(grasp.force_n),
@@ -419,17 +422,6 @@ def _true_slip(ev: Any) -> dict[str, float]:
     """The simulator's slip episode: how long it slid (NaN while open / fallen) and how far."""
     return {"true_slip_ms": float("nan") if ev is None or ev.end is None else 1e3 * (ev.end - ev.onset),
             "true_slip_mm": float("nan") if ev is None else 1e3 * ev.distance}
-
-
-#: After the poured water lands, its knock (~30 ms in the simulator) is over by this time (s).
-LANDING_S: float = 0.1
-
-
-def _jet_fall_s(pour) -> float:
-    """Fall time (s) of the poured water from the spout to the bottle."""
-    from . import hardware as hw
-
-    return math.sqrt(2.0 * pour.fall_height_m / hw.GRAVITY)
 
 
 def run_reproduce(config: ReproduceConfig | None = None, *, jobs: int | None = None,
@@ -468,6 +460,7 @@ def run_reproduce(config: ReproduceConfig | None = None, *, jobs: int | None = N
         raise ParameterError(f"jobs must be >= 1, got {jobs}")
     t0 = time.perf_counter()
     import scipy.signal  # noqa: F401  (once, here: forked workers inherit it; each took ~1 s to import it)
+
     from .sim.calibration import check_grasp
     for b in config.bottles:                    # a grasp that cannot hold a bottle fails here, at once
         check_grasp(config.bottle(b), config.grasp_force_n)
@@ -484,8 +477,9 @@ def run_reproduce(config: ReproduceConfig | None = None, *, jobs: int | None = N
 
     def finished(group: tuple) -> None:
         bar.update(len(group))
-        for c in group if on_done else ():
-            on_done(c)
+        if on_done is not None:
+            for c in group:
+                on_done(c)
 
     with Progress(len(cells), desc="trials", unit="trial", enabled=progress) as bar:
         try:

@@ -18,14 +18,14 @@ Examples
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Hashable, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 from typing import Any
 
-from . import methods
+from . import experiment_specs, methods
 from .analysis.outputs import ReproduceResult
-from .analysis.paper import EXPERIMENTS, bottle_key
+from .analysis.paper import bottle_key
 from .interrupts import stop_pool, worker_signals
 
 __all__ = ["Cell", "run_cells", "row_order", "grid_result"]
@@ -59,7 +59,7 @@ class Cell:
         return (self.experiment, self.bottle, self.method, self.trial)
 
 
-def run_cells(calls: Mapping[Hashable, Callable[[], Any]], jobs: int,
+def run_cells(calls: Mapping[Any, Callable[[], Any]], jobs: int,
               finished: Callable[[Any], Any], done: dict) -> None:
     """Run every call into ``done`` by its key: in this process for ``jobs == 1``, else on a pool.
 
@@ -111,7 +111,7 @@ def row_order(row: Any) -> tuple:
     >>> [r.bottle for r in sorted(rows, key=row_order)]
     ['TR', 'TX']
     """
-    return (EXPERIMENTS.index(row.experiment), bottle_key(row.bottle), row.bottle,
+    return (experiment_specs.names().index(row.experiment), bottle_key(row.bottle), row.bottle,
             methods.names().index(row.method), row.trial, row.event)
 
 

@@ -19,6 +19,7 @@ import enum
 __all__ = [
     "FS_NOMINAL", "F_CPU", "DAQ_PERIOD_S", "DAQ_FS", "ADC_BITS", "ADC_VREF", "ADC_LSB",
     "PAPER_LSB", "WINDOW_N", "FINGER_MIN", "FINGER_MAX", "THUMB_ROTATOR_MAX", "PWM_MAX",
+    "FINGER_SPEED_UNITS_S",
     "Finger", "HandCommand", "TRIPOD", "SLIP_FINGER", "ILIMB_START", "ILIMB_END",
     "ILIMB_BAUD", "FLOW_PULSES_PER_LITRE", "CONTACT_FORCE_N", "TACTILE_SHAPE",
     "NMSD_FS", "SWT_FS", "GRAVITY", "IMU_RANGE_G", "IMU_LSB_PER_G", "SLIP_SENSOR_GAP_M",
@@ -48,6 +49,10 @@ FINGER_MIN: int = 0
 FINGER_MAX: int = 500
 THUMB_ROTATOR_MAX: int = 750
 PWM_MAX: int = 297
+#: Closing speed of an i-Limb digit at full PWM (position units per second): a digit closes
+#: fully (0 -> 500) in about 0.8 s (manufacturer; Belter et al. 2013, J Rehabil Res Dev 50(5)).
+#: The grip-only rule (:mod:`slipreflex.grip`) turns grip into closing time with it.
+FINGER_SPEED_UNITS_S: float = 625.0
 
 
 class Finger(enum.IntEnum):

@@ -16,7 +16,7 @@ Examples
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal, Protocol, runtime_checkable
 
@@ -87,22 +87,38 @@ class SampleSource(Protocol):
 
 @runtime_checkable
 class Hand(Protocol):
-    """A hand that takes finger position targets and reports finger positions.
+    """A hand: what a grasp routine and a reflex may tell it, and what it reports.
 
-    Positions are in i-Limb units (0 open .. 500 closed). ``set_positions``
-    sends targets for the named fingers only; ``positions`` returns the last
-    known measured position of every finger it knows.
+    Positions are in i-Limb units (0 open .. 500 closed). Four methods:
+
+    - ``set_positions(targets)`` sends position targets for the named fingers
+      (grasp routines, before a reflex runs; a reflex never uses it);
+    - ``close_fingers(fingers, speed)`` starts closing the fingers at ``speed``
+      units/s, until ``hold``;
+    - ``hold(fingers)`` stops them where they are (never opens);
+    - ``positions()`` returns the measured position of every finger the hand
+      measures, and an empty dict for a hand that reports none (the i-Limb).
+
+    A reflex adds grip only through ``close_fingers`` then ``hold``
+    (:mod:`slipreflex.grip`); where ``positions`` reports a finger, the loops
+    use it as the reflex's measured position and its start.
 
     Examples
     --------
     >>> class Still:
     ...     def set_positions(self, targets): pass
+    ...     def close_fingers(self, fingers, speed): pass
+    ...     def hold(self, fingers): pass
     ...     def positions(self): return {}
     >>> isinstance(Still(), Hand)
     True
     """
 
     def set_positions(self, targets: Mapping[Finger, float]) -> None: ...
+
+    def close_fingers(self, fingers: Iterable[Finger], speed: float) -> None: ...
+
+    def hold(self, fingers: Iterable[Finger]) -> None: ...
 
     def positions(self) -> dict[Finger, float]: ...
 
@@ -150,15 +166,23 @@ class Reflex(Protocol):
     True
     """
 
-    name: str
-    input_kind: InputKind
-    fs: float
-    last_event: bool
-    last_filtered: float
-    last_threshold: float | None
-    last_count: int | None
+    # Read-only to a caller: an implementation may keep each as a plain attribute or a property.
+    @property
+    def name(self) -> str: ...
+    @property
+    def input_kind(self) -> InputKind: ...
+    @property
+    def fs(self) -> float: ...
+    @property
+    def last_event(self) -> bool: ...
+    @property
+    def last_filtered(self) -> float: ...
+    @property
+    def last_threshold(self) -> float | None: ...
+    @property
+    def last_count(self) -> int | None: ...
 
-    def step(self, sample: float | np.ndarray, position: float | None = None) -> float | None: ...
+    def step(self, sample: Any, /, position: float | None = None) -> float | None: ...
 
     def reset(self) -> None: ...
 

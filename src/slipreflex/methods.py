@@ -62,7 +62,6 @@ Examples
 from __future__ import annotations
 
 import dataclasses
-import functools
 import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -77,6 +76,7 @@ from .validation import choice, flag, positive, text
 
 __all__ = ["MethodSpec", "MethodContext", "Detections", "register", "unregister", "get", "names",
            "make", "label", "canonical", "chain_method", "calibrated", "load_plugins", "ENTRY_POINT_GROUP",
+           "EntryPoint",
            "FIXED", "DATH", "NMSD", "SWT", "AUTHORS_GUI", "AUTHORS_CHAIN", "DATH_EVENT",
            "DATH_FLOOR", "DATH_LEAK"]
 
@@ -140,9 +140,7 @@ class MethodContext:
         """
         if self.speed is not None:
             return positive("speed", self.speed)
-        from .sim import HandParams
-
-        return float(HandParams().speed_units_s)
+        return float(hw.FINGER_SPEED_UNITS_S)   # the simulated hand's default (sim.HandParams)
 
 
 @dataclass(frozen=True)
@@ -291,7 +289,7 @@ def load_plugins() -> tuple[str, ...]:
         try:
             obj = ep.load()
             got = obj() if callable(obj) and not isinstance(obj, MethodSpec) else obj
-            specs = [got] if isinstance(got, MethodSpec) else list(got)
+            specs = [got] if isinstance(got, MethodSpec) else list(got)  # pyright: ignore[reportArgumentType]
         except Exception as err:  # a broken plugin is the user's to fix: say which one
             raise ParameterError(f"method plugin {ep.name!r} ({ep.value}): cannot load: {err}") from err
         for spec in specs:
@@ -432,23 +430,44 @@ def make(name: str, *, p0: float = 0.0, context: MethodContext | None = None, **
 
 
 # --- the built-in methods -------------------------------------------------------------------
+# The registry sits below the implementations it lists: a built-in's builder, detection drawing
+# and rest statistic are named by entry point ("module:function", :class:`EntryPoint`) and
+# imported when first called, so this module imports none of chain, baselines, board or sim.
 
 
-def _build_chain(chain_params: Mapping[str, Any], name: str, p0: float, context: MethodContext,
-                 **params: Any) -> Reflex:
-    from .chain import SlipReflex
+@dataclass(frozen=True)
+class EntryPoint:
+    """A function named ``"module:function"``, imported when first called (with bound arguments).
 
-    reflex = SlipReflex(**{"fs": hw.DAQ_FS, **chain_params, **params, "p0": p0})
-    reflex.name = name
-    return reflex
+    Like Gymnasium's ``entry_point`` strings: a registry lists implementations that
+    sit above it without importing them. Picklable, so a spec runs in worker processes.
 
+    Parameters
+    ----------
+    target : str
+        ``"package.module:function"``.
+    args : tuple
+        Positional arguments put before the caller's (like :func:`functools.partial`).
 
-def _chain_detections(reflex: Any, volts: np.ndarray) -> Detections:
-    from .chain import run_chain
+    Examples
+    --------
+    >>> EntryPoint("math:hypot", (3.0,))(4.0)
+    5.0
+    """
 
-    res = run_chain(volts, reflex.params)
-    return Detections(res.filtered, f"slip sensor, {reflex.params.cutoff:g} Hz low-pass (V)",
-                      np.asarray(res.events, dtype=bool), "events (spikes)")
+    target: str
+    args: tuple = ()
+
+    def __post_init__(self) -> None:
+        module, _, name = self.target.partition(":")
+        if not module or not name.isidentifier():
+            raise ParameterError(f"EntryPoint target must be 'module:function', got {self.target!r}")
+
+    def __call__(self, *args: Any, **kwargs: Any) -> Any:
+        import importlib  # the entry point's module, named at run time: nothing above is imported statically
+
+        module, _, name = self.target.partition(":")
+        return getattr(importlib.import_module(module), name)(*self.args, *args, **kwargs)
 
 
 def chain_method(name: str, label: str, *, color: str = "0.5", paper: bool = False,
@@ -476,102 +495,35 @@ def chain_method(name: str, label: str, *, color: str = "0.5", paper: bool = Fal
     """
     fs = chain_params.get("fs", hw.DAQ_FS)
     return MethodSpec(name=name, label=label, input_kind="slip", fs=fs,
-                      build=functools.partial(_build_chain, dict(chain_params), name),
-                      detections=_chain_detections, color=color, paper=paper)
+                      build=EntryPoint("slipreflex.chain.builders:build_chain", (dict(chain_params), name)),
+                      detections=_CHAIN_DETECTIONS, color=color, paper=paper)
 
 
-def _tactile_kwargs(context: MethodContext, params: dict[str, Any]) -> dict[str, Any]:
-    """Threshold and speed from the context unless the caller gave them."""
-    if "threshold" not in params:
-        if context.threshold is None:
-            raise ParameterError(f"{context.method} needs a threshold: pass threshold=... or a context "
-                                 "with calibrated thresholds (slipreflex.experiments.calibrate)")
-        params["threshold"] = context.threshold
-    if "speed" not in params:
-        params["speed"] = context.closing_speed()
-    return params
-
-
-def _build_nmsd(p0: float, context: MethodContext, **params: Any) -> Reflex:
-    from .baselines import NMSD as _NMSD
-
-    return _NMSD(p0=p0, **_tactile_kwargs(context, params))
-
-
-def _build_swt(p0: float, context: MethodContext, **params: Any) -> Reflex:
-    from .baselines import SWTSD
-
-    if "persist" not in params and context.options.get("swt_persist") is not None:
-        params["persist"] = context.options["swt_persist"]
-    return SWTSD(p0=p0, **_tactile_kwargs(context, params))
-
-
-def _total_force(frames: np.ndarray) -> np.ndarray:
-    return np.asarray(frames, dtype=float).reshape(len(frames), -1).sum(axis=1)
-
-
-_FORCE_LABEL = "index tactile array, total force (N)"
-
-
-def _nmsd_detections(reflex: Any, frames: np.ndarray) -> Detections:
-    from .baselines import nmsd_detections
-
-    det = nmsd_detections(frames, reflex.fs, threshold=reflex.params.threshold)
-    return Detections(_total_force(frames), _FORCE_LABEL, det, "NMSD detections")
-
-
-def _swt_detections(reflex: Any, frames: np.ndarray) -> Detections:
-    from .baselines import swt_on
-
-    on = swt_on(frames, threshold=reflex.params.threshold, persist=reflex.params.persist)
-    starts = on & ~np.concatenate(([False], on[:-1]))
-    return Detections(_total_force(frames), _FORCE_LABEL, starts, "SWT-SD ON starts")
-
-
-def _nmsd_rest(frames: np.ndarray, fs: float) -> np.ndarray:
-    from .baselines import nmsd_rest_statistic
-
-    return nmsd_rest_statistic(frames, fs)
-
-
-def _swt_rest(frames: np.ndarray, fs: float) -> np.ndarray:
-    from .baselines import swt_rest_statistic
-
-    return swt_rest_statistic(frames, fs)
-
+_CHAIN_DETECTIONS = EntryPoint("slipreflex.chain.builders:chain_detections")
 
 # the paper's table order (DATH, fixed, NMSD, SWT-SD) is the one method order everywhere
 register(chain_method(DATH, "DATH", dath=True, color="#1f77b4", paper=True))
 register(chain_method(FIXED, "fixed", dath=False, color="#ff7f0e", paper=True))
-register(MethodSpec(name=NMSD, label="NMSD", input_kind="tactile", fs=hw.NMSD_FS, build=_build_nmsd,
-                    ramp=True, detections=_nmsd_detections, rest_statistic=_nmsd_rest,
+register(MethodSpec(name=NMSD, label="NMSD", input_kind="tactile", fs=hw.NMSD_FS,
+                    build=EntryPoint("slipreflex.baselines.builders:build_nmsd"), ramp=True,
+                    detections=EntryPoint("slipreflex.baselines.builders:nmsd_method_detections"),
+                    rest_statistic=EntryPoint("slipreflex.baselines.nmsd:nmsd_rest_statistic"),
                     color="#2ca02c", paper=True, threshold_unit="N/s"))
-register(MethodSpec(name=SWT, label="SWT-SD", input_kind="tactile", fs=hw.SWT_FS, build=_build_swt,
-                    ramp=True, detections=_swt_detections, rest_statistic=_swt_rest,
+register(MethodSpec(name=SWT, label="SWT-SD", input_kind="tactile", fs=hw.SWT_FS,
+                    build=EntryPoint("slipreflex.baselines.builders:build_swt"), ramp=True,
+                    detections=EntryPoint("slipreflex.baselines.builders:swt_method_detections"),
+                    rest_statistic=EntryPoint("slipreflex.baselines.swt:swt_rest_statistic"),
                     color="#d62728", paper=True, threshold_unit="N"))
-
 
 # The paper's chain as the microcontroller runs it (fixed point, slipreflex.board): beside the
 # float chain in `reproduce --methods dath,dath-board`; not one of the paper's methods.
-def _build_board(dath: bool, p0: float, context: MethodContext, **params: Any) -> Reflex:
-    from .board import BoardReflex
-
-    return BoardReflex(**{"dath": dath, **params, "p0": int(np.floor(p0 + 0.5))})
-
-
-def _board_detections(reflex: Any, volts: np.ndarray) -> Detections:
-    from .board import board_detections
-
-    x, events = board_detections(reflex, volts)
-    return Detections(x, "slip sensor on the board, Q16 low-pass (V)", events, "events (spikes)")
-
-
+_BOARD_DETECTIONS = EntryPoint("slipreflex.board:board_method_detections")
 register(MethodSpec(name="dath-board", label="DATH (board)", input_kind="slip", fs=hw.DAQ_FS,
-                    build=functools.partial(_build_board, True), detections=_board_detections,
-                    color="#17becf"))
+                    build=EntryPoint("slipreflex.board:build_board_method", (True,)),
+                    detections=_BOARD_DETECTIONS, color="#17becf"))
 register(MethodSpec(name="fixed-board", label="fixed (board)", input_kind="slip", fs=hw.DAQ_FS,
-                    build=functools.partial(_build_board, False), detections=_board_detections,
-                    color="#bcbd22"))
+                    build=EntryPoint("slipreflex.board:build_board_method", (False,)),
+                    detections=_BOARD_DETECTIONS, color="#bcbd22"))
 
 
 # Variants of the paper's chain (docs/method.md, "Variants"), beside the paper's methods in
@@ -580,24 +532,18 @@ AUTHORS_GUI, AUTHORS_CHAIN, DATH_EVENT = "authors-gui", "authors-chain", "dath-e
 DATH_FLOOR, DATH_LEAK = "dath-floor", "dath-leak"
 
 
-def _build_preset(preset: str, name: str, p0: float, context: MethodContext, **params: Any) -> Reflex:
-    from .chain import SlipReflex
-
-    reflex = SlipReflex.from_preset(preset, fs=params.pop("fs", hw.DAQ_FS), **{**params, "p0": p0})
-    reflex.name = name
-    return reflex
+def _preset(preset: str, name: str, fixed: Mapping[str, Any] | None = None) -> EntryPoint:
+    return EntryPoint("slipreflex.chain.builders:build_preset", (preset, name, dict(fixed or {})))
 
 
 register(MethodSpec(name=AUTHORS_GUI, label="authors' GUI", input_kind="slip", fs=hw.DAQ_FS,
-                    build=functools.partial(_build_preset, AUTHORS_GUI, AUTHORS_GUI),
-                    detections=_chain_detections, color="#9467bd"))
+                    build=_preset(AUTHORS_GUI, AUTHORS_GUI), detections=_CHAIN_DETECTIONS, color="#9467bd"))
 # the authors' chain with the paper's hand rule (every finger at the command): what the +20 does
 register(MethodSpec(name=AUTHORS_CHAIN, label="authors' chain, no +20", input_kind="slip", fs=hw.DAQ_FS,
-                    build=functools.partial(_build_preset, AUTHORS_GUI, AUTHORS_CHAIN, slip_finger_offset=0.0),
-                    detections=_chain_detections, color="#7f7f7f"))
+                    build=_preset(AUTHORS_GUI, AUTHORS_CHAIN, {"slip_finger_offset": 0.0}),
+                    detections=_CHAIN_DETECTIONS, color="#7f7f7f"))
 register(MethodSpec(name=DATH_EVENT, label="DATH, event MPI", input_kind="slip", fs=hw.DAQ_FS,
-                    build=functools.partial(_build_preset, DATH_EVENT, DATH_EVENT),
-                    detections=_chain_detections, color="#8c564b"))
+                    build=_preset(DATH_EVENT, DATH_EVENT), detections=_CHAIN_DETECTIONS, color="#8c564b"))
 # DATH whose threshold never drops below one ADC step (docs/method.md, "A DATH floor")
 register(chain_method(DATH_FLOOR, "DATH, floor 1 LSB", dath=True, dath_floor=hw.ADC_LSB, color="#e377c2"))
 # DATH whose accumulator forgets with a 0.1 s time constant (docs/method.md, "An accumulator that forgets")

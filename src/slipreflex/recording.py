@@ -343,7 +343,7 @@ class Recorder:
         self._closed = True
         self._close_file()
 
-    def __enter__(self) -> "Recorder":
+    def __enter__(self) -> Recorder:
         return self
 
     def __exit__(self, *exc: object) -> None:

@@ -11,9 +11,15 @@ the commands are out) and *watchdog* (faults, holds, counters).
 
 What it guarantees:
 
-- **Safe start**: the fingers are first told to STOP where they are
-  (:func:`safe_start`); no command is ever below a finger's start position,
-  and nothing is sent until the reflex first asks for more grip.
+- **Grip only ever added** (:mod:`slipreflex.grip`): the fingers are first
+  told to STOP where they are (:func:`safe_start`); after that the reflex's
+  command reaches the hand only as the grip it *rises* by, sent as closing
+  time (CLOSE at the hand's documented speed, then STOP when the time is up).
+  The loop never sends OPEN or a position, so no ``p0`` can open the hand or
+  make it jump shut; ``p0`` is the reflex's bookkeeping only. A hand that
+  reports positions gives the reflex its measured slip-finger position and
+  the start; the i-Limb reports none and refuses, while a reflex runs, any
+  command that could open a finger (:meth:`slipreflex.devices.ilimb.ILimb.reflex_running`).
 - **Latency** is measured for every command sent, twice: from the moment the
   sample's bytes were read from the port (``source.last_arrival``) and from
   the frame's own arrival as its board time places it (so a backlog shows).
@@ -45,9 +51,10 @@ Examples
 ...     def clock(self): return self.now
 ...     def close(self): pass
 >>> class Hand:
-...     def __init__(self): self.targets = {}
-...     def set_positions(self, t): self.targets.update(t)
-...     def positions(self): return dict(self.targets)
+...     def set_positions(self, t): pass
+...     def close_fingers(self, fingers, speed): pass
+...     def hold(self, fingers): pass
+...     def positions(self): return {}
 >>> src = Source()
 >>> res = run_loop(src, Hand(), SlipReflex(p0=200.0), duration=0.5, clock=src.clock)
 >>> res.samples, res.commands, res.commands_sent, [f.kind for f in res.faults]
@@ -72,11 +79,13 @@ from typing import Any
 import numpy as np
 
 from .errors import DeviceError, ParameterError
+from .grip import FINGER_SPEED_UNITS_S, Grip, span
 from .hardware import FINGER_MAX, FINGER_MIN, SLIP_FINGER, THUMB_ROTATOR_MAX, TRIPOD, Finger
 from .interfaces import DaqSample, Hand, Reflex, SampleSource
 from .validation import number
 
 __all__ = ["Fault", "SampleRecord", "RunResult", "run_loop", "print_fault", "realtime_priority",
+           "drop_capabilities",
            "WATCHDOG_S", "WATCHDOG_MIN_S", "WATCHDOG_MAX_S", "start_positions", "safe_start",
            "finger_offsets"]
 
@@ -121,7 +130,8 @@ class Fault:
         ``"daq-crc"``, ``"daq-truncated"``, ``"daq-invalid"``, ``"daq-garbage"``,
         ``"daq-gap"``, ``"daq-duplicate"``, ``"daq-reordered"``, ``"daq-reset"``,
         ``"daq-discarded"``, ``"hand-port"``, ``"hand-port-restored"``,
-        ``"command-rejected"``, ``"hold-failed"``, ``"mpi-saturated"``, ``"recording"`` or
+        ``"command-rejected"``, ``"hold-failed"``, ``"stop-failed"``, ``"mpi-saturated"``,
+        ``"recording"`` or
         ``"board-mismatch"`` (``run --board-reflex``: the board's chain output differs
         from its Python twin's on the same sample).
     message : str
@@ -168,16 +178,17 @@ class SampleRecord:
         Slip-finger position given to the reflex (in the reflex's frame).
     command : float or None
         The reflex's command, when this sample completed a window.
-    targets : dict of Finger to float or None
-        The position for each finger that the command means.
+    grip : dict of Finger to float or None
+        The grip (units) the command adds to each finger: how far it rose.
     filtered, threshold : float or None
     event : bool
     count : int or None
         The window's spike count, when this sample completed a window.
     sent : bool
-        Whether the targets were written to the hand.
+        Whether the hand was told to close (or to close longer) for it.
     note : str
-        Why a command was not sent: ``"at start"``, ``"stale"``, ``"rejected"``, ``"hand-port"``.
+        Why a command was not sent: ``"at start"`` (no rise yet), ``"no rise"``, ``"stale"``,
+        ``"rejected"``, ``"hand-port"``.
     latency, frame_latency : float or None
         Seconds from ``arrival`` (read) and from the frame's own arrival to the write.
     board : dict or None
@@ -196,7 +207,7 @@ class SampleRecord:
     age: float
     position: float | None = None
     command: float | None = None
-    targets: dict[Finger, float] | None = None
+    grip: dict[Finger, float] | None = None
     filtered: float | None = None
     threshold: float | None = None
     event: bool = False
@@ -242,7 +253,8 @@ class RunResult:
         Why the recording stopped early, if it did.
     start : dict
         Position (finger name -> units) each finger held at start, after the
-        safe start's STOP: no command the loop sent was below it.
+        safe start's STOP: measured where the hand reports it, else ``p0``
+        (bookkeeping only: the loop sends no positions).
     initial_command : str
         What the loop sent first (the STOP of the safe start).
     holds_sent : int
@@ -253,9 +265,16 @@ class RunResult:
         Frames the source buffered while the run set up (warm-up, safe start), dropped
         before the clock started (the source's optional ``drop_buffered()``).
     saturated_at : float or None
-        Board time (s) at which the command first reached the finger maximum (500).
+        Board time (s) at which the reflex's command first reached its ceiling
+        (``ceiling``): from then on it adds no grip.
     saturated_windows : int
         Windows with spikes after that: slips the command could not answer.
+    ceiling : float
+        The reflex's command ceiling (``params.hi``; 500 when it declares none).
+    grip_added : dict
+        Grip (finger name -> units) the loop told each finger to add.
+    closes, stops : int
+        CLOSE commands sent, and the STOPs that ended a closing.
 
     Examples
     --------
@@ -283,6 +302,10 @@ class RunResult:
     dropped_at_start: int = 0
     saturated_at: float | None = None
     saturated_windows: int = 0
+    ceiling: float = float(FINGER_MAX)
+    grip_added: dict[str, float] = field(default_factory=dict)
+    closes: int = 0
+    stops: int = 0
 
     def latency_ms(self, since: str = "read") -> dict[str, float]:
         """p50, p99 and max of the command latency in milliseconds (NaN if none).
@@ -321,9 +344,13 @@ class RunResult:
                 "frames", "seq_gaps", "frames_lost", "crc_errors", "truncated", "resyncs",
                 "garbage_bytes", "duplicates", "reordered", "resets", "disconnects", "reconnects",
                 "frames_discarded") if k in d))
+        if self.grip_added:
+            lines.append("grip added: " + ", ".join(f"{k} {v:.1f}" for k, v in self.grip_added.items())
+                         + f" units ({self.closes} closings)")
         if self.saturated_at is not None:
-            lines.append(f"MPI saturated at {FINGER_MAX} (fingers fully closed) at t={self.saturated_at:.3f} s; "
-                         f"{self.saturated_windows} later windows with spikes could not raise the command")
+            lines.append(f"reflex command at its ceiling {self.ceiling:g} from t={self.saturated_at:.3f} s: it "
+                         f"adds no grip after that; {self.saturated_windows} later windows with spikes "
+                         f"added none")
         kinds = collections.Counter(f.kind for f in self.faults)
         lines.append("faults: " + (", ".join(f"{k} x{n}" for k, n in kinds.items()) or "none")
                      + (f"; holds sent {self.holds_sent}" if self.holds_sent else "")
@@ -347,14 +374,15 @@ class RunResult:
                "faults": len(self.faults), "holds_sent": self.holds_sent,
                "stale_samples": self.stale_samples, "dropped_at_start": self.dropped_at_start,
                "saturated_at": "" if self.saturated_at is None else f"{self.saturated_at:.6f}",
-               "saturated_windows": self.saturated_windows}
+               "saturated_windows": self.saturated_windows, "ceiling": self.ceiling,
+               "grip_added": json.dumps(self.grip_added), "closes": self.closes, "stops": self.stops}
         for since, key in (("read", "latency"), ("frame", "frame_latency")):
             for q, v in self.latency_ms(since).items():
                 out[f"{key}_{q}_ms"] = f"{v:.4f}"
         return {k: str(v) for k, v in out.items()}
 
 
-def _num(x: Any) -> float | None:
+def _json_float(x: Any) -> float | None:
     """JSON-safe float: NaN/inf/None -> None."""
     if x is None:
         return None
@@ -433,15 +461,13 @@ def safe_start(hand: Hand, p0: float | Mapping[Any, float],
                fingers: Sequence[Finger] = TRIPOD) -> dict[Finger, float]:
     """Hold the fingers where they are, then tell where each one holds.
 
-    The hand is told to STOP (``hand.hold(fingers)``; a hand without
-    ``hold`` is sent nothing): the fingers are never moved to a value at
-    start. Each finger's start position is the larger of its ``p0`` and the
-    position the hand reports for it (a hand that measures its fingers, or a
-    driver that remembers the targets it wrote), so that a ``p0`` given too
-    low can never make a later command open a finger the hand reports
-    closed further. The i-Limb reports no positions over its serial
-    protocol, so for it the start is the ``p0`` given, per finger, as the
-    grasp routine found it.
+    The hand is told to STOP (``hand.hold(fingers)``): the fingers are never
+    moved to a value at start. Each finger's start position is the position
+    the hand reports for it where it measures its fingers, else its ``p0``.
+    The start is bookkeeping only (the reflex's frame, the recording): the
+    loop adds grip as closing time and never sends a position. The i-Limb
+    reports no positions over its serial protocol, so for it the start is
+    the ``p0`` given.
 
     Parameters
     ----------
@@ -453,7 +479,7 @@ def safe_start(hand: Hand, p0: float | Mapping[Any, float],
     Returns
     -------
     dict of Finger to float
-        Start position per finger: no command ``run_loop`` sends is below it.
+        Start position per finger.
 
     Raises
     ------
@@ -468,15 +494,14 @@ def safe_start(hand: Hand, p0: float | Mapping[Any, float],
     ...     def positions(self): return {Finger.THUMB: 149.0, Finger.INDEX: 147.0, Finger.MIDDLE: 147.0}
     ...     def hold(self, fingers): self.sent.append("stop")
     >>> h = Hand()
-    >>> safe_start(h, 0)[Finger.THUMB], h.sent
+    >>> safe_start(h, 500)[Finger.THUMB], h.sent
     (149.0, ['stop'])
     """
     start = start_positions(p0, fingers)
-    if hasattr(hand, "hold"):
-        hand.hold(tuple(start))
+    hand.hold(tuple(start))
     reported = hand.positions()
     for f, v in reported.items():
-        if f in start and v is not None and math.isfinite(v) and v > start[f]:
+        if f in start and isinstance(v, (int, float)) and math.isfinite(v):
             start[f] = float(v)
     return start
 
@@ -540,13 +565,15 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
         ``drop_buffered()``, called once just before the clock starts: the frames that arrived
         during the set-up are from before the run (else a stale backlog at the start).
     hand : Hand
-        ``set_positions(targets)``; optional ``hold(fingers)``.
+        ``close_fingers(fingers, speed)``, ``hold(fingers)`` and ``positions()``
+        (:class:`~slipreflex.interfaces.Hand`); an optional ``reflex_running(bool)``
+        is switched on for the run (the i-Limb's grip-only guard).
     reflex : Reflex
         A slip reflex (``input_kind == "slip"``), e.g. :class:`slipreflex.chain.SlipReflex`.
     p0 : float or mapping of Finger to float, optional
         Position each finger holds at start, as the grasp left it (default: the reflex's
-        initial command). The loop starts with :func:`safe_start`; each finger gets the
-        reflex's command shifted by its own start, never below it.
+        initial command): bookkeeping only. The loop starts with :func:`safe_start`; each
+        rise of the reflex's command is then sent as closing time (:mod:`slipreflex.grip`).
     recorder : Recorder, optional
     duration : float, optional
         Seconds to run (default: until stopped).
@@ -554,7 +581,7 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
         Seconds (0.02..0.5) without a fresh valid sample before the fingers are held;
         longest wait in one read (at most half the watchdog).
     fingers : sequence of Finger
-        Fingers that get the reflex's command (default: the tripod).
+        Fingers that close when the reflex's command rises (default: the tripod).
     stop : threading.Event, optional
     on_fault : callable, optional
         Called with each :class:`Fault` as it happens (e.g. to print it).
@@ -572,7 +599,8 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
     Raises
     ------
     ParameterError
-        For a reflex that does not read the slip sensor, a bad p0, watchdog or poll.
+        For a reflex that does not read the slip sensor, a hand that cannot close and
+        hold, a bad p0, watchdog or poll.
 
     Examples
     --------
@@ -584,6 +612,7 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
     >>> class Hand:
     ...     held = 0
     ...     def set_positions(self, t): pass
+    ...     def close_fingers(self, fingers, speed): pass
     ...     def positions(self): return {}
     ...     def hold(self, fingers): self.held += 1
     >>> h, src = Hand(), Silent()
@@ -601,8 +630,12 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
         raise ParameterError(f"run_loop: poll must be in (0, watchdog / 2], got {poll!r}")
     if duration is not None and not (math.isfinite(duration) and duration > 0):
         raise ParameterError(f"run_loop: duration must be > 0 s, got {duration!r}")
+    missing = [m for m in ("close_fingers", "hold", "positions") if not callable(getattr(hand, m, None))]
+    if missing:
+        raise ParameterError(f"run_loop: the hand has no {', '.join(missing)}: a reflex adds grip only by "
+                             f"closing and holding (slipreflex.interfaces.Hand)")
     fingers = tuple(Finger(f) for f in fingers)
-    ref0 = getattr(reflex, "command", None)  # the reflex's own start (SlipReflex: clip(p0))
+    ref0: Any = getattr(reflex, "command", None)  # the reflex's own start (SlipReflex: clip(p0))
     ref_ok = isinstance(ref0, (int, float)) and math.isfinite(ref0)
     if p0 is None and not ref_ok:
         raise ParameterError("run_loop: give p0 (the reflex has no initial command)")
@@ -613,7 +646,8 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
         start, start_error = safe_start(hand, given, fingers), None
     except DeviceError as err:  # the STOP did not go out: the fingers stay as the grasp left them
         start, start_error = given, err
-    dropped = source.drop_buffered() if hasattr(source, "drop_buffered") else 0
+    drop_buffered = getattr(source, "drop_buffered", None)   # optional in the SampleSource protocol
+    dropped = drop_buffered() if drop_buffered is not None else 0
     loop = _Loop(source, hand, reflex, start=start,
                  ref0=float(ref0) if ref_ok else start.get(SLIP_FINGER, next(iter(start.values()))),
                  recorder=recorder, duration=duration, watchdog=watchdog, poll=poll, stop=stop,
@@ -622,7 +656,14 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
         loop.fault("hold-failed", f"safe start: {start_error}", "fingers stay where the grasp left them; "
                    "the watchdog holds again if samples stop")
     loop.res.dropped_at_start = dropped
-    return loop.run(guard)
+    guard_on = getattr(hand, "reflex_running", None)
+    if callable(guard_on):
+        guard_on(True)
+    try:
+        return loop.run(guard)
+    finally:
+        if callable(guard_on):
+            guard_on(False)
 
 
 def _warm_up(reflex: Any) -> None:
@@ -662,15 +703,15 @@ class _Sink:
             s, arr = r.sample, r.arrival
             self.write("/daq/samples", {"seq": s.seq, "t": s.t, "slip_volts": s.slip_volts,
                                         "flow_pulses": s.flow_pulses, "arrival": arr - self.t0,
-                                        "position": _num(r.position)}, arr)
+                                        "position": _json_float(r.position)}, arr)
             if s.accel_g is not None:
                 ax, ay, az = s.accel_g
                 self.write("/daq/imu", {"seq": s.seq, "t": s.t, "ax": ax, "ay": ay, "az": az}, arr)
             if s.flow_pulses != last_flow:
                 self.write("/daq/flow", {"seq": s.seq, "t": s.t, "pulses": s.flow_pulses}, arr)
             last_flow = s.flow_pulses
-            self.write("/chain/state", {"seq": s.seq, "t": s.t, "filtered": _num(r.filtered),
-                                        "threshold": _num(r.threshold) or 0.0, "event": r.event}, arr)
+            self.write("/chain/state", {"seq": s.seq, "t": s.t, "filtered": _json_float(r.filtered),
+                                        "threshold": _json_float(r.threshold) or 0.0, "event": r.event}, arr)
             if r.event:
                 self.write("/chain/events", {"seq": s.seq, "t": s.t}, arr)
             if r.count is not None:
@@ -678,9 +719,9 @@ class _Sink:
             if r.board is not None:
                 self.write("/board/state", {"seq": s.seq, "t": s.t, **r.board}, arr)
             if r.command is not None:
-                targets = {f.name.lower(): _num(v) for f, v in (r.targets or {}).items()}
+                grip = {f.name.lower(): _json_float(v) for f, v in (r.grip or {}).items()}
                 self.write("/hand/commands", {"seq": s.seq, "t": s.t, "target": float(r.command),
-                                              "fingers": finger_names, "targets": targets,
+                                              "fingers": finger_names, "targets": {}, "grip": grip,
                                               "sent": r.sent, "note": r.note, "latency": r.latency,
                                               "frame_latency": r.frame_latency}, arr)
         return last_flow
@@ -697,17 +738,21 @@ class _Loop:
         self.fingers = tuple(start)
         self.finger_names = [f.name.lower() for f in self.fingers]
         self.start = start
-        # reflex frame -> each finger's; a reflex's finger_offsets (authors-gui: middle + 20)
-        # add to that finger's targets only (the floor at start and the cap at 500 still hold)
+        # grip only ever added: rises of the command become closing time per finger group; a
+        # reflex's finger_offsets (authors-gui: middle + 20) are that group's extra first rise
         self.offsets = finger_offsets(reflex, self.fingers)
-        self.shift = {f: start[f] - ref0 + self.offsets.get(f, 0.0) for f in self.fingers}
-        self.top = {f: float(THUMB_ROTATOR_MAX if f == Finger.THUMB_ROTATOR else FINGER_MAX)
-                    for f in self.fingers}
-        self.slip_shift = self.shift.get(SLIP_FINGER, 0.0) - self.offsets.get(SLIP_FINGER, 0.0)
+        self.grip = Grip(ref0, self.fingers, self.offsets)
+        self.speed = FINGER_SPEED_UNITS_S
+        self.owed = [0.0] * len(self.grip.groups)  # grip not yet sent (stale, a cut closing, a lost port)
+        self.until: list[float | None] = [None] * len(self.grip.groups)  # clock time each closing ends
+        hi = getattr(getattr(reflex, "params", None), "hi", FINGER_MAX)
+        self.ceiling = float(hi) if isinstance(hi, (int, float)) and math.isfinite(hi) else float(FINGER_MAX)
+        # the reflex's frame: its command ref0 is where the slip finger stood at start
+        self.slip_shift = start.get(SLIP_FINGER, ref0) - ref0
         self.duration, self.watchdog_s, self.poll, self.stop = duration, watchdog, poll, stop
         self.on_fault, self.stats_interval, self.clock = on_fault, stats_interval, clock
         self.res = RunResult(start={f.name.lower(): v for f, v in start.items()},
-                             initial_command="STOP " + ",".join(self.finger_names))
+                             initial_command="STOP " + ",".join(self.finger_names), ceiling=self.ceiling)
         self.t0 = clock()
         self.sink = _Sink(recorder, self.t0, self._recording_failed)
         self.lock = threading.Lock()  # hand writes: the loop and the stall guard
@@ -719,12 +764,11 @@ class _Loop:
         self.last_arrival = self.t0
         self.anchor_resets = 0  # the source's reset counter at the last re-anchoring
         self.last_valid = self.t0
-        self.last_hold = -math.inf
+        self.last_hold = self.last_retry = -math.inf
         self.no_data = self.stale = self.risen = self.hold_failed = self.warned = False
         self.hand_ok = True
-        self.held_back = False  # a command came while stale: send the latest when fresh
-        self.last_target: dict[Finger, float] | None = None
-        self.latest_targets: dict[Finger, float] | None = None
+        self.held_back = False  # grip came while stale: send it when fresh
+        self.stop_failed = False
         self.processed = 0
         self.last_flow: int | None = None
         self.counters: dict[str, int] = {}
@@ -752,7 +796,9 @@ class _Loop:
                 samples, arrival = self.read()
                 if samples:
                     records = self.process(samples, arrival)  # commands out first
+                    self.end_closings()
                     self.record(records)
+                self.end_closings()
                 self.watchdog(bool(samples))
         except KeyboardInterrupt:
             self.res.interrupted = True
@@ -760,6 +806,7 @@ class _Loop:
             gc.unfreeze()
             if guard_thread is not None:
                 guard_thread.close()
+            self.end_closings(final=True)  # a run never ends with the fingers still closing
         return self.finish()
 
     def done(self) -> bool:
@@ -769,8 +816,12 @@ class _Loop:
 
     # -- step 1: read ----------------------------------------------------------------
     def read(self) -> tuple[list[DaqSample], float]:
+        timeout = self.poll
+        ends = [u for u in self.until if u is not None]
+        if ends:  # wake up in time to end a closing
+            timeout = min(timeout, max(1e-4, min(ends) - self.clock()))
         try:
-            samples = self.source.read(self.poll)
+            samples = self.source.read(timeout)
         except DeviceError as err:
             self.fault("daq-port", str(err), "fingers hold via the watchdog; reconnecting")
             return [], math.nan
@@ -816,7 +867,7 @@ class _Loop:
             if pos is not None:
                 pos -= self.slip_shift  # in the reflex's frame
             cmd = reflex.step(s.slip_volts, pos)
-            r = SampleRecord(s, arrival, self.clock() - (s.t + self.offset), pos, cmd,
+            r = SampleRecord(s, arrival, self.clock() - (s.t + (self.offset or 0.0)), pos, cmd,
                              filtered=reflex.last_filtered, threshold=reflex.last_threshold,
                              event=bool(reflex.last_event), count=reflex.last_count,
                              board=getattr(reflex, "last_board", None))
@@ -838,67 +889,106 @@ class _Loop:
                 self.hold()
                 self.fault("stale", f"sample seq {r.sample.seq} was {r.age * 1e3:.0f} ms old when "
                            f"processed: the loop was frozen or fell behind", "fingers held; commands "
-                           f"wait for fresh samples")
+                           "wait for fresh samples")
         elif self.stale:
             self.stale = False
             self.fault("stale-clear", f"samples fresh again ({r.age * 1e3:.1f} ms old)", "reflex resumed")
-            if self.held_back and self.latest_targets is not None:
+            if self.held_back:
                 self.held_back = False
-                self.send(r, self.latest_targets, resend=True)
-
-    def targets_for(self, cmd: float) -> dict[Finger, float]:
-        out = {}
-        for f in self.fingers:
-            v = cmd + self.shift[f]
-            if v < self.start[f]:  # never below the start (a NaN passes on, to be rejected)
-                v = self.start[f]
-            elif v > self.top[f] and cmd <= FINGER_MAX:  # the MPI saturated; this finger started higher
-                v = self.top[f]
-            out[f] = v
-        return out
+                self.deliver(r, resend=True)
 
     def command(self, r: SampleRecord, cmd: float) -> None:
-        targets = r.targets = self.targets_for(cmd)
-        if cmd >= FINGER_MAX and self.res.saturated_at is None:
+        try:
+            rises = self.grip.rise(cmd)
+        except ParameterError as err:
+            r.note = "rejected"
+            self.fault("command-rejected", str(err), "no grip added; fingers keep what they hold")
+            return
+        r.grip = {f: g for (fs, _), g in zip(self.grip.groups, rises) for f in fs}
+        if cmd >= self.ceiling and self.res.saturated_at is None:
             self.res.saturated_at = r.sample.t
-            self.fault("mpi-saturated", f"the MPI command reached {FINGER_MAX} at t={r.sample.t:.3f} s",
-                       "fingers fully closed; later slips cannot raise the command")
-        if not self.risen:
-            if all(targets[f] <= self.start[f] for f in self.fingers):
-                r.note = "at start"  # nothing asked for yet: the fingers stay held where they are
-                return
-            self.risen = True
-        self.latest_targets = targets
+            self.fault("mpi-saturated", f"the reflex's command reached its ceiling {self.ceiling:g} at "
+                       f"t={r.sample.t:.3f} s", "it adds no grip after that; later slips cannot be answered")
+        if not any(g > 0.0 for g in rises):
+            r.note = "no rise" if self.risen else "at start"  # nothing to add: the fingers stay held
+            return
+        self.risen = True
+        for i, g in enumerate(rises):
+            self.owed[i] += g
         if self.stale:
             r.note, self.held_back = "stale", True
             return
-        self.send(r, targets)
+        self.deliver(r)
 
-    def send(self, r: SampleRecord, targets: dict[Finger, float], resend: bool = False) -> None:
-        try:
-            with self.lock:
-                self.hand.set_positions(targets)
-        except ParameterError as err:
-            r.note = "rejected"
-            self.fault("command-rejected", str(err), "not sent; fingers hold their last target")
-            return
-        except DeviceError as err:
-            r.note = "hand-port"
-            if self.hand_ok:
-                self.fault("hand-port", str(err), "hand keeps its last target; reconnecting")
-            self.hand_ok = False
-            return
-        self.last_target = targets
-        if resend:
-            return
+    def deliver(self, r: SampleRecord | None, resend: bool = False) -> None:
+        """Send the grip owed as closing time: CLOSE now, or a closing in progress made longer."""
         now = self.clock()
-        r.sent, r.latency = True, now - r.arrival
-        r.frame_latency = now - (r.sample.t + self.offset)
-        self.latencies.append(r.latency)
-        self.frame_latencies.append(r.frame_latency)
+        sent = False
+        for i, (fingers, _) in enumerate(self.grip.groups):
+            g = self.owed[i]
+            if g <= 0.0:
+                continue
+            until = self.until[i]
+            begin, end = span(now, -math.inf if until is None else until, g, self.speed)
+            if until is None or until <= now:
+                try:
+                    with self.lock:
+                        self.hand.close_fingers(fingers, self.speed)
+                except ParameterError as err:
+                    self.owed[i] = 0.0
+                    if r is not None:
+                        r.note = "rejected"
+                    self.fault("command-rejected", str(err), "no grip added; fingers keep what they hold")
+                    continue
+                except DeviceError as err:
+                    if r is not None:
+                        r.note = "hand-port"
+                    if self.hand_ok:
+                        self.fault("hand-port", str(err), "fingers keep what they hold; the grip is sent "
+                                   "when the port is back")
+                    self.hand_ok = False
+                    return
+                self.res.closes += 1
+            self.until[i] = end
+            self.owed[i] = 0.0
+            for f in fingers:
+                name = f.name.lower()
+                self.res.grip_added[name] = self.res.grip_added.get(name, 0.0) + g
+            sent = True
+        if not sent:
+            return
         if not self.hand_ok:
             self.hand_ok = True
             self.fault("hand-port-restored", "hand port is back", "commands resumed")
+        if resend or r is None:
+            return
+        now = self.clock()
+        r.sent, r.latency = True, now - r.arrival
+        r.frame_latency = now - (r.sample.t + (self.offset or 0.0))  # offset: set by the first read
+        self.latencies.append(r.latency)
+        self.frame_latencies.append(r.frame_latency)
+
+    def end_closings(self, final: bool = False) -> None:
+        """STOP each group whose closing time is up (all of them at the end of the run)."""
+        now = self.clock()
+        for i, (fingers, _) in enumerate(self.grip.groups):
+            until = self.until[i]
+            if until is None or (now < until and not final):
+                continue
+            try:
+                with self.lock:
+                    self.hand.hold(fingers)
+            except (DeviceError, ParameterError) as err:
+                if not self.stop_failed:
+                    self.stop_failed = True
+                    self.fault("stop-failed", str(err), "the STOP that ends a closing is retried")
+                continue
+            self.stop_failed = False
+            self.until[i] = None
+            self.res.stops += 1
+            if until > now:  # the run ended first: that part of the grip was not added
+                for f in fingers:
+                    self.res.grip_added[f.name.lower()] -= (until - now) * self.speed
 
     # -- step 3: record (after the commands are out) -----------------------------------
     def record(self, records: list[SampleRecord]) -> None:
@@ -923,6 +1013,8 @@ class _Loop:
                 self.no_data = False
                 self.fault("watchdog-clear", f"samples resumed after {now - self.last_valid:.3f} s",
                            "reflex resumed")
+                if any(g > 0.0 for g in self.owed) and not self.stale:
+                    self.deliver(None)  # the rest of a closing the hold cut short
             self.last_valid = now
         elif not self.no_data and now - self.last_valid > self.watchdog_s:
             self.no_data = True
@@ -931,6 +1023,10 @@ class _Loop:
                        "fingers held where they are; the hold is re-sent while it lasts")
         if (self.no_data or self.stale) and now - self.last_hold >= self.watchdog_s:
             self.hold()  # the i-Limb protocol has no acknowledgement: say it again
+        elif (not self.hand_ok and not (self.no_data or self.stale) and any(g > 0.0 for g in self.owed)
+              and now - self.last_retry >= self.watchdog_s):
+            self.last_retry = now
+            self.deliver(None)  # grip owed since the hand port failed: try again
         if not self.warned and self.processed == 0 and now - self.t0 >= _FIRST_FRAME_S:
             self.warned = True
             self.fault("no-data", self.no_data_message(), "fingers held; still waiting")
@@ -950,20 +1046,25 @@ class _Loop:
                 f"wrong port, swapped ports (--daq/--hand), board not powered or not flashed?")
 
     def hold(self) -> None:
-        self.last_hold = self.clock()
+        now = self.last_hold = self.clock()
         try:
             with self.lock:
-                if hasattr(self.hand, "hold"):
-                    self.hand.hold(self.fingers)
-                elif self.last_target is not None:
-                    self.hand.set_positions(self.last_target)
+                self.hand.hold(self.fingers)
         except (DeviceError, ParameterError) as err:
             if not self.hold_failed:
                 self.hold_failed = True
-                self.fault("hold-failed", str(err), "hand keeps its last target; the hold is retried")
+                self.fault("hold-failed", str(err), "hand keeps its last command; the hold is retried")
             return
         self.hold_failed = False
         self.res.holds_sent += 1
+        for i, until in enumerate(self.until):  # a closing cut short: its rest is owed
+            if until is not None:
+                if until > now:
+                    self.owed[i] += (until - now) * self.speed
+                    for f in self.grip.groups[i][0]:
+                        name = f.name.lower()
+                        self.res.grip_added[name] -= (until - now) * self.speed
+                self.until[i] = None
 
     def source_stats(self) -> dict[str, int]:
         st = getattr(self.source, "stats", None)
@@ -1094,10 +1195,12 @@ def print_fault(fault: Fault, file: Any = None) -> None:
 def realtime_priority(priority: int = 50) -> str:
     """Ask the OS to run this process under SCHED_FIFO real-time scheduling.
 
-    On Linux with the right privileges (root or ``CAP_SYS_NICE`` / an
-    ``rtprio`` limit) the loop then preempts ordinary processes, which keeps
-    its latency low on a busy machine. The loop blocks in ``select`` between
-    samples, so it does not starve anything.
+    On Linux with an ``rtprio`` limit of at least ``priority`` or
+    ``CAP_SYS_NICE`` (root works too, but is not needed: docs/runtime.md,
+    "Privileges") the loop then preempts ordinary processes, which keeps its
+    latency low on a busy machine. The loop blocks in ``select`` between
+    samples, so it does not starve anything. Call :func:`drop_capabilities`
+    afterwards: the policy stays, the capability is no longer needed.
 
     Parameters
     ----------
@@ -1121,3 +1224,64 @@ def realtime_priority(priority: int = 50) -> str:
     except (OSError, ValueError) as err:
         return f"could not get SCHED_FIFO ({err}); running at normal priority"
     return f"running under SCHED_FIFO priority {priority}"
+
+
+#: Linux capability numbers named in messages (linux/capability.h).
+_CAP_NAMES = {23: "CAP_SYS_NICE", 1: "CAP_DAC_OVERRIDE", 21: "CAP_SYS_ADMIN", 7: "CAP_SETUID"}
+
+
+def _capabilities() -> tuple[int, int]:
+    """The effective and permitted capability masks of this process (Linux; 0, 0 elsewhere)."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as fh:
+            fields = dict(line.split(":", 1) for line in fh if line.startswith("Cap"))
+        return int(fields["CapEff"], 16), int(fields["CapPrm"], 16)
+    except (OSError, KeyError, ValueError):
+        return 0, 0
+
+
+def drop_capabilities() -> str:
+    """Give up every Linux capability this process holds; the scheduling policy already set stays.
+
+    ``run --realtime`` started with ``CAP_SYS_NICE`` (an ambient capability, a
+    file capability) needs it only for the one ``sched_setscheduler`` call; the
+    serial ports need the ``dialout`` group, not a capability. So after
+    :func:`realtime_priority` the effective, permitted and inheritable sets are
+    cleared (``capset(2)``; the ambient set follows). A process running as root
+    keeps its rights (dropping them could leave it unable to finish its
+    recording in a user's folder); the message then says to use
+    ``CAP_SYS_NICE`` or an ``rtprio`` limit instead.
+
+    Returns
+    -------
+    str
+        What happened, for the user, or ``""`` when nothing was held (never raises).
+
+    Examples
+    --------
+    >>> isinstance(drop_capabilities.__doc__, str)
+    True
+    """
+    if not sys.platform.startswith("linux"):
+        return ""
+    if os.geteuid() == 0:
+        return ("root: not needed, its rights are kept; give the user CAP_SYS_NICE or an rtprio "
+                "limit instead (docs/runtime.md, Privileges)")
+    eff, prm = _capabilities()
+    if not (eff or prm):
+        return ""
+    import ctypes
+
+    held = [name for bit, name in _CAP_NAMES.items() if (eff | prm) >> bit & 1]
+    header = (ctypes.c_uint32 * 2)(0x20080522, 0)   # _LINUX_CAPABILITY_VERSION_3, this process
+    data = (ctypes.c_uint32 * 6)()                  # effective, permitted, inheritable: none (2 words)
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        if libc.capset(header, data) != 0:
+            return f"could not drop capabilities: {os.strerror(ctypes.get_errno())}"
+    except (OSError, AttributeError) as err:
+        return f"could not drop capabilities: {err}"
+    eff, prm = _capabilities()
+    if eff or prm:
+        return f"could not drop capabilities (still held: {eff:#x})"
+    return "gave up capabilities " + (", ".join(held) or "held") + " (the scheduling policy stays)"

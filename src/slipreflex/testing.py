@@ -49,7 +49,7 @@ from .errors import DataError
 from .interfaces import Reflex
 
 __all__ = ["ContractError", "CheckReport", "check_reflex", "check_method", "synthetic_input",
-           "reflex_for_check"]
+           "reflex_for_check", "check_experiment"]
 
 #: Synthetic trial: seconds of rest, then seconds of slip.
 REST_S, SLIP_S = 1.0, 1.0
@@ -170,7 +170,8 @@ def _check_attributes(reflex: Any) -> None:
         if not callable(getattr(reflex, m, None)):
             _fail(reflex, f"{m} must be callable")
     if not isinstance(reflex, Reflex):
-        missing = [a for a in (*Reflex.__annotations__, "step", "reset") if not hasattr(reflex, a)]
+        members = [n for n, v in vars(Reflex).items() if isinstance(v, property)]
+        missing = [a for a in (*members, "step", "reset") if not hasattr(reflex, a)]
         _fail(reflex, f"is not a slipreflex.interfaces.Reflex (missing: {', '.join(missing)})")
 
 
@@ -320,7 +321,7 @@ def check_reflex(reflex: Any, *, shape: tuple[int, ...] | None = None, seed: int
     >>> check_reflex(Opens())
     Traceback (most recent call last):
     ...
-    slipreflex.testing.ContractError: Opens (opens): a non-finite sample produced the command 0.0, below ... (it would open the hand)
+    slipreflex.testing.ContractError: Opens (opens): a non-finite sample produced the command 0.0, below ...
     """
     _check_attributes(reflex)
     if shape is None:
@@ -382,3 +383,72 @@ def check_method(name: str, *, shape: tuple[int, ...] | None = None) -> CheckRep
             _fail(reflex, "rest_statistic() must give a non-empty 1-D array of finite values")
     return report
 
+
+def check_experiment(name: str, config: Any = None, *, method: str = "fixed") -> list[Any]:
+    """Check a registered experiment: its specification holds and one trial of it runs and is read.
+
+    The perturbation it builds from ``config`` is one the simulated rig applies; its
+    description is words; its load and settle times are finite, not negative, and slips are
+    looked for inside the recording; one trial (the first bottle, ``method``) runs, and its
+    rows carry the experiment's name, a whole number of slip events (one at most for
+    ``slip_events="single"``) and, with ``records_load``, a load at every onset found.
+
+    Parameters
+    ----------
+    name : str
+        A registered experiment (:mod:`slipreflex.experiment_specs`).
+    config : ReproduceConfig, optional
+        The run to build its perturbation from (default: the paper's, this experiment only).
+    method : str
+        The method of the trial.
+
+    Returns
+    -------
+    list of TrialRow
+        The trial's rows.
+
+    Raises
+    ------
+    ContractError
+        Naming the experiment and the broken rule.
+
+    Examples
+    --------
+    >>> [r.experiment for r in check_experiment("drop")]
+    ['drop']
+    """
+    from . import experiment_specs, methods
+    from .experiments import Cell, ReproduceConfig, calibrate, run_trial, trial_seed
+    from .sim import Rig
+
+    spec = experiment_specs.get(name)
+
+    def fail(what: str) -> None:
+        raise ContractError(f"experiment {name!r}: {what}")
+
+    cfg = config or ReproduceConfig(trials=1, methods=(method,), experiments=(name,))
+    what = spec.perturbation(cfg)
+    try:
+        Rig(cfg.bottles[0]).perturb(what, at=0.0)
+    except Exception as err:  # noqa: BLE001 - any refusal is the experiment's to fix
+        fail(f"the simulated rig refuses its perturbation {what!r}: {err}")
+    text = spec.describe(what)
+    if not isinstance(text, str) or not text.strip():
+        fail(f"describe() must give words, got {text!r}")
+    load, settle = float(spec.load_s(what)), float(spec.settle_s(what))
+    if not (math.isfinite(load) and load >= 0.0):
+        fail(f"load_s() must be finite and >= 0, got {load!r}")
+    if not (math.isfinite(settle) and 0.0 <= settle < load + cfg.after_s):
+        fail(f"settle_s() must be >= 0 and inside the recording (load {load:g} s + after {cfg.after_s:g} s), "
+             f"got {settle!r}")
+    cell = Cell(name, cfg.bottles[0], method, 0, trial_seed(cfg.seed, name, cfg.bottles[0], 0))
+    thresholds = calibrate(cfg) if method in methods.calibrated() else {}
+    rows, _ = run_trial(cell, cfg, thresholds)
+    if not rows or any(r.experiment != name for r in rows):
+        fail(f"a trial's rows must carry the experiment's name, got {[r.experiment for r in rows]}")
+    n = rows[0].n_events
+    if spec.slip_events == "single" and n > 1:
+        fail(f"slip_events='single' but the trial found {n} slips")
+    if spec.records_load and any(r.n_events and not math.isfinite(r.load_at_onset) for r in rows):
+        fail("records_load=True but an onset has no load")
+    return rows

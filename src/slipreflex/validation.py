@@ -86,7 +86,7 @@ def _bounds(lo: float | None, hi: float | None, lo_open: bool, hi_open: bool) ->
     return (" " + " and ".join(parts)) if parts else ""
 
 
-def _outside(value: float, lo: float | None, hi: float | None, lo_open: bool, hi_open: bool) -> bool:
+def _outside(value: Any, lo: float | None, hi: float | None, lo_open: bool, hi_open: bool) -> bool:
     if lo is not None and (value <= lo if lo_open else value < lo):
         return True
     return hi is not None and (value >= hi if hi_open else value > hi)
@@ -321,7 +321,7 @@ def build(cls: type[T], kwargs: dict[str, Any]) -> T:
     ...
     slipreflex.errors.ParameterError: unknown parameter(s) for Window: m (known: n)
     """
-    known = {f.name for f in dataclasses.fields(cls)}
+    known = {f.name for f in dataclasses.fields(cls)}  # pyright: ignore[reportArgumentType] (cls: a dataclass)
     unknown = sorted(set(kwargs) - known)
     if unknown:
         raise ParameterError(

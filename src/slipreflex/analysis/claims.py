@@ -72,6 +72,7 @@ from typing import Any
 import numpy as np
 
 from .. import hardware as hw
+from ..csvfiles import cell_bool, cell_float
 from ..methods import DATH, FIXED, NMSD, SWT
 from ..methods import label as _label
 from .paper import BOTTLE_ORDER, EXPERIMENTS, PAPER
@@ -440,7 +441,7 @@ class ClaimInput:
         ...           ).success("drop", ["TR"], "dath")
         (1, 2)
         """
-        s = [_truthy(_get(r, "success")) for b in bottles for r in self.cell(experiment, b, method)
+        s = [cell_bool(_get(r, "success")) for b in bottles for r in self.cell(experiment, b, method)
              if _count(_get(r, "event")) == 0]
         return sum(s), len(s)
 
@@ -478,24 +479,14 @@ def _get(row: Any, key: str) -> Any:
 
 
 def _num(x: Any) -> float:
-    if x is None or (isinstance(x, str) and not x.strip()):
-        return float("nan")
-    try:
-        return float(x)
-    except (TypeError, ValueError):
-        return float("nan")
+    """A cell of a table being judged: blank, missing or unreadable is NaN."""
+    return cell_float(x, lenient=True)
 
 
 def _count(x: Any) -> int:
     """A count cell as int; a missing or unreadable cell counts 0."""
     v = _num(x)
     return int(v) if math.isfinite(v) else 0
-
-
-def _truthy(x: Any) -> bool:
-    if isinstance(x, str):
-        return x.strip().lower() in ("true", "1")
-    return bool(x) and not (isinstance(x, float) and math.isnan(x))
 
 
 def _f(x: float, digits: int = 0) -> str:
@@ -591,7 +582,7 @@ def _scan_levels(ci: ClaimInput) -> list[Part]:
             ("black_hi", 3.35, "3.35"))
     inside, parts = [], []
     tol = {stat: VOLT_TOL(text) for stat, _, text in want}
-    for stat, volts, text in want:
+    for stat, volts, _ in want:
         lo, hi = e.band(stat, CENTRAL)
         inside.append(lo - tol[stat] <= volts <= hi + tol[stat])
         parts.append(f"{stat.replace('_', ' ')} {lo:.3f}-{hi:.3f} V (paper {volts:g})")
@@ -1078,9 +1069,8 @@ def write_claims_csv(path: str | Path, results: Sequence[Any], columns: Sequence
         w = csv.writer(fh, lineterminator="\n")
         w.writerow(columns)
         for r in results:
-            get = (lambda k: r[k]) if isinstance(r, Mapping) else (lambda k: getattr(r, "number" if k == "claim"
-                                                                                   else k))
-            w.writerow([_cell(get(c)) for c in columns])
+            d = r if isinstance(r, Mapping) else {c: getattr(r, "number" if c == "claim" else c) for c in columns}
+            w.writerow([_cell(d[c]) for c in columns])
     return path
 
 
@@ -1182,9 +1172,8 @@ def _bounds_item(plant: Any, first_slip_ml: float, simulate: bool) -> Contradict
             "C <= r[(M+m)g + m^2 g h/(d(M+m))], a fully inelastic impact, then sliding out against the grip; "
             "h = release height + bottle depth. Both assume " + DROP_ASSUMPTIONS + ".")
     if simulate:
-        from ..sim.calibration import drop_fall_capacity
-
         from ..sim import BOTTLES
+        from ..sim.calibration import drop_fall_capacity
 
         kw = None if plant is None else plant.rig_kwargs()
         sim = drop_fall_capacity((BOTTLES if plant is None else plant.bottles)["TR"], rig_kwargs=kw, iterations=8)

@@ -120,7 +120,7 @@ def segment_events(t, envelope, threshold: float, interval: tuple[float, float],
     end_all = float(t[-1] + (t[-1] - t[-2] if t.size > 1 else 0.0)) if t_end is None else float(t_end)
     onsets = [float(t[g[0]]) for g in groups]
     out = []
-    for i, (i0, i1) in enumerate(groups):
+    for i, (_, i1) in enumerate(groups):
         w0 = max(lo, onsets[i] - lead_s)
         w1 = onsets[i + 1] - lead_s if i + 1 < len(onsets) else end_all
         out.append(SlipEvent(onsets[i], float(t[i1]), (w0, w1)))

@@ -28,6 +28,7 @@ from typing import Any
 
 import numpy as np
 
+from .. import experiment_specs
 from .. import methods as _registry
 from .paper import BOTTLE_ORDER, paper_value
 
@@ -205,8 +206,11 @@ def _present(summary, experiment):
 
 
 def bar_chart(summary: Sequence[dict[str, Any]], experiment: str, metric: str,
-              path: str | Path) -> Path:
+              path: str | Path, what: str | None = None) -> Path:
     """Bars of ``metric`` ("response" or "total") with sd, ours beside the paper's.
+
+    ``what`` names the load as run ("10 g dropped from 2 cm"; default: the experiment's
+    title, :mod:`slipreflex.experiment_specs`).
 
     Our values are the filled bars; the paper's mean and sd, where it reports
     them, are black diamonds with error bars next to each bar.
@@ -250,7 +254,7 @@ def bar_chart(summary: Sequence[dict[str, Any]], experiment: str, metric: str,
     ax.set_xticks(np.arange(len(bottles)))
     ax.set_xticklabels(bottles)
     label = "response time" if metric == "response" else "total controller time"
-    what = "sudden 10 g drop" if experiment == "drop" else "pouring 500 ml"
+    what = what or f"{experiment}, {experiment_specs.get(experiment).title}"
     ax.set_ylabel(f"{label} (ms)")
     ax.set_title(f"{label.capitalize()}, {what} (bars: sd)", fontsize=9)
     ax.set_ylim(bottom=0)
@@ -286,7 +290,9 @@ def success_chart(summary: Sequence[dict[str, Any]], path: str | Path) -> Path:
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
-    exps = [e for e in ("drop", "pour") if any(s["experiment"] == e for s in summary)] or ["drop"]
+    exps = [e for e in experiment_specs.names() if any(s["experiment"] == e for s in summary)]
+    exps += sorted({s["experiment"] for s in summary} - set(exps))
+    exps = exps or [experiment_specs.names()[0]]
     fig, axes = plt.subplots(1, len(exps), figsize=(4.4 * len(exps) + 1.6, 3.6), squeeze=False)
     shown: dict[str, Any] = {}
     for ax, e in zip(axes[0], exps):
@@ -315,7 +321,7 @@ def success_chart(summary: Sequence[dict[str, Any]], path: str | Path) -> Path:
         ax.set_yticks([0, 20, 40, 60, 80, 100])
         ax.set_ylabel("successful trials (%)")
         ax.set_title(f"Success, {e}: the slip stopped before the bottle fell", fontsize=8)
-    handles = [Patch(color=_color(m), label=f"{_registry.label(m)} (ours)") for m in shown if m not in "Dv"]
+    handles: list[Any] = [Patch(color=_color(m), label=f"{_registry.label(m)} (ours)") for m in shown if m not in "Dv"]
     if "D" in shown:
         handles.append(Line2D([], [], ls="", marker="D", color="k", ms=4.5, label="paper, as stated"))
     if "v" in shown:

@@ -19,14 +19,25 @@ Examples
 from __future__ import annotations
 
 import dataclasses
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from .paper import BOTTLE_ORDER, EXPERIMENTS
-from .report import (SUCCESS_CAPTION, SUMMARY_COLUMNS, bars_caption, discussion_text, report_markdown,
-                     setup_lines, trial_caption, write_csv, zoom_caption)
+from .. import experiment_specs
+from .paper import BOTTLE_ORDER
+from .report import (
+    SUCCESS_CAPTION,
+    SUMMARY_COLUMNS,
+    bars_caption,
+    discussion_text,
+    report_markdown,
+    setup_lines,
+    trial_caption,
+    write_csv,
+    zoom_caption,
+)
 from .trial import RESULT_COLUMNS, TrialRow
 
 __all__ = ["ReproduceResult", "write_outputs", "trial_plot", "paper_part", "not_the_papers", "trial_outcome"]
@@ -167,14 +178,14 @@ def not_the_papers(config: Any) -> list[str]:
     >>> not_the_papers(ReproduceConfig(drop_mass_kg=0.02))
     ['drop (20 g from 2 cm)']
     """
-    from ..sim import BOTTLES, PAPER_DROP, PAPER_POUR
+    from ..sim import BOTTLES
 
     out = [f"bottle {b}" for b in config.bottles if b not in BOTTLES or config.bottle(b) != BOTTLES[b]]
-    drop, pour = config.drop, config.pour
-    if "drop" in config.experiments and drop != PAPER_DROP:
-        out.append(f"drop ({1e3 * drop.mass_kg:g} g from {1e2 * drop.height_m:g} cm)")
-    if "pour" in config.experiments and pour != PAPER_POUR:
-        out.append(f"pour ({pour.volume_ml:g} ml at {pour.rate_l_min:g} L/min)")
+    for e in config.experiments:
+        exp = experiment_specs.get(e)
+        what = exp.perturbation(config)
+        if exp.paper is None or what != exp.paper():
+            out.append(f"{e} ({exp.describe(what)})")
     return out
 
 
@@ -213,7 +224,8 @@ def _figure_tasks(result: ReproduceResult, fig_dir: Path) -> list[tuple[str, str
     from . import figures as F
 
     tasks: list[tuple[str, str, Any, tuple]] = []
-    for key in sorted(result.plots, key=lambda k: (EXPERIMENTS.index(k[0]), BOTTLE_ORDER.index(k[1])
+    order = experiment_specs.names()
+    for key in sorted(result.plots, key=lambda k: (order.index(k[0]), BOTTLE_ORDER.index(k[1])
                                                    if k[1] in BOTTLE_ORDER else len(BOTTLE_ORDER), k[1])):
         e, b, m, _ = key
         plot = result.plots[key]
@@ -224,9 +236,11 @@ def _figure_tasks(result: ReproduceResult, fig_dir: Path) -> list[tuple[str, str
                                        title=plot.title + ", zoomed on its slips")
             tasks.append((f"trial_{e}_{b}_{m}_zoom.png", zoom_caption(b, m, e), F.plot_trial, (zoom,)))
     for e in result.config.experiments:
+        exp = experiment_specs.get(e)
+        what = f"{exp.title}, {exp.describe(exp.perturbation(result.config))}"
         for metric in ("response", "total"):
-            tasks.append((f"bars_{e}_{metric}.png", bars_caption(e, metric), F.bar_chart,
-                          (result.summary, e, metric)))
+            tasks.append((f"bars_{e}_{metric}.png", bars_caption(e, metric),
+                          functools.partial(F.bar_chart, what=what), (result.summary, e, metric)))
     tasks.append(("success.png", SUCCESS_CAPTION, F.success_chart, (result.summary,)))
     return tasks
 
@@ -259,7 +273,7 @@ def _write_figures(result: ReproduceResult, out: Path, paths: dict[str, Path],
         F._plt()                       # imported once here, so the forked workers start warm
         with ProcessPoolExecutor(max_workers=jobs, initializer=worker_signals) as ex:
             drawn = list(ex.map(_draw, work))
-    for (name, caption, _, _), path in zip(tasks, drawn):
+    for (name, _, _, _), path in zip(tasks, drawn):
         paths[name] = path
     return [(caption, f"figures/{name}") for name, caption, _, _ in tasks]
 
@@ -298,8 +312,9 @@ def trial_plot(cell: Any, spec: Any, tr: Any, reflex: Any, rows: Sequence[Any], 
     env = accel_envelope(tr.t, tr.accel[:, axis], OnsetParams())
     sensor_t, x = (tr.t, tr.volts) if spec.input_kind == "slip" else (tr.tactile_t, tr.tactile)
     det = spec.detections(reflex, x) if spec.detections is not None else None
-    pour = cell.experiment == "pour"
-    xlim = None if pour else (t_pert - 0.3, min(tr.t_end, t_pert + 1.5))
+    exp = experiment_specs.get(cell.experiment)
+    zoom = exp.zoom_s
+    xlim = None if zoom is None else (t_pert - zoom[0], min(tr.t_end, t_pert + zoom[1]))
     axes = "xyz"
     return TrialPlot(
         title=f"{cell.experiment} {cell.bottle} {cell.method} (trial {cell.trial}, seed {cell.seed})",
@@ -309,7 +324,7 @@ def trial_plot(cell: Any, spec: Any, tr: Any, reflex: Any, rows: Sequence[Any], 
         sensor_label="" if det is None else det.sensor_label,
         event_t=None if det is None else sensor_t[det.events],
         event_label="" if det is None else det.event_label, cmd_t=tr.cmd_t, cmd_v=tr.cmd_value,
-        load_t=tr.t if pour else None, load=tr.water_ml if pour else None,
+        load_t=tr.t if exp.records_load else None, load=tr.water_ml if exp.records_load else None,
         onsets=[r.onset_s for r in rows], responses=[r.onset_s + r.response_ms / 1e3 for r in rows],
         lasts=[r.last_change_s for r in rows], true_onsets=[r.true_onset_s for r in rows],
         xlim=xlim, outcome=trial_outcome(rows, tr.fall_time))

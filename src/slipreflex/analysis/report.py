@@ -26,7 +26,8 @@ from typing import Any
 
 import numpy as np
 
-from .. import methods
+from .. import experiment_specs, methods
+from ..csvfiles import cell_bool, cell_float
 from ..methods import label as _label
 from .paper import BOTTLE_ORDER, EXPERIMENTS, PAPER, PAPER_SUCCESS, paper_value
 from .trial import RESULT_COLUMNS
@@ -35,7 +36,7 @@ __all__ = ["SUMMARY_COLUMNS", "summarize", "write_csv", "read_csv", "terminal_ta
            "comparison_markdown", "success_markdown", "onset_markdown", "pour_slips_markdown",
            "differences",
            "report_markdown", "fmt_mean_sd", "group_key_order", "setup_lines", "discussion_text",
-           "trial_caption", "zoom_caption", "bars_caption", "SUCCESS_CAPTION", "PAPER_FIGURES"]
+           "trial_caption", "zoom_caption", "bars_caption", "SUCCESS_CAPTION", "paper_figure"]
 
 #: Columns of summary.csv, in order.
 SUMMARY_COLUMNS: tuple[str, ...] = (
@@ -48,13 +49,8 @@ SUMMARY_COLUMNS: tuple[str, ...] = (
 )
 
 
-def _num(x: Any) -> float:
-    """A cell as float: "" (how write_csv stores NaN) and None are NaN."""
-    return float("nan") if x is None or (isinstance(x, str) and not x.strip()) else float(x)
-
-
 def _stats(values: Iterable[Any]) -> tuple[float, float, int]:
-    v = np.array([_num(x) for x in values], dtype=float)
+    v = np.array([cell_float(x) for x in values], dtype=float)
     v = v[np.isfinite(v)]
     if v.size == 0:
         return float("nan"), float("nan"), 0
@@ -73,7 +69,7 @@ def group_key_order(key: tuple[str, str, str]) -> tuple:
     def idx(seq, x):
         return seq.index(x) if x in seq else len(seq)
     e, b, m = key
-    return (idx(EXPERIMENTS, e), e, idx(BOTTLE_ORDER, b), b, idx(methods.names(), m), m)
+    return (idx(experiment_specs.names(), e), e, idx(BOTTLE_ORDER, b), b, idx(methods.names(), m), m)
 
 
 def _table_methods(by: dict[tuple[str, str, str], Any]) -> list[str]:
@@ -82,12 +78,6 @@ def _table_methods(by: dict[tuple[str, str, str], Any]) -> list[str]:
     return (list(methods.names(paper=True)) + [m for m in methods.names() if m in ran
                                                and m not in methods.names(paper=True)]
             + sorted(ran - set(methods.names())))
-
-
-def _truthy(x: Any) -> float:
-    if isinstance(x, str):
-        return 1.0 if x.strip().lower() in ("true", "1") else 0.0
-    return float(bool(x))
 
 
 def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
@@ -112,13 +102,13 @@ def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
         rm, rs, rn = _stats(r.get("response_ms", math.nan) for r in g)
         tm, ts, tn = _stats(r.get("total_ms", math.nan) for r in g)
         em, es, en = _stats(r.get("onset_error_ms", math.nan) for r in g)
-        succ = [_truthy(r.get("success", False)) for r in g]
+        succ = [float(cell_bool(r.get("success", False))) for r in g]
         pr, pt = paper_value(e, "response_ms", b, m), paper_value(e, "total_ms", b, m)
         out.append({
             "experiment": e, "bottle": b, "method": m,
             "n_trials": len({(r.get("trial"), r.get("seed")) for r in g}),
             "n_rows": len(g),
-            "n_events": int(sum(1 for r in g if _num(r.get("n_events", 1)) > 0)),
+            "n_events": int(sum(1 for r in g if cell_float(r.get("n_events", 1)) > 0)),
             "response_mean_ms": rm, "response_sd_ms": rs, "response_n": rn,
             "total_mean_ms": tm, "total_sd_ms": ts, "total_n": tn,
             "success_rate": float(np.mean(succ)) if succ else float("nan"), "success_n": len(succ),
@@ -136,7 +126,7 @@ def _cell(v: Any) -> str:
     return str(v)
 
 
-def write_csv(path: str | Path, rows: Sequence[dict[str, Any]],
+def write_csv(path: str | Path, rows: Sequence[Any],
               columns: Sequence[str] = RESULT_COLUMNS, *, notes: Sequence[str] = ()) -> Path:
     """Write ``rows`` with exactly ``columns`` (NaN as an empty cell).
 
@@ -215,8 +205,8 @@ def comparison_markdown(summary: Sequence[dict[str, Any]]) -> str:
 
     Examples
     --------
-    >>> print(comparison_markdown([]).splitlines()[0])
-    | experiment, metric | bottle | DATH paper | DATH ours | fixed paper | fixed ours | NMSD paper | NMSD ours | SWT-SD paper | SWT-SD ours |
+    >>> comparison_markdown([]).splitlines()[0].split(" | ")[:5]
+    ['| experiment, metric', 'bottle', 'DATH paper', 'DATH ours', 'fixed paper']
     """
     by = {(s["experiment"], s["bottle"], s["method"]): s for s in summary}
     order = _table_methods(by)
@@ -285,7 +275,7 @@ def onset_markdown(rows: Sequence[dict[str, Any]]) -> str:
     """
     groups: dict[tuple[str, str], list[float]] = {}
     for r in rows:
-        groups.setdefault((r["experiment"], r["bottle"]), []).append(_num(r.get("onset_error_ms")))
+        groups.setdefault((r["experiment"], r["bottle"]), []).append(cell_float(r.get("onset_error_ms")))
     lines = ["| experiment | bottle | error ms, mean ± sd (n) | min | max |", "|---|---|---|---|---|"]
     for (e, b) in sorted(groups, key=lambda k: group_key_order((k[0], k[1], ""))):
         v = np.array(groups[(e, b)], dtype=float)
@@ -310,20 +300,21 @@ def pour_slips_markdown(rows: Sequence[dict[str, Any]]) -> str:
     >>> print(pour_slips_markdown(r).splitlines()[2])
     | DK | DATH | 2.0 | 100% | 190 | 410 |
     """
-    groups: dict[tuple[str, str], dict[tuple, list[dict[str, Any]]]] = {}
+    groups: dict[tuple[str, str, str], dict[tuple, list[dict[str, Any]]]] = {}
     for r in rows:
-        if r["experiment"] != "pour":
+        if not experiment_specs.get(r["experiment"]).records_load:   # slips at a load: the pour's
             continue
-        groups.setdefault((r["bottle"], r["method"]), {}).setdefault((r["trial"], r["seed"]), []).append(r)
+        key = (r["experiment"], r["bottle"], r["method"])
+        groups.setdefault(key, {}).setdefault((r["trial"], r["seed"]), []).append(r)
     lines = ["| bottle | method | slips per trial (mean) | trials with 2+ slips | ml at 1st slip (median) "
              "| ml at 2nd slip (median) |", "|---|---|---|---|---|---|"]
-    for (b, m) in sorted(groups, key=lambda k: group_key_order(("pour", k[0], k[1]))):
-        trials = groups[(b, m)]
-        n = [int(_num(rs[0].get("n_events", 0))) for rs in trials.values()]
-        first = [_num(r.get("load_at_onset")) for rs in trials.values() for r in rs
-                 if int(_num(r.get("event", 0))) == 0 and int(_num(r.get("n_events", 0))) > 0]
-        second = [_num(r.get("load_at_onset")) for rs in trials.values() for r in rs
-                  if int(_num(r.get("event", 0))) == 1]
+    for (e, b, m) in sorted(groups, key=group_key_order):
+        trials = groups[(e, b, m)]
+        n = [int(cell_float(rs[0].get("n_events", 0))) for rs in trials.values()]
+        first = [cell_float(r.get("load_at_onset")) for rs in trials.values() for r in rs
+                 if int(cell_float(r.get("event", 0))) == 0 and int(cell_float(r.get("n_events", 0))) > 0]
+        second = [cell_float(r.get("load_at_onset")) for rs in trials.values() for r in rs
+                  if int(cell_float(r.get("event", 0))) == 1]
 
         def med(v):
             v = [x for x in v if x == x]
@@ -355,14 +346,14 @@ def differences(summary: Sequence[dict[str, Any]], *, tolerance_sd: float = 2.0)
                 out.append(f"{s['experiment']}, {metric}, {s['bottle']}, "
                            f"{_label(s['method'])}: no value of ours (paper {p.text()} ms)")
                 continue
-            if abs(m - p.mean) > tolerance_sd * p.sd:
+            if p.sd is not None and abs(m - p.mean) > tolerance_sd * p.sd:
                 out.append(f"{s['experiment']}, {metric}, {s['bottle']}, {_label(s['method'])}: "
                            f"ours {m:.0f} ms vs paper {p.text()} ms ({m - p.mean:+.0f} ms, "
                            f"{m / p.mean:.1f}x)")
     return out
 
 
-def report_markdown(*, summary: Sequence[dict[str, Any]], rows: Sequence[dict[str, Any]],
+def report_markdown(*, summary: Sequence[dict[str, Any]], rows: Sequence[Any],
                     figures: Sequence[tuple[str, str]], setup: Sequence[str],
                     discussion: Sequence[str], claims: Sequence[Any] = (),
                     notices: Sequence[str] = ()) -> str:
@@ -411,7 +402,7 @@ def report_markdown(*, summary: Sequence[dict[str, Any]], rows: Sequence[dict[st
     lines += ["## Onset estimate vs the simulator's true onset", "",
               "Accelerometer onset minus the true onset of the slip (positive: the estimate is late).",
               "", onset_markdown(rows), ""]
-    if any(r["experiment"] == "pour" for r in rows):
+    if any(experiment_specs.get(r["experiment"]).records_load for r in rows):
         lines += ["## Slips per pour", "",
                   "The paper saw two slips in most pours, near 200 ml and near 400 ml (volume from the "
                   "flow sensor at each accelerometer onset).", "", pour_slips_markdown(rows), ""]
@@ -437,12 +428,20 @@ def report_markdown(*, summary: Sequence[dict[str, Any]], rows: Sequence[dict[st
 # registry, the hardware constants, the analysis parameters, the paper's table), so the text
 # follows --rest-k, --swt-persist, --drop-mass, --pour-volume and the rest.
 
-#: The paper's figures our figures correspond to (for the captions).
-PAPER_FIGURES: dict[tuple[str, str], str] = {
-    ("drop", "trial"): "Figs. 10-12", ("pour", "trial"): "Fig. 15",
-    ("drop", "response"): "Fig. 13", ("drop", "total"): "Fig. 14",
-    ("pour", "response"): "Fig. 16", ("pour", "total"): "Fig. 17",
-}
+def paper_figure(experiment: str, plot: str) -> str:
+    """The paper's figure a plot of ``experiment`` is like ("" when the paper has none).
+
+    Examples
+    --------
+    >>> paper_figure("pour", "total"), paper_figure("pour", "zoom")
+    ('Fig. 17', '')
+    """
+    return experiment_specs.get(experiment).paper_figures.get(plot, "")
+
+
+def _like_paper(experiment: str, plot: str) -> str:
+    fig = paper_figure(experiment, plot)
+    return f" (like the paper's {fig})" if fig else ""
 
 
 def _finite(x: Any) -> bool:
@@ -477,16 +476,16 @@ def trial_caption(experiment: str, bottle: str, method: str) -> str:
     >>> trial_caption("drop", "TR", "dath")[:38]
     'One drop trial, bottle TR, method DATH'
     """
-    return (f"One {experiment} trial, bottle {bottle}, method {_label(method)} (like the paper's "
-            f"{PAPER_FIGURES[(experiment, 'trial')]}): I onset, II first response, III last change")
+    return (f"One {experiment} trial, bottle {bottle}, method {_label(method)}{_like_paper(experiment, 'trial')}: "
+            "I onset, II first response, III last change")
 
 
-def zoom_caption(bottle: str, method: str, experiment: str = "pour") -> str:
+def zoom_caption(bottle: str, method: str, experiment: str) -> str:
     """Caption of the zoom on an example trial's slips.
 
     Examples
     --------
-    >>> zoom_caption("DK", "dath")
+    >>> zoom_caption("DK", "dath", "pour")
     'The same pour trial zoomed on its slips, every axis scaled to the zoom (DK, DATH)'
     """
     return (f"The same {experiment} trial zoomed on its slips, every axis scaled to the zoom "
@@ -502,8 +501,7 @@ def bars_caption(experiment: str, metric: str) -> str:
     True
     """
     what = "Response" if metric == "response" else "Total controller"
-    return (f"{what} time, {experiment} (like the paper's {PAPER_FIGURES[(experiment, metric)]}); "
-            "diamonds: the paper")
+    return f"{what} time, {experiment}{_like_paper(experiment, metric)}; diamonds: the paper"
 
 
 #: Caption of the success chart.
@@ -539,7 +537,8 @@ def setup_lines(result: Any, command: str | None = None) -> list[str]:
            if getattr(c, "variations", False) else "; every repeat is the nominal plant"),
         f"drop: {c.drop.mass_kg * 1e3:g} g from {c.drop.height_m * 1e2:g} cm above the opening; "
         f"pour: {c.pour.volume_ml:g} ml at {c.pour.rate_l_min:g} L/min ({c.pour.duration_s:.0f} s)",
-        f"protocol: grasp to {getattr(c, 'grasp_force_n', hw.CONTACT_FORCE_N):g} N, settle (simulator's grasp routine), "
+        f"protocol: grasp to {getattr(c, 'grasp_force_n', hw.CONTACT_FORCE_N):g} N, "
+        "settle (simulator's grasp routine), "
         f"{c.rest_s:g} s of rest recorded, perturbation, {c.after_s:g} s after it ends",
         _chain_line(),
     ]
@@ -587,7 +586,8 @@ def _analysis_lines(c: Any) -> list[str]:
     from .trial import MAX_RESPONSE_S
 
     op = OnsetParams()
-    travel = sorted({c.bottle(b).grip_travel_m if hasattr(c, "bottle") else BOTTLES[b].grip_travel_m for b in c.bottles})
+    travel = sorted({c.bottle(b).grip_travel_m if hasattr(c, "bottle") else BOTTLES[b].grip_travel_m
+                     for b in c.bottles})
     return [
         f"onset: paper's recipe with k = {op.k:g} sd over the first {op.baseline_s * 1e3:.0f} ms; slip "
         f"episodes must peak at {op.peak_factor:g}x the threshold; responses later than "
@@ -648,11 +648,11 @@ def _simulated_rig(d: _Rows) -> str:
 
 def _onset_paragraph(d: _Rows) -> str:
     parts, late_pours = [], 0
-    for e in ("drop", "pour"):
+    for e in experiment_specs.names():
         err = np.array([r.onset_error_ms for r in d.sel(experiment=e) if _finite(r.onset_error_ms)])
         if err.size:
             late = int((err > LATE_ONSET_MS).sum())
-            late_pours += late if e == "pour" else 0
+            late_pours += late if experiment_specs.get(e).slip_events == "segmented" else 0
             parts.append(f"{e}: median absolute error {np.median(np.abs(err)):.1f} ms, largest "
                          f"{np.abs(err).max():.0f} ms, {late} of {err.size} found more than "
                          f"{LATE_ONSET_MS:.0f} ms after the true onset")
@@ -702,7 +702,7 @@ def _bottles_paragraph(d: _Rows) -> str:
                 if (e, b, methods.DATH) in by}
         vals = {b: v for b, v in vals.items() if _finite(v)}
         if len(vals) >= 2:
-            order = sorted(vals, key=vals.get)
+            order = sorted(vals, key=lambda b: vals[b])
             tx_first = tx_first or order[0] == "TX"
             parts.append(f"{e}: " + ", ".join(f"{b} {vals[b]:.0f} ms" for b in order) + " (paper: "
                          + ", ".join(f"{b} {p.mean:g} ms" for b in order

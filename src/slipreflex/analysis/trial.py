@@ -37,13 +37,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from .. import methods
+from .. import experiment_specs, methods
 from ..errors import ParameterError
 from .events import LEAD_S, MERGE_S, segment_events
 from .metrics import ACTIVITY_GAP_S, controller_activity, response_time, suppressed
@@ -169,7 +169,7 @@ class TrialRow(Mapping):
         return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> "TrialRow":
+    def from_dict(cls, data: dict[str, Any]) -> TrialRow:
         """A row from a dict, e.g. a results.csv line (strings parsed; "" is NaN; unknown keys ignored).
 
         Examples
@@ -182,7 +182,7 @@ class TrialRow(Mapping):
         kw = {}
         for f in dataclasses.fields(cls):
             if f.name in data:
-                kw[f.name] = _parse(f.name, f.type, data[f.name])
+                kw[f.name] = _parse(f.name, str(f.type), data[f.name])
         return cls(**kw)
 
 
@@ -212,7 +212,8 @@ class TrialStreams:
 
     Parameters
     ----------
-    experiment : {"drop", "pour"}
+    experiment : str
+        A registered experiment (:mod:`slipreflex.experiment_specs`).
     method, bottle : str
     seed, trial : int
         The trial's seed and index (reported, not used).
@@ -272,8 +273,7 @@ class TrialStreams:
     ramp: bool | None = None
 
     def __post_init__(self) -> None:
-        if self.experiment not in ("drop", "pour"):
-            raise ParameterError(f"experiment must be 'drop' or 'pour', got {self.experiment!r}")
+        experiment_specs.get(self.experiment)   # a registered experiment (else a one-line error)
         if self.ramp is None:
             registered = self.method.casefold() in methods.names() if isinstance(self.method, str) else False
             object.__setattr__(self, "ramp", methods.get(self.method).ramp if registered else False)
@@ -364,7 +364,7 @@ def analyse_trial(s: TrialStreams, onset_params: OnsetParams | None = None, *,
     lo, hi = float(s.induction[0]), float(s.induction[1])
     fell = float(s.fell_out_time)
 
-    if s.experiment == "drop":
+    if experiment_specs.get(s.experiment).slip_events == "single":
         on = detect_onset(t, acc, (lo, hi), p)
         events = [(on.time, (lo, float(s.t_end)))]
         axis, thr = on.axis, on.threshold

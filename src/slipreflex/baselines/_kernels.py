@@ -16,9 +16,33 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ._layout import (KIND_SWT, P_FS, P_HI, P_HOLD, P_KIND, P_LO, P_PERSIST, P_SPC, P_STEP, P_TAXELS,
-                      P_THRESHOLD, P_WEIGHTS, P_WINDOW, S_ARRAYS, S_CLOSING, S_DETECTIONS, S_EPISODE,
-                      S_EVENT, S_FRAMES, S_LEVEL, S_REMAINING, S_RING, S_STAT, S_TARGET, S_TRIGGERS)
+from ._layout import (
+    KIND_SWT,
+    P_FS,
+    P_HI,
+    P_HOLD,
+    P_KIND,
+    P_LO,
+    P_PERSIST,
+    P_SPC,
+    P_STEP,
+    P_TAXELS,
+    P_THRESHOLD,
+    P_WEIGHTS,
+    P_WINDOW,
+    S_ARRAYS,
+    S_CLOSING,
+    S_DETECTIONS,
+    S_EPISODE,
+    S_EVENT,
+    S_FRAMES,
+    S_LEVEL,
+    S_REMAINING,
+    S_RING,
+    S_STAT,
+    S_TARGET,
+    S_TRIGGERS,
+)
 
 
 @njit(cache=True, inline="always")

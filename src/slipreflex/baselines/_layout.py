@@ -23,6 +23,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._slots import Layout
+
 __all__ = ["pack_closing", "pack_params", "init_state"]
 
 # P, the parameters (read only):
@@ -49,18 +51,26 @@ __all__ = ["pack_closing", "pack_params", "init_state"]
 #                       SWT-SD the window ring (W rows of T), each taxel's over-threshold run (T)
 #                       and each taxel's last coefficient c_k (T; 0 until the window is full).
 
+# A Closer alone has no detector: its P leaves the detector's slots at 0 (pack_closing).
+PARAMS = Layout("a tactile method's parameters P", """
+    KIND TAXELS=0 THRESHOLD=0 FS=0 PERSIST=0 HOLD SPC STEP LO HI TARGET0 WINDOW=0""", prefix="P_")
 (P_KIND, P_TAXELS, P_THRESHOLD, P_FS, P_PERSIST, P_HOLD, P_SPC, P_STEP, P_LO, P_HI, P_TARGET0,
- P_WINDOW, P_WEIGHTS) = range(13)
+ P_WINDOW) = PARAMS.slots
+P_WEIGHTS = PARAMS.size   # then the SWT-SD window's W weights
 
+STATE = Layout("a tactile method's state S", """
+    FRAMES=0 STAT=0 EVENT=0 LEVEL=0 DETECTIONS=0 TARGET REMAINING=0 CLOSING=0 TRIGGERS=0
+    EPISODE=0 RING=0""", prefix="S_")
 (S_FRAMES, S_STAT, S_EVENT, S_LEVEL, S_DETECTIONS, S_TARGET, S_REMAINING, S_CLOSING, S_TRIGGERS,
- S_EPISODE, S_RING, S_ARRAYS) = range(12)
+ S_EPISODE, S_RING) = STATE.slots
+S_ARRAYS = STATE.size     # then the detector's arrays
 
 KIND_CLOSER, KIND_NMSD, KIND_SWT = -1.0, 0.0, 1.0
 
 
 def pack_closing(closing, hold: bool = False) -> np.ndarray:
     """The head of ``P``: a :class:`~slipreflex.baselines.ClosingParams` (a Closer's whole ``P``)."""
-    head = np.zeros(P_WEIGHTS)
+    head = PARAMS.new()
     head[P_KIND] = KIND_CLOSER
     head[P_HOLD] = float(hold)
     head[P_SPC] = closing.samples_per_close
@@ -68,7 +78,7 @@ def pack_closing(closing, hold: bool = False) -> np.ndarray:
     head[P_LO] = closing.lo
     head[P_HI] = closing.hi
     head[P_TARGET0] = min(max(closing.p0, closing.lo), closing.hi)
-    return head
+    return PARAMS.check(head)
 
 
 def pack_params(params, kind: float, hold: bool, weights: np.ndarray) -> np.ndarray:
@@ -81,13 +91,13 @@ def pack_params(params, kind: float, hold: bool, weights: np.ndarray) -> np.ndar
     head[P_FS] = params.fs
     head[P_PERSIST] = getattr(params, "persist", 0)
     head[P_WINDOW] = len(weights)
-    return np.concatenate([head, np.asarray(weights, dtype=np.float64)])
+    return np.concatenate([PARAMS.check(head), np.asarray(weights, dtype=np.float64)])
 
 
 def init_state(P: np.ndarray) -> np.ndarray:
     """The initial state ``S`` for the parameter vector ``P`` (what ``reset`` restores)."""
     taxels = int(P[P_TAXELS])
     rows = int(P[P_WINDOW]) + 2 if P[P_KIND] == KIND_SWT else 2 if P[P_KIND] == KIND_NMSD else 0
-    S = np.zeros(S_ARRAYS + rows * taxels)
+    S = STATE.new(rows * taxels, tail=0.0)
     S[S_TARGET] = P[P_TARGET0]
-    return S
+    return STATE.check(S)

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import methods  # the registry sits below the baselines: only its table is read here
 from ..errors import DataError, ParameterError
 from ..hardware import NMSD_FS
 from ..validation import number
@@ -71,8 +72,6 @@ def _statistic(method):
     """The rest statistic of ``method``: the callable itself, or the registry's entry."""
     if callable(method):
         return method
-    from .. import methods  # the registry sits above the baselines; only its table is read here
-
     stat = methods.get(method).rest_statistic
     if stat is None:
         raise ParameterError(f"method {method!r} has no rest statistic "

@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 
@@ -222,7 +222,7 @@ def _hold(mode: str) -> bool:
     return mode == "hold"
 
 
-_K = None  # slipreflex.baselines._kernels, imported with the first Closer or tactile reflex
+_K: Any = None  # slipreflex.baselines._kernels, imported with the first Closer or tactile reflex
 
 
 def _load_kernels():

@@ -130,7 +130,7 @@ def nmsd_detections(frames, fs: float = NMSD_FS, *, threshold: float) -> np.ndar
     """
     threshold = number("threshold", threshold, lo=0.0, lo_open=True)
     s = nmsd_statistic(frames, fs)
-    over = (np.abs(s) > threshold).reshape(len(s), -1).any(axis=1)
+    over = np.asarray(np.asarray(np.abs(s) > threshold).reshape(len(s), -1).any(axis=1))
     prev = np.concatenate(([False], over[:-1]))
     return over & ~prev
 

@@ -27,17 +27,20 @@ from __future__ import annotations
 import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import numpy as np
 
+from .._slots import slot
 from ..hardware import FINGER_MAX, FINGER_MIN, NMSD_FS, TACTILE_SHAPE
 from ..validation import number, resolve_params, set_field
-from .._slots import slot
 from . import _layout as _L
-from ._validate import as_frame, frame_shape
 from . import closing as _closing
+from ._validate import as_frame, frame_shape
 from .closing import CLOSE_S, ClosingParams, TriggerMode, _load_kernels
+
+if TYPE_CHECKING:
+    from ..interfaces import InputKind
 
 __all__ = ["TactileParams", "TactileReflex"]
 
@@ -86,7 +89,7 @@ class TactileParams:
         set_field(self, "threshold", number("threshold", self.threshold, lo=0.0, lo_open=True))
         set_field(self, "fs", number("fs", self.fs, lo=0.0, lo_open=True))
         set_field(self, "shape", frame_shape("shape", self.shape))
-        self.closing  # validates speed, close_s, p0, lo, hi
+        _ = self.closing  # validates speed, close_s, p0, lo, hi
 
     @property
     def closing(self) -> ClosingParams:
@@ -137,11 +140,11 @@ class TactileReflex(ABC):
     True
     """
 
-    name: ClassVar[str]
+    name: str
     params_class: ClassVar[type]
     mode: ClassVar[TriggerMode]
     kind: ClassVar[float]
-    input_kind: ClassVar[str] = "tactile"
+    input_kind: InputKind = "tactile"
 
     def __init__(self, params: Any = None, **kwargs: Any) -> None:
         self.params = resolve_params(self.params_class, params, kwargs)

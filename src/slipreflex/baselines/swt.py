@@ -203,11 +203,11 @@ def swt_on(frames, *, threshold: float, persist: int = SWT_WINDOW) -> np.ndarray
     """
     threshold = number("threshold", threshold, lo=0.0, lo_open=True)
     persist = integer("persist", persist, lo=0)
-    over = (np.abs(swt_statistic(frames)) > threshold).reshape(len(np.asarray(frames)), -1)
+    over = np.asarray(np.abs(swt_statistic(frames)) > threshold).reshape(len(np.asarray(frames)), -1)
     k = np.arange(over.shape[0])[:, None]
     last_below = np.maximum.accumulate(np.where(over, -1, k), axis=0)
     run = k - last_below  # consecutive over-threshold samples ending at k
-    return (run > persist).any(axis=1)
+    return np.asarray((run > persist).any(axis=1))
 
 
 def swt_commands(frames, params: SWTParams, positions=None) -> np.ndarray:

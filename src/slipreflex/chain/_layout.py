@@ -23,6 +23,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._slots import Layout
+from ._shared import _clip, _design
+
 __all__ = ["pack_params", "init_state"]
 
 # Two float64 vectors hold everything:
@@ -60,26 +63,32 @@ __all__ = ["pack_params", "init_state"]
 #   S_SKIPPED      non-finite samples skipped since the reset
 #   then the filter state zi (2 * P_NSEC), the event ring (N), the mean ring (M).
 
+PARAMS = Layout("the chain's parameters P", """
+    FILTER THETA0 DATH D FLOOR X0 X0_GIVEN ACC_RESET LEAK LEAK_ON N
+    P0 M0 KP KI RESET_AFTER LO HI EVENT MEAN_M NSEC""", prefix="P_")
 (P_FILTER, P_THETA0, P_DATH, P_D, P_FLOOR, P_X0, P_X0_GIVEN, P_ACC_RESET, P_LEAK, P_LEAK_ON, P_N,
- P_P0, P_M0, P_KP, P_KI, P_RESET_AFTER, P_LO, P_HI, P_EVENT, P_MEAN_M, P_NSEC, P_SOS) = range(22)
+ P_P0, P_M0, P_KP, P_KI, P_RESET_AFTER, P_LO, P_HI, P_EVENT, P_MEAN_M, P_NSEC) = PARAMS.slots
+P_SOS = PARAMS.size   # the sos coefficients, then zi0, follow the named slots
 
+STATE = Layout("the chain's state S", """
+    STARTED=0 PREV ACC=0 THETA REMAINING=0 CLOCK=0 COUNT=0 FILLED=0 PBASE H=0 M
+    ZEROS=0 SLIDE=0 SLIDE_POS=0 MEAN_N=0 MEAN_POS=0 LAST_X=nan LAST_EVENT=0 LAST_THETA
+    LAST_ACC=0 LAST_COUNT=-1 SKIPPED=0""", prefix="S_")
 (S_STARTED, S_PREV, S_ACC, S_THETA, S_REMAINING, S_CLOCK, S_COUNT, S_FILLED, S_PBASE, S_H, S_M,
  S_ZEROS, S_SLIDE, S_SLIDE_POS, S_MEAN_N, S_MEAN_POS, S_LAST_X, S_LAST_EVENT, S_LAST_THETA,
- S_LAST_ACC, S_LAST_COUNT, S_SKIPPED, S_ZI) = range(23)
+ S_LAST_ACC, S_LAST_COUNT, S_SKIPPED) = STATE.slots
+S_ZI = STATE.size     # the filter state zi, the event ring and the mean ring follow
 
 FILTER_OFF, FILTER_BUTTERWORTH, FILTER_MEAN = 0.0, 1.0, 2.0
 
 
 def pack_params(params) -> np.ndarray:
     """The parameter vector P of :func:`chain_step` for a :class:`ReflexParams`."""
-    from .filters import _design
-    from .mpi import _clip
-
     p = params
     sos, zi0 = _design(p.fs, p.cutoff)
     kind = FILTER_OFF if not p.filter else FILTER_MEAN if p.filter_kind == "mean" else FILTER_BUTTERWORTH
     e = p.encoder
-    head = np.empty(P_SOS)
+    head = PARAMS.new()
     head[P_FILTER] = kind
     head[P_THETA0] = p.threshold
     head[P_DATH] = float(p.dath)
@@ -101,7 +110,7 @@ def pack_params(params) -> np.ndarray:
     head[P_EVENT] = float(p.mpi_mode == "event")
     head[P_MEAN_M] = p.lowpass.window
     head[P_NSEC] = sos.shape[0]
-    return np.concatenate([head, sos.ravel(), zi0.ravel()])
+    return np.concatenate([PARAMS.check(head), sos.ravel(), zi0.ravel()])
 
 
 
@@ -109,12 +118,10 @@ def init_state(P: np.ndarray) -> np.ndarray:
     """The initial state vector S for the parameter vector ``P`` (what ``reset`` restores)."""
     nsec = int(P[P_NSEC])
     size = S_ZI + 2 * nsec + int(P[P_N]) + int(P[P_MEAN_M])
-    S = np.zeros(size)
+    S = STATE.new(size - S_ZI, tail=0.0)
     S[S_THETA] = P[P_THETA0]
     S[S_PREV] = P[P_X0]
     S[S_PBASE] = P[P_P0]
     S[S_M] = P[P_M0]
-    S[S_LAST_X] = np.nan
     S[S_LAST_THETA] = P[P_THETA0]
-    S[S_LAST_COUNT] = -1.0
-    return S
+    return STATE.check(S)

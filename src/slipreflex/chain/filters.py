@@ -16,28 +16,16 @@ True
 from __future__ import annotations
 
 import math
-from functools import lru_cache
 
 import numpy as np
 
 from ..hardware import DAQ_FS
 from ._checks import as_samples
+from ._shared import _design
 from .params import FilterParams
 
 __all__ = ["design_lowpass", "lowpass", "LowPass"]
 
-FILTER_ORDER = 2
-
-
-@lru_cache(maxsize=32)
-def _design(fs: float, cutoff: float) -> tuple[np.ndarray, np.ndarray]:
-    from scipy.signal import butter, sosfilt_zi
-
-    sos = butter(FILTER_ORDER, cutoff, fs=fs, output="sos")
-    zi = sosfilt_zi(sos)
-    sos.setflags(write=False)
-    zi.setflags(write=False)
-    return sos, zi
 
 
 def design_lowpass(fs: float = DAQ_FS, cutoff: float = 10.0) -> np.ndarray:

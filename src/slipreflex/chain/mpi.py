@@ -19,13 +19,10 @@ import numpy as np
 from ..errors import DataError
 from ..hardware import FINGER_MAX, FINGER_MIN
 from ._checks import as_vector
+from ._shared import _clip
 from .params import MPIParams
 
 __all__ = ["mpi", "MPIController"]
-
-
-def _clip(value: float, lo: float, hi: float) -> float:
-    return lo if value < lo else hi if value > hi else value
 
 
 def mpi(v, p0: float = 0.0, kp: float = 5.0, ki: float = 5.0, reset_after: int | None = 10,

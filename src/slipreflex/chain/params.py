@@ -304,7 +304,7 @@ class ReflexParams:
         return tuple(sorted(out))
 
     @classmethod
-    def preset(cls, name: str, fs: float = DAQ_FS, **overrides: Any) -> "ReflexParams":
+    def preset(cls, name: str, fs: float = DAQ_FS, **overrides: Any) -> ReflexParams:
         """The parameters of a named method, at sampling rate ``fs``.
 
         Parameters
@@ -365,7 +365,7 @@ class ReflexParams:
         return dataclasses.asdict(self)
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> "ReflexParams":
+    def from_dict(cls, data: dict[str, Any]) -> ReflexParams:
         """Build from a dict; unknown keys are an error naming them.
 
         Examples

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -27,6 +28,9 @@ from ..hardware import DAQ_FS, SLIP_FINGER, Finger
 from . import _layout as _k
 from ._checks import as_samples
 from .params import ReflexParams
+
+if TYPE_CHECKING:
+    from ..interfaces import InputKind
 
 __all__ = ["SlipReflex", "run_chain", "ChainResult"]
 
@@ -75,7 +79,7 @@ class SlipReflex:
     (True, 1)
     """
 
-    input_kind = "slip"
+    input_kind: InputKind = "slip"
     __slots__ = ("params", "name", "_P", "_S", "_S0")
 
     def __init__(self, params: ReflexParams | None = None, **kwargs) -> None:
@@ -91,7 +95,7 @@ class SlipReflex:
         self._S = self._S0.copy()
 
     @classmethod
-    def from_params(cls, params: ReflexParams) -> "SlipReflex":
+    def from_params(cls, params: ReflexParams) -> SlipReflex:
         """Build a chain from a :class:`ReflexParams` (e.g. read from a recording).
 
         Examples
@@ -102,7 +106,7 @@ class SlipReflex:
         return cls(params)
 
     @classmethod
-    def from_preset(cls, name: str, fs: float = DAQ_FS, **overrides) -> "SlipReflex":
+    def from_preset(cls, name: str, fs: float = DAQ_FS, **overrides) -> SlipReflex:
         """A chain with a named parameter set (:meth:`ReflexParams.preset`), named after it.
 
         Parameters
@@ -205,7 +209,7 @@ class SlipReflex:
 
 
 _NAN = math.nan
-_chain_step = None  # the compiled step, imported with the first chain (numba stays out of `import`)
+_chain_step: Any = None  # the compiled step, imported with the first chain (numba stays out of `import`)
 
 
 def _load_step() -> None:

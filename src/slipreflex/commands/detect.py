@@ -90,6 +90,7 @@ def _file_params(rec: Recording) -> ReflexParams | None:
 
 def _sampling_rate(rec: Recording, given: float | None, base: ReflexParams | None) -> float:
     if not rec.has_time:
+        assert given is not None, "read_recording refuses a file with neither a t column nor --fs"
         return float(given)
     from_t = rec.step_rate()
     if given is not None and abs(given - from_t) > FS_TOLERANCE * from_t:

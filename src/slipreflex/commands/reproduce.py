@@ -75,7 +75,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``slipreflex reproduce``: every count and load parameter."""
     import dataclasses
 
-    from .. import methods
+    from .. import experiment_specs, methods
     from ..experiments import BOTTLE_NAMES, EXPERIMENTS, METHODS, ReproduceConfig
 
     d = {f.name: f.default for f in dataclasses.fields(ReproduceConfig)}
@@ -99,7 +99,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--methods", type=_csv_list("methods", methods.names, any_case=True), default=METHODS,
                    help=f"comma-separated methods, any case (registered: {','.join(methods.names())}; "
                         f"default: {','.join(METHODS)})")
-    p.add_argument("--experiments", type=_csv_list("experiments", lambda: EXPERIMENTS),
+    p.add_argument("--experiments", type=_csv_list("experiments", experiment_specs.names),
                    default=EXPERIMENTS,
                    help=f"comma-separated experiments (default: {','.join(EXPERIMENTS)})")
     p.add_argument("--seed", type=int, default=d["seed"], help=f"master seed (default {d['seed']})")
@@ -181,11 +181,10 @@ LONG_RUN_S: float = 600.0
 
 
 def _write(result, out: Path, command: str | None) -> dict:
-    from ..analysis.report import terminal_table
-    from ..experiments import write_outputs
-
     from ..analysis.claims import claims_terminal, judge_run
     from ..analysis.outputs import paper_part
+    from ..analysis.report import terminal_table
+    from ..experiments import write_outputs
 
     paths = write_outputs(result, out, command=command)
     paper, _, notice = paper_part(result)

@@ -20,9 +20,8 @@ from typing import Any
 
 from .. import __version__
 from ..errors import ParameterError
-from ..hardware import DAQ_FS, FINGER_MAX, SLIP_FINGER, TRIPOD, Finger
+from ..hardware import DAQ_FS, FINGER_MAX, FINGER_MIN, SLIP_FINGER, TRIPOD, Finger
 from ..methods import DATH, FIXED
-
 from ..runtime import WATCHDOG_MAX_S, WATCHDOG_MIN_S, WATCHDOG_S
 
 NAME = "run"
@@ -64,9 +63,14 @@ _PRESET_REPLACES = {"--cutoff": "cutoff", "--threshold": "threshold", "--dath-sa
 
 def chain_params(args: argparse.Namespace, p0: float):
     """Build the ReflexParams the options describe (a ``--preset`` with any other chain option
-    is an error naming it, rather than one of them being silently ignored)."""
+    is an error naming it, rather than one of them being silently ignored).
+
+    ``p0`` is the MPI's bookkeeping only (the hand gets the command's rises as closing time,
+    :mod:`slipreflex.grip`), so the command's ceiling is ``p0`` plus one whole finger travel:
+    whatever ``p0`` says, the reflex can add the same grip (the hand's end stop ends it)."""
     from ..chain import ReflexParams
 
+    hi = p0 + (FINGER_MAX - FINGER_MIN)
     if getattr(args, "preset", None):
         d = ReflexParams()
         given = [o for o, k in _PRESET_REPLACES.items() if getattr(args, k) != getattr(d, k)]
@@ -74,11 +78,11 @@ def chain_params(args: argparse.Namespace, p0: float):
         if given:
             raise ParameterError(f"--preset {args.preset} sets the whole chain; {given[0]} cannot be "
                                  f"combined with it")
-        return ReflexParams.preset(args.preset, fs=args.fs, p0=p0)
+        return ReflexParams.preset(args.preset, fs=args.fs, p0=p0, hi=hi)
     return ReflexParams(fs=args.fs, cutoff=args.cutoff, filter=not args.no_filter,
                         threshold=args.threshold, dath=args.method == DATH,
                         dath_samples=args.dath_samples, dath_floor=args.dath_floor, n=args.n,
-                        p0=p0, kp=args.kp, ki=args.ki, reset_after=args.reset_after)
+                        p0=p0, kp=args.kp, ki=args.ki, reset_after=args.reset_after, hi=hi)
 
 
 def parse_p0(text: str) -> dict[Finger, float]:
@@ -90,12 +94,20 @@ def parse_p0(text: str) -> dict[Finger, float]:
     {'THUMB': 149.0, 'INDEX': 147.0, 'MIDDLE': 147.0}
     >>> parse_p0("147")[Finger.THUMB]
     147.0
+    >>> parse_p0("thumb=148,thumb=14,index=147,middle=147")
+    Traceback (most recent call last):
+    ...
+    slipreflex.errors.ParameterError: --p0 'thumb=148,thumb=14,index=147,middle=147': finger thumb is given twice
     """
     from ..runtime import start_positions
 
     items = [x.strip() for x in str(text).split(",") if x.strip()]
     if not items:
         raise ParameterError("--p0: empty (give thumb=..,index=..,middle=.. or one position)")
+    names = [x.split("=", 1)[0].strip().lower() for x in items if "=" in x]
+    twice = next((k for i, k in enumerate(names) if k in names[:i]), None)
+    if twice is not None:
+        raise ParameterError(f"--p0 {text!r}: finger {twice} is given twice")
     try:
         if all("=" in x for x in items):
             given: Any = {k.strip(): float(v) for k, v in (x.split("=", 1) for x in items)}
@@ -151,9 +163,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--p0", required=True,
                    help="position (0..500) at which each tripod finger holds the object, as the grasp "
                         "routine left it: thumb=149,index=147,middle=147 (virtual-rig prints this), "
-                        "or one value for all three. The loop starts with STOP (fingers stay where "
-                        "they are), the MPI starts from the middle finger's p0, and no finger is ever "
-                        "commanded below its p0")
+                        "or one value for all three (each finger once). Bookkeeping only: the loop "
+                        "starts with STOP (fingers stay where they are), the MPI starts from the "
+                        "middle finger's p0, and the hand only ever gets the command's rises as "
+                        "closing time (no OPEN, no position; docs/runtime.md)")
     p.add_argument("--record", type=Path, default=None,
                    help="MCAP file to record to (default: run-YYYYmmdd-HHMMSS.mcap here)")
     p.add_argument("--no-record", action="store_true", help="do not record")
@@ -162,7 +175,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help=f"seconds without a valid sample before the fingers hold "
                         f"({WATCHDOG_MIN_S:g}..{WATCHDOG_MAX_S:g}; {WATCHDOG_S:g})")
     p.add_argument("--realtime", action="store_true",
-                   help="ask for SCHED_FIFO real-time scheduling (Linux; needs privileges)")
+                   help="ask for SCHED_FIFO real-time scheduling (Linux; needs CAP_SYS_NICE or an "
+                        "rtprio limit, not root: docs/runtime.md)")
     p.add_argument("--board-reflex", action="store_true",
                    help="the DAQ board runs the reflex itself (firmware daq-reflex or hand2560): record "
                         "what it does and check its output on every sample against its Python twin; a "
@@ -178,7 +192,7 @@ def run(args: argparse.Namespace) -> int:
     from ..devices.daq import SerialDaq
     from ..devices.ilimb import ILimb
     from ..recording import METADATA_NAME, Recorder
-    from ..runtime import print_fault, realtime_priority, run_loop
+    from ..runtime import drop_capabilities, print_fault, realtime_priority, run_loop
 
     p0 = check_arguments(args)  # everything, before a port opens or a byte is sent
     params = chain_params(args, p0[SLIP_FINGER])
@@ -194,6 +208,9 @@ def run(args: argparse.Namespace) -> int:
         board_meta = {"board_params": json.dumps(bparams.to_dict())}
     if args.realtime:
         print(realtime_priority(), flush=True)
+    dropped = drop_capabilities()  # the loop keeps nothing it does not need (docs/runtime.md)
+    if dropped and (args.realtime or not dropped.startswith("root:")):
+        print(dropped, flush=True)
     stop = threading.Event()
 
     def on_signal(signum: int, _frame: object) -> None:
@@ -209,7 +226,7 @@ def run(args: argparse.Namespace) -> int:
                 "fingers": json.dumps([f.name.lower() for f in TRIPOD]),
                 "p0": json.dumps({f.name.lower(): v for f, v in p0.items()}),
                 "daq": args.daq, "hand": args.hand, "watchdog_s": repr(args.watchdog),
-                "started": datetime.datetime.now(datetime.timezone.utc).isoformat(), **board_meta}
+                "started": datetime.datetime.now(datetime.UTC).isoformat(), **board_meta}
         recorder = Recorder(path, metadata={METADATA_NAME: meta})  # fails before the ports open
     old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
     started = False

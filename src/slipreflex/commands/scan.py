@@ -14,6 +14,7 @@ import argparse
 import csv
 import dataclasses
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -43,14 +44,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run the scan, write the files, print the numbers."""
     from ..errors import ParameterError
-    from ..sim import scan
-
     from ..paths import output_dir
+    from ..sim import scan
 
     if args.speed <= 0 or args.distance <= 0:
         raise ParameterError("--speed and --distance must be > 0")
     out: Path = output_dir(args.out, "--out")
-    kw = {"layout": _layout(args)} if args.layout is not None else {}
+    kw: dict[str, Any] = {"layout": _layout(args)} if args.layout is not None else {}
     result = scan(seed=args.seed, speed=args.speed * 1e-3, distance=args.distance * 1e-3, **kw)
     summary = result.analyse(threshold=args.threshold)
     csv_path = out / "scan.csv"
@@ -89,7 +89,7 @@ def _layout(args: argparse.Namespace) -> list:
     from ..sim.objects import resolve_surface
 
     objs = load_objects(args.objects) if args.objects is not None else None
-    extra = dict(objs.surfaces) if objs else {}
+    extra: dict[str, Any] = dict(objs.surfaces) if objs else {}
     if objs:
         extra.update({n: b.surface for n, b in objs.bottles.items()})
     out = []

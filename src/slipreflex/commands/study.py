@@ -26,16 +26,18 @@ import argparse
 import shlex
 import sys
 from pathlib import Path
+from typing import Any
 
 NAME = "study"
 HELP = "map where the paper's claims hold across plausible plants (Dask; resumable)"
 ORDER = 35
 
 
-def _list(kind: str, known):
+def _list(kind: str, known: Any):
     def parse(text: str) -> tuple[str, ...]:
         items = tuple(x.strip() for x in text.split(",") if x.strip())
-        names = known() if callable(known) else known
+        listed: Any = known() if callable(known) else known
+        names = tuple(listed)
         if kind == "methods":   # method names match in any case (the registry's rule)
             items = tuple(x.lower() for x in items)
         bad = [x for x in items if x not in names]
@@ -48,11 +50,10 @@ def _list(kind: str, known):
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``slipreflex study``."""
-    from .. import methods
+    from .. import experiment_specs, methods
     from ..experiments import BOTTLE_NAMES, EXPERIMENTS
-    from ..study import DEFAULT_PLANTS, DEFAULT_TRIALS, DESIGNS
-
     from ..experiments import DEFAULT_SEED as seed
+    from ..study import DEFAULT_PLANTS, DEFAULT_TRIALS, DESIGNS
     p.add_argument("--plants", type=int, default=DEFAULT_PLANTS,
                    help=f"plants to draw (default {DEFAULT_PLANTS}; saltelli rounds up to B(D+2))")
     p.add_argument("--design", choices=DESIGNS, default="sobol", help="design over the constants (default sobol)")
@@ -62,7 +63,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help=f"comma-separated bottles (default {','.join(BOTTLE_NAMES)})")
     p.add_argument("--methods", type=_list("methods", methods.names), default=methods.names(paper=True),
                    help=f"comma-separated methods (default {','.join(methods.names(paper=True))})")
-    p.add_argument("--experiments", type=_list("experiments", EXPERIMENTS), default=EXPERIMENTS,
+    p.add_argument("--experiments", type=_list("experiments", experiment_specs.names), default=EXPERIMENTS,
                    help=f"comma-separated experiments (default {','.join(EXPERIMENTS)})")
     p.add_argument("--seed", type=int, default=seed, help=f"design and trial master seed (default {seed})")
     p.add_argument("--out", type=Path, default=Path("out/study"), help="output directory (default out/study)")
@@ -78,9 +79,37 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-progress", action="store_true", help="no progress output")
 
 
+#: What ``pip install 'slipreflex[study]'`` adds; the base install never imports them.
+STUDY_EXTRA = ("dask", "distributed", "pyarrow", "SALib")
+
+
+def require_study_extra() -> None:
+    """Raise a one-line error naming the ``study`` extra when any of its packages is missing.
+
+    Raises
+    ------
+    SlipreflexError
+        ``needs the optional 'study' extra (not installed: ...)``, before any work starts.
+
+    Examples
+    --------
+    >>> require_study_extra()  # doctest: +SKIP
+    """
+    import importlib.util
+
+    from ..errors import SlipreflexError
+
+    missing = [name for name in STUDY_EXTRA if importlib.util.find_spec(name) is None]
+    if missing:
+        raise SlipreflexError(f"needs the optional 'study' extra (not installed: {', '.join(missing)}); "
+                              "install it with: pip install 'slipreflex[study]'")
+
+
 def run(args: argparse.Namespace) -> int:
     """Run the study, write the outputs, print the claims' fractions."""
     from ..errors import ParameterError
+
+    require_study_extra()
     from ..study import StudyConfig, run_study
     from ..study.analyse import claim_fractions, plant_table, write_outputs
 

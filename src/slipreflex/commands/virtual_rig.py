@@ -18,11 +18,11 @@ from __future__ import annotations
 
 import argparse
 import select
-from pathlib import Path
 import signal
 import sys
 import threading
 import time
+from pathlib import Path
 
 NAME = "virtual-rig"
 HELP = "simulated rig behind two pseudo-terminals (DAQ and i-Limb) for 'slipreflex run'"
@@ -72,7 +72,6 @@ def run(args: argparse.Namespace) -> int:
     """Grasp, open the ports, run in real time, print a summary at exit."""
     from ..devices.simrig import SimRig
     from ..devices.virtual import VirtualDevices, parse_schedule
-
     from ..paths import output_dir
 
     schedule = parse_schedule(args.schedule)
@@ -120,11 +119,11 @@ def run(args: argparse.Namespace) -> int:
                 break
             if stdin_open:
                 try:
-                    ready, _, _ = select.select([sys.stdin], [], [], 0.1)
+                    ready, _, _ = select.select([sys.stdin], [], [], 0.1)  # pyright: ignore[reportArgumentType]
                 except (OSError, ValueError):
                     stdin_open = False
                     continue
-                if ready:
+                if ready and sys.stdin is not None:
                     line = sys.stdin.readline()
                     if not line:
                         stdin_open = False  # EOF: keep running on schedule and signals

@@ -21,7 +21,6 @@ import time
 from dataclasses import dataclass, field, fields
 from typing import Any
 
-from ..errors import DeviceError
 from ..interfaces import DaqSample
 from . import wire
 from .port import ReconnectingPort
@@ -261,7 +260,7 @@ class SerialDaq:
         """
         self._port.close()
 
-    def __enter__(self) -> "SerialDaq":
+    def __enter__(self) -> SerialDaq:
         return self
 
     def __exit__(self, *exc: object) -> None:

@@ -31,11 +31,21 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..errors import DeviceError, ParameterError
-from ..interfaces import GraspResult
 from ..hardware import (
-    CONTACT_FORCE_N, FINGER_MAX, FINGER_MIN, ILIMB_BAUD, ILIMB_END, ILIMB_START, PWM_MAX,
-    THUMB_ROTATOR_MAX, TRIPOD, Finger, HandCommand,
+    CONTACT_FORCE_N,
+    FINGER_MAX,
+    FINGER_MIN,
+    FINGER_SPEED_UNITS_S,
+    ILIMB_BAUD,
+    ILIMB_END,
+    ILIMB_START,
+    PWM_MAX,
+    THUMB_ROTATOR_MAX,
+    TRIPOD,
+    Finger,
+    HandCommand,
 )
+from ..interfaces import GraspResult
 from .port import ReconnectingPort
 
 __all__ = [
@@ -257,7 +267,7 @@ class PacketParser:
                 self._reject(buf)
                 continue
             try:
-                cmds = tuple(FingerCommand(buf[i], buf[i + 1], (buf[i + 2] << 8) | buf[i + 3])
+                cmds = tuple(FingerCommand(buf[i], buf[i + 1], (buf[i + 2] << 8) | buf[i + 3])  # pyright: ignore[reportArgumentType] (ints, converted and checked)
                              for i in range(2, n + 2, BYTES_PER_FINGER))
                 if len({c.finger for c in cmds}) != len(cmds):
                     raise ParameterError("repeated finger")
@@ -284,7 +294,13 @@ class ILimb:
     calls try to reopen it (at most every ``reconnect_interval`` seconds),
     then re-send the latest targets so the hand never falls back to an older
     grip. The control unit reports no positions, so :meth:`positions`
-    returns the last targets written (what the hand was last told to hold).
+    returns nothing (:meth:`targets` gives the last position targets written).
+
+    While a reflex runs (:meth:`reflex_running`, the grip-only rule of
+    :mod:`slipreflex.grip`) the driver refuses every command that could open
+    a finger: OPEN, and a POSITION below the finger's last position target or
+    for a finger that a CLOSE has since moved by an amount nobody measured.
+    After a lost port it then re-sends STOP, never the old position targets.
 
     Parameters
     ----------
@@ -312,8 +328,8 @@ class ILimb:
     >>> hand.set_positions({Finger.THUMB: 120, Finger.INDEX: 120.4})
     >>> PacketParser().feed(loop.read(100))[0][1]
     FingerCommand(finger=<Finger.INDEX: 1>, command=<HandCommand.POSITION: 3>, value=120)
-    >>> hand.positions()[Finger.INDEX]
-    120.0
+    >>> hand.targets()[Finger.INDEX], hand.positions()
+    (120.0, {})
     >>> hand.close(); loop.close()
     """
 
@@ -326,6 +342,8 @@ class ILimb:
         self.write_timeout = write_timeout
         self.reconnect_interval = reconnect_interval
         self._targets: dict[Finger, float] = {}
+        self._reflex = False
+        self._closed: set[Finger] = set()  # fingers a CLOSE moved while a reflex runs
         #: Packets written and write failures.
         self.packets_sent = 0
         self.write_failures = 0
@@ -360,7 +378,11 @@ class ILimb:
         if self._port.serial is None:
             if not self._port.ensure_open():
                 raise DeviceError(f"{self.port_name}: i-Limb port is not connected")
-            if self._targets:  # back after a loss: restore the whole grip first
+            if self._reflex:  # back after a loss while a reflex runs: hold, never an old position
+                self._write(encode_packet([FingerCommand(f, HandCommand.STOP, 0)
+                                           for f in sorted(set(self._targets) | self._closed)]
+                                          or [FingerCommand(f, HandCommand.STOP, 0) for f in TRIPOD]))
+            elif self._targets:  # back after a loss: restore the whole grip first
                 self._write(self._targets_packet(self._targets))
         try:
             self._port.write(packet)
@@ -392,7 +414,29 @@ class ILimb:
         >>> loop.read(100).hex(" ")
         '24 04 06 00 00 00 21'
         """
-        self._write(encode_packet(commands))
+        commands = list(commands)
+        packet = encode_packet(commands)  # validates everything first
+        if self._reflex:
+            for c in commands:
+                self._check_grip_only(c)
+        self._write(packet)
+        if self._reflex:
+            self._closed.update(c.finger for c in commands if c.command == HandCommand.CLOSE)
+
+    def _check_grip_only(self, c: FingerCommand) -> None:
+        if c.command == HandCommand.OPEN:
+            raise ParameterError(f"i-Limb: {c.finger.name} OPEN refused while a reflex runs "
+                                 f"(grip is only ever added)")
+        if c.command == HandCommand.POSITION:
+            if c.finger in self._closed:
+                raise ParameterError(f"i-Limb: {c.finger.name} POSITION {c.value} refused while a reflex "
+                                     f"runs: a CLOSE moved the finger to a position the hand does not "
+                                     f"report, so the target could open it")
+            last = self._targets.get(c.finger)
+            if last is None or c.value < last:
+                why = "no target known" if last is None else f"below its target {last:g}"
+                raise ParameterError(f"i-Limb: {c.finger.name} POSITION {c.value} refused while a reflex "
+                                     f"runs ({why})")
 
     @staticmethod
     def _targets_packet(targets: Mapping[Finger, float]) -> bytes:
@@ -424,6 +468,9 @@ class ILimb:
         """
         fingers = {Finger(_finger_id(f)): v for f, v in targets.items()}
         packet = self._targets_packet(fingers)  # validates everything first
+        if self._reflex:
+            for f, v in fingers.items():
+                self._check_grip_only(FingerCommand(f, HandCommand.POSITION, _round_position(f, v)))
         self._targets.update({f: float(_round_position(f, v)) for f, v in fingers.items()})
         self._write(packet)
 
@@ -440,8 +487,65 @@ class ILimb:
         """
         self.send([FingerCommand(f, HandCommand.STOP, 0) for f in fingers])
 
+    def close_fingers(self, fingers: Iterable[Finger], speed: float) -> None:
+        """Close ``fingers`` at ``speed`` units/s until they are told to hold (CLOSE at a PWM duty).
+
+        The duty is ``speed`` over the documented full-PWM speed
+        (:data:`~slipreflex.hardware.FINGER_SPEED_UNITS_S`) times 297, rounded, at least 1.
+
+        Raises
+        ------
+        ParameterError
+            For a speed that is not a number > 0 (nothing is written).
+        DeviceError
+            The port is gone.
+
+        Examples
+        --------
+        >>> import serial
+        >>> loop = serial.serial_for_url("loop://", timeout=0)
+        >>> ILimb(loop).close_fingers([Finger.MIDDLE], 625.0)
+        >>> loop.read(100).hex(" ")
+        '24 04 02 01 01 29 21'
+        """
+        if isinstance(speed, bool) or not isinstance(speed, (int, float)) or not (math.isfinite(speed)
+                                                                                and speed > 0):
+            raise ParameterError(f"i-Limb: closing speed must be a number > 0 units/s, got {speed!r}")
+        pwm = min(PWM_MAX, max(1, int(round(speed / FINGER_SPEED_UNITS_S * PWM_MAX))))
+        self.send([FingerCommand(f, HandCommand.CLOSE, pwm) for f in fingers])
+
+    def reflex_running(self, running: bool = True) -> None:
+        """Switch the grip-only guard on (a reflex runs) or off.
+
+        While on, OPEN and any POSITION that could open a finger are refused with
+        :class:`~slipreflex.errors.ParameterError` before a byte is written.
+
+        Examples
+        --------
+        >>> import serial
+        >>> hand = ILimb(serial.serial_for_url("loop://", timeout=0))
+        >>> hand.set_positions({Finger.INDEX: 148}); hand.reflex_running()
+        >>> hand.set_positions({Finger.INDEX: 140})
+        Traceback (most recent call last):
+        ...
+        slipreflex.errors.ParameterError: i-Limb: INDEX POSITION 140 refused while a reflex runs (below its target 148)
+        """
+        self._reflex = bool(running)
+        self._closed.clear()
+
+    def targets(self) -> dict[Finger, float]:
+        """The last position targets written, per finger (not a measurement).
+
+        Examples
+        --------
+        >>> import serial
+        >>> ILimb(serial.serial_for_url("loop://")).targets()
+        {}
+        """
+        return dict(self._targets)
+
     def positions(self) -> dict[Finger, float]:
-        """The last position targets written, per finger.
+        """Measured positions: none, the control unit reports no positions.
 
         Examples
         --------
@@ -449,7 +553,7 @@ class ILimb:
         >>> ILimb(serial.serial_for_url("loop://")).positions()
         {}
         """
-        return dict(self._targets)
+        return {}
 
     def close(self) -> None:
         """Close the port if this driver opened it.
@@ -462,7 +566,7 @@ class ILimb:
         """
         self._port.close()
 
-    def __enter__(self) -> "ILimb":
+    def __enter__(self) -> ILimb:
         return self
 
     def __exit__(self, *exc: object) -> None:

@@ -49,7 +49,7 @@ def _keep_input_class() -> type:
 
         def _reset_input_buffer(self) -> None:
             if not self._opening:
-                super()._reset_input_buffer()
+                super()._reset_input_buffer()  # pyright: ignore[reportAttributeAccessIssue] (pyserial's, untyped)
 
     return KeepInputSerial
 
@@ -87,7 +87,7 @@ class ReconnectingPort:
     >>> ReconnectingPort("/nonexistent/tty", what="DAQ", baudrate=115200)
     Traceback (most recent call last):
     ...
-    slipreflex.errors.DeviceError: /nonexistent/tty: cannot open DAQ port: [Errno 2] could not open port /nonexistent/tty: [Errno 2] No such file or directory: '/nonexistent/tty'
+    slipreflex.errors.DeviceError: /nonexistent/tty: cannot open DAQ port: [Errno 2] could not open port ...
     """
 
     def __init__(self, port: Any, *, what: str, baudrate: int, write_timeout: float | None = None,
@@ -107,7 +107,7 @@ class ReconnectingPort:
         import serial
 
         name = self.port_name
-        kw = dict(baudrate=self.baudrate, timeout=0, write_timeout=self.write_timeout)
+        kw: dict[str, Any] = dict(baudrate=self.baudrate, timeout=0, write_timeout=self.write_timeout)
         try:
             if "://" in name:
                 return serial.serial_for_url(name, **kw)

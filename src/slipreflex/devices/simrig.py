@@ -20,8 +20,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from .. import experiment_specs
 from ..errors import ParameterError
-
 from ..interfaces import DaqSample, GraspResult
 
 __all__ = ["SimRig"]
@@ -85,19 +85,19 @@ class SimRig:
         return self.rig.advance_to(self._t0 + t)
 
     def perturb(self, kind: str) -> None:
-        """Start the paper's "drop" or "pour" now.
+        """Start a registered experiment's perturbation ("drop", "pour") now.
 
         Examples
         --------
         >>> r = SimRig("TR"); r.perturb("pour"); len(r.rig.perturbations)
         1
         """
-        if kind == "drop":
-            self.rig.perturb(self.drop, at=self.rig.t)
-        elif kind == "pour":
-            self.rig.perturb(self.pour, at=self.rig.t)
-        else:
-            raise ParameterError(f"unknown perturbation {kind!r}: drop or pour")
+        try:
+            exp = experiment_specs.get(kind)
+        except ParameterError:
+            raise ParameterError(f"unknown perturbation {kind!r} (known: {', '.join(experiment_specs.names())})") \
+                from None
+        self.rig.perturb(exp.perturbation(self), at=self.rig.t)   # reads this rig's drop and pour
 
     def status(self) -> str:
         """One line of truth: displacement, slip, fallen, load.

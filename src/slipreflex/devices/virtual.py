@@ -51,8 +51,9 @@ import tty
 from collections.abc import Iterable
 from typing import Any
 
+from .. import experiment_specs
 from ..errors import DeviceError, ParameterError
-from ..hardware import DAQ_PERIOD_S, Finger, HandCommand
+from ..hardware import DAQ_PERIOD_S, FINGER_SPEED_UNITS_S, PWM_MAX, Finger, HandCommand
 from . import wire
 from .ilimb import PacketParser, value_range
 
@@ -232,7 +233,7 @@ def parse_schedule(text: str) -> list[tuple[str, float]]:
     >>> parse_schedule("jump@1")
     Traceback (most recent call last):
     ...
-    slipreflex.errors.ParameterError: schedule item 'jump@1': kind must be drop or pour
+    slipreflex.errors.ParameterError: schedule item 'jump@1': kind must be one of drop, pour
     """
     out = []
     for item in (s.strip() for s in text.split(",")):
@@ -242,8 +243,8 @@ def parse_schedule(text: str) -> list[tuple[str, float]]:
         kind = kind.strip().lower()
         if not sep:
             raise ParameterError(f"schedule item {item!r}: expected kind@seconds, e.g. drop@2.0")
-        if kind not in ("drop", "pour"):
-            raise ParameterError(f"schedule item {item!r}: kind must be drop or pour")
+        if kind not in experiment_specs.names():
+            raise ParameterError(f"schedule item {item!r}: kind must be one of {', '.join(experiment_specs.names())}")
         try:
             t = float(at)
         except ValueError:
@@ -261,10 +262,12 @@ class VirtualDevices:
     :meth:`start`, writes each new sample's frame to the DAQ port, and
     applies every i-Limb packet that arrives on the hand port to
     ``rig.hand``: through ``rig.hand.command(kind, fingers, value)`` if the
-    hand has it (the simulated i-Limb does), else as position targets
-    (stop: hold the measured position; close/open: move to the end of the
-    range). Perturbations run when :meth:`trigger` is called or their
-    scheduled time comes.
+    hand has it (the simulated i-Limb does), else through its
+    :class:`~slipreflex.interfaces.Hand` methods (position: ``set_positions``;
+    close: ``close_fingers`` at the PWM's share of the documented speed; stop:
+    ``hold``), falling back to position targets for a hand without them (stop:
+    hold the measured position; close/open: move to the end of the range).
+    Perturbations run when :meth:`trigger` is called or their scheduled time comes.
 
     Parameters
     ----------
@@ -352,7 +355,7 @@ class VirtualDevices:
         """Seconds since :meth:`start` (NaN before)."""
         return time.perf_counter() - self._t0
 
-    def start(self) -> "VirtualDevices":
+    def start(self) -> VirtualDevices:
         """Start the real-time thread (idempotent); returns self."""
         if self._thread is None:
             self._t0 = time.perf_counter()
@@ -389,7 +392,7 @@ class VirtualDevices:
         """True while the thread runs."""
         return self._thread is not None and self._thread.is_alive()
 
-    def __enter__(self) -> "VirtualDevices":
+    def __enter__(self) -> VirtualDevices:
         return self.start()
 
     def __exit__(self, *exc: object) -> None:
@@ -414,8 +417,8 @@ class VirtualDevices:
         ParameterError
             For another kind.
         """
-        if kind not in ("drop", "pour"):
-            raise ParameterError(f"unknown perturbation {kind!r}: drop or pour")
+        if kind not in experiment_specs.names():
+            raise ParameterError(f"unknown perturbation {kind!r} (known: {', '.join(experiment_specs.names())})")
         self._request("perturb", kind)
 
     def inject_daq(self, data: bytes) -> None:
@@ -474,7 +477,11 @@ class VirtualDevices:
             hold = [c.finger for c in cmds if c.command == HandCommand.STOP]
             measured = hand.positions() if hold else {}
             for c in cmds:
-                if c.command == HandCommand.POSITION:
+                if c.command == HandCommand.STOP and hasattr(hand, "hold"):
+                    hand.hold([c.finger])
+                elif c.command == HandCommand.CLOSE and hasattr(hand, "close_fingers"):
+                    hand.close_fingers([c.finger], FINGER_SPEED_UNITS_S * c.value / PWM_MAX)
+                elif c.command == HandCommand.POSITION:
                     targets[c.finger] = float(c.value)
                 elif c.command == HandCommand.STOP:
                     if c.finger in measured:

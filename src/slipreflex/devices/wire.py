@@ -57,8 +57,8 @@ from dataclasses import dataclass, field, fields
 
 from .. import hardware
 from ..errors import DataError, ParameterError
-from ..validation import integer
 from ..interfaces import DaqSample
+from ..validation import integer
 
 __all__ = [
     "SYNC", "VERSION", "FRAME_LEN", "PAYLOAD_LEN", "BAUD", "SEQ_MODULO", "FLOW_MODULO",

@@ -38,8 +38,7 @@ True
 """
 
 from .loop import TRACE_COLUMNS, SimTrace, run_closed_loop, simulate_open_loop
-from .objects import (BOTTLES, PAPER_DROP, PAPER_POUR, SURFACES, Bottle, Drop, Objects, Pour, Surface,
-                      load_objects)
+from .objects import BOTTLES, PAPER_DROP, PAPER_POUR, SURFACES, Bottle, Drop, Objects, Pour, Surface, load_objects
 from .params import FlowParams, HandParams, ImuParams, PhysicsParams, SlipSensorParams, TactileParams, WaterParams
 from .rig import DaqBlock, GraspResult, Rig, SimHand, SlipEvent, TactileSampler
 from .scan import ScanResult, scan

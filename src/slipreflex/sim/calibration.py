@@ -27,8 +27,9 @@ True
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -37,7 +38,8 @@ from ..errors import ParameterError
 from .contacts import static_capacity
 from .objects import PAPER_DROP, PAPER_POUR, WATER_DENSITY, Bottle, Drop, Pour
 
-__all__ = ["PAPER_FIRST_SLIP_ML", "CALIBRATION_SEEDS", "LANDING_S", "FirstSlip", "first_slip", "first_slip_ml", "calibrate_bottle", "Calibration",
+__all__ = ["PAPER_FIRST_SLIP_ML", "CALIBRATION_SEEDS", "LANDING_S", "FirstSlip", "first_slip", "first_slip_ml",
+           "calibrate_bottle", "Calibration",
            "drop_falls", "drop_fall_capacity", "GraspFailed", "check_grasp", "plant_lines"]
 
 #: The paper's open-loop first pour slip (ml): "the first slip occurred at about 200 ml" (Fig. 15).
@@ -422,7 +424,7 @@ def _across_jump(f, lo, hi, target: float, band_ml, name: str) -> tuple[tuple[fl
     jump = (f"the open-loop first slip of bottle {name} jumps from {lo[1]:.1f} to {hi[1]:.1f} ml at pad mu_s "
             f"{hi[0]:.4g} (a gross slip starts only at a slip of the middle finger's cuff)")
     inside = [p for p in (lo, hi) if band_ml is not None and band_ml[0] <= p[1] <= band_ml[1]]
-    if not inside:
+    if not inside or band_ml is None:
         within = "" if band_ml is None else f", nor in {band_ml[0]:g}-{band_ml[1]:g} ml"
         raise ParameterError(f"calibration: {jump}: no pad mu_s puts it at {target:g} ml{within}")
     edge = min(inside, key=lambda p: abs(p[1] - target))
@@ -513,7 +515,7 @@ def plant_lines(bottles: Sequence[Bottle], grasp_force: float = hw.CONTACT_FORCE
     --------
     >>> from slipreflex.sim import BOTTLES
     >>> print(plant_lines([BOTTLES["TR"]])[0][:60])
-    open-loop first pour slip (0.8 N grasp, no reflex, seed 0): 
+    open-loop first pour slip (0.8 N grasp, no reflex, seed 0):
     """
     slips = ", ".join(f"{b.name} {first_slip_ml(b, rig_kwargs=rig_kwargs, seeds=(0,), grasp_force=grasp_force):.0f} ml"
                       for b in bottles)

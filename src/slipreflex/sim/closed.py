@@ -14,10 +14,11 @@
   sampler's key, gain and filter state, which the sampler then takes back) with
   the middle-finger position of the latest DAQ row at or before the frame
   (:meth:`Rig.finger_position_at`'s rule);
-* queue every command with the due step :meth:`SimHand.command` gives it
-  (``max(ceil((t + latency) / dt - 1e-9), step now)``), split into finger groups
-  with their offsets and start floors as the Python loop splits it
-  (:func:`~slipreflex.sim.loop.command_groups`, :func:`~slipreflex.sim.loop.finger_target`).
+* turn every rise of a command into a CLOSE and a STOP per finger group (the
+  grip-only rule, :func:`slipreflex.grip.Grip.rise` and :func:`slipreflex.grip.span`,
+  with the groups of :func:`~slipreflex.sim.loop.grip_groups`) and queue each with
+  the due step :meth:`SimHand.command` gives it
+  (``max(ceil((t + latency) / dt - 1e-9), step now)``).
 
 Afterwards :func:`run_compiled` hands back to the rig and the hand what their
 Python objects own (DAQ history, events, tactile snapshots for every open
@@ -39,6 +40,7 @@ import hashlib
 import math
 import os
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numba import njit, types
@@ -61,14 +63,15 @@ _EPS = 1e-12    # the loop's time comparisons (sim/loop.py)
 
 # cfg: float64 configuration vector
 (CF_TEND, CF_LAT, CF_DT, CF_DAQ_T, CF_SPEED, CF_PREPOS, CF_SI, CF_CHUNK, CF_GAIN, CF_SIGMA, CF_SHIFT,
- CF_NOISE, CF_RES, CF_ALPHA, CF_HYST, CF_DRIFT) = range(16)
-CF_SIZE = 16
+ CF_NOISE, CF_RES, CF_ALPHA, CF_HYST, CF_DRIFT, CF_GSPEED) = range(17)
+CF_SIZE = 17
 # cnt: int64 fill counters and loop state
 (N_DAQ, N_EV, N_TAC, N_CMD, N_QHEAD, N_QLEN, N_COUNT, N_FRAMES, N_POSPTR) = range(9)
 N_SIZE = 9
 # q_i columns: due step, sequence number, HandCommand, finger group
 Q_STEP, Q_COUNT, Q_KIND, Q_GROUP = range(4)
 _POS, _CLOSE, _OPEN = int(HandCommand.POSITION), int(HandCommand.CLOSE), int(HandCommand.OPEN)
+_STOP = int(HandCommand.STOP)
 _FMIN, _FMAX, _PWM = float(hw.FINGER_MIN), float(hw.FINGER_MAX), float(hw.PWM_MAX)
 _GROW, _DONE, _BAD_COMMAND = 1, 0, 2
 
@@ -97,7 +100,7 @@ class _Stamped:
     def from_function(cls, py_func, py_file):
         if os.path.abspath(py_file) != os.path.abspath(__file__):
             return None
-        return super().from_function(py_func, py_file)
+        return super().from_function(py_func, py_file)  # pyright: ignore[reportAttributeAccessIssue] (numba's locator, mixed in)
 
 
 _LOCATORS = getattr(getattr(_caching, "CacheImpl", None), "_locator_classes", None)
@@ -110,9 +113,9 @@ if _CACHE and not any(issubclass(c, _Stamped) for c in _LOCATORS):
 _f1, _i1, _u1 = types.float64[::1], types.int64[::1], types.uint64[::1]
 _f2, _i2, _f3 = types.float64[:, ::1], types.int64[:, ::1], types.float64[:, :, ::1]
 # the arguments every kernel shares: physics, hand, queue, outputs, scratch
-_COMMON = (_f1, _f1, _f1, _i1, _f1, _u1, _f2, _f2, _f1, _f1, _i1, _i1,  # RS RP | S C P keys D W track rates next contact
-           _f1, _f1, _i2, _f1, _i1, _i1, _f1, _f1,                    # tgt spd q_i q_v masks cmd_g cmd_off cmd_floor
-           _f1, _i1, _f2, _f2, _f2, _f1, _f1, _f2, _f2, _f2, _i1)     # cfg cnt daq ev tac cmd_t cmd_v s_daq s_ev s_tac s_n
+_COMMON = (_f1, _f1, _f1, _i1, _f1, _u1, _f2, _f2, _f1, _f1, _i1, _i1,  # RS RP | S C P keys D W track rates next cont
+           _f1, _f1, _i2, _f1, _i1, _i1, _f1, _f1, _f1,  # tgt spd q_i q_v masks cmd_g cmd_off g_level g_until
+           _f1, _i1, _f2, _f2, _f2, _f1, _f1, _f2, _f2, _f2, _i1)  # cfg cnt daq ev tac cmd_t cmd_v s_daq s_ev s_tac s_n
 
 
 @njit(cache=True, inline="always")
@@ -166,14 +169,26 @@ def _enqueue(q_i, q_v, cnt, step, kind, group, value):
 
 
 @njit(cache=True, inline="always")
-def _command(c, ts, n, cfg, q_i, q_v, cnt, cmd_g, cmd_off, cmd_floor, cmd_t, cmd_v):
-    """The loop's ``command(POSITION, fingers, c, at=ts)`` (each finger group its finger_target) and its record."""
-    step = np.int64(np.ceil((ts + cfg[CF_LAT]) / cfg[CF_DT] - _ROUND))
-    if step < n:
-        step = n
+def _due(at, n, cfg):
+    """SimHand.command's due step for a command sent at ``at``."""
+    step = np.int64(np.ceil((at + cfg[CF_LAT]) / cfg[CF_DT] - _ROUND))
+    return n if step < n else step
+
+
+@njit(cache=True, inline="always")
+def _command(c, ts, n, cfg, q_i, q_v, cnt, cmd_g, cmd_off, g_level, g_until, cmd_t, cmd_v):
+    """The loop's grip sender for command ``c`` at ``ts`` (sim/loop.py's ``_grip_sender``: per finger
+    group, a rise becomes CLOSE at ``max(ts, until)`` and STOP ``rise / speed`` later) and its record."""
     for g in range(cmd_g.shape[0]):
-        v = min(max(c + cmd_off[g], cmd_floor[g]), _FMAX)   # sim/loop.py's finger_target
-        _enqueue(q_i, q_v, cnt, step, _POS, cmd_g[g], v)
+        want = c + cmd_off[g]
+        rise = want - g_level[g] if want > g_level[g] else 0.0
+        if rise > 0.0:
+            g_level[g] = want
+            begin = ts if ts > g_until[g] else g_until[g]
+            end = begin + rise / cfg[CF_GSPEED]
+            g_until[g] = end
+            _enqueue(q_i, q_v, cnt, _due(begin, n, cfg), _CLOSE, cmd_g[g], _PWM)
+            _enqueue(q_i, q_v, cnt, _due(end, n, cfg), _STOP, cmd_g[g], 0.0)
     k = cnt[N_CMD]
     cmd_t[k] = ts
     cmd_v[k] = c
@@ -191,7 +206,7 @@ def _room(C, D, tac_rates, cfg, cnt, q_i, q_v, daq, ev, tac, cmd_t, n_groups, ho
     for s in range(tac_rates.shape[0]):
         n_tac += span * tac_rates[s] + 2.0
     head = cnt[N_QHEAD]
-    if head > 0 and cnt[N_QLEN] + inputs * n_groups > q_i.shape[0]:
+    if head > 0 and cnt[N_QLEN] + 2.0 * inputs * n_groups > q_i.shape[0]:
         m = cnt[N_QLEN] - head
         for r in range(m):
             for j in range(4):
@@ -203,7 +218,7 @@ def _room(C, D, tac_rates, cfg, cnt, q_i, q_v, daq, ev, tac, cmd_t, n_groups, ho
             and cnt[N_EV] + steps * (3.0 + D.shape[0]) + 8.0 <= ev.shape[0]
             and cnt[N_TAC] + n_tac <= tac.shape[0]
             and cnt[N_CMD] + inputs <= cmd_t.shape[0]
-            and cnt[N_QLEN] + inputs * n_groups <= q_i.shape[0])
+            and cnt[N_QLEN] + 2.0 * inputs * n_groups <= q_i.shape[0])
 
 
 @njit(cache=True, inline="always")
@@ -243,7 +258,8 @@ def _advance(horizon, S, C, P, keys, D, W, track, tac_rates, tac_next, tac_conta
 
 @njit(cache=_CACHE)
 def _closed_slip(step, RS, RP, S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, tgt, spd, q_i, q_v,
-                 masks, cmd_g, cmd_off, cmd_floor, cfg, cnt, daq, ev, tac, cmd_t, cmd_v, s_daq, s_ev, s_tac, s_n):
+                 masks, cmd_g, cmd_off, g_level, g_until, cfg, cnt, daq, ev, tac, cmd_t, cmd_v, s_daq, s_ev, s_tac,
+                 s_n):
     """The slip-sensor closed loop: one compiled step per DAQ row. Returns _DONE, _GROW or _BAD_COMMAND."""
     t_end = cfg[CF_TEND]
     dt = cfg[CF_DT]
@@ -266,14 +282,14 @@ def _closed_slip(step, RS, RP, S, C, P, keys, D, W, track, tac_rates, tac_next, 
                 if not np.isfinite(c):
                     cmd_v[cnt[N_CMD]] = c
                     return _BAD_COMMAND
-                _command(c, daq[k, K.O_T], n, cfg, q_i, q_v, cnt, cmd_g, cmd_off, cmd_floor, cmd_t, cmd_v)
+                _command(c, daq[k, K.O_T], n, cfg, q_i, q_v, cnt, cmd_g, cmd_off, g_level, g_until, cmd_t, cmd_v)
     return _DONE
 
 
 @njit(cache=_CACHE)
 def _closed_tactile(step, RS, RP, S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, tgt, spd, q_i,
-                    q_v, masks, cmd_g, cmd_off, cmd_floor, cfg, cnt, daq, ev, tac, cmd_t, cmd_v, s_daq, s_ev, s_tac,
-                    s_n, tkey, tstate, frames3, frames2):
+                    q_v, masks, cmd_g, cmd_off, g_level, g_until, cfg, cnt, daq, ev, tac, cmd_t, cmd_v, s_daq, s_ev,
+                    s_tac, s_n, tkey, tstate, frames3, frames2):
     """The tactile closed loop: one compiled step per frame of sampler ``cfg[CF_SI]``."""
     t_end = cfg[CF_TEND]
     dt = cfg[CF_DT]
@@ -320,7 +336,7 @@ def _closed_tactile(step, RS, RP, S, C, P, keys, D, W, track, tac_rates, tac_nex
                 if not np.isfinite(c):
                     cmd_v[cnt[N_CMD]] = c
                     return _BAD_COMMAND
-                _command(c, ts, n, cfg, q_i, q_v, cnt, cmd_g, cmd_off, cmd_floor, cmd_t, cmd_v)
+                _command(c, ts, n, cfg, q_i, q_v, cnt, cmd_g, cmd_off, g_level, g_until, cmd_t, cmd_v)
     return _DONE
 
 
@@ -330,7 +346,7 @@ _SIGNATURES = {
 }
 
 
-def _kernel(kind: str):
+def _kernel(kind: str) -> Any:
     """The loop kernel for ``kind``, compiled (or loaded from the cache) for its one signature.
 
     Its compilation is then disabled, so every reflex's step is passed as a
@@ -431,6 +447,7 @@ def _cfg(rig, t_end: float, sampler) -> np.ndarray:
     cfg[CF_SPEED] = rig.hand.params.speed_units_s
     cfg[CF_PREPOS] = rig.last_daq_position(Finger.MIDDLE)
     cfg[CF_CHUNK] = max(1, int(0.25 / rig.physics.dt))
+    cfg[CF_GSPEED] = rig.hand.params.speed_units_s   # sim/loop.py's _grip_sender: the hand's own speed
     if sampler is not None:
         tp = rig.tactile_params
         cfg[CF_SI] = rig.samplers.index(sampler)
@@ -441,13 +458,14 @@ def _cfg(rig, t_end: float, sampler) -> np.ndarray:
     return cfg
 
 
-def run_compiled(rig, reflex, t_end: float, split: list[tuple[tuple[Finger, ...], float, float]],
-                 sampler) -> tuple[np.ndarray, np.ndarray]:
+def run_compiled(rig, reflex, t_end: float, split: list[tuple[tuple[Finger, ...], float]],
+                 sampler, start: float) -> tuple[np.ndarray, np.ndarray]:
     """Run the closed loop to ``t_end`` in the compiled kernels; return (command times, values).
 
-    ``split`` is how a command goes to the tripod fingers
-    (:func:`~slipreflex.sim.loop.command_groups`: finger groups, offsets, start
-    floors); ``sampler`` is the tactile reflex's :class:`TactileSampler` (None for a slip
+    ``split`` is how a command's rises go to the tripod fingers
+    (:func:`~slipreflex.sim.loop.grip_groups`: finger groups and offsets), ``start``
+    the level from which they count (:func:`~slipreflex.sim.loop.grip_start`);
+    ``sampler`` is the tactile reflex's :class:`TactileSampler` (None for a slip
     reflex). The rig, its hand and samplers are left as the Python loop leaves
     them (before its last open-loop stretch to ``t_end``, which the caller runs).
     :func:`~slipreflex.sim.run_closed_loop` calls it; call that instead.
@@ -456,24 +474,26 @@ def run_compiled(rig, reflex, t_end: float, split: list[tuple[tuple[Finger, ...]
     --------
     >>> from slipreflex.sim import Rig
     >>> from slipreflex.chain import SlipReflex
-    >>> from slipreflex.sim.loop import command_groups
+    >>> from slipreflex.sim.loop import grip_groups
     >>> rig = Rig("TR", seed=1); g = rig.grasp()
-    >>> split = command_groups(hw.TRIPOD, None)
-    >>> t, c = run_compiled(rig, SlipReflex(p0=g.position), rig.t + 0.2, split, None)
+    >>> split = grip_groups(hw.TRIPOD, None)
+    >>> t, c = run_compiled(rig, SlipReflex(p0=g.position), rig.t + 0.2, split, None, g.position)
     >>> t.size, bool((c == g.position).all())    # a command per 16-sample window, no slip
     (4, True)
     """
     kind = "tactile" if sampler is not None else "slip"
     step, RS, RP = _typed_step(reflex, kind)
-    groups = [g for g, _, _ in split]
+    groups = [g for g, _ in split]
     A = rig.kernel_arrays()
     span = max(t_end - rig.t, 0.0) + 0.05
     n_in = int(span * (hw.DAQ_FS if sampler is None else sampler.fs)) + 16
     q_i, q_v, q_len, count = _queue_arrays(rig, groups, 8 * len(split) + 64)
     masks = np.array([sum(1 << hw.TRIPOD.index(f) for f in g) for g in groups], dtype=np.int64)
     cmd_g = np.arange(len(split), dtype=np.int64)
-    cmd_off = np.array([off for _, off, _ in split], dtype=np.float64)
-    cmd_floor = np.array([low for _, _, low in split], dtype=np.float64)
+    cmd_off = np.array([off for _, off in split], dtype=np.float64)
+    g_level = np.full(len(split), float(start))
+    g_until = np.array([max((rig.hand.closing_until.get(f, -math.inf) for f in g), default=-math.inf)
+                        for g, _ in split], dtype=np.float64)
     n_tac = int(sum(span * fs + 4 for fs in A.tac_rates))
     buf = _Buffers(daq=np.empty((int(span * hw.DAQ_FS) + 16, K.O_SIZE)), ev=np.empty((4096, 3)),
                    tac=np.empty((n_tac + 16, K.T_SIZE)), cmd_t=np.empty(n_in), cmd_v=np.empty(n_in),
@@ -492,7 +512,7 @@ def run_compiled(rig, reflex, t_end: float, split: list[tuple[tuple[Finger, ...]
     try:
         while status == _GROW:
             common = (RS, RP, A.S, A.C, A.P, A.keys, A.D, A.W, A.track, A.tac_rates, A.tac_next, A.tac_contact,
-                      A.targets, A.speeds, buf.q_i, buf.q_v, masks, cmd_g, cmd_off, cmd_floor, cfg, cnt, buf.daq,
+                      A.targets, A.speeds, buf.q_i, buf.q_v, masks, cmd_g, cmd_off, g_level, g_until, cfg, cnt, buf.daq,
                       buf.ev, buf.tac, buf.cmd_t, buf.cmd_v, s_daq, s_ev, s_tac, s_n)
             if sampler is None:
                 status = _kernel(kind)(step, *common)
@@ -503,6 +523,9 @@ def run_compiled(rig, reflex, t_end: float, split: list[tuple[tuple[Finger, ...]
                 buf.grow()
     finally:   # also when the reflex's step raised: the rig then stands where the Python loop's would
         _hand_back(rig, buf, cnt, groups, None if sampler is None else (sampler, tstate))
+        for (g, _), until in zip(split, g_until.tolist()):
+            if until > -math.inf:
+                rig.hand.closing_until.update({f: until for f in g})
     nc = int(cnt[N_CMD])
     if status == _BAD_COMMAND:
         raise ParameterError(f"hand command value must be finite, got {buf.cmd_v[nc]!r}")

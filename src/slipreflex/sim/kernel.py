@@ -69,50 +69,70 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from .._slots import Layout
+
 __all__: list[str] = []
+
+# Every vector's slots are named once, in a Layout (slipreflex._slots); the constants below are
+# bound from it for the kernels, and tests/test_slots.py checks each against its layout's name.
 
 # ---- state vector S -------------------------------------------------------
 # Bottle-level: S_S mean slid distance of the contacts, S_W smallest sliding speed,
 # S_STUCK 1 unless every contact slides (gross slip), S_FT total friction force.
-S_X, S_V, S_S, S_W, S_STUCK, S_DIR = 0, 1, 2, 3, 4, 5
-S_Q0, S_TGT0, S_SPD0 = 6, 9, 12
-S_NC, S_FT, S_AF, S_SUPPORTED, S_FALLEN, S_TFALL = 15, 16, 17, 18, 19, 20
-S_AX, S_AY, S_AZ, S_AFRESH, S_MASS, S_A = 21, 22, 23, 24, 25, 26
-# per contact (thumb, index, middle): block of SC_SIZE starting at S_C0 + i * SC_SIZE
-S_C0 = 27
-SC_S, SC_W, SC_STUCK, SC_DIR, SC_PHI, SC_FT, SC_Z = range(7)   # SC_Z: ln(1 + w / v0), the solver's variable
-SC_SIZE = 7
-# the water (WaterParams): bottle's sideways position and velocity, the slosh mass's, the bottle's sideways
-# acceleration and its DLPF, the splash noise at the two ends of the current 1 ms interval, the slosh mode's
-# k tanh(k h), mass m1, damping coefficient and jet participation, the axial load and the water's sideways
-# force on the bottle (truth)
-S_L0 = S_C0 + 3 * SC_SIZE
-(S_YB, S_VB, S_Y1, S_V1, S_ALAT, S_AFL, S_SPL0, S_SPL1, S_KTH, S_M1, S_C1, S_BETA, S_LOAD,
- S_FWAT) = range(S_L0, S_L0 + 14)
-S_SIZE = S_L0 + 14
+# Per contact (thumb, index, middle): a CONTACT block of SC_SIZE from S_C0 + i * SC_SIZE
+# (SC_Z: ln(1 + w / v0), the solver's variable).
+# The water (WaterParams), from S_L0: bottle's sideways position and velocity, the slosh mass's, the
+# bottle's sideways acceleration and its DLPF, the splash noise at the two ends of the current 1 ms
+# interval, the slosh mode's k tanh(k h), mass m1, damping coefficient and jet participation, the
+# axial load and the water's sideways force on the bottle (truth).
+CONTACT = Layout("a contact's block of the rig's state S", "S=0 W=0 STUCK=1 DIR=1 PHI=1 FT=0 Z=0", prefix="SC_")
+SC_S, SC_W, SC_STUCK, SC_DIR, SC_PHI, SC_FT, SC_Z = CONTACT.slots
+SC_SIZE = CONTACT.size
+STATE = Layout("the rig's state S", f"""
+    X=0 V=0 S=0 W=0 STUCK=1 DIR=1 Q0:3=0 TGT0:3=0 SPD0:3
+    NC=0 FT=0 AF=0 SUPPORTED=1 FALLEN=0 TFALL=nan AX=0 AY=0 AZ=0 AFRESH=0 MASS A=0
+    C0:{3 * SC_SIZE}
+    YB=0 VB=0 Y1=0 V1=0 ALAT=0 AFL=0 SPL0 SPL1 KTH=0 M1=0 C1=0 BETA=0 LOAD=0 FWAT=0""", prefix="S_")
+(S_X, S_V, S_S, S_W, S_STUCK, S_DIR, S_Q0, S_TGT0, S_SPD0,
+ S_NC, S_FT, S_AF, S_SUPPORTED, S_FALLEN, S_TFALL, S_AX, S_AY, S_AZ, S_AFRESH, S_MASS, S_A,
+ S_C0,
+ S_YB, S_VB, S_Y1, S_V1, S_ALAT, S_AFL, S_SPL0, S_SPL1, S_KTH, S_M1, S_C1, S_BETA, S_LOAD, S_FWAT) = STATE.slots
+S_L0 = S_YB
+S_SIZE = STATE.size
 
 # ---- counters C (int64) ---------------------------------------------------
 # C_NFAIL: implicit friction solves that did not converge; C_NITER: most iterations one took.
 # C_SPL: index j of the 1 ms splash-noise interval [j, j + 1) ms the values S_SPL0, S_SPL1 belong to.
-C_N, C_DAQ, C_ACC, C_NFAIL, C_NITER, C_SPL = 0, 1, 2, 3, 4, 5
-C_SIZE = 6
+COUNTERS = Layout("the rig's counters C", "N DAQ ACC NFAIL NITER SPL", prefix="C_")
+C_N, C_DAQ, C_ACC, C_NFAIL, C_NITER, C_SPL = COUNTERS.slots
+C_SIZE = COUNTERS.size
 
 # ---- parameters P ---------------------------------------------------------
+# Per contact friction: a FRICTION block of PC_SIZE from P_C0 + i * PC_SIZE. The water, from P_L0:
+# splash rms (relative), noise grid (s), its one-pole factor and innovation, bottle radius, the
+# slosh's deep-fill damping ratio (slosh_zeta0), jet's mode participation J1(k r_j) / J1(1.8412),
+# water density, sideways stiffness and damping of the bottle in the grasp, 1 / noise grid.
+FRICTION = Layout("a contact's friction block of the rig's parameters P", """
+    LAW MUS MUK VS A V0 DC HEAL KT CT DECAY HEAL_DECAY""", prefix="PC_")
+(PC_LAW, PC_MUS, PC_MUK, PC_VS, PC_A, PC_V0, PC_DC, PC_HEAL, PC_KT, PC_CT, PC_DECAY,
+ PC_HEAL_DECAY) = FRICTION.slots
+PC_SIZE = FRICTION.size
+PARAMS = Layout("the rig's parameters P", f"""
+    DT G MB KN LAM QC KSERVO STALL GRIP
+    DAQ_T ACC_T ACC_ALPHA ACC_NOISE ACC_LSB ACC_RANGE TILT_X TILT_Z TILT_Y
+    VCC VSAT KNEE VNOISE GAP ADC_LSB ADC_MAX TRACK_DX TRACK_OFF
+    FLOW_K FLOW_PHASE SPOT_K PADS_SAME
+    C0:{3 * PC_SIZE}
+    SPL_RMS SPL_DT SPL_RHO SPL_SIG SLOSH_R ZETA0 PHIJ RHO_W KLAT CLAT SPL_INV""", prefix="P_")
 (P_DT, P_G, P_MB, P_KN, P_LAM, P_QC, P_KSERVO, P_STALL, P_GRIP,
  P_DAQ_T, P_ACC_T, P_ACC_ALPHA, P_ACC_NOISE, P_ACC_LSB, P_ACC_RANGE, P_TILT_X, P_TILT_Z, P_TILT_Y,
  P_VCC, P_VSAT, P_KNEE, P_VNOISE, P_GAP, P_ADC_LSB, P_ADC_MAX, P_TRACK_DX, P_TRACK_OFF,
- P_FLOW_K, P_FLOW_PHASE, P_SPOT_K, P_PADS_SAME) = range(31)
-# per contact friction: block of PC_SIZE starting at P_C0 + i * PC_SIZE
-P_C0 = 31
-(PC_LAW, PC_MUS, PC_MUK, PC_VS, PC_A, PC_V0, PC_DC, PC_HEAL, PC_KT, PC_CT, PC_DECAY, PC_HEAL_DECAY) = range(12)
-PC_SIZE = 12
-# the water: splash rms (relative), noise grid (s), its one-pole factor and innovation, bottle radius, the slosh's
-# deep-fill damping ratio (slosh_zeta0), jet's mode participation J1(k r_j) / J1(1.8412), water density,
-# sideways stiffness and damping of the bottle in the grasp, 1 / noise grid
-P_L0 = P_C0 + 3 * PC_SIZE
-(P_SPL_RMS, P_SPL_DT, P_SPL_RHO, P_SPL_SIG, P_SLOSH_R, P_ZETA0, P_PHIJ, P_RHO_W, P_KLAT,
- P_CLAT, P_SPL_INV) = range(P_L0, P_L0 + 11)
-P_SIZE = P_L0 + 11
+ P_FLOW_K, P_FLOW_PHASE, P_SPOT_K, P_PADS_SAME,
+ P_C0,
+ P_SPL_RMS, P_SPL_DT, P_SPL_RHO, P_SPL_SIG, P_SLOSH_R, P_ZETA0, P_PHIJ, P_RHO_W, P_KLAT,
+ P_CLAT, P_SPL_INV) = PARAMS.slots
+P_L0 = P_SPL_RMS
+P_SIZE = PARAMS.size
 #: Friction laws (PC_LAW): Coulomb with a Stribeck curve; slip weakening + healing + log rate.
 LAW_COULOMB, LAW_RATE_STATE = 0.0, 1.0
 _NEWTON_MAX = 60
@@ -120,21 +140,26 @@ _NEWTON_MAX = 60
 _XI = 1.8411837813406593
 
 # ---- drops D (one row per drop) -------------------------------------------
-D_REL, D_M, D_H0, D_KC, D_CC, D_ACT, D_Z, D_VZ, D_LANDED = range(9)
-D_SIZE = 9
+DROP = Layout("a drop's row of D", "REL M H0 KC CC ACT=0 Z=0 VZ=0 LANDED=0", prefix="D_")
+D_REL, D_M, D_H0, D_KC, D_CC, D_ACT, D_Z, D_VZ, D_LANDED = DROP.slots
+D_SIZE = DROP.size
 
 # ---- pours W (one row per pour) -------------------------------------------
-W_START, W_RATE_KG_S, W_TOTAL_KG, W_DELAY, W_JET_N, W_RATE_L_S, W_DUR = range(7)
-W_SIZE = 7
+POUR = Layout("a pour's row of W", "START RATE_KG_S TOTAL_KG DELAY JET_N RATE_L_S DUR", prefix="W_")
+W_START, W_RATE_KG_S, W_TOTAL_KG, W_DELAY, W_JET_N, W_RATE_L_S, W_DUR = POUR.slots
+W_SIZE = POUR.size
 
 # ---- DAQ output rows --------------------------------------------------------
+DAQ_ROW = Layout("a DAQ output row", """
+    T VOLTS AX AY AZ AFRESH PULSES X V S STUCK NC MASS Q0 Q1 Q2 FALLEN A ALAT LOAD FWAT""", prefix="O_")
 (O_T, O_VOLTS, O_AX, O_AY, O_AZ, O_AFRESH, O_PULSES, O_X, O_V, O_S, O_STUCK, O_NC, O_MASS,
- O_Q0, O_Q1, O_Q2, O_FALLEN, O_A, O_ALAT, O_LOAD, O_FWAT) = range(21)
-O_SIZE = 21
+ O_Q0, O_Q1, O_Q2, O_FALLEN, O_A, O_ALAT, O_LOAD, O_FWAT) = DAQ_ROW.slots
+O_SIZE = DAQ_ROW.size
 
 # ---- tactile snapshot rows --------------------------------------------------
-T_ID, T_IDX, T_T, T_NC, T_FT, T_S, T_FALLEN, T_W = range(8)
-T_SIZE = 8  # T_FT, T_S, T_W: the sampler's own contact
+TACTILE_ROW = Layout("a tactile snapshot row", "ID IDX T NC FT S FALLEN W", prefix="T_")
+T_ID, T_IDX, T_T, T_NC, T_FT, T_S, T_FALLEN, T_W = TACTILE_ROW.slots
+T_SIZE = TACTILE_ROW.size  # T_FT, T_S, T_W: the sampler's own contact
 
 # ---- events -----------------------------------------------------------------
 E_ONSET, E_STICK, E_FALLEN, E_LANDED = 1.0, 2.0, 3.0, 4.0
@@ -498,7 +523,6 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
         fallen = S[S_FALLEN] > 0.0
         nc = kn * pen if (pen > 0.0 and not fallen) else 0.0
         S[S_NC] = nc
-        ntot = 3.0 * nc
         # ---- loads
         mw = 0.0
         fjet = 0.0

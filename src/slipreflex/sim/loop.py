@@ -3,10 +3,15 @@
 :func:`run_closed_loop` feeds a :class:`slipreflex.interfaces.Reflex` the
 input its ``input_kind`` asks for (slip-sensor volts at the DAQ's 333.33 Hz,
 or ``(4, 4)`` index-finger tactile frames at the reflex's own ``fs``), passes
-the measured middle-finger position with every sample, and sends every
-returned command as a position target to the tripod fingers (thumb, index,
-middle). The command is sent at the time of the sample that produced it and
-reaches the fingers after the hand's latency; the physics is advanced in
+the measured middle-finger position with every sample, and sends every rise of
+the returned command to the tripod fingers (thumb, index, middle) as closing
+time, the grip-only rule of :mod:`slipreflex.grip` that the real-rig loop
+applies too: a rise of ``g`` units is a CLOSE at the hand's closing speed
+(full PWM: ``HandParams.speed_units_s``, the documented
+:data:`~slipreflex.hardware.FINGER_SPEED_UNITS_S` on the nominal plant) and a
+STOP ``g / speed`` seconds later, a rise while the fingers still close extends
+the closing. The commands are sent at the time of the sample that produced them and
+reach the fingers after the hand's latency; the physics is advanced in
 stretches that never pass a time a pending command could still change, so
 the result is the same as stepping sample by sample.
 
@@ -16,15 +21,13 @@ one numba function (:mod:`slipreflex.sim.closed`), 2 to 4 times faster and
 with the same bits; ``run_closed_loop(..., compiled=False)`` forces the Python
 loop, which every other reflex runs.
 
-Every finger the loop drives gets the command (plus a reflex's declared
-``finger_offsets``), never below where that finger stood when the loop started:
-its target is ``clip(max(c + offset, start), 0, 500)``, ``start`` its position
-then, rounded to whole units as the hand reports it (:func:`start_floors`). The
-grasp stops each finger at its own position (the thumb often a unit further
-closed than the middle finger, whose position the reflex starts from), so
-without the floor the reflex's first command would open the thumb a little; the
-real-rig loop (:func:`slipreflex.runtime.run_loop`) never sends a finger a target
-below its start either. Both loops apply the same rule.
+No finger ever gets OPEN or a position from a reflex, so none can open, whatever
+the reflex's start: each closes from wherever it holds (the grasp stops each
+finger at its own position). A reflex's declared ``finger_offsets`` close that
+finger's group ``offset`` units more at the first command
+(:func:`grip_groups`). The closing in progress is the hand's
+(:attr:`SimHand.closing_until <slipreflex.sim.rig.SimHand>`), so a loop that
+continues a run extends it rather than cutting it short.
 
 :class:`SimTrace` holds every stream of the run as arrays.
 
@@ -53,6 +56,7 @@ import numpy as np
 
 from .. import hardware as hw
 from ..errors import ParameterError
+from ..grip import Grip, finger_groups, span
 from ..hardware import Finger, HandCommand
 from ..interfaces import Reflex
 from .objects import Drop, Pour
@@ -240,7 +244,7 @@ def _fmt(v: object) -> str:
     return "" if math.isnan(f) else repr(f)
 
 
-def _trace(rig: Rig, t0: float, method: str, cmd_t: list[float], cmd_v: list[float],
+def _trace(rig: Rig, t0: float, method: str, cmd_t: Sequence[float] | np.ndarray, cmd_v: Sequence[float] | np.ndarray,
            tac_t: np.ndarray, tac: np.ndarray) -> SimTrace:
     d = rig.daq_history(since=t0)
     ons = rig.onsets
@@ -286,71 +290,58 @@ def simulate_open_loop(rig: Rig, duration: float, *, tactile_fs: float | None = 
     return _trace(rig, t0, "open-loop", [], [], tac_t, tac)
 
 
-def start_floors(rig: Rig, fingers: Sequence[Finger]) -> dict[Finger, float]:
-    """Where each of ``fingers`` stands now, rounded to whole units as the hand reports it.
+def grip_groups(fingers: tuple[Finger, ...], offsets) -> list[tuple[tuple[Finger, ...], float]]:
+    """How the rises of a command go to ``fingers``: ``(fingers, offset)`` pairs.
 
-    The closed loop never sends a finger a target below this (:func:`command_groups`).
-
-    Examples
-    --------
-    >>> from slipreflex.sim import Rig
-    >>> rig = Rig("TR", seed=1); g = rig.grasp()
-    >>> floors = start_floors(rig, hw.TRIPOD)
-    >>> floors == {f: float(round(g.positions[f])) for f in hw.TRIPOD}
-    True
-    """
-    pos = rig.hand.positions()
-    return {Finger(f): pos[Finger(f)] for f in fingers}
-
-
-def command_groups(fingers: tuple[Finger, ...], offsets,
-                   floors: dict[Finger, float] | None = None) -> list[tuple[tuple[Finger, ...], float, float]]:
-    """How one command ``c`` goes to ``fingers``: ``(fingers, offset, floor)`` triples.
-
-    Each group of fingers gets ``min(max(c + offset, floor), top)``
-    (:func:`finger_target`): ``offset`` from a reflex's declared
-    ``finger_offsets`` ({finger: units}, 0 for the others), ``floor`` from
-    ``floors`` (a finger's start, :func:`start_floors`; 0 if not given), ``top``
-    the finger's range (500; the thumb rotator, in a group of its own, 750).
-    Fingers with the same offset and floor share a group, in the order of
-    ``fingers`` (the Python loop and the compiled one both split a command this way).
+    Fingers with the same declared offset (``finger_offsets``; 0 for the others)
+    close together (:func:`slipreflex.grip.finger_groups`); the Python loop and the
+    compiled one both split a command this way.
 
     Examples
     --------
     >>> from slipreflex.hardware import TRIPOD
-    >>> command_groups(TRIPOD, {Finger.MIDDLE: 20.0})
-    [((<Finger.THUMB: 0>, <Finger.INDEX: 1>), 0.0, 0.0), ((<Finger.MIDDLE: 2>,), 20.0, 0.0)]
-    >>> command_groups(TRIPOD, None, {Finger.THUMB: 148.0, Finger.INDEX: 147.0, Finger.MIDDLE: 147.0})
-    [((<Finger.THUMB: 0>,), 0.0, 148.0), ((<Finger.INDEX: 1>, <Finger.MIDDLE: 2>), 0.0, 147.0)]
+    >>> grip_groups(TRIPOD, {Finger.MIDDLE: 20.0})
+    [((<Finger.THUMB: 0>, <Finger.INDEX: 1>), 0.0), ((<Finger.MIDDLE: 2>,), 20.0)]
     """
-    offs = {Finger(f): float(v) for f, v in (offsets or {}).items()}
-    lows = {Finger(f): float(v) for f, v in (floors or {}).items()}
-    groups: dict[tuple[float, float], list[Finger]] = {}
-    for f in fingers:
-        key = (offs.get(f, 0.0), lows.get(f, float(hw.FINGER_MIN)), f == Finger.THUMB_ROTATOR)
-        groups.setdefault(key, []).append(f)
-    return [(tuple(fs), off, low) for (off, low, _), fs in groups.items()]
+    return finger_groups(fingers, offsets)
 
 
-def finger_target(c: float, offset: float, floor: float, top: float = hw.FINGER_MAX) -> float:
-    """A finger's target for command ``c``: ``min(max(c + offset, floor), top)`` (see :func:`command_groups`).
+def grip_start(rig: Rig, reflex: Reflex) -> float:
+    """The command level from which a reflex's rises count: its own ``command`` when it
+    has a finite one (its bookkeeping), else the middle finger's measured position.
 
     Examples
     --------
-    >>> finger_target(147.0, 0.0, 148.0), finger_target(160.0, 0.0, 148.0), finger_target(495.0, 20.0, 0.0)
-    (148.0, 160.0, 500.0)
+    >>> from slipreflex.sim import Rig
+    >>> from slipreflex.chain import SlipReflex
+    >>> grip_start(Rig("TR"), SlipReflex(p0=500.0)), grip_start(Rig("TR"), object())
+    (500.0, 0.0)
     """
-    return min(max(c + offset, floor), float(top))
+    c = getattr(reflex, "command", None)
+    if isinstance(c, (int, float)) and not isinstance(c, bool) and math.isfinite(c):
+        return float(c)
+    return float(rig.hand.positions()[Finger.MIDDLE])
 
 
-def _finger_command(command, groups: list[tuple[tuple[Finger, ...], float, float]]):
-    """A ``command(kind, fingers, c, at)`` that sends each group of ``groups`` its :func:`finger_target`."""
-    def send(kind, _fingers, value, at):
+def _grip_sender(hand, groups: list[tuple[tuple[Finger, ...], float]], start: float):
+    """A ``send(c, at)`` that turns each rise of ``c`` into CLOSE and STOP commands (the grip rule)."""
+    grip = Grip(start, [f for g, _ in groups for f in g], {f: off for g, off in groups for f in g})
+    assert grip.groups == groups   # both from slipreflex.grip.finger_groups
+    # the simulated hand's own closing speed is its documented rate (625 units/s on the nominal
+    # plant, hardware.FINGER_SPEED_UNITS_S): a rise of g units closes its fingers g units
+    speed = float(getattr(getattr(hand, "params", None), "speed_units_s", hw.FINGER_SPEED_UNITS_S))
+
+    def send(value, at):
         if not math.isfinite(value):   # checked before any finger gets it, as the compiled loop does
             raise ParameterError(f"hand command value must be finite, got {value!r}")
-        for group, off, low in groups:
-            top = hw.THUMB_ROTATOR_MAX if group == (Finger.THUMB_ROTATOR,) else hw.FINGER_MAX
-            command(kind, group, finger_target(value, off, low, top), at=at)
+        for (fingers, _), g in zip(groups, grip.rise(value)):
+            if g > 0.0:
+                until = max((hand.closing_until.get(f, -math.inf) for f in fingers), default=-math.inf)
+                begin, end = span(at, until, g, speed)
+                hand.command(HandCommand.CLOSE, fingers, float(hw.PWM_MAX), at=begin)
+                hand.command(HandCommand.STOP, fingers, 0.0, at=end)
+                for f in fingers:
+                    hand.closing_until[f] = end
     return send
 
 
@@ -370,8 +361,8 @@ def run_closed_loop(rig: Rig, reflex: Reflex, duration: float, *,
     duration : float
         Seconds to run.
     fingers : sequence of Finger
-        Fingers that receive each command (default: the tripod), each never
-        below where it stands when the loop starts (:func:`command_groups`).
+        Fingers that close when the command rises (default: the tripod;
+        :func:`grip_groups`).
     tactile_fs : float, optional
         For a slip reflex, also record tactile frames at this rate.
     compiled : bool
@@ -409,7 +400,8 @@ def run_closed_loop(rig: Rig, reflex: Reflex, duration: float, *,
         raise ParameterError(f"compiled must be True or False, got {compiled!r}")
     fingers = tuple(Finger(f) for f in fingers)
     offsets = getattr(reflex, "finger_offsets", None) if kind == "slip" else None
-    groups = command_groups(fingers, offsets, start_floors(rig, fingers))
+    groups = grip_groups(fingers, offsets)
+    start = grip_start(rig, reflex)
     t0 = rig.t
     t_end = t0 + duration
     fs = float(reflex.fs) if kind == "tactile" else tactile_fs
@@ -419,14 +411,14 @@ def run_closed_loop(rig: Rig, reflex: Reflex, duration: float, *,
 
         if compiled and compilable(rig, reflex, fingers):
             reflex_sampler = tac_s if kind == "tactile" else None
-            cmd_t, cmd_v = run_compiled(rig, reflex, t_end, groups, reflex_sampler)
+            cmd_t, cmd_v = run_compiled(rig, reflex, t_end, groups, reflex_sampler, start)
             if reflex_sampler is not None:
                 reflex_sampler.read()     # the loop consumed them
         elif kind == "slip":
-            cmd_t, cmd_v = _python_slip(rig, reflex, t_end, fingers, groups)
+            cmd_t, cmd_v = _python_slip(rig, reflex, t_end, _grip_sender(rig.hand, groups, start))
         else:
             assert tac_s is not None
-            cmd_t, cmd_v = _python_tactile(rig, reflex, t_end, fingers, groups, tac_s)
+            cmd_t, cmd_v = _python_tactile(rig, reflex, t_end, _grip_sender(rig.hand, groups, start), tac_s)
         if rig.t < t_end - _EPS:
             rig.advance_block(t_end)
     finally:
@@ -439,12 +431,11 @@ def run_closed_loop(rig: Rig, reflex: Reflex, duration: float, *,
 _EPS = 1e-12
 
 
-def _python_slip(rig: Rig, reflex: Reflex, t_end: float, fingers: tuple[Finger, ...], groups):
+def _python_slip(rig: Rig, reflex: Reflex, t_end: float, send):
     """The Python loop for a slip reflex: one ``reflex.step`` per DAQ sample."""
     cmd_t: list[float] = []
     cmd_v: list[float] = []
     step = reflex.step
-    command = _finger_command(rig.hand.command, groups)
     dt = rig.physics.dt
     lat = rig.hand.latency
     while rig.next_daq_time <= t_end + _EPS:
@@ -455,7 +446,7 @@ def _python_slip(rig: Rig, reflex: Reflex, t_end: float, fingers: tuple[Finger, 
         for v, pos, ts_k in zip(volts_a.tolist(), np.rint(mids_a).tolist(), times.tolist()):
             c = step(v, position=pos)
             if c is not None:
-                command(HandCommand.POSITION, fingers, float(c), at=ts_k)
+                send(float(c), ts_k)
                 cmd_t.append(ts_k)
                 cmd_v.append(float(c))
         if rig.t >= t_end - _EPS and rig.next_daq_time > t_end + _EPS:
@@ -463,12 +454,11 @@ def _python_slip(rig: Rig, reflex: Reflex, t_end: float, fingers: tuple[Finger, 
     return cmd_t, cmd_v
 
 
-def _python_tactile(rig: Rig, reflex: Reflex, t_end: float, fingers: tuple[Finger, ...], groups, tac_s):
+def _python_tactile(rig: Rig, reflex: Reflex, t_end: float, send, tac_s):
     """The Python loop for a tactile reflex: one ``reflex.step`` per frame of ``tac_s``."""
     cmd_t: list[float] = []
     cmd_v: list[float] = []
     step = reflex.step
-    command = _finger_command(rig.hand.command, groups)
     lat = rig.hand.latency
     while tac_s.next_time <= t_end + _EPS:
         horizon = min(t_end, max(rig.t + rig.physics.dt, tac_s.next_time + lat))
@@ -482,7 +472,7 @@ def _python_tactile(rig: Rig, reflex: Reflex, t_end: float, fingers: tuple[Finge
             pos = float(round(rig.finger_position_at(ts_k, Finger.MIDDLE)))
             c = step(frames[k], position=pos)
             if c is not None:
-                command(HandCommand.POSITION, fingers, float(c), at=ts_k)
+                send(float(c), ts_k)
                 cmd_t.append(ts_k)
                 cmd_v.append(float(c))
         if rig.t >= t_end - _EPS and tac_s.next_time > t_end + _EPS:

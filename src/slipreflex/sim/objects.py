@@ -51,17 +51,19 @@ slipreflex.errors.ParameterError: Drop.mass_kg must be a finite number > 0 and <
 from __future__ import annotations
 
 import tomllib
+from collections.abc import Mapping
 from dataclasses import MISSING, dataclass, field, fields
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any, Mapping
+from typing import Any
 
 from ..errors import ParameterError
 from ..validation import number
 
 __all__ = [
     "Surface", "Bottle", "Drop", "Pour", "Objects", "SURFACES", "BOTTLES",
-    "PAPER_DROP", "PAPER_POUR", "WATER_DENSITY", "PAPER_PAD_MU_S", "PAPER_PAD_MU_S_TX", "FRICTION_LAWS", "load_objects", "resolve_surface",
+    "PAPER_DROP", "PAPER_POUR", "WATER_DENSITY", "PAPER_PAD_MU_S", "PAPER_PAD_MU_S_TX", "FRICTION_LAWS",
+    "load_objects", "resolve_surface",
 ]
 
 #: Density of water (kg/m^3) used for poured volume -> mass.

@@ -60,7 +60,8 @@ class HandParams:
     speed_units_s : float
         Servo speed limit (position units/s): an i-Limb digit closes fully
         (0 -> 500) in about 0.8 s (manufacturer; Belter et al. 2013, J
-        Rehabil Res Dev 50(5)), so 625 units/s.
+        Rehabil Res Dev 50(5)), so 625 units/s
+        (:data:`slipreflex.hardware.FINGER_SPEED_UNITS_S`).
     latency_s : float
         Command latency (s): a 15-byte packet at 115200 baud takes 1.3 ms,
         the prosthesis control unit and the digit controller add a few ms;
@@ -125,7 +126,7 @@ class HandParams:
     0.1
     """
 
-    speed_units_s: float = 625.0
+    speed_units_s: float = hw.FINGER_SPEED_UNITS_S
     latency_s: float = 0.010
     servo_gain: float = 40.0
     travel_per_unit_m: float = 0.2e-3

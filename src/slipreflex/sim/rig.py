@@ -57,8 +57,17 @@ from ..interfaces import DaqSample, GraspResult
 from . import kernel as K
 from .contacts import fill_contact_params
 from .objects import BOTTLES, WATER_DENSITY, Bottle, Drop, Pour, Surface
-from .params import (SLOSH_ROOT, WATER_KINEMATIC_VISCOSITY, FlowParams, HandParams, ImuParams, PhysicsParams, SlipSensorParams,
-                     TactileParams, WaterParams)
+from .params import (
+    SLOSH_ROOT,
+    WATER_KINEMATIC_VISCOSITY,
+    FlowParams,
+    HandParams,
+    ImuParams,
+    PhysicsParams,
+    SlipSensorParams,
+    TactileParams,
+    WaterParams,
+)
 from .sensors import Track
 
 __all__ = ["Rig", "SimHand", "TactileSampler", "GraspResult", "DaqBlock", "SlipEvent", "KernelArrays",
@@ -164,7 +173,7 @@ class DaqBlock:
     water_force_lateral: np.ndarray
 
     @classmethod
-    def from_rows(cls, rows: np.ndarray, seq0: int) -> "DaqBlock":
+    def from_rows(cls, rows: np.ndarray, seq0: int) -> DaqBlock:
         """Build from kernel rows (internal layout).
 
         Examples
@@ -195,7 +204,8 @@ class DaqBlock:
         """
         out = []
         for i in range(self.t.size):
-            acc = tuple(float(a) for a in self.accel[i]) if self.accel_fresh[i] else None
+            acc = (float(self.accel[i][0]), float(self.accel[i][1]), float(self.accel[i][2])) \
+                if self.accel_fresh[i] else None
             out.append(DaqSample(seq=int(self.seq[i]), t=float(self.t[i]), slip_volts=float(self.volts[i]),
                                  accel_g=acc, flow_pulses=int(self.flow_pulses[i])))
         return out
@@ -280,7 +290,7 @@ class TactileSampler:
     ((4, 4), 27)
     """
 
-    def __init__(self, rig: "Rig", fs: float, finger: Finger, key: np.uint64, keep: bool) -> None:
+    def __init__(self, rig: Rig, fs: float, finger: Finger, key: np.uint64, keep: bool) -> None:
         self.fs = float(fs)
         self.finger = Finger(finger)
         self.gain = rig.tactile_gain(self.finger)
@@ -438,12 +448,15 @@ class SimHand:
     100.0
     """
 
-    def __init__(self, rig: "Rig", params: HandParams) -> None:
+    def __init__(self, rig: Rig, params: HandParams) -> None:
         self._rig = rig
         self.params = params
         self._pending: list[tuple[int, int, HandCommand, tuple[Finger, ...], float]] = []
         self._count = 0
         self._others: dict[Finger, float] = {f: 0.0 for f in Finger if f not in hw.TRIPOD}
+        #: When the closing a closed loop started for each finger ends (rig time, s; the grip
+        #: rule of :mod:`slipreflex.grip`: a later rise extends it rather than cutting it short).
+        self.closing_until: dict[Finger, float] = {}
         #: Servo targets and speed limits of thumb, index and middle (the rig hands them to the physics).
         self.targets = np.zeros(len(hw.TRIPOD))
         self.speeds = np.full(len(hw.TRIPOD), params.speed_units_s)
@@ -509,6 +522,32 @@ class SimHand:
             by_value.setdefault(float(v), []).append(f)
         for v, fingers in by_value.items():
             self.command(HandCommand.POSITION, fingers, v, at=at)
+
+    def close_fingers(self, fingers: Iterable[Finger], speed: float, at: float | None = None) -> None:
+        """CLOSE ``fingers`` at ``speed`` units/s (the PWM duty ``speed / speed_units_s * 297``).
+
+        Examples
+        --------
+        >>> from slipreflex.sim import Rig
+        >>> rig = Rig("TR"); rig.hand.close_fingers([Finger.INDEX], 625.0)
+        >>> rig.hand.queue()[0][0][2:]
+        (<HandCommand.CLOSE: 1>, (<Finger.INDEX: 1>,), 297.0)
+        """
+        if not (math.isfinite(speed) and speed > 0):
+            raise ParameterError(f"closing speed must be a number > 0 units/s, got {speed!r}")
+        pwm = min(float(hw.PWM_MAX), speed / self.params.speed_units_s * hw.PWM_MAX)
+        self.command(HandCommand.CLOSE, fingers, pwm, at=at)
+
+    def hold(self, fingers: Iterable[Finger], at: float | None = None) -> None:
+        """STOP ``fingers`` where they are.
+
+        Examples
+        --------
+        >>> from slipreflex.sim import Rig
+        >>> rig = Rig("TR"); rig.hand.hold([Finger.INDEX]); rig.hand.queue()[0][0][2]
+        <HandCommand.STOP: 0>
+        """
+        self.command(HandCommand.STOP, fingers, 0.0, at=at)
 
     def positions(self) -> dict[Finger, float]:
         """Measured positions (rounded to whole units, as the control unit reports them).
@@ -692,21 +731,16 @@ class Rig:
         self.track = Track.build([(surf, self.physics.track_length_m)], np.random.default_rng(tex_ss),
                                  lead=0.01, sensor=self.slip_sensor)
         self._P = self._params(flow_k, flow_phase)
-        self._S = np.zeros(K.S_SIZE)
-        self._S[K.S_STUCK] = 1.0
-        self._S[K.S_DIR] = 1.0
+        self._S = K.STATE.new()   # the layout's initial values; NaN in the slots set here
         for i in range(3):
-            self._S[K.S_C0 + i * K.SC_SIZE + K.SC_STUCK] = 1.0
-            self._S[K.S_C0 + i * K.SC_SIZE + K.SC_DIR] = 1.0
-            self._S[K.S_C0 + i * K.SC_SIZE + K.SC_PHI] = 1.0
-        self._S[K.S_SUPPORTED] = 1.0
+            self._S[K.S_C0 + i * K.SC_SIZE:K.S_C0 + (i + 1) * K.SC_SIZE] = K.CONTACT.new()
         self._S[K.S_MASS] = bottle.mass_kg
         self._S[K.S_SPD0:K.S_SPD0 + 3] = self.hand_params.speed_units_s
-        self._S[K.S_TFALL] = np.nan
         # the splash noise starts stationary on its 1 ms grid (stream keys[5])
         self._S[K.S_SPL0] = K.normal(self._keys[5], 0)
         P = self._P
         self._S[K.S_SPL1] = P[K.P_SPL_RHO] * self._S[K.S_SPL0] + P[K.P_SPL_SIG] * K.normal(self._keys[5], 1)
+        K.STATE.check(self._S)
         self._C = np.zeros(K.C_SIZE, dtype=np.int64)
         self._D = np.zeros((0, K.D_SIZE))
         self._W = np.zeros((0, K.W_SIZE))
@@ -731,7 +765,7 @@ class Rig:
     # ------------------------------------------------------------------ setup
     def _params(self, flow_k: float, flow_phase: float) -> np.ndarray:
         b, h, s, imu, ph = self.bottle, self.hand_params, self.slip_sensor, self.imu, self.physics
-        P = np.zeros(K.P_SIZE)
+        P = K.PARAMS.new()   # NaN until filled: checked complete below
         P[K.P_DT] = ph.dt
         P[K.P_G] = hw.GRAVITY
         P[K.P_MB] = b.mass_kg
@@ -756,7 +790,7 @@ class Rig:
         P[K.P_FLOW_K] = flow_k
         P[K.P_FLOW_PHASE] = flow_phase
         self._water_params(P)
-        return P
+        return K.PARAMS.check(P)
 
     def _water_params(self, P: np.ndarray) -> None:
         """The water's splash and slosh constants (:class:`WaterParams`) and the grasp's sideways stiffness."""
@@ -808,7 +842,7 @@ class Rig:
         return self._S[K.S_Q0:K.S_Q0 + 3].copy()
 
     @property
-    def samplers(self) -> tuple["TactileSampler", ...]:
+    def samplers(self) -> tuple[TactileSampler, ...]:
         """The tactile samplers now running.
 
         Examples
@@ -818,7 +852,7 @@ class Rig:
         """
         return tuple(self._samplers)
 
-    def detach_sampler(self, sampler: "TactileSampler") -> None:
+    def detach_sampler(self, sampler: TactileSampler) -> None:
         """Stop feeding ``sampler`` (what :meth:`TactileSampler.close` calls).
 
         Examples
@@ -932,7 +966,7 @@ class Rig:
                 return float(rows[-1, K.O_Q0 + hw.TRIPOD.index(Finger(finger))])
         return math.nan
 
-    def kernel_arrays(self) -> "KernelArrays":
+    def kernel_arrays(self) -> KernelArrays:
         """The live arrays of the physics and the hand's servo targets, for a compiled loop.
 
         A loop that advances them with :func:`slipreflex.sim.kernel.step_until`
@@ -950,7 +984,7 @@ class Rig:
                             tac_contact=self._tac_contact, targets=self.hand.targets, speeds=self.hand.speeds)
 
     def record(self, daq_rows: np.ndarray, events: np.ndarray, snapshots: np.ndarray,
-               built: tuple["TactileSampler", np.ndarray, np.ndarray] | None = None) -> None:
+               built: tuple[TactileSampler, np.ndarray, np.ndarray] | None = None) -> None:
         """Take what a compiled loop produced on :meth:`kernel_arrays`: DAQ rows (kept as
         history), physics events and tactile snapshots (turned into frames by each sampler,
         except ``built = (sampler, frames, filter state)``: the frames the loop built from
@@ -1211,16 +1245,16 @@ class Rig:
         if isinstance(what, Drop):
             zeta = -math.log(max(what.restitution, 1e-6)) / math.sqrt(math.pi**2 + math.log(max(what.restitution,
                                                                                                   1e-6))**2)
-            row = np.zeros(K.D_SIZE)
+            row = K.DROP.new()
             row[K.D_REL] = at
             row[K.D_M] = what.mass_kg
             row[K.D_H0] = self.bottle.height_m + what.height_m
             row[K.D_KC] = what.contact_stiffness_n_m
             row[K.D_CC] = 2.0 * zeta * math.sqrt(what.contact_stiffness_n_m * what.mass_kg)
-            self._D = np.vstack([self._D, row])
+            self._D = np.vstack([self._D, K.DROP.check(row)])
         elif isinstance(what, Pour):
             rate_l_s = what.rate_l_min / 60.0
-            row = np.zeros(K.W_SIZE)
+            row = K.POUR.new()
             row[K.W_START] = at
             row[K.W_RATE_L_S] = rate_l_s
             row[K.W_RATE_KG_S] = rate_l_s * 1e-3 * WATER_DENSITY
@@ -1228,7 +1262,7 @@ class Rig:
             row[K.W_TOTAL_KG] = what.volume_ml * 1e-6 * WATER_DENSITY
             row[K.W_DELAY] = math.sqrt(2.0 * what.fall_height_m / g)
             row[K.W_JET_N] = row[K.W_RATE_KG_S] * math.sqrt(2.0 * g * what.fall_height_m)
-            self._W = np.vstack([self._W, row])
+            self._W = np.vstack([self._W, K.POUR.check(row)])
         else:
             raise ParameterError(f"perturb: expected a Drop or a Pour, got {what!r}")
         self.perturbations.append((at, what))

@@ -21,8 +21,8 @@ Examples
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Sequence
 
 import numpy as np
 import scipy.fft
@@ -73,7 +73,7 @@ def texture(n: int, dx: float, exponent: float, min_wavelength: float, max_wavel
     coef = (rng.standard_normal(k.size) + 1j * rng.standard_normal(k.size)) * amp
     # scipy's FFT: the same numbers as numpy's here, about twice as fast on a track's awkward length
     # (26002 = 2 x 13001, a prime)
-    out = scipy.fft.irfft(coef, n)
+    out = np.asarray(scipy.fft.irfft(coef, n))
     sd = out.std()
     return out / sd if sd > 0 else out
 
@@ -156,7 +156,7 @@ class Track:
 
     @classmethod
     def build(cls, layout: Sequence[tuple[Surface, float]], rng: np.random.Generator, *,
-              lead: float = 0.0, sensor: SlipSensorParams | None = None, dx: float = TRACK_DX) -> "Track":
+              lead: float = 0.0, sensor: SlipSensorParams | None = None, dx: float = TRACK_DX) -> Track:
         """Lay surfaces end to end and sample what the sensor sees.
 
         Parameters

@@ -41,10 +41,11 @@ from __future__ import annotations
 
 import math
 import tomllib
+from collections.abc import Mapping
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any, Mapping
+from typing import Any
 
 from ..errors import ParameterError
 from .objects import BOTTLES, Bottle
@@ -195,7 +196,7 @@ UNCERTAIN: Mapping[str, UncertainConstant] = MappingProxyType({c.name: c for c i
        "hand.latency_s"),
     _c("finger_speed", "units/s", _H.speed_units_s, 415.0, 625.0, "uniform",
        "i-Limb digits close fully (0..500) in about 0.8 s (manufacturer; Belter et al. 2013 review); "
-       "up to 1.2 s reported", 
+       "up to 1.2 s reported",
        "hand.speed_units_s"),
     _c("servo_gain", "1/s", _H.servo_gain, 20.0, 80.0, "loguniform",
        "estimate: geared DC digit under position control settles small steps in 0.05-0.2 s",
@@ -311,7 +312,7 @@ class Plant:
         state.update(bottles=dict(self.bottles), values=dict(self.values))
         return (_unpickle_plant, (state,))
 
-    def calibrated(self, seeds: tuple[int, ...] | None = None) -> "Plant":
+    def calibrated(self, seeds: tuple[int, ...] | None = None) -> Plant:
         """This plant with every bottle's pad friction calibrated to :attr:`first_slip_ml`.
 
         See :func:`slipreflex.sim.calibration.calibrate_bottle` (open loop only).
@@ -427,7 +428,7 @@ def plant_from_values(values: Mapping[str, float] | None = None, *,
                 raise ParameterError(f"{name}: unknown target {target!r}")
     for b, fld, val, ratio_of in ratios:
         own = getattr(BOTTLES[b], fld) / getattr(BOTTLES[b], ratio_of)
-        base = bottle_set[b].get(ratio_of, getattr(BOTTLES[b], ratio_of))
+        base = bottle_set[b][ratio_of] if ratio_of in bottle_set[b] else getattr(BOTTLES[b], ratio_of)
         if base == getattr(BOTTLES[b], ratio_of) and round(own, 6) == val:
             continue    # the bottle's own ratio on its own base: keep its own field, bit for bit
         bottle_set[b][fld] = val * base

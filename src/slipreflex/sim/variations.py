@@ -72,7 +72,7 @@ class VariationSpread:
                 raise ParameterError(f"VariationSpread.{f} must be a finite number >= 0, got {v!r}")
 
     @classmethod
-    def none(cls) -> "VariationSpread":
+    def none(cls) -> VariationSpread:
         """No variation: every repeat is the same plant.
 
         Examples

@@ -15,8 +15,16 @@ Examples
 """
 
 from .design import DESIGNS, draw_design, unit_design, varying
-from .runner import (DEFAULT_PLANTS, DEFAULT_TRIALS, PlantOutcome, StudyConfig, StudyRun, read_parts,
-                     run_plant, run_study)
+from .runner import (
+                     DEFAULT_PLANTS,
+                     DEFAULT_TRIALS,
+                     PlantOutcome,
+                     StudyConfig,
+                     StudyRun,
+                     read_parts,
+                     run_plant,
+                     run_study,
+)
 
 __all__ = ["DESIGNS", "draw_design", "unit_design", "varying", "DEFAULT_PLANTS", "DEFAULT_TRIALS",
            "PlantOutcome", "StudyConfig", "StudyRun", "read_parts", "run_plant", "run_study"]

@@ -36,8 +36,17 @@ from typing import Any
 
 import numpy as np
 
-from ..analysis.claims import (CLAIMS, CLAIMS_CSV_COLUMNS, FAILING, FAILS_PLANT, HOLDS, NOT_DECIDABLE,
-                               UNRESOLVED, VERDICTS, proportion_interval)
+from ..analysis.claims import (
+    CLAIMS,
+    CLAIMS_CSV_COLUMNS,
+    FAILING,
+    FAILS_PLANT,
+    HOLDS,
+    NOT_DECIDABLE,
+    UNRESOLVED,
+    VERDICTS,
+    proportion_interval,
+)
 from .design import varying
 
 __all__ = ["wilson", "plant_table", "pooled_scan", "claim_fractions", "sensitivity", "top_constants", "write_outputs",
@@ -208,7 +217,7 @@ def sensitivity(plants: Sequence[Mapping[str, Any]], table: Mapping, *, design: 
             x = np.array([p[k] for p in testable], dtype=float)
             rho, pv = (float("nan"), float("nan"))
             if len(y) > 2 and y.std() > 0 and x.std() > 0:
-                res = spearmanr(x, y)
+                res: Any = spearmanr(x, y)   # a SignificanceResult (scipy's stubs do not say so)
                 rho, pv = float(res.statistic), float(res.pvalue)
             s = sob.get(k, (float("nan"),) * 4)
             rows.append({"claim": c.number, "constant": k, "n": len(testable), "spearman_rho": rho,

@@ -281,7 +281,8 @@ def _calibrated(plant: Any, table: Mapping) -> tuple[Any, dict[str, Any]]:
     from dataclasses import replace
     from types import MappingProxyType
 
-    from ..sim.calibration import CALIBRATION_SEEDS as DEFAULT_SEEDS, calibrate_bottle
+    from ..sim.calibration import CALIBRATION_SEEDS as DEFAULT_SEEDS
+    from ..sim.calibration import calibrate_bottle
 
     c = table["first_slip_ml"]
     kw = plant.rig_kwargs()
