@@ -32,6 +32,7 @@ def _jump(bottle, kw, seeds, mus):
     return v[k], v[k + 1]
 
 
+@pytest.mark.slow
 def test_a_target_inside_a_jump_of_the_first_slip_is_reported_or_met_at_the_nearest_edge():
     plant = plant_from_values(STAIRS)
     tr, kw = plant.bottles["TR"], plant.rig_kwargs()
@@ -53,6 +54,7 @@ def test_a_target_inside_a_jump_of_the_first_slip_is_reported_or_met_at_the_near
     assert first_slip_ml(c.bottle, rig_kwargs=kw, seeds=(0,)) < 0.5 * below
 
 
+@pytest.mark.slow
 def test_a_study_plant_whose_accelerometer_sees_the_cuff_slip_cannot_meet_the_paper_s_fact(tmp_path):
     values = {**nominal_values(), **STAIRS, "first_slip_ml": 200.0}
     grid = dict(trials=1, bottles=("TR",), methods=("dath",), experiments=("drop",), scan=False)

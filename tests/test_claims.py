@@ -65,6 +65,7 @@ def _replace(rows, pred, **kw):
     return [{**r, **kw} if pred(r) else r for r in rows]
 
 
+@pytest.mark.slow
 def test_on_the_paper_like_table_every_claim_holds_but_those_the_paper_itself_breaks():
     v = verdicts(paper_like(), ensemble())
     assert v == {**{n: C.HOLDS for n in range(1, 11)}, 8: C.FAILS_PAPER, 9: C.FAILS_PAPER}
@@ -92,6 +93,7 @@ def test_fails_definition_for_dath_s_one_sample_spike_spacing():
     assert res[2].verdict == C.FAILS_DEFINITION and "Eq. 4" in res[2].reason and res[2].value == 1.0
 
 
+@pytest.mark.slow
 def test_fails_plant_and_unresolved_follow_the_interval():
     rows = paper_like()
     flat = _replace(rows, lambda r: r["method"] == "nmsd" and r["experiment"] == "drop", total_ms=300.0)
@@ -197,6 +199,7 @@ def test_tables_print_every_claim():
     assert len(term.splitlines()) == 21
 
 
+@pytest.mark.slow
 def test_contradictions_of_the_paper():
     items = {c.topic: c for c in C.contradictions()}
     cap = items["drop slip-outs beside the first pour slip (bounds, with their assumptions)"]
@@ -210,6 +213,7 @@ def test_contradictions_of_the_paper():
     assert not C.contradictions(first_slip_ml=50.0, simulate=False)[0].inconsistent
 
 
+@pytest.mark.slow
 def test_report_terminal_and_claims_csv_of_a_run(tmp_path):
     from slipreflex.analysis.outputs import write_outputs
     from slipreflex.experiments import ReproduceConfig, run_reproduce
@@ -225,6 +229,7 @@ def test_report_terminal_and_claims_csv_of_a_run(tmp_path):
     assert [b["verdict"] for b in C.read_claims_csv(paths["claims"])] == [r.verdict for r in judged]
 
 
+@pytest.mark.slow
 def test_claims_command_writes_the_run_s_claims_csv(tmp_path, capsys):
     from slipreflex.analysis.outputs import write_outputs
     from slipreflex.cli import main

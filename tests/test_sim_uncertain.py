@@ -156,6 +156,7 @@ def test_a_reproduction_on_a_drawn_plant_runs_in_worker_processes_as_in_one():
     assert [repr(r) for r in one.rows] == [repr(r) for r in two.rows] and one.rows
 
 
+@pytest.mark.slow
 def test_the_nominal_plant_is_the_built_in_plant_bit_for_bit():
     from slipreflex.experiments import ReproduceConfig, run_reproduce
     from slipreflex.sim import BOTTLES

@@ -196,6 +196,7 @@ def test_outputs_and_figures(tmp_path):
     assert {"plant", "error", "hand_latency", "response_ms"} <= set(header)
 
 
+@pytest.mark.slow
 def test_every_plant_scans_its_own_texture_seeds_and_the_study_pools_them(tmp_path):
     from slipreflex.study.analyse import pooled_scan
     from slipreflex.study.runner import run_plant
