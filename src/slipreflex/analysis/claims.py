@@ -1190,7 +1190,7 @@ def _identical_totals() -> Contradiction:
     same, parts = 0, []
     for b in BOTTLE_ORDER:
         d, f = PAPER[("pour", "total_ms", b, DATH)], PAPER[("pour", "total_ms", b, FIXED)]
-        hits = [math.floor(fv) == dv for dv, fv in ((d.mean, f.mean), (d.sd, f.sd))]
+        hits = [fv is not None and math.floor(fv) == dv for dv, fv in ((d.mean, f.mean), (d.sd, f.sd))]
         same += sum(hits)
         parts.append(f"{b} DATH {d.text()} vs fixed {f.text()}")
     return Contradiction(

@@ -222,8 +222,9 @@ def first_slip(bottle: Bottle, *, rig_kwargs: dict[str, Any] | None = None, seed
         while rig.t < stop and rig.t > last:      # (the rig stops on its own time grid, at or before `stop`)
             last = rig.t
             rig.advance_block(min(stop, rig.t + 0.5))
-            if rig.fallen:
-                stop = min(stop, float(rig.fall_time) + _AFTER_FALL_S)
+            fell = rig.fall_time
+            if fell is not None:
+                stop = min(stop, float(fell) + _AFTER_FALL_S)
         if rig.onsets.size == n0:
             return FirstSlip(math.nan, math.nan, math.nan, ((math.nan, math.nan),))
         t_on = float(rig.onsets[n0])
