@@ -82,7 +82,7 @@ def test_fails_definition_when_dath_and_fixed_answer_at_the_same_sample_on_paire
             if r["experiment"] == "drop" and r["method"] == "fixed" else r for r in rows]
     res = {r.number: r for r in C.judge(rows)}
     assert res[3].verdict == C.FAILS_DEFINITION and "same encoder until the first spike" in res[3].reason
-    assert "100 of 100 paired trials" in res[3].reason
+    assert "300 of 300 paired drop trials" in res[3].reason
     # the same numbers on unpaired trials (other seeds) are only a tie: noise, not a definition
     moved = [{**r, "seed": r["seed"] + 1000} if r["method"] == "fixed" else r for r in rows]
     assert verdicts(moved)[3] != C.FAILS_DEFINITION

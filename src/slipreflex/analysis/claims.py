@@ -659,11 +659,25 @@ def _faster(ci: ClaimInput, experiment: str, bottle: str, fast: str, slow: str, 
     return _part(lo, hi, (-INF, 0.0), d, crit, numbers, physics)
 
 
+def _same_encoder(ci: ClaimInput, experiment: str) -> Part | None:
+    """A fails-definition part when DATH and fixed answer at the same sample on every paired trial (2 or more)."""
+    pairs = [p for b in BOTTLE_ORDER for p in zip(*ci.pairs(experiment, b, DATH, FIXED, first_only=True))]
+    if len(pairs) < 2 or any(x != y for x, y in pairs):
+        return None
+    return Part(FAILS_DEFINITION, (
+        f"DATH and the fixed threshold respond at the same sample on {len(pairs)} of {len(pairs)} paired "
+        f"{experiment} trials: they are the same encoder until the first spike (Eq. 1-4: DATH changes the "
+        "threshold only after one), so on the same input DATH cannot be faster"), 0.0,
+        "DATH minus fixed mean response < 0 ms", 0.0, 0.0)
+
+
 def _drop_faster(ci: ClaimInput) -> list[Part]:
     bad = [f"drop {b} DATH {_paper_mean('drop', b, DATH):g} vs fixed {_paper_mean('drop', b, FIXED):g}"
            for b in BOTTLE_ORDER if not _paper_mean("drop", b, DATH) < _paper_mean("drop", b, FIXED)]
     if gone := _missing(ci, "drop", (DATH, FIXED)):
         return _paper_part(bad, "DATH not faster") + gone
+    if same := _same_encoder(ci, "drop"):
+        return _paper_part(bad, "DATH not faster") + [same]
     out = [_faster(ci, "drop", b, DATH, FIXED, PHYSICS[3]) for b in BOTTLE_ORDER]
     return _paper_part(bad, "DATH not faster") + [
         Part(p.verdict, p.reason, p.value, p.criterion + " on every bottle", p.low, p.high) for p in out]
@@ -883,8 +897,10 @@ def _pour_faster(ci: ClaimInput) -> list[Part]:
            if _paper_mean("pour", b, f) >= _paper_mean("pour", b, s)]
     if gone := _missing(ci, "pour", fast + slow):
         return _paper_part(bad, "not faster") + gone
-    parts = [_faster(ci, "pour", b, f, s, PHYSICS[7]) for b in BOTTLE_ORDER for f in fast for s in slow]
-    return _paper_part(bad, "not faster") + parts
+    same = _same_encoder(ci, "pour")
+    parts = [_faster(ci, "pour", b, f, s, PHYSICS[7]) for b in BOTTLE_ORDER for f in fast for s in slow
+             if not (same and (f, s) == (DATH, FIXED))]
+    return _paper_part(bad, "not faster") + ([same] if same else []) + parts
 
 
 def _under_85(ci: ClaimInput) -> list[Part]:

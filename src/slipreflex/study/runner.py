@@ -291,8 +291,11 @@ def _calibrated(plant: Any, table: Mapping) -> tuple[Any, dict[str, Any]]:
         try:
             cals[name] = calibrate_bottle(bottle, plant.first_slip_ml, rig_kwargs=kw, seeds=CALIBRATION_SEEDS)
         except ParameterError:
-            cals[name] = calibrate_bottle(bottle, plant.first_slip_ml, rig_kwargs=kw, seeds=DEFAULT_SEEDS,
-                                          band_ml=(c.low, c.high))
+            try:
+                cals[name] = calibrate_bottle(bottle, plant.first_slip_ml, rig_kwargs=kw, seeds=DEFAULT_SEEDS,
+                                              band_ml=(c.low, c.high))
+            except ParameterError as err:   # no friction meets the paper's observed fact: counted apart
+                return plant, {"calibration_note": "", "rejected": f"{err}"}
     plant = replace(plant, bottles=MappingProxyType({n: k.bottle for n, k in cals.items()}))
     extra: dict[str, Any] = {f"calibrated_mu_s_{n}": float(k.mu_s) for n, k in cals.items()}
     extra.update({f"calibrated_first_slip_ml_{n}": float(k.first_slip_ml) for n, k in cals.items()})
