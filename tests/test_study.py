@@ -223,3 +223,9 @@ def test_a_plant_whose_observed_first_slip_leaves_the_band_is_counted_apart(monk
     assert out.error == "" and out.trials == 0 and out.claims == [] and "TX 260 ml" in out.calibration["rejected"]
     rec = plant_table({0: ({"values": out.values, "error": "", "claims": [], "calibration": out.calibration}, [])})
     assert claim_fractions(rec)[0]["rejected"] == 1 and claim_fractions(rec)[0]["plants"] == 0
+
+
+def test_a_claim_most_plants_cannot_decide_is_unresolved_in_the_study():
+    plants = [{"error": "", "claim_6": "unresolved"} for _ in range(30)] + [{"error": "", "claim_6": "fails-plant"}]
+    r = claim_fractions(plants)[5]
+    assert r["verdict"] == "unresolved" and "30 of 31 plants unresolved" in r["reason"]

@@ -125,6 +125,9 @@ def _study_verdict(claim: Any, verdicts: list[str], reasons: list[str]) -> tuple
         return top, f"{share}: {why}"
     f, lo, hi = proportion_interval(k, n)
     text = f"holds on {k} of {n} plants ({100 * f:.0f} %, {100 * lo:.0f}-{100 * hi:.0f} %)"
+    if top == UNRESOLVED:   # most plants' own trials could not decide it: the study cannot either
+        return UNRESOLVED, (f"{share} unresolved: their trials' intervals straddle the criterion (one trial per "
+                            f"cell gives none); {text}; more --trials decide it")
     if lo > 0.5:
         return HOLDS, text
     if hi < 0.5:
