@@ -12,7 +12,7 @@ a marker in README.md or docs/*.md has no step, so a physics change updates ever
 docs quote in one commit. Steps:
 
 1. ``slipreflex reproduce`` (the default run) into a temporary directory;
-2. ``scripts/readme_results.py SUMMARY --write``: README's results table;
+2. ``scripts/readme_results.py SUMMARY --write``: README's results and claims tables;
 3. ``scripts/splice_report.py REPORT``: the run's report in docs/reproduce.md;
 4. ``scripts/benchmark_table.py --write``: the real-data benchmark tables of README.md and
    docs/benchmark.md.
@@ -31,7 +31,7 @@ SCRIPTS = ROOT / "scripts"
 #: (step name, markers it writes, command; "{out}" is the reproduction's directory).
 STEPS: list[tuple[str, tuple[str, ...], list[str]]] = [
     ("reproduce", (), [sys.executable, "-m", "slipreflex", "reproduce", "--no-progress", "--out", "{out}"]),
-    ("README results table", ("results table",),
+    ("README results and claims tables", ("results table", "claims table"),
      [sys.executable, str(SCRIPTS / "readme_results.py"), "{out}/summary.csv", "--write"]),
     ("docs/reproduce.md report", ("report.md",),
      [sys.executable, str(SCRIPTS / "splice_report.py"), "{out}/report.md"]),

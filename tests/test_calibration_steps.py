@@ -64,3 +64,9 @@ def test_a_study_plant_whose_accelerometer_sees_the_cuff_slip_cannot_meet_the_pa
     plants = plant_table({0: ({"values": out.values, "error": out.error, "claims": [],
                                "calibration": out.calibration}, out.rows)})
     assert claim_fractions(plants)[0]["plants"] == 0
+
+
+def test_the_stairs_plant_is_a_plausible_plant():
+    from slipreflex.sim.uncertain import UNCERTAIN
+
+    assert all(UNCERTAIN[k].low <= v <= UNCERTAIN[k].high for k, v in STAIRS.items())

@@ -66,7 +66,8 @@ def test_first_slip_target_recalibrates_the_pads():
     c = p.calibrated(seeds=(0,))
     from slipreflex.sim.calibration import first_slip_ml
 
-    assert first_slip_ml(c.bottles["DK"], rig_kwargs=c.rig_kwargs(), seeds=(0,)) == pytest.approx(230.0, abs=1.0)
+    # the observed first slip moves in flow-sensor pulses (2.2 ml): within the calibration's 2 %
+    assert first_slip_ml(c.bottles["DK"], rig_kwargs=c.rig_kwargs(), seeds=(0,)) == pytest.approx(230.0, abs=4.6)
 
 
 def test_plant_builds_rigs_with_its_parameters():
@@ -167,7 +168,7 @@ def test_the_nominal_plant_is_the_built_in_plant_bit_for_bit():
     kw = dict(trials=1, bottles=("TX",), methods=("dath",), experiments=("drop",))
     a = run_reproduce(ReproduceConfig(**kw), jobs=1, progress=False, plots=False).rows
     b = run_reproduce(ReproduceConfig(**kw, plant=p), jobs=1, progress=False, plots=False).rows
-    assert [dict(r) for r in a] == [dict(r) for r in b]
+    assert [repr(dict(r)) for r in a] == [repr(dict(r)) for r in b]        # NaN-aware: same bits
 
 
 def test_the_tape_s_pad_friction_is_drawn_apart_from_the_smooth_bottles():

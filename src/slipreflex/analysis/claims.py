@@ -270,7 +270,7 @@ def ratio_interval(x: Iterable[Any], y: Iterable[Any]) -> tuple[float, float, fl
     --------
     >>> r, lo, hi, n = ratio_interval([600, 640, 700, 660], [300, 310, 290, 330])
     >>> round(r, 2), lo < r < hi
-    (2.12, True)
+    (2.11, True)
     """
     a, b = _clean(x), _clean(y)
     if not a.size or not b.size or not b.mean() > 0:
@@ -1136,7 +1136,7 @@ def claims_terminal(results: Sequence[ClaimResult]) -> str:
     Examples
     --------
     >>> print(claims_terminal(judge([])).splitlines()[0])
-    paper's claims: 10 not-decidable
+    paper's claims: 2 fails-paper, 8 not-decidable
     """
     lines = [f"paper's claims: {_counts(results)}"]
     for r in results:

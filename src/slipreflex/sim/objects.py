@@ -194,7 +194,7 @@ def resolve_surface(surface: Surface | str, extra: Mapping[str, Surface] | None 
     Examples
     --------
     >>> resolve_surface("white").reflectance
-    0.93
+    0.9332
     """
     if isinstance(surface, Surface):
         return surface

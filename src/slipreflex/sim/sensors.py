@@ -113,7 +113,7 @@ def _spot_blur(x: np.ndarray, sigma: float, dx: float) -> np.ndarray:
     --------
     >>> import numpy as np
     >>> y = _spot_blur(np.r_[np.zeros(400), np.ones(400)], 1e-4, 5e-6)
-    >>> round(float(y[400] + y[399]), 6), float(y[0]), float(y[-1])
+    >>> round(float(y[400] + y[399]), 6), round(float(y[0]), 12), round(float(y[-1]), 12)
     (1.0, 0.0, 1.0)
     """
     if sigma <= 0:
