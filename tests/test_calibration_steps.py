@@ -66,7 +66,7 @@ def test_a_study_plant_whose_accelerometer_sees_the_cuff_slip_cannot_meet_the_pa
     assert claim_fractions(plants)[0]["plants"] == 0
 
 
-def test_the_stairs_plant_is_a_plausible_plant():
+def test_the_stairs_plant_sets_uncertain_constants_only():
     from slipreflex.sim.uncertain import UNCERTAIN
 
-    assert all(UNCERTAIN[k].low <= v <= UNCERTAIN[k].high for k, v in STAIRS.items())
+    assert set(STAIRS) <= set(UNCERTAIN) and plant_from_values(STAIRS).bottles["TR"].cuff_mu_s == 0.35
