@@ -35,10 +35,12 @@ import numpy as np
 
 from .. import hardware as hw
 from ..errors import ParameterError
+from ..methods import EntryPoint
 from .contacts import static_capacity
 from .objects import PAPER_DROP, PAPER_POUR, WATER_DENSITY, Bottle, Drop, Pour
 
-__all__ = ["PAPER_FIRST_SLIP_ML", "CALIBRATION_SEEDS", "LANDING_S", "FirstSlip", "first_slip", "first_slip_ml",
+__all__ = ["PAPER_FIRST_SLIP_ML", "CALIBRATION_SEEDS", "LANDING_S", "OBSERVED_ONSET", "FirstSlip", "first_slip",
+           "first_slip_ml",
            "calibrate_bottle", "Calibration",
            "drop_falls", "drop_fall_capacity", "GraspFailed", "check_grasp", "plant_lines"]
 
@@ -158,26 +160,17 @@ class FirstSlip:
     per_seed: tuple = ()
 
 
+#: The paper's accelerometer-onset recipe for the first slip of a pour recording, named by entry point:
+#: it sits above the simulator (``slipreflex.analysis``), which must not be imported from here.
+OBSERVED_ONSET = EntryPoint("slipreflex.analysis.events:first_pour_slip")
+
+
 def _observed_onset(rig, t_rec: float, t0: float, pour: Pour) -> tuple[float, float]:
     """(onset time, flow-sensor ml at it) of the first slip the accelerometer recipe finds (NaN, NaN if none)."""
-    from ..analysis.events import segment_events
-    from ..analysis.onset import OnsetParams, accel_envelope, rest_threshold_of, select_axis
-
     h = rig.daq_history(since=t_rec)
-    t, acc = h.t, h.accel
     lo = t0 + math.sqrt(2.0 * pour.fall_height_m / hw.GRAVITY) + LANDING_S
-    hi = float(t[-1])
-    if t.size < 8 or hi <= lo:
-        return math.nan, math.nan
-    p = OnsetParams()
-    axis = select_axis(t, acc, (lo, hi), baseline_s=p.baseline_s)
-    env = accel_envelope(t, acc[:, axis], p)
-    found = segment_events(t, env, rest_threshold_of(t, env, p), (lo, hi), params=p)
-    if not found:
-        return math.nan, math.nan
-    on = found[0].onset
     ml = h.flow_pulses / hw.FLOW_PULSES_PER_LITRE * 1000.0
-    return on, float(np.interp(on, t, ml))
+    return OBSERVED_ONSET(h.t, h.accel, ml, (lo, float(h.t[-1]) if h.t.size else lo))
 
 
 def first_slip(bottle: Bottle, *, rig_kwargs: dict[str, Any] | None = None, seeds=CALIBRATION_SEEDS,
