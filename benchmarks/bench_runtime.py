@@ -12,6 +12,11 @@ Usage::
     python benchmarks/bench_runtime.py              # 60 s
     python benchmarks/bench_runtime.py --duration 10 --no-record
     python benchmarks/bench_runtime.py --hogs 2 --realtime   # two CPU hogs; loop and rig SCHED_FIFO
+    python benchmarks/bench_runtime.py --duration 30 --live  # with the Foxglove live view and a client
+
+With ``--live`` the loop publishes every message on a Foxglove WebSocket server
+(``run --live``) and a client in another process subscribes to every channel and
+reads everything, as Foxglove would.
 
 Both latencies are printed: from reading the sample's bytes (the loop's work)
 and from the frame's own arrival as its board time places it (what a backlog
@@ -53,6 +58,36 @@ def start_rig(link_dir: str, schedule: str, seed: int,
     return proc, info
 
 
+def live_client(url: str, seconds: float) -> int:
+    """A Foxglove WebSocket client that subscribes to every channel and reads until closed."""
+    from websockets.exceptions import ConnectionClosed
+    from websockets.sync.client import connect
+
+    from slipreflex.live import WS_SUBPROTOCOLS
+
+    n, channels = 0, {}
+    with connect(url, subprotocols=list(WS_SUBPROTOCOLS)) as ws:
+        deadline = time.monotonic() + seconds
+        while time.monotonic() < deadline:
+            try:
+                msg = ws.recv(timeout=1.0)
+            except TimeoutError:
+                continue
+            except ConnectionClosed:
+                break
+            if isinstance(msg, str):
+                m = json.loads(msg)
+                if m["op"] == "advertise":
+                    new = [c["id"] for c in m["channels"] if c["id"] not in channels]
+                    channels.update({c["id"]: c["topic"] for c in m["channels"]})
+                    ws.send(json.dumps({"op": "subscribe", "subscriptions": [
+                        {"id": cid, "channelId": cid} for cid in new]}))
+            else:
+                n += 1
+    print(f"live client: {n} messages on {len(channels)} channels", flush=True)
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the benchmark; print the numbers."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -63,14 +98,19 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--hogs", type=int, default=0,
                     help="start this many CPU hogs (busy processes at normal priority) meanwhile")
+    ap.add_argument("--live", action="store_true",
+                    help="publish on a Foxglove live view with a subscribed client (as 'run --live')")
+    ap.add_argument("--client", default=None, help=argparse.SUPPRESS)  # the live client's own process
     ap.add_argument("--schedule", default=None,
                     help="perturbations for the rig (default: a drop every 10 s, first at 5 s)")
     args = ap.parse_args(argv)
+    if args.client:
+        return live_client(args.client, args.duration + 30)
 
     from slipreflex.chain import SlipReflex
+    from slipreflex.commands.run import parse_p0
     from slipreflex.devices.daq import SerialDaq
     from slipreflex.devices.ilimb import ILimb
-    from slipreflex.commands.run import parse_p0
     from slipreflex.hardware import SLIP_FINGER
     from slipreflex.recording import METADATA_NAME, Recorder
     from slipreflex.runtime import realtime_priority, run_loop
@@ -89,8 +129,21 @@ def main(argv: list[str] | None = None) -> int:
                 rec = Recorder(os.path.join(tmp, "bench.mcap"), metadata={METADATA_NAME: {
                     "reflex_params": json.dumps(reflex.params.to_dict())}})
             note = realtime_priority() if args.realtime else "normal priority"
+            taps, client = [], None
+            if args.live:
+                from slipreflex.live import RUN_TOPICS, LiveView
+
+                taps = [LiveView(("127.0.0.1", 0), RUN_TOPICS).start()]
+                client = subprocess.Popen([sys.executable, __file__, "--client", taps[0].url,
+                                           "--duration", str(args.duration)])
+                time.sleep(2.0)  # the client connects and subscribes before the loop starts
             with SerialDaq(info["daq"]) as daq, ILimb(info["hand"]) as hand:
-                res = run_loop(daq, hand, reflex, p0=p0, recorder=rec, duration=args.duration)
+                res = run_loop(daq, hand, reflex, p0=p0, recorder=rec, duration=args.duration, taps=taps)
+            for tap in taps:
+                tap.close()
+                print(f"live view: {tap.published} messages published, {tap.dropped} dropped", flush=True)
+            if client is not None:
+                client.wait(timeout=30)
             if rec is not None:
                 rec.close()
                 size = os.path.getsize(rec.path)
@@ -114,7 +167,8 @@ def main(argv: list[str] | None = None) -> int:
     print(f"machine: {platform.machine()}, {os.cpu_count()} cpus, python {platform.python_version()}, "
           f"load average {os.getloadavg()[0]:.2f}")
     print(f"loop over virtual devices for {res.duration:.1f} s "
-          f"({'recording to MCAP' if not args.no_record else 'no recording'}), p0 {info['p0']}, "
+          f"({'recording to MCAP' if not args.no_record else 'no recording'}"
+          f"{', live view with a client' if args.live else ''}), p0 {info['p0']}, "
           f"rig schedule {schedule or 'none'}; {note}; {args.hogs} CPU hogs")
     print(res.summary())
     if not args.no_record:

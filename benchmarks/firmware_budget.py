@@ -8,12 +8,13 @@ and faults all the time), flow sensor and MPU6050 (the DAQ once more with no IMU
 the bus), checks the capture (firmware/test/check_capture.py, and for the reflex
 builds firmware/test/check_board.py against the Python twin) and prints the CPU cycles
 the firmware spends awake per 3 ms sample period, as a share of the 48,000 cycles
-available at 16 MHz (issue 13's budget: DAQ alone <= 5 %, DAQ + chain <= 15 %). Awake
+available at 16 MHz (the budget: DAQ alone <= 5 %, DAQ + chain <= 15 %). Awake
 means not in the SLEEP instruction: every interrupt handler, the framing, the CRC and
 the chain. For the DAQ and the DAQ + chain it also prints where those cycles go, per
 function (the harness attributes every instruction's cycles to its address; avr-nm
 maps addresses to functions), and for the ATmega2560 the time from the conversion of
-the sample that completes a window to the first byte of the hand packet on UART1.
+the sample at which a hand packet (CLOSE or STOP) is due to its first byte on UART1,
+and how much longer than g / 625 s each closing (CLOSE to STOP) lasted.
 Simulated time, so the numbers do not depend on the host machine.
 
 Run: python benchmarks/firmware_budget.py [--seconds S]
@@ -54,6 +55,11 @@ VECTORS = {
                    "__vector_39": "ISR TWI (MPU6050 bus)", "__vector_37": "ISR USART1_UDRE (hand)"},
 }
 
+#: Stands for the file of slip-like counts in a run's harness options.
+SLIP_FILE = "{slip}"
+#: Seed and length of that input.
+SLIP_SEED, SLIP_SAMPLES = 4, 6000
+
 #: (label, ELF, MCU, harness options, profile?, reflex on board?)
 RUNS = [
     ("DAQ alone, MPU6050 on the bus", "daq.elf", "atmega328p", [], True, False),
@@ -61,6 +67,10 @@ RUNS = [
     ("DAQ + reflex chain (ATmega328P)", "daq-reflex.elf", "atmega328p", [], True, True),
     ("standalone reflex + hand (ATmega2560)", "hand2560.elf", "atmega2560", ["--mcu", "atmega2560"],
      False, True),
+    # The same on slip-like counts (board_sim.slip_like(4, 6000): slips, a 120 ms unplugged
+    # sensor, a 3.3 s stuck converter): closings with no fault in them, to time.
+    ("standalone reflex + hand, slip-like input", "hand2560.elf", "atmega2560",
+     ["--mcu", "atmega2560", "--adc", SLIP_FILE], False, True),
 ]
 
 
@@ -96,12 +106,16 @@ def main() -> int:
             return 1
         for line in re.findall(r"^\S+ size: .*$", proc.stdout, flags=re.M):
             print(line)
+        slip = Path(tmp) / "slip.txt"
+        slip.write_text("\n".join(map(str, _load("board_sim").slip_like(SLIP_SEED, SLIP_SAMPLES))))
         status = 0
-        for label, elf, mcu, extra, profile, reflex in RUNS:
-            out = Path(tmp) / elf.replace(".", "_") / "_".join(extra or ["imu"])
+        for i, (label, elf, mcu, extra, profile, reflex) in enumerate(RUNS):
+            out = Path(tmp) / f"run{i}"
             out.mkdir(parents=True)
+            seconds = args.seconds if SLIP_FILE not in extra else SLIP_SAMPLES * 0.003 + 0.01
+            extra = [str(slip) if e == SLIP_FILE else e for e in extra]
             run = subprocess.run([str(build / "harness"), str(build / elf), str(out),
-                                  str(args.seconds), *(["--profile"] if profile else []), *extra],
+                                  str(seconds), *(["--profile"] if profile else []), *extra],
                                  capture_output=True, text=True)
             if run.returncode != 0:
                 print(run.stdout + run.stderr, file=sys.stderr)
@@ -111,7 +125,7 @@ def main() -> int:
             brep = check_board.check(out) if reflex else None
             if brep is not None:
                 errors += brep.errors
-            print(f"\n[{label}] {elf}, {args.seconds:g} s simulated, {rep.frames} frames, "
+            print(f"\n[{label}] {elf}, {seconds:g} s simulated, {rep.frames} frames, "
                   f"checks {'passed' if not errors else 'FAILED'}")
             print(f"  CPU per 3 ms period: mean {rep.busy_mean_cycles:.0f} cycles = "
                   f"{100 * rep.busy_share:.2f} % of {check.PERIOD_CYCLES:.0f}; "
@@ -124,13 +138,19 @@ def main() -> int:
                       f"readings, every frame equal to the Python twin's")
                 if brep.latencies:
                     lat = brep.latencies
-                    print(f"  hand packets: {len(lat)}; conversion start of the window-completing "
-                          f"sample -> first byte on UART1: max {max(lat)} cycles "
-                          f"({max(lat) / 16e3:.3f} ms), mean {sum(lat) / len(lat):.0f} cycles")
+                    n_close = sum(c == "CLOSE" for _, c in brep.packets)
+                    print(f"  hand packets: {len(lat)} ({n_close} CLOSE, {len(lat) - n_close} STOP, "
+                          f"none OPEN or POSITION); conversion start of their sample -> first byte "
+                          f"on UART1: max {max(lat)} cycles ({max(lat) / 16e3:.3f} ms), mean "
+                          f"{sum(lat) / len(lat):.0f} cycles")
+                if brep.closings:
+                    over = [(got - exact) / 16e3 for _, got, exact in brep.closings]
+                    print(f"  closings without a fault: {len(over)}; CLOSE -> STOP minus g / 625 s: "
+                          f"{min(over):+.3f} .. {max(over):+.3f} ms (rounded up to whole 3 ms samples)")
             for e in errors:
                 print(f"  ERROR: {e}")
             if profile:
-                periods = args.seconds / 0.003
+                periods = seconds / 0.003
                 print("  where the cycles go (per period):")
                 for name, cycles in _profile(build / elf, out / "profile.txt", periods, mcu):
                     if cycles >= 1:

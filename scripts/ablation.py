@@ -54,7 +54,7 @@ def main() -> None:
         fmt = lambda d, k: f"{float(d.get(k, 'nan')):.0f}"           # noqa: E731
         print(f"{' '.join(key):24s} {fmt(x, 'response_mean_ms'):>11s} {fmt(y, 'response_mean_ms'):>12s} "
               f"{fmt(x, 'total_mean_ms'):>10s} {fmt(y, 'total_mean_ms'):>11s} "
-              f"{100 * float(x['success_rate']):5.0f}% {100 * float(y.get('success_rate', 'nan')):5.0f}%")
+              f"{100 * float(x['event_success_rate']):5.0f}% {100 * float(y.get('event_success_rate', 'nan')):5.0f}%")
 
 
 if __name__ == "__main__":

@@ -104,10 +104,11 @@ def why(trials) -> str:
     from slipreflex.baselines import nmsd_statistic
     from slipreflex.benchmark import BenchmarkConfig, run_benchmark, run_trial
     from slipreflex.benchmark.report import summarize
-    from slipreflex.methods import AUTHORS_GUI, _build_preset
+    from slipreflex.chain.builders import build_preset
+    from slipreflex.methods import AUTHORS_GUI
 
     def build(p0, context, **params):
-        return _build_preset(AUTHORS_GUI, "authors-gui-no-reset", p0, context, **{**params, "acc_reset": None})
+        return build_preset(AUTHORS_GUI, "authors-gui-no-reset", {}, p0, context, **{**params, "acc_reset": None})
 
     spec = dataclasses.replace(methods.get(AUTHORS_GUI), name="authors-gui-no-reset",
                                label="authors' GUI without its reset", build=build)

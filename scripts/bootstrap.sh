@@ -63,7 +63,10 @@ fi
 VPY=.venv/bin/python
 # Every extra pyproject.toml declares (test, study, dev, ...), read from it so a new extra needs no edit here.
 extras=$("$VPY" -c 'import tomllib; t = tomllib.load(open("pyproject.toml", "rb")); print(",".join(t.get("project", {}).get("optional-dependencies", {})))')
-"$VPY" -m pip install -q --disable-pip-version-check -e ".${extras:+[$extras]}"
+# pip's own lines (Collecting / Downloading / Installing ...) show the progress: on a fresh
+# machine this step downloads the dependencies and takes a minute or two; it is never silent.
+echo "bootstrap.sh: installing slipreflex and its dependencies into .venv with pip (a minute or two on a fresh machine)"
+"$VPY" -m pip install --disable-pip-version-check --progress-bar on -e ".${extras:+[$extras]}"
 echo "bootstrap.sh: slipreflex is installed in .venv; to use it later: source .venv/bin/activate"
 export PATH="$PWD/.venv/bin:$PATH"
 

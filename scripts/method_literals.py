@@ -1,4 +1,4 @@
-"""Count the method names written as string literals in the package (issue 12, item 1).
+"""Count the method names written as string literals in the package.
 
 A literal counts when the whole string is exactly the name of a method the package registers
 (``slipreflex.methods.names()`` at import), outside docstrings. The names' one home,

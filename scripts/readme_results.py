@@ -46,9 +46,9 @@ def _ms(value: str) -> str:
 
 
 def _pooled_success(summary: list[dict], experiment: str, method: str) -> float:
-    rows = [r for r in summary if r["experiment"] == experiment and r["method"] == method and r["success_n"]]
-    n = sum(int(r["success_n"]) for r in rows)
-    return sum(float(r["success_rate"]) * int(r["success_n"]) for r in rows) / n if n else float("nan")
+    rows = [r for r in summary if r["experiment"] == experiment and r["method"] == method and r["event_success_n"]]
+    n = sum(int(r["event_success_n"]) for r in rows)
+    return sum(float(r["event_success_rate"]) * int(r["event_success_n"]) for r in rows) / n if n else float("nan")
 
 
 def table(summary: list[dict], first_slip: dict[str, float]) -> str:
@@ -72,7 +72,7 @@ def table(summary: list[dict], first_slip: dict[str, float]) -> str:
         rates = " / ".join(f"{100 * _pooled_success(summary, e, m):.0f}" for m in present)
         said = ", ".join(f"{methods.label(m)} {PAPER_SUCCESS[(e, 'all', m)]}" for m in present
                          if (e, "all", m) in PAPER_SUCCESS)
-        lines.append(f"| {e} success, {' / '.join(methods.label(m) for m in present)} (all bottles) | "
+        lines.append(f"| {e} success per slip event, {' / '.join(methods.label(m) for m in present)} (all bottles) | "
                      f"{rates} % | {said or '-'} |")
     slip = " / ".join(f"{first_slip[b]:.0f}" for b in bottles)
     lines.append(f"| open-loop first pour slip, ml ({names}; calibrated, not a result) | {slip} | ~200 |")

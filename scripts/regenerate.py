@@ -4,14 +4,15 @@ Usage::
 
     python scripts/regenerate.py              # run every step (a default reproduction first)
     python scripts/regenerate.py --dry-run    # list the steps and the markers each one writes
-    python scripts/regenerate.py --jobs 2     # worker processes of the reproduction
+    python scripts/regenerate.py --jobs 4     # worker processes of the reproduction (default 2)
 
 Each table sits between two markers, ``<!-- NAME begins -->`` and ``<!-- NAME ends -->``, and
 each marker pair is written by exactly one step below; ``tests/test_regenerate.py`` fails when
 a marker in README.md or docs/*.md has no step, so a physics change updates every table the
 docs quote in one commit. Steps:
 
-1. ``slipreflex reproduce`` (the default run) into a temporary directory;
+1. ``slipreflex reproduce --jobs 2 --out /tmp/repro --no-progress`` (the default run; the
+   command docs/reproduce.md records, so a rerun changes only what the code changes);
 2. ``scripts/readme_results.py SUMMARY --write``: README's results and claims tables;
 3. ``scripts/splice_report.py REPORT``: the run's report in docs/reproduce.md;
 4. ``scripts/benchmark_table.py --write``: the real-data benchmark tables of README.md and
@@ -30,7 +31,8 @@ SCRIPTS = ROOT / "scripts"
 
 #: (step name, markers it writes, command; "{out}" is the reproduction's directory).
 STEPS: list[tuple[str, tuple[str, ...], list[str]]] = [
-    ("reproduce", (), [sys.executable, "-m", "slipreflex", "reproduce", "--no-progress", "--out", "{out}"]),
+    ("reproduce", (), [sys.executable, "-m", "slipreflex", "reproduce", "--jobs", "{jobs}", "--out", "{out}",
+                       "--no-progress"]),
     ("README results and claims tables", ("results table", "claims table"),
      [sys.executable, str(SCRIPTS / "readme_results.py"), "{out}/summary.csv", "--write"]),
     ("docs/reproduce.md report", ("report.md",),
@@ -38,26 +40,25 @@ STEPS: list[tuple[str, tuple[str, ...], list[str]]] = [
     ("benchmark tables", ("benchmark table", "benchmark summary", "vs-sim table", "chain rule",
                           "k sensitivity", "why"),
      [sys.executable, str(SCRIPTS / "benchmark_table.py"), "--write"]),
+    ("limits table", ("limits table",), [sys.executable, str(SCRIPTS / "limits_table.py"), "--write"]),
 ]
 
 
 def main(argv: list[str]) -> int:
     dry = "--dry-run" in argv
-    jobs = argv[argv.index("--jobs") + 1] if "--jobs" in argv else None
-    with tempfile.TemporaryDirectory(prefix="slipreflex-regenerate-") as out:
-        for name, markers, command in STEPS:
-            cmd = [c.replace("{out}", out) for c in command]
-            if name == "reproduce" and jobs:
-                cmd += ["--jobs", jobs]
-            print(f"regenerate: {name}: {' '.join(cmd)}" + (f"  (writes: {', '.join(markers)})" if markers else ""),
-                  flush=True)
-            if dry:
-                continue
-            done = subprocess.run(cmd, cwd=ROOT)
-            if done.returncode != 0:
-                print(f"regenerate: step '{name}' failed (exit {done.returncode}); later steps not run",
-                      file=sys.stderr)
-                return done.returncode
+    jobs = argv[argv.index("--jobs") + 1] if "--jobs" in argv else "2"
+    out = str(Path(tempfile.gettempdir()) / "repro")
+    for name, markers, command in STEPS:
+        cmd = [c.replace("{out}", out).replace("{jobs}", jobs) for c in command]
+        print(f"regenerate: {name}: {' '.join(cmd)}" + (f"  (writes: {', '.join(markers)})" if markers else ""),
+              flush=True)
+        if dry:
+            continue
+        done = subprocess.run(cmd, cwd=ROOT)
+        if done.returncode != 0:
+            print(f"regenerate: step '{name}' failed (exit {done.returncode}); later steps not run",
+                  file=sys.stderr)
+            return done.returncode
     return 0
 
 

@@ -5,7 +5,9 @@ Tiers: ``pytest -m "not slow"`` is the fast tier (docs/development.md); the slow
 tools they need with ``@pytest.mark.needs_tools("make", "avr-gcc", ...)`` or, in a
 fixture, ``require_tools(...)``: where a tool is absent they skip, naming it, unless
 ``SLIPREFLEX_REQUIRE_TOOLS=1`` (``scripts/bootstrap.sh test`` sets it, so CI, which
-installs the tools, fails instead of skipping).
+installs the tools, fails instead of skipping). Real-time tests (``@pytest.mark.realtime``:
+the loop against the wall clock) skip, saying so, on a machine loaded past
+``REALTIME_LOAD_PER_CORE`` runnable processes per core, except under that same variable.
 """
 
 from __future__ import annotations
@@ -60,9 +62,29 @@ AVR = ("make", "avr-gcc", "avr-libc")
 SIMAVR = ("make", "cc", "avr-gcc", "avr-libc", "simavr")
 
 
+#: A real-time test (the loop against the wall clock, over virtual devices) skips when the
+#: 1-minute load average is above this many runnable processes per core: its deadlines would
+#: measure the machine's other work, not the code.
+REALTIME_LOAD_PER_CORE = 2.0
+
+
+def realtime_overload() -> str | None:
+    """Why the machine is too busy for a real-time test (a one-line reason), or None."""
+    cores = os.cpu_count() or 1
+    load = os.getloadavg()[0]
+    if load <= REALTIME_LOAD_PER_CORE * cores:
+        return None
+    return (f"real-time test: load average {load:.1f} on {cores} cores (over {REALTIME_LOAD_PER_CORE:g} per core) "
+            "would make it miss deadlines; run it on a quieter machine (CI: SLIPREFLEX_REQUIRE_TOOLS=1 runs it anyway)")
+
+
 def pytest_runtest_setup(item):
     for mark in item.iter_markers("needs_tools"):
         require_tools(*mark.args)
+    if item.get_closest_marker("realtime") and os.environ.get("SLIPREFLEX_REQUIRE_TOOLS") != "1":
+        reason = realtime_overload()
+        if reason:
+            pytest.skip(reason)
 
 
 @pytest.fixture(scope="session")

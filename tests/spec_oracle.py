@@ -1,4 +1,4 @@
-"""A literal, slow transcription of shared SPEC section 1, independent of the package.
+"""A literal, slow transcription of docs/method.md section 1, independent of the package.
 
 Used as the oracle the package's batch and streaming code must match bit for bit.
 Sections 1.1-1.4 (the paper's chain), 1.6 (the authors' rig code, ``authors_gui``)
@@ -23,7 +23,10 @@ def lowpass(raw, fs, cutoff):
 
 
 def encode(x, theta0=0.008, dath=False, D=16, x0=None, floor=0.0, acc_reset=None, leak=None):
-    """SPEC 1.2; ``acc_reset`` clears acc every that many samples, ``leak`` is a time constant (samples)."""
+    """docs/method.md section 1.2; ``acc_reset`` clears acc every that many samples.
+
+    ``leak`` is a time constant (samples).
+    """
     x = [float(v) for v in x]
     if not x:
         return [], []
@@ -80,7 +83,7 @@ def mpi(v, p0=0.0, kp=5.0, ki=5.0, R=10, lo=0.0, hi=500.0, positions=None):
 
 
 def moving_mean(raw, M):
-    """SPEC 1.6 filter: the mean of the last M raw samples (of those so far at the start)."""
+    """docs/method.md section 1.6 filter: the mean of the last M raw samples (of those so far at the start)."""
     out = []
     for k in range(len(raw)):
         window = raw[max(0, k - M + 1):k + 1]
@@ -111,7 +114,7 @@ def event_mpi(y, n=16, p0=0.0, kp=5.0, ki=5.0, R=10, lo=0.0, hi=500.0, positions
 
 
 def authors_gui(raw, fs, p0=125.0):
-    """SPEC 1.6, rule by rule: (filtered, events, window counts, commands).
+    """docs/method.md section 1.6, rule by rule: (filtered, events, window counts, commands).
 
     M = round(fs / 5), R = int(0.1 fs), W = int(0.03 fs); theta = 0.005 V fixed;
     prev = 0.0, acc = 0, c = 0; the accumulator cleared every R samples; windows of W;

@@ -189,13 +189,14 @@ def test_summary_csv_and_tables(tmp_path):
     summary = summarize(back)                    # works on the strings read back, too
     assert [s["method"] for s in summary] == ["dath", "nmsd"]
     s = summary[0]
-    assert s["n_trials"] == 4 and s["success_rate"] == 0.75 and s["response_n"] == 3
+    assert s["n_trials"] == 4 and s["event_success_rate"] == 0.75 and s["response_n"] == 3
+    assert s["trial_success_rate"] == 0.75 and s["trial_success_n"] == 4
     assert s["total_mean_ms"] == pytest.approx(150.0)
     write_csv(tmp_path / "summary.csv", summary, SUMMARY_COLUMNS)
     assert read_csv(tmp_path / "summary.csv")[0]["paper_response_ms"] == "31.3 ± 4.16"
     md = comparison_markdown(summary)
     assert "| drop, response ms | TX | 31.3 ± 4.16 |" in md
-    assert "75% of 4" in md and "not run" in md
+    assert "75% of 4 slip events" in md and "no comparable run" in md
     assert "DATH" in terminal_table(summary)
 
 

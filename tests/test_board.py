@@ -2,7 +2,7 @@
 
 Bit-exactness by shared vectors (tests/data/board/vectors.txt) and random signals,
 the negative control (a core built with truncation instead of rounding), and the
-twin's semantics against the float chain of shared SPEC section 1.
+twin's semantics against the float chain of docs/method.md section 1.
 """
 
 from __future__ import annotations
@@ -180,7 +180,7 @@ def test_c_core_equals_twin_on_random_signals(host_build, tmp_path):
     assert "60 vectors" in proc.stdout and " 0 failures" in proc.stdout
 
 
-# -- the twin against the float chain (SPEC 1) --------------------------------------------
+# -- the twin against the float chain (docs/method.md section 1) --------------------------------------------
 
 def test_documented_constants():
     p = board.BoardParams.from_chain()
@@ -237,7 +237,7 @@ def test_filter_is_close_to_the_float_filter():
 @given(st.lists(st.integers(0, 1023), min_size=1, max_size=300), st.booleans(),
        st.integers(0, 60_000), st.integers(1, 20))
 def test_encoder_without_filter_is_the_spec_encoder(adc, dath, theta, d):
-    """Filter off: x = adc << 16 are exact in float64, so the float encoder (SPEC 1.2)
+    """Filter off: x = adc << 16 are exact in float64, so the float encoder (docs/method.md section 1.2)
     on them must give the same events as the board's integer encoder."""
     res = board.run_board_chain(adc, filter=False, dath=dath, dath_samples=d,
                                 threshold=theta / 2**16 * hardware.ADC_LSB)
@@ -251,7 +251,7 @@ def test_encoder_without_filter_is_the_spec_encoder(adc, dath, theta, d):
 @given(st.lists(st.integers(0, 1023), min_size=16, max_size=600), st.integers(0, 500),
        st.integers(0, 20), st.integers(0, 20), st.integers(1, 12))
 def test_mpi_is_exact(adc, p0, kp, ki, reset_after):
-    """The integer MPI equals the float MPI (SPEC 1.4) on the same counts."""
+    """The integer MPI equals the float MPI (docs/method.md section 1.4) on the same counts."""
     res = board.run_board_chain(adc, dath=True, p0=p0, kp=kp, ki=ki, reset_after=reset_after)
     ref = mpi(res.counts.astype(float), p0=p0, kp=kp, ki=ki, reset_after=reset_after)
     assert res.commands.tolist() == ref.tolist()
@@ -338,3 +338,103 @@ def test_board_methods_run_in_reproduce_beside_the_float_chain():
     by = {row["method"]: row for row in res.rows}
     assert set(by) == {"dath", "dath-board"}
     assert by["dath-board"]["n_increases"] > 0 and math.isfinite(by["dath-board"]["response_ms"])
+
+
+# -- the standalone board's hand rule: grip only added (BoardHand, twin of hand2560) --------
+
+CLOSE, STOP = hardware.HandCommand.CLOSE, hardware.HandCommand.STOP
+
+
+def _hand_run(steps, p0: int = 100):
+    """Feed BoardHand (window, fault, command) per sample; return [(sample, packet)]."""
+    h = board.BoardHand(board.BoardParams.firmware(p0=p0))
+    return [(k, pk) for k, s in enumerate(steps) if (pk := h.step(*s)) is not None], h
+
+
+def test_grip_time_is_the_documented_closing_speed_in_samples():
+    per_unit, per_sample = board.grip_time_ratio()
+    assert (per_unit, per_sample) == (board.GRIP_PER_UNIT, board.GRIP_PER_SAMPLE) == (8, 15)
+    assert per_unit / per_sample == pytest.approx(1 / (hardware.FINGER_SPEED_UNITS_S * hardware.DAQ_PERIOD_S))
+    assert board.grip_time_ratio(500.0, 0.004) == (1, 2)
+    assert board.HAND_PWM == hardware.PWM_MAX == 297
+    with pytest.raises(ParameterError, match="must be > 0"):
+        board.grip_time_ratio(0.0)
+
+
+@pytest.mark.parametrize("g", [1, 2, 7, 14, 15, 16, 30, 90, 187, 400])
+def test_one_rise_closes_for_its_time_rounded_up_to_whole_samples(g):
+    steps = [(True, False, 100 + g)] + [(False, False, 100 + g)] * 300
+    packets, h = _hand_run(steps)
+    n = math.ceil(8 * g / 15)
+    assert packets == [(0, CLOSE), (n, STOP)]
+    t, exact = n * hardware.DAQ_PERIOD_S, g / hardware.FINGER_SPEED_UNITS_S
+    assert exact <= t < exact + hardware.DAQ_PERIOD_S                  # never short, < 1 sample long
+    assert h.level == 100 + g and h.left == 0 and not h.closing
+
+
+def test_a_rise_while_closing_makes_the_closing_longer():
+    # 30 units at sample 0 (16 samples), 20 more at sample 15 while closing: one CLOSE,
+    # STOP after ceil(8 x 50 / 15) = 27 samples, the partial samples carried exactly.
+    steps = [(True, False, 130)] + [(False, False, 130)] * 14 + [(True, False, 150)] \
+        + [(False, False, 150)] * 40
+    packets, _ = _hand_run(steps)
+    assert packets == [(0, CLOSE), (27, STOP)]
+    # A command that does not rise (or falls: the MPI cannot, but the rule ignores it) adds nothing.
+    steps = [(True, False, 130), (True, False, 120), (True, False, 130)] + [(False, False, 130)] * 40
+    assert _hand_run(steps)[0] == [(0, CLOSE), (16, STOP)]
+
+
+def test_a_fault_stops_the_closing_and_the_rest_is_owed():
+    g = 90                                                  # 48 samples of closing
+    steps = [(True, False, 100 + g)] + [(False, False, 100 + g)] * 9 \
+        + [(False, True, 100 + g)] * 5 + [(False, False, 100 + g)] * 100
+    packets, _ = _hand_run(steps)
+    # STOP at the fault's first reading (10), nothing while it lasts, CLOSE at the next
+    # good reading (15), STOP when the 48 samples are done: 10 before, 38 after.
+    assert packets == [(0, CLOSE), (10, STOP), (15, CLOSE), (15 + 38, STOP)]
+
+
+def test_a_fault_holds_even_when_not_closing_and_a_rise_in_it_waits():
+    steps = [(False, False, 100)] * 3 + [(False, True, 100)] * 3 + [(True, True, 115)] \
+        + [(False, True, 115)] * 2 + [(False, False, 115)] * 20
+    packets, _ = _hand_run(steps)
+    assert packets == [(3, STOP), (9, CLOSE), (9 + 8, STOP)]     # 15 units: ceil(120/15) = 8
+
+
+def test_p0_is_bookkeeping_only_for_the_hand():
+    adc = [300] * 32 + [300, 320] * 32 + [300] * 200
+    runs = {p0: board.board_hand(board.run_board_chain(adc, board.BoardParams.firmware(p0=p0)))
+            for p0 in (0, 100, 148, 400)}
+    assert runs[0].packets == runs[100].packets == runs[148].packets        # same grip, same time
+    assert [c for _, c in runs[0].packets] == [STOP, CLOSE, STOP, CLOSE, STOP]
+    assert runs[0].grip == runs[148].grip == 140
+    # From 400 the MPI reaches its ceiling (500) after 100 units: the same closings until then.
+    assert runs[400].grip == 100 and runs[400].packets[:4] == runs[0].packets[:4]
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(st.booleans(), st.booleans(), st.integers(0, 60)), min_size=1, max_size=400),
+       st.integers(-50, 550))
+def test_hand_rule_never_opens_never_short_at_most_a_sample_long(steps, p0):
+    """Any sequence of windows, faults and rises: only CLOSE and STOP, CLOSE only from
+    stopped, and the closing time sums to the grip's time rounded up per closing."""
+    h = board.BoardHand(board.BoardParams.firmware(p0=p0))
+    cmd, closing_samples, stops, last = h.level, 0, 0, None
+    for window, fault, rise in steps:
+        was_closing = h.closing
+        if window:
+            cmd = min(cmd + rise, 500)
+        pk = h.step(window, fault, cmd)
+        closing_samples += was_closing
+        assert pk in (None, CLOSE, STOP)
+        if pk is CLOSE:
+            assert last in (None, STOP) and not fault and not was_closing
+        if pk is STOP and was_closing:
+            stops += 1
+        last = pk if pk is not None else last
+        assert h.closing == (h.left > 0 and not fault)
+    grip = h.level - min(max(p0, 0), 500)
+    # Closing time spent minus the grip's time plus what is still owed: the overshoots a
+    # STOP dropped, each less than one sample (15), so never short.
+    spent = 15 * closing_samples - 8 * grip + h.left
+    assert 0 <= spent and (spent < 15 * stops or spent == 0)

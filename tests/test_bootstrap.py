@@ -212,3 +212,16 @@ def test_bootstrap_without_root_or_sudo_names_the_apt_command(standin, tmp_path)
     assert r.returncode == 2
     assert "as root run: apt-get install avrdude" in r.stderr
     assert not log.exists() and not (proj / ".venv").exists()
+
+
+@requires_system_python
+def test_bootstrap_shows_the_install_as_it_happens(standin):
+    """The pip step announces itself and lets pip print its progress (it was silent for a minute)."""
+    proj, shims, _ = standin
+    r = _bootstrap(proj, f"{shims}:{SYSTEM_PATH}", "detect")
+    assert r.returncode == 0, r.stdout + r.stderr
+    lines = r.stdout.splitlines()
+    start = next(i for i, line in enumerate(lines) if line.startswith("bootstrap.sh: installing slipreflex"))
+    pip = [line for line in lines[start + 1:] if line.startswith(("Obtaining", "Processing", "Collecting",
+                                                                  "Building", "Installing", "Successfully"))]
+    assert len(pip) >= 2, r.stdout

@@ -1,4 +1,4 @@
-"""Streaming objects, batch functions and the SPEC oracle agree bit for bit."""
+"""Streaming objects, batch functions and the specification oracle agree bit for bit."""
 
 import itertools
 

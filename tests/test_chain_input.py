@@ -1,4 +1,4 @@
-"""Parameter validation and bad samples (SPEC 1, issue 2 item 2)."""
+"""Parameter validation and bad samples (docs/method.md section 1)."""
 
 import math
 

@@ -1,4 +1,4 @@
-"""Every rule of SPEC section 1, with examples worked by hand and written out."""
+"""Every rule of docs/method.md section 1, with examples worked by hand and written out."""
 
 import numpy as np
 from scipy.signal import butter, sosfilt, sosfilt_zi

@@ -1,5 +1,5 @@
 """The compiled closed loop (sim/closed.py) equals the Python loop: every command, every trace array,
-the reflex's state and the rig's, bit for bit (issue 10, item 4)."""
+the reflex's state and the rig's, bit for bit."""
 
 from __future__ import annotations
 

@@ -82,7 +82,7 @@ def test_export_preamble_carries_p0_and_the_chain_so_the_commands_can_be_rerun(t
 @pytest.mark.slow
 @pytest.mark.parametrize("out, says", [
     ("{tmp}", "not a regular file"), ("{tmp}/missing/x.csv", "does not exist"),
-    ("/proc/version", "cannot write"), ("{tmp}/fifo", "not a regular file"),
+    ("/proc/version", "exists"), ("{tmp}/fifo", "not a regular file"),
 ])
 def test_export_out_that_is_not_a_regular_file_is_one_line_and_replaces_nothing(tmp_path, capsys, out, says):
     path = _recorded_run(tmp_path)

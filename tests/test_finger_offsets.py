@@ -122,6 +122,7 @@ def test_a_bad_offset_is_refused_before_anything_is_sent(bad):
     assert hand.sent == []  # not even the safe start's STOP
 
 
+@pytest.mark.realtime
 @pytest.mark.slow
 def test_cli_run_with_the_authors_gui_preset_offsets_the_middle_finger_and_replays(tmp_path, capsys):
     from slipreflex.cli import main

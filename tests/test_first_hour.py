@@ -1,4 +1,4 @@
-"""A new user's first hour (issue 11): the steps after set-up that the README promises."""
+"""A new user's first hour: the steps after set-up that the README promises."""
 
 import os
 import subprocess
@@ -55,12 +55,12 @@ def _one_line_exit_2(capsys, argv, *fragments):
 
 
 def test_virtual_rig_link_dir_that_cannot_be_made_is_one_line(capsys, tmp_path):
-    _one_line_exit_2(capsys, ["virtual-rig", "--link-dir", "/proc/nope", "--duration", "0"],
+    _one_line_exit_2(capsys, ["virtual-rig", "--link-dir", "/proc/nope", "--duration", "1"],
                      "--link-dir /proc/nope", "cannot create the directory")
     (tmp_path / "f").write_text("x")
-    _one_line_exit_2(capsys, ["virtual-rig", "--link-dir", str(tmp_path / "f"), "--duration", "0"],
+    _one_line_exit_2(capsys, ["virtual-rig", "--link-dir", str(tmp_path / "f"), "--duration", "1"],
                      f"--link-dir {tmp_path / 'f'}: is a file, not a directory")
-    _one_line_exit_2(capsys, ["virtual-rig", "--link-dir", str(tmp_path / "f" / "sub"), "--duration", "0"],
+    _one_line_exit_2(capsys, ["virtual-rig", "--link-dir", str(tmp_path / "f" / "sub"), "--duration", "1"],
                      "--link-dir", "Not a directory")
 
 
@@ -355,7 +355,7 @@ def captured_figures(monkeypatch):
 def _summary(rates):
     out = []
     for (e, b, m), rate in rates.items():
-        out.append({"experiment": e, "bottle": b, "method": m, "success_rate": rate, "success_n": 10,
+        out.append({"experiment": e, "bottle": b, "method": m, "trial_success_rate": rate, "trial_success_n": 10,
                     "response_mean_ms": 30.0, "response_sd_ms": 50.0, "response_n": 7,
                     "total_mean_ms": 300.0, "total_sd_ms": 40.0, "total_n": 7})
     return out
@@ -369,8 +369,8 @@ def test_success_chart_starts_at_zero_shows_zero_bars_the_papers_values_and_n(ca
     ax = fig.axes[0]
     assert ax.get_ylim()[0] == 0 and ax.get_ylim()[1] > 100
     texts = [t.get_text() for t in ax.texts]
-    assert "0\nn=10" in texts and "n=10" in texts                 # the zero bar is labelled, n shown
-    assert "slip stopped before the bottle fell" in ax.get_title()
+    assert "0\n10 trials" in texts and "10 trials" in texts       # the zero bar is labelled, n shown
+    assert "per trial (bars), per slip event (dots)" in ax.get_title()
     paper = [ln for ln in ax.get_lines() if ln.get_marker() == "D"]
     assert [tuple(ln.get_ydata()) for ln in paper] == [(100.0,)]   # the paper's "100 %" for DATH pour
     assert fig.legends and not ax.get_legend()
@@ -417,7 +417,8 @@ def test_scan_figure_names_its_regions_and_shows_both_thresholds(tmp_path, monke
     assert main(["scan", "--out", str(tmp_path), "--distance", "50"]) == 0
     fig = kept[-1]
     overview = fig.axes[0]
-    assert [t.get_text() for t in overview.texts] == ["stand", "white", "black", "stand"]
+    names = [t.get_text() for t in overview.texts if not t.get_text().startswith("paper ")]   # + the paper's levels
+    assert names == ["stand", "white", "black", "stand"]
     for ax in fig.axes:
         labels = [ln.get_label() for ln in ax.get_lines()]
         if "threshold fixed" in labels:

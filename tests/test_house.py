@@ -1,10 +1,11 @@
-"""The package's own house rules (issue 12): checked over every public name, so new code is covered."""
+"""The package's own house rules: checked over every public name, so new code is covered."""
 
 from __future__ import annotations
 
 import enum
 import importlib
 import inspect
+import re
 import sys
 from pathlib import Path
 
@@ -119,3 +120,24 @@ def test_every_test_module_keeps_a_fast_test_and_the_tier_markers_are_registered
     assert not without, f"test modules with no test in the fast tier: {without}"
     markers = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["pytest"]["ini_options"]["markers"]
     assert {m.split(":")[0].split("(")[0] for m in markers} >= {"slow", "needs_tools"}
+
+
+def test_a_realtime_test_skips_only_on_an_overloaded_machine_and_says_why(monkeypatch):
+    import os
+
+    from conftest import realtime_overload
+
+    monkeypatch.setattr(os, "cpu_count", lambda: 2)
+    monkeypatch.setattr(os, "getloadavg", lambda: (3.9, 0.0, 0.0))
+    assert realtime_overload() is None
+    monkeypatch.setattr(os, "getloadavg", lambda: (7.3, 0.0, 0.0))
+    assert "load average 7.3 on 2 cores" in realtime_overload()
+
+
+def test_the_readme_is_a_five_minute_read():
+    """README.md stays under 10 KB: long explanations belong in docs/, which it links."""
+    readme = Path(__file__).resolve().parent.parent / "README.md"
+    size = len(readme.read_bytes())
+    assert size <= 10 * 1024, f"README.md is {size} bytes; move the long parts to docs/"
+    for link in re.findall(r"\]\((docs/[^)#]+)", readme.read_text(encoding="utf-8")):
+        assert (readme.parent / link).is_file(), f"README links to {link}, which does not exist"

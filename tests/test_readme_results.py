@@ -9,7 +9,7 @@ SCRIPT = runpy.run_path(str(ROOT / "scripts" / "readme_results.py"))
 
 def _row(e, b, m, resp, total, rate, n):
     return {"experiment": e, "bottle": b, "method": m, "response_mean_ms": resp, "total_mean_ms": total,
-            "success_rate": rate, "success_n": n}
+            "event_success_rate": rate, "event_success_n": n}
 
 
 def test_table_reads_dath_cells_and_pools_success_over_bottles():

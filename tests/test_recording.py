@@ -93,7 +93,9 @@ def test_sigkill_leaves_a_file_readable_up_to_about_a_second_before(tmp_path):
             proc.kill()
             proc.wait(timeout=10)
         proc.stdout.close()
-    r = read_recording(path)
+    # a run killed mid-way leaves its recording under NAME.part (named NAME only when closed)
+    assert not path.exists()
+    r = read_recording(f"{path}.part")
     assert not r.complete
     seqs = [m["seq"] for m in r.topic("/chain/events")]
     assert seqs == list(range(len(seqs)))  # nothing garbled, nothing missing before the cut
@@ -153,6 +155,7 @@ def test_disk_full_mid_run_stops_recording_without_raising():
         buf.close()
 
 
+@pytest.mark.realtime
 @pytest.mark.slow
 def test_sigkilled_run_leaves_a_recording_that_replays(tmp_path):
     """End to end: `slipreflex run` on the virtual rig, killed with SIGKILL mid-run."""
@@ -162,10 +165,11 @@ def test_sigkilled_run_leaves_a_recording_that_replays(tmp_path):
 
     sim = SimRig("TR", seed=2)
     p0 = sim.grasp().position
-    path = tmp_path / "killed-run.mcap"
+    target = tmp_path / "killed-run.mcap"
+    path = tmp_path / "killed-run.mcap.part"   # named killed-run.mcap only when the run ends
     with VirtualDevices(sim, link_dir=str(tmp_path), schedule=[("drop", 0.5)]) as dev:
         proc = subprocess.Popen([sys.executable, "-m", "slipreflex", "run", "--daq", dev.daq_path,
-                                 "--hand", dev.hand_path, "--p0", f"{p0:g}", "--record", str(path)],
+                                 "--hand", dev.hand_path, "--p0", f"{p0:g}", "--record", str(target)],
                                 stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
         killer = threading.Timer(90, proc.kill)  # bounds the test if the child hangs
         killer.start()
@@ -185,6 +189,7 @@ def test_sigkilled_run_leaves_a_recording_that_replays(tmp_path):
                 proc.kill()
                 proc.wait()
             proc.stdout.close()
+    assert not target.exists()
     rec = read_recording(path)
     assert not rec.complete and len(rec.topic("/daq/samples")) >= n
     assert rec.topic("/hand/commands") and rec.topic("/chain/state")

@@ -18,17 +18,19 @@ from mcap.reader import NonSeekingReader, make_reader
 from slipreflex.chain import ReflexParams, SlipReflex
 from slipreflex.cli import main
 from slipreflex.errors import DataError
-from slipreflex.recording import METADATA_NAME, Recorder, read_recording, recover_recording, replay
+from slipreflex.recording import METADATA_NAME, PLANNED_SAMPLES, Recorder, read_recording, recover_recording, replay
 from test_recording import _CHILD
 
 N = 2000
 
 
-def _run_recording(path, n=N, chunk_size=2000):
-    """A recording like `run` writes: parameters, samples, the reflex's commands, a final /stats."""
+def _run_recording(path, n=N, chunk_size=2000, planned=True):
+    """A recording like `run --duration` writes: parameters with the planned sample count, samples,
+    the reflex's commands, a final /stats."""
     params = ReflexParams(p0=100.0, dath=True)
     reflex = SlipReflex(params)
-    meta = {METADATA_NAME: {"reflex_params": json.dumps(params.to_dict())}}
+    meta = {METADATA_NAME: {"reflex_params": json.dumps(params.to_dict()),
+                            **({PLANNED_SAMPLES: str(n)} if planned else {})}}
     with Recorder(path, metadata=meta, chunk_size=chunk_size) as rec:
         for k in range(n):
             v = 0.4 + (0.05 * ((k * 7919) % 13 - 6) if 600 < k < 900 else 0.0)
@@ -82,6 +84,7 @@ def test_a_sigkilled_recording_opens_with_make_reader_after_recover(tmp_path, ca
             proc.kill()
             proc.wait()
         proc.stdout.close()
+    path = tmp_path / "killed.mcap.part"   # a killed run leaves NAME.part
     with open(path, "rb") as fh, pytest.raises(Exception):  # noqa: B017 - any failure: no footer
         sum(1 for _ in make_reader(fh).iter_messages())  # why `recover` exists
     ours = read_recording(path)
@@ -104,7 +107,8 @@ def test_a_recording_cut_anywhere_is_recovered_up_to_its_last_complete_chunk(tmp
     cut.write_bytes(whole[:int(len(whole) * keep)])
     rec = read_recording(cut)
     got = len(rec.topic("/daq/samples"))
-    assert 0 < got <= N and rec.cut_at is not None and f"read {got} of about" in rec.gaps()
+    assert 0 < got <= N and rec.cut_at is not None
+    assert f"read {got} of the {N} samples it should hold; cut short at byte {rec.cut_at}" in rec.gaps()
     res = recover_recording(cut, tmp_path / "fixed.mcap")
     total = sum(len(m) for m in rec.messages.values())
     assert res.messages == total and _count_standard(tmp_path / "fixed.mcap") == (total, total)
@@ -123,7 +127,7 @@ def test_a_bit_flip_in_a_chunk_is_skipped_reported_and_needs_allow_partial(tmp_p
     missing = sorted(set(range(N)) - set(samples))
     assert missing and missing == list(range(missing[0], missing[-1] + 1))  # one chunk's worth
     assert samples[-1] == N - 1  # the reader went on after the damaged chunk
-    line = f"read {len(samples)} of about {N} samples; chunk at byte {bad} damaged"
+    line = f"read {len(samples)} of the {N} samples it should hold; chunk at byte {bad} damaged"
     assert line in rec.gaps()
     for cmd in (["replay", str(path)], ["export", str(path)]):
         assert main(cmd) == 2

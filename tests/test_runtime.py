@@ -130,6 +130,7 @@ def _run_recorded(tmp_path, daq, hand, reflex, duration):
     return res
 
 
+@pytest.mark.realtime
 @pytest.mark.slow
 def test_loop_over_virtual_devices_reacts_records_and_replays_exactly(tmp_path):
     path = tmp_path / "run.mcap"
@@ -175,6 +176,7 @@ def test_loop_over_virtual_devices_reacts_records_and_replays_exactly(tmp_path):
     assert main(["detect", str(tmp_path / "run.csv"), "--out", str(tmp_path / "det")]) == 0
 
 
+@pytest.mark.realtime
 @pytest.mark.slow
 def test_watchdog_holds_when_the_daq_stops_and_resumes_when_it_restarts(tmp_path):
     script = [(0.5, lambda d: d.pause_daq()), (0.9, lambda d: d.restart_daq())]
@@ -195,6 +197,7 @@ def test_watchdog_holds_when_the_daq_stops_and_resumes_when_it_restarts(tmp_path
     assert res.samples > 0.5 * (1.5 - 0.4) * hw.DAQ_FS  # the loop kept running after
 
 
+@pytest.mark.realtime
 @pytest.mark.slow
 def test_daq_port_that_disappears_and_comes_back(tmp_path):
     script = [(0.4, lambda d: d.unplug("daq")), (0.8, lambda d: d.replug("daq"))]
@@ -210,6 +213,7 @@ def test_daq_port_that_disappears_and_comes_back(tmp_path):
     assert res.samples > 0.5 * (1.4 - 0.4) * hw.DAQ_FS
 
 
+@pytest.mark.realtime
 @pytest.mark.slow
 def test_hand_port_that_disappears_and_comes_back(tmp_path):
     script = [(0.5, lambda d: d.unplug("hand")), (0.9, lambda d: d.replug("hand"))]
@@ -226,6 +230,7 @@ def test_hand_port_that_disappears_and_comes_back(tmp_path):
     assert max(h[hw.Finger.MIDDLE] for h in history) > P0  # the drop was answered
 
 
+@pytest.mark.realtime
 @pytest.mark.slow
 def test_garbage_truncated_and_flipped_frames_while_running(tmp_path):
     bad = bytearray(wire.encode_frame(seq=1, adc=5))
@@ -239,7 +244,7 @@ def test_garbage_truncated_and_flipped_frames_while_running(tmp_path):
     st = res.daq_stats
     assert st["garbage_bytes"] >= 20 and st["truncated"] >= 1 and st["crc_errors"] >= 1
     assert st["resyncs"] >= 3
-    # each kind of damage is a recorded fault event (issue 15: not only a 1 Hz counter)
+    # each kind of damage is a recorded fault event (not only a 1 Hz counter)
     kinds = {f.kind for f in res.faults}
     assert {"daq-garbage", "daq-truncated", "daq-crc"} <= kinds
     assert kinds <= {"daq-garbage", "daq-truncated", "daq-crc", "watchdog", "watchdog-clear"}
@@ -321,6 +326,7 @@ def test_disk_full_mid_run_is_recorded_as_a_fault_and_the_reflex_keeps_running()
     loop.close()
 
 
+@pytest.mark.realtime
 @pytest.mark.slow
 def test_cli_run_over_virtual_devices_then_replay(tmp_path, capsys):
     path = tmp_path / "cli.mcap"

@@ -1,4 +1,4 @@
-"""Safe start: `run` never opens the hand, whatever --p0 says (issue 15, finding 1)."""
+"""Safe start: `run` never opens the hand, whatever --p0 says."""
 
 from __future__ import annotations
 
@@ -74,6 +74,7 @@ def _run_on_virtual_rig(tmp_path, p0_text, schedule=(), extra=()):
     return code, grasp, lowest, path
 
 
+@pytest.mark.realtime
 @pytest.mark.slow
 def test_run_with_p0_zero_holds_the_fingers_where_the_grasp_left_them(tmp_path, capsys):
     code, grasp, lowest, path = _run_on_virtual_rig(tmp_path, "0")
@@ -85,6 +86,7 @@ def test_run_with_p0_zero_holds_the_fingers_where_the_grasp_left_them(tmp_path, 
     assert not any(m["sent"] for m in rec.topic("/hand/commands"))
 
 
+@pytest.mark.realtime
 @pytest.mark.slow
 def test_the_virtual_rigs_printed_p0_does_not_open_the_thumb_when_the_reflex_acts(tmp_path, capsys):
     sim = SimRig("TX", seed=165)   # textured (its drop slip fires spikes); its thumb stops a unit further

@@ -136,7 +136,7 @@ def test_load_ranges_errors_name_file_and_key(tmp_path, text, match):
 def test_load_ranges_missing_file_and_directory(tmp_path):
     with pytest.raises(ParameterError, match="no such file"):
         load_ranges(tmp_path / "none.toml")
-    with pytest.raises(ParameterError, match="no such file"):
+    with pytest.raises(ParameterError, match="is a directory, not a TOML file"):
         load_ranges(tmp_path)
 
 

@@ -35,7 +35,7 @@ def _stream(reflex, raw):
     return [(k, u) for k, u in enumerate(out) if u is not None]
 
 
-# --- the authors-gui preset (SPEC 1.6) -------------------------------------------------------
+# --- the authors-gui preset (docs/method.md section 1.6) -------------------------------------------------------
 
 @pytest.mark.parametrize("fs", [333.0, hw.DAQ_FS, 1000.0])
 def test_authors_gui_equals_its_literal_transcription_bit_for_bit(fs):

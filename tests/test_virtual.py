@@ -31,7 +31,7 @@ RUN_S = 4.0
 # (0.18 s) after the end of the grasp, and starts the pour when the loop has its first sample
 # (in-process: one sample period later), so that neither the phase nor whether the reflex is
 # running when the pour begins is at the mercy of how long the ports took to open (a slow
-# start under load once lost the bottle, issue 15). Measured (python -m pytest -s with a
+# start under load once lost the bottle). Measured (python -m pytest -s with a
 # print; grip-only rule, 1 run): 4.58 mm over the ptys, 4.46 mm in-process (the same pour instant
 # and hand commands replayed); fallen unassisted.
 PHASE = 12 + 3 * 16
@@ -91,6 +91,7 @@ class _From:
         pass
 
 
+@pytest.mark.realtime
 @pytest.mark.slow
 def test_run_over_virtual_devices_suppresses_slip_like_the_in_process_simulation(tmp_path):
     without, _ = _in_process(lambda p0: _Hold())
@@ -186,6 +187,7 @@ def _readline(proc, want, deadline_s=120.0):
     raise AssertionError(f"no line starting with {want!r}; got {lines}")
 
 
+@pytest.mark.realtime
 @pytest.mark.slow
 def test_virtual_rig_command_keys_signals_schedule_and_run(tmp_path, capsys, monkeypatch):
     import slipreflex.runtime as runtime
@@ -195,7 +197,7 @@ def test_virtual_rig_command_keys_signals_schedule_and_run(tmp_path, capsys, mon
     def drop_when_running(source, *args, **kw):
         # The drop starts when run's loop has its first sample, not at a time after the rig
         # started: run may take seconds to start under load, and the slip was then over before
-        # the loop began ("(0 sent)", issue 15 item 7).
+        # the loop began ("(0 sent)").
         def drop():
             proc.stdin.write("d\n")
             proc.stdin.flush()
@@ -206,7 +208,8 @@ def test_virtual_rig_command_keys_signals_schedule_and_run(tmp_path, capsys, mon
     # the textured bottle: its drop slip fires spikes under the rate-state contacts; the schedule's
     # pour at 0.2 s only starts the water (its first slip comes seconds later)
     proc = subprocess.Popen([sys.executable, "-m", "slipreflex", "virtual-rig", "--link-dir", str(tmp_path),
-                             "--bottle", "TX", "--schedule", "pour@0.2", "--duration", "60"],
+                             "--bottle", "TX", "--schedule", "pour@0.2", "--schedule-from", "start",
+                             "--duration", "60"],
                             stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
     killer = threading.Timer(90, proc.kill)  # bounds the test if the child hangs
     killer.start()

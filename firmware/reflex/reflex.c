@@ -62,7 +62,7 @@ static int32_t lowpass(struct reflex_state *st, const struct reflex_params *p, i
     return y;
 }
 
-/* Send-on-delta with optional DATH, SPEC 1.2, in Q16 counts. */
+/* Send-on-delta with optional DATH, docs/method.md 1.2, in Q16 counts. */
 static uint8_t encode(struct reflex_state *st, const struct reflex_params *p, int32_t x)
 {
     int32_t d = x - st->prev;
@@ -87,7 +87,7 @@ static uint8_t encode(struct reflex_state *st, const struct reflex_params *p, in
     return y;
 }
 
-/* Monotonic PI on one window's spike count, SPEC 1.4. */
+/* Monotonic PI on one window's spike count, docs/method.md 1.4. */
 static int16_t mpi(struct reflex_state *st, const struct reflex_params *p, uint8_t v,
                    const int16_t *position)
 {

@@ -1,5 +1,5 @@
 /*
- * reflex.h -- the slip reflex chain (shared/SPEC.md section 1) in integer fixed point.
+ * reflex.h -- the slip reflex chain (docs/method.md section 1) in integer fixed point.
  *
  * Portable C99: no AVR header, no floating point, no dynamic memory. The caller owns
  * the parameters and the state (as in PyWavelets' C core), so several chains can run

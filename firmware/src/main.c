@@ -18,9 +18,10 @@
  *                    ADC reading and sends version-2 frames carrying its spike, window
  *                    count, command and filtered sample. REFLEX_DATH (0/1) and REFLEX_P0
  *                    choose the encoder and the initial position.
- *   HAND_UART1       (ATmega2560, with REFLEX_ON_BOARD) the standalone reflex: when the
- *                    command rises, an i-Limb position packet for the tripod goes out on
- *                    UART1 at 115200 baud. On the ATmega2560 (Arduino Mega) the pins are
+ *   HAND_UART1       (ATmega2560, with REFLEX_ON_BOARD) the standalone reflex: each rise
+ *                    of the command becomes closing time for the tripod, i-Limb CLOSE
+ *                    (full PWM) then STOP packets on UART1 at 115200 baud; a fault and
+ *                    every start send STOP; never OPEN or POSITION. On the ATmega2560 (Arduino Mega) the pins are
  *                    A0/PF0 slip sensor, D20/PD1 SDA, D21/PD0 SCL, D2/PE4 (INT4) flow
  *                    sensor, D1/PE1 TXD0 to the PC, D18/PD3 TXD1 to the hand.
  */
@@ -175,21 +176,31 @@ static struct reflex_state chain;
 
 #ifdef HAND_UART1
 /* i-Limb control unit on UART1, 8N1 at 115200 baud: with U2X1 the nearest divider at
- * 16 MHz is UBRR1 = 16, i.e. 117647 baud, +2.12 % (docs/firmware.md). */
+ * 16 MHz is UBRR1 = 16, i.e. 117647 baud, +2.12 % (docs/firmware.md).
+ *
+ * Grip only ever added (docs/firmware.md, "The hand: grip only added"): the command is
+ * never sent as a position. A window whose command rises g units above grip_level owes
+ * g units of closing at full PWM, g / 625 s = 8 g / 15 samples; grip_left counts the
+ * closing still owed in fifteenths of a sample. CLOSE goes out when the fingers are to
+ * close, STOP when their time is up or a fault starts; never OPEN, never POSITION. The
+ * Python twin is slipreflex.board.BoardHand. */
 #define HAND_BAUD 115200UL
 #define HAND_UBRR ((F_CPU + 4UL * HAND_BAUD) / (8UL * HAND_BAUD) - 1UL)           /* 16 */
 #define HAND_START 0x24u
 #define HAND_END 0x21u
-#define HAND_POSITION 3u
+#define HAND_STOP 0u
+#define HAND_CLOSE 1u
 #define HAND_FINGERS 3u                   /* tripod: thumb 0, index 1, middle 2 */
 #define HAND_PACKET_LEN (3u + 4u * HAND_FINGERS)
 static uint8_t hand_buf[HAND_PACKET_LEN];
 static volatile uint8_t hand_idx = HAND_PACKET_LEN;   /* == LEN: nothing in flight */
-/* The last position sent survives a watchdog reset (.noinit, with its complement as a
- * check), so a reset board resumes from it and never commands the hand open. */
-static uint16_t hand_sent __attribute__((section(".noinit")));
-static uint16_t hand_sent_check __attribute__((section(".noinit")));
-static uint8_t hand_pending;
+/* The command already turned into grip survives a watchdog reset (.noinit, with its
+ * complement as a check): a reset board's MPI resumes from it (bookkeeping only). */
+static int16_t grip_level __attribute__((section(".noinit")));
+static uint16_t grip_level_check __attribute__((section(".noinit")));
+static int32_t grip_left;                 /* closing owed, 1/15 sample; <= 0 when stopped */
+static uint8_t hand_closing;              /* the last packet sent was CLOSE */
+static uint8_t hand_fault;                /* the last reading was faulty */
 
 ISR(USART1_UDRE_vect)
 {
@@ -209,30 +220,64 @@ static void hand_setup(void)
     UCSR1B = _BV(TXEN1);
 }
 
-/* Queue a position packet for the tripod; if one is still in flight, send the latest
- * command when it is done (main loop). Returns 1 if queued now. */
-static uint8_t hand_send(uint16_t pos)
+/* Queue CLOSE (full PWM) or STOP for the tripod. A packet takes 1.28 ms on the wire and
+ * at most one is queued per 3 ms sample, so the previous one is always gone; should it
+ * not be, nothing is queued and the caller tries again at the next sample. Returns 1 if
+ * queued. */
+static uint8_t hand_send(uint8_t command)
 {
-    if (hand_idx != HAND_PACKET_LEN) {
-        hand_pending = 1;
+    if (hand_idx != HAND_PACKET_LEN)
         return 0;
-    }
+    uint16_t value = command == HAND_CLOSE ? REFLEX_CFG_HAND_PWM : 0u;
     uint8_t *p = hand_buf;
     *p++ = HAND_START;
     *p++ = 4u * HAND_FINGERS;
     for (uint8_t f = 0; f < HAND_FINGERS; f++) {
         *p++ = f;
-        *p++ = HAND_POSITION;
-        *p++ = (uint8_t)(pos >> 8);
-        *p++ = (uint8_t)pos;
+        *p++ = command;
+        *p++ = (uint8_t)(value >> 8);
+        *p++ = (uint8_t)value;
     }
     *p = HAND_END;
-    hand_sent = pos;
-    hand_sent_check = (uint16_t)~pos;
-    hand_pending = 0;
     hand_idx = 0;
     UCSR1B |= _BV(UDRIE1);
     return 1;
+}
+
+/* After each sample: the grip-only rule (slipreflex.board.BoardHand, step by step).
+ * Returns 1 if a packet was queued. */
+static uint8_t hand_step(const struct reflex_out *out)
+{
+    if (hand_closing)
+        grip_left -= REFLEX_CFG_GRIP_PER_SAMPLE;          /* one sample of closing done */
+    if (out->window && out->command > grip_level) {
+        grip_left += (int32_t)REFLEX_CFG_GRIP_PER_UNIT * ((int32_t)out->command - grip_level);
+        grip_level = out->command;
+        grip_level_check = (uint16_t)~(uint16_t)grip_level;
+    }
+#ifdef HAND_WRONG_ROUNDING
+    /* Negative control for the tests: closing time rounded down (floor), not up. */
+    uint8_t want = grip_left >= REFLEX_CFG_GRIP_PER_SAMPLE && !out->fault;
+#else
+    uint8_t want = grip_left > 0 && !out->fault;
+#endif
+    uint8_t onset = out->fault && !hand_fault;
+    uint8_t sent = 0;
+    if (want && !hand_closing)
+        sent = hand_send(HAND_CLOSE);
+    else if ((hand_closing && !want) || onset)
+        sent = hand_send(HAND_STOP);
+    else
+        want = hand_closing;             /* nothing to send: nothing changes */
+    if (want != hand_closing || onset) {
+        if (!sent)
+            return 0;                    /* UART1 busy (cannot happen): again next sample */
+        hand_closing = want;
+    }
+    hand_fault = out->fault;
+    if (!hand_closing && grip_left < 0)
+        grip_left = 0;
+    return sent;
 }
 #endif
 
@@ -258,10 +303,8 @@ ISR(ADC_vect)
                        (out.window ? WIRE_REFLEX_WINDOW : 0u) |
                        (out.fault ? WIRE_REFLEX_FAULT : 0u));
 #ifdef HAND_UART1
-    /* Only a rise moves the hand, never a lower position; on a faulty reading the hand
-     * holds (a rise waits for the next window with a good reading). */
-    if ((out.window || hand_pending) && !out.fault && out.command > (int16_t)hand_sent
-        && hand_send((uint16_t)out.command))
+    /* Rises become closing time (CLOSE, then STOP); a faulty reading holds (STOP). */
+    if (hand_step(&out))
         r.bits |= WIRE_REFLEX_HAND;
 #endif
     r.v = out.v;
@@ -334,13 +377,17 @@ int main(void)
     reflex_init(&chain, &chain_params);
 #endif
 #ifdef HAND_UART1
-    if (!watchdog_reset || (uint16_t)~hand_sent_check != hand_sent || hand_sent > REFLEX_CFG_HI)
-        hand_sent = (uint16_t)chain.m;   /* power-on: nothing sent yet, start at clip(p0) */
-    else if ((int16_t)hand_sent > chain.m)
-        chain.m = chain.P0 = (int16_t)hand_sent;   /* resume from where the hand was sent */
-    hand_sent_check = (uint16_t)~hand_sent;
+    if (!watchdog_reset || (uint16_t)~grip_level_check != (uint16_t)grip_level
+        || grip_level > REFLEX_CFG_HI || grip_level < REFLEX_CFG_LO)
+        grip_level = chain.m;            /* power-on: no grip added yet, start at clip(p0) */
+    else if (grip_level > chain.m)
+        chain.m = chain.P0 = grip_level; /* the MPI resumes from the grip already added */
+    grip_level_check = (uint16_t)~(uint16_t)grip_level;
 #endif
     setup();
+#ifdef HAND_UART1
+    hand_send(HAND_STOP);                /* every start holds: a reset may cut a closing */
+#endif
     set_sleep_mode(SLEEP_MODE_IDLE);     /* timers, ADC, TWI and UART keep running */
     sleep_enable();
     sei();

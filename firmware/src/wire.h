@@ -28,7 +28,7 @@
 #define WIRE_REFLEX_SPIKE 0x01u     /* the encoder fired on this sample */
 #define WIRE_REFLEX_WINDOW 0x02u    /* this sample completed a window: v is its count */
 #define WIRE_REFLEX_FAULT 0x04u     /* reading out of range or stuck: sample skipped */
-#define WIRE_REFLEX_HAND 0x08u      /* a hand packet with this command was queued */
+#define WIRE_REFLEX_HAND 0x08u      /* a hand packet (CLOSE or STOP) was queued */
 
 /* One sample period's values, in the board's raw units. */
 struct wire_sample {

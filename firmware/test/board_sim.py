@@ -15,10 +15,10 @@ produced:
 (OUT may end in .csv; the suffix is dropped.) ``slipreflex detect --board ADC.csv
 --out OUT2`` writes the same two files from the Python twin, so ``diff`` shows any
 disagreement. --dath selects the DATH encoder (default: fixed threshold, as in the
-issue's runner); --p0 the initial position; --mega runs the standalone ATmega2560
-build and also writes OUT.hand.csv (sample, cycles, position: every i-Limb packet it
-sent on UART1, with the CPU cycles from the completing sample's conversion start to
-the packet's first byte). The board's outputs are also checked against the twin
+issue's runner); --p0 the MPI's start (REFLEX_P0); --mega runs the standalone ATmega2560
+build and also writes OUT.hand.csv (sample, cycles, command: every i-Limb packet it
+sent on UART1 after the STOP every start sends, CLOSE or STOP, with the CPU cycles
+from its sample's conversion start to the packet's first byte). The board's outputs are also checked against the twin
 (firmware/test/check_board.py); exit status 1 if they differ.
 """
 
@@ -40,6 +40,31 @@ def _load(name: str):
     sys.modules[spec.name] = module
     spec.loader.exec_module(module)
     return module
+
+
+def slip_like(seed: int, k: int):
+    """Counts like the slip sensor's: a level, quiet stretches, slips (fast texture),
+    a disconnected sensor (near 0 V, 120 ms at k/3) and a stuck converter (identical
+    readings, 3.3 s at 2k/3). Deterministic for a seed; the tests and
+    benchmarks/firmware_budget.py run the standalone firmware on it.
+
+    Examples
+    --------
+    >>> a = slip_like(1, 3000)
+    >>> a.size, int(a[1000]), bool((a[2000:3000] == a[1999]).all())
+    (3000, 2, True)
+    """
+    import numpy as np
+
+    rng = np.random.default_rng(seed)
+    x = 300 + np.cumsum(rng.normal(0, 0.3, k))
+    for start in range(400, k - 200, 900):          # slips: texture at 30-60 Hz
+        n = int(rng.integers(80, 200))
+        x[start:start + n] += rng.uniform(3, 12) * np.sin(np.arange(n) * rng.uniform(0.6, 1.2))
+    adc = np.clip(np.round(x + rng.normal(0, 0.6, k)), 0, 1023).astype(int)
+    adc[k // 3:k // 3 + 40] = 2                       # sensor unplugged for 120 ms
+    adc[2 * k // 3:2 * k // 3 + 1100] = adc[2 * k // 3 - 1]   # stuck for 3.3 s
+    return adc
 
 
 def build(dath: bool, p0: int, build_root: Path = FIRMWARE / "build") -> Path:
@@ -110,7 +135,7 @@ def main(argv: list[str] | None = None) -> int:
             hand = [(s, c, p) for (s, p), c in zip(rep.packets, rep.latencies) if s < k]
             paths += (Path(f"{prefix}.hand.csv"),)
             write_columns(paths[-1], {"sample": [h[0] for h in hand], "cycles": [h[1] for h in hand],
-                                      "position": [h[2] for h in hand]})
+                                      "command": [h[2] for h in hand]})
     print(f"{args.adc_csv}: {k} samples through the board under simavr "
           f"({'DATH' if args.dath else 'fixed'}, p0 {args.p0}{', ATmega2560' if args.mega else ''})")
     print("  " + rep.summary().replace("\n", "\n  "))

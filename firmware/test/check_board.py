@@ -11,13 +11,15 @@ counts the harness injected, with the parameters that firmware was built with
 - every frame carries the twin's filtered sample (Q16), spike, fault, window flag,
   window count and command for its sample: bit-exact, on every sample;
 - (with uart1.bin, the standalone build) the bytes on UART1 are valid i-Limb packets
-  (slipreflex.devices.ilimb.PacketParser), each a position command for thumb, index
-  and middle with one value; the packets are exactly those the rule predicts from the
-  twin (a packet at each window whose command rose above the last one sent, unless
-  that reading was a fault), so positions only rise and a fault sends nothing; every
-  frame flagged HAND matches one packet; and each packet's first byte leaves within
-  1 ms (16,000 cycles) of the start of the conversion of the sample that completed its
-  window.
+  (slipreflex.devices.ilimb.PacketParser), each a CLOSE at full PWM or a STOP for
+  thumb, index and middle, never an OPEN or a POSITION; the first is the STOP every
+  start sends, before the first sample; the packets are exactly those the grip-only
+  rule predicts from the twin (slipreflex.board.board_hand: CLOSE when a rise owes
+  closing time, STOP when it is up or a fault starts), at the same samples; every
+  frame flagged HAND matches one packet; each packet's first byte leaves within 1 ms
+  (16,000 cycles) of the start of its sample's conversion; and every closing with no
+  fault lasts, from CLOSE's first byte to STOP's, g / 625 s rounded up to whole
+  samples (within 400 cycles of jitter).
 
 Exit status 0 when every check passes.
 """
@@ -35,6 +37,10 @@ from slipreflex.devices import ilimb, wire
 
 #: Latency bound from the completing sample's conversion start to the packet's first byte.
 LATENCY_LIMIT_CYCLES = hardware.F_CPU // 1000
+#: CPU cycles per 3 ms sample.
+PERIOD_CYCLES = round(hardware.F_CPU * hardware.DAQ_PERIOD_S)
+#: How much two packets' latencies may differ (conversion-start jitter, interrupt order).
+CLOSING_JITTER_CYCLES = 400
 
 
 @dataclass
@@ -45,8 +51,10 @@ class BoardReport:
     windows: int = 0
     spikes: int = 0
     faults: int = 0
-    packets: list[tuple[int, int]] = field(default_factory=list)   # (sample, position)
+    packets: list[tuple[int, str]] = field(default_factory=list)   # (sample, "CLOSE"/"STOP")
     latencies: list[int] = field(default_factory=list)            # cycles per packet
+    closings: list[tuple[int, int, float]] = field(default_factory=list)  # (g, cycles, g/625 s)
+    hand_commands: list[list[int]] = field(default_factory=list)  # command codes of every packet
     events: np.ndarray | None = None
     counts: np.ndarray | None = None
     commands: np.ndarray | None = None
@@ -61,10 +69,15 @@ class BoardReport:
                  f"{self.faults} faulty readings: board and twin compared on every sample"]
         if self.latencies:
             lat = np.array(self.latencies)
-            lines.append(f"{len(self.packets)} hand packets, positions "
-                         f"{[p for _, p in self.packets][:8]}{' ...' if len(self.packets) > 8 else ''}")
-            lines.append(f"window-completing sample -> first hand byte: max {lat.max()} cycles "
+            n_close = sum(c == "CLOSE" for _, c in self.packets)
+            lines.append(f"{len(self.packets)} hand packets after the start's STOP: {n_close} CLOSE, "
+                         f"{len(self.packets) - n_close} STOP; none OPEN or POSITION")
+            lines.append(f"sample -> first hand byte: max {lat.max()} cycles "
                          f"({lat.max() / hardware.F_CPU * 1e3:.3f} ms), mean {lat.mean():.0f} cycles")
+        if self.closings:
+            over = np.array([(got - exact) / hardware.F_CPU * 1e3 for _, got, exact in self.closings])
+            lines.append(f"{len(self.closings)} closings without a fault: CLOSE -> STOP lasted g / 625 s "
+                         f"+ {over.min():.3f} .. {over.max():.3f} ms")
         lines += [f"ERROR: {e}" for e in self.errors] or ["OK"]
         return "\n".join(lines)
 
@@ -114,16 +127,26 @@ def _compare(frames: list[wire.Frame], res: board.BoardResult, err: list[str]) -
         err.append("a frame carries a command other than the one in force")
 
 
-def expected_packets(res: board.BoardResult) -> list[tuple[int, int]]:
-    """(sample, position) of every hand packet the firmware's rule sends for this run."""
-    p = res.params
-    sent = min(max(p.p0, p.lo), p.hi)
-    out = []
-    for k, (end, cmd) in enumerate(zip(res.window_end_index(), res.commands.tolist())):
-        if not res.faults[end] and cmd > sent:
-            out.append((int(end), cmd))
-            sent = cmd
-    return out
+def expected_packets(res: board.BoardResult) -> list[tuple[int, hardware.HandCommand]]:
+    """(sample, CLOSE or STOP) of every hand packet the firmware sends for this run;
+    sample -1 is the STOP every start sends (slipreflex.board.board_hand)."""
+    return board.board_hand(res).packets
+
+
+def _packet_kind(pkt) -> hardware.HandCommand | None:
+    """CLOSE or STOP if ``pkt`` is one for exactly thumb, index and middle with the board's
+    value (full PWM, or 0), else None."""
+    fingers = tuple(c.finger for c in pkt)
+    kinds = {c.command for c in pkt}
+    vals = {c.value for c in pkt}
+    if fingers != tuple(hardware.TRIPOD) or len(kinds) != 1:
+        return None
+    kind = kinds.pop()
+    if kind == hardware.HandCommand.CLOSE and vals == {board.HAND_PWM}:
+        return hardware.HandCommand.CLOSE
+    if kind == hardware.HandCommand.STOP and vals == {0}:
+        return hardware.HandCommand.STOP
+    return None
 
 
 def _check_hand(outdir: Path, frames, res, adc_t, rep: BoardReport) -> None:
@@ -133,37 +156,61 @@ def _check_hand(outdir: Path, frames, res, adc_t, rep: BoardReport) -> None:
     parser = ilimb.PacketParser()
     packets = parser.feed(data)
     size = 3 + 4 * len(hardware.TRIPOD)
+    rep.hand_commands = [sorted({int(c.command) for c in pkt}) for pkt in packets]
     # The last packet may still be in flight when the run ends.
     if parser.rejected or parser.skipped_bytes or not 0 <= len(data) - len(packets) * size < size:
         err.append(f"UART1: {len(data)} bytes are not {len(packets)} whole i-Limb packets "
                    f"({parser.rejected} rejected, {parser.skipped_bytes} skipped)")
         return
-    values = []
+    kinds = []
     for i, pkt in enumerate(packets):
-        fingers = tuple(c.finger for c in pkt)
-        kinds = {c.command for c in pkt}
-        vals = {c.value for c in pkt}
-        if fingers != tuple(hardware.TRIPOD) or kinds != {hardware.HandCommand.POSITION} \
-                or len(vals) != 1:
-            err.append(f"hand packet {i} is not one position for thumb, index and middle: {pkt}")
+        if any(c.command in (hardware.HandCommand.OPEN, hardware.HandCommand.POSITION) for c in pkt):
+            err.append(f"hand packet {i} is an OPEN or a POSITION, which the board must never send: {pkt}")
             return
-        values.append(vals.pop())
+        kind = _packet_kind(pkt)
+        if kind is None:
+            err.append(f"hand packet {i} is not one CLOSE at PWM {board.HAND_PWM} or one STOP for "
+                       f"thumb, index and middle: {pkt}")
+            return
+        kinds.append(kind)
+    trace = board.board_hand(res)
+    want = [(k, c) for k, c in trace.packets if k < len(frames)]
+    if not kinds or kinds[0] != hardware.HandCommand.STOP or cycles[0] >= adc_t[0]:
+        err.append("the board did not send STOP before its first sample")
+        return
+    if [c for _, c in want] != kinds[:len(want)] or len(kinds) > len(want) + 1:
+        err.append(f"hand packets {[c.name for c in kinds[:10]]} are not those the twin predicts "
+                   f"{[c.name for _, c in want[:10]]}")
     flagged = [k for k, f in enumerate(frames) if f.reflex.hand]
-    want = [(k, v) for k, v in expected_packets(res) if k < len(frames)]
-    rep.packets = list(zip(flagged, values))
-    if [v for _, v in want] != values[:len(want)] or len(values) > len(want) + 1:
-        err.append(f"hand positions {values[:10]} are not the rises the twin predicts "
-                   f"{[v for _, v in want][:10]}")
-    if flagged != [k for k, _ in want]:
-        err.append(f"frames flagged HAND {flagged[:10]} are not the windows that rose {want[:10]}")
-    if any(b <= a for a, b in zip(values, values[1:])):
-        err.append("a hand packet did not raise the position")
-    for (k, _), j in zip(rep.packets, range(len(values))):
-        rep.latencies.append(int(cycles[j * size]) - int(adc_t[k]))
+    if flagged != [k for k, _ in want[1:]]:
+        err.append(f"frames flagged HAND {flagged[:10]} are not the samples the twin sends a packet at "
+                   f"{[k for k, _ in want[1:11]]}")
+    rep.packets = [(k, c.name) for k, c in want[1:]]
+    first = []                                    # first byte's cycle of packets 1..
+    for j, (k, _) in enumerate(want[1:len(kinds)], start=1):
+        first.append(int(cycles[j * size]))
+        rep.latencies.append(first[-1] - int(adc_t[k]))
     if rep.latencies and max(rep.latencies) >= LATENCY_LIMIT_CYCLES:
         err.append(f"hand packet latency {max(rep.latencies)} cycles is not under 1 ms")
     if any(lat <= 0 for lat in rep.latencies):
         err.append("a hand packet left before its sample was taken")
+    # Each closing with nothing owed before it and no fault until its STOP: the time from
+    # CLOSE's first byte to STOP's, against its grip's g / 625 s, in CPU cycles.
+    pk = want[1:1 + len(first)]
+    for j in range(len(pk) - 1):
+        (c, kc), (s, ks) = pk[j], pk[j + 1]
+        if kc != hardware.HandCommand.CLOSE or ks != hardware.HandCommand.STOP:
+            continue
+        if (c > 0 and trace.left[c - 1] != 0) or res.faults[c:s + 1].any():
+            continue
+        g = int(trace.rises[c:s].sum())
+        exact = g / hardware.FINGER_SPEED_UNITS_S * hardware.F_CPU
+        rep.closings.append((g, first[j + 1] - first[j], exact))
+    for g, got, exact in rep.closings:
+        if not exact - CLOSING_JITTER_CYCLES <= got < exact + PERIOD_CYCLES + CLOSING_JITTER_CYCLES:
+            err.append(f"a closing for {g} units lasted {got} cycles, not g / 625 s = {exact:.0f} "
+                       f"cycles rounded up to whole samples")
+            break
 
 
 def check(outdir: str | Path, *, dath: bool = True, p0: int = 0) -> BoardReport:

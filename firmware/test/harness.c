@@ -16,6 +16,9 @@
  *     firmware wakes it). Every burst read starting at ACCEL_XOUT_H latches a new
  *     pseudo-random reading. --no-imu leaves the bus empty (every address NACKed);
  *     --imu-from S plugs a powered-on (asleep) MPU6050 in at S simulated seconds.
+ *   - --stall-at S: at S simulated seconds the sample clock stops (OCIE1A cleared in
+ *     TIMSK1, as a hung interrupt would leave it): no conversion, no sample, nothing
+ *     feeds the watchdog, which resets the firmware 60 ms later (logged as "R <cycle>");
  *   - UART0 captured byte by byte with the CPU cycle at which the firmware wrote UDR0;
  *     on the ATmega2560 UART1 too (the i-Limb hand), into uart1.bin / uart1_cycles.bin.
  *
@@ -27,6 +30,8 @@
  *   I <cycle> <ax> <ay> <az>   the MPU6050 latched this reading for a burst read
  *   W <cycle> <reg> <value>    the firmware wrote an MPU6050 register
  *   E <cycle> <text>           something the firmware must never do (e.g. wrong ADC channel)
+ *   S <cycle>                  --stall-at: the sample clock was stopped
+ *   R <cycle>                  the firmware restarted (program counter back at 0)
  *   X <cycles> <sleep_cycles>  end of run
  * With --profile, also OUTDIR/profile.txt: "<pc> <cycles>" per flash byte address, the
  * awake CPU cycles spent on the instruction there (benchmarks/firmware_budget.py maps
@@ -198,6 +203,17 @@ static void mpu_from_avr(struct avr_irq_t *irq, uint32_t value, void *param)
     }
 }
 
+/* ---- --stall-at: stop the sample clock, as a hung interrupt handler would ----------- */
+#define TIMSK1_ADDR 0x6Fu           /* TIMSK1's data address on the ATmega328P and 2560 */
+#define OCIE1A_BIT 1u
+static avr_cycle_count_t stall(avr_t *a, avr_cycle_count_t when, void *param)
+{
+    (void)when; (void)param;
+    a->data[TIMSK1_ADDR] &= (uint8_t)~(1u << OCIE1A_BIT);
+    fprintf(events, "S %llu\n", (unsigned long long)a->cycle);
+    return 0;
+}
+
 static avr_cycle_count_t mpu_plug_in(avr_t *a, avr_cycle_count_t when, void *param)
 {
     (void)a; (void)when; (void)param;
@@ -235,11 +251,11 @@ int main(int argc, char **argv)
 {
     if (argc < 4) {
         fprintf(stderr, "usage: %s FIRMWARE.elf OUTDIR SECONDS [--no-imu | --imu-from S] "
-                        "[--flow-hz HZ] [--seed N] [--profile]\n", argv[0]);
+                        "[--flow-hz HZ] [--seed N] [--profile] [--mcu M] [--adc FILE] [--stall-at S]\n", argv[0]);
         return 2;
     }
     const char *elf = argv[1], *outdir = argv[2], *mcu = "atmega328p";
-    double seconds = atof(argv[3]), flow_hz = 97.0, imu_from = 0.0;
+    double seconds = atof(argv[3]), flow_hz = 97.0, imu_from = 0.0, stall_at = 0.0;
     int profile = 0;
     mpu.present = 1;
     for (int i = 4; i < argc; i++) {
@@ -247,6 +263,7 @@ int main(int argc, char **argv)
         else if (!strcmp(argv[i], "--profile")) profile = 1;
         else if (!strcmp(argv[i], "--imu-from") && i + 1 < argc) imu_from = atof(argv[++i]);
         else if (!strcmp(argv[i], "--flow-hz") && i + 1 < argc) flow_hz = atof(argv[++i]);
+        else if (!strcmp(argv[i], "--stall-at") && i + 1 < argc) stall_at = atof(argv[++i]);
         else if (!strcmp(argv[i], "--mcu") && i + 1 < argc) mcu = argv[++i];
         else if (!strcmp(argv[i], "--adc") && i + 1 < argc) read_adc_file(argv[++i]);
         else if (!strcmp(argv[i], "--seed") && i + 1 < argc)
@@ -310,6 +327,9 @@ int main(int argc, char **argv)
     avr_irq_register_notify(avr_io_getirq(avr, AVR_IOCTL_TWI_GETIRQ(0), TWI_IRQ_OUTPUT),
                             mpu_from_avr, NULL);
 
+    if (stall_at > 0)
+        avr_cycle_timer_register(avr, (avr_cycle_count_t)(stall_at * F_CPU_HZ), stall, NULL);
+
     const uint64_t end = (uint64_t)(seconds * F_CPU_HZ);
     int state = cpu_Running;
     static uint64_t pc_cycles[262144];
@@ -323,6 +343,8 @@ int main(int argc, char **argv)
         } else {
             state = avr_run(avr);
         }
+        if (avr->pc == 0 && avr->cycle > 0)
+            fprintf(events, "R %llu\n", (unsigned long long)avr->cycle);
         if (state == cpu_Done || state == cpu_Crashed)
             break;
     }

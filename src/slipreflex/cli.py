@@ -74,7 +74,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     usage: slipreflex ...
     """
     parser = build_parser()
-    args = parser.parse_args(argv)
+    argv = list(sys.argv[1:] if argv is None else argv)
+    args, extra = parser.parse_known_args(argv)
+    if extra:
+        from .commands._lists import list_hint
+
+        hint = list_hint(argv, extra)
+        if hint is None:
+            parser.parse_args(argv)     # argparse's own message and exit status 2
+        print(f"slipreflex {args.command}: error: {hint}", file=sys.stderr)
+        return 2
     if not getattr(args, "_run", None):
         parser.print_help()
         return 2

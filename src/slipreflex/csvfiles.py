@@ -23,7 +23,6 @@ from __future__ import annotations
 import csv
 import math
 import os
-import tempfile
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -196,47 +195,96 @@ def read_recording(path: str | os.PathLike, fs: float | None = None) -> Recordin
     >>> read_recording("examples/slip_example.csv").x.size > 0
     True
     """
+    from array import array
+
+    from .validation import LIMITS
+
     path = Path(path)
-    try:
-        with path.open(newline="") as fh:
-            rows = list(csv.reader(fh))
-    except (OSError, UnicodeDecodeError) as err:
-        raise DataError(f"{path}: cannot read: {getattr(err, 'strerror', None) or err}") from None
-    rows = [(i + 1, [c.strip() for c in row]) for i, row in enumerate(rows)
-            if any(c.strip() for c in row) and not row[0].lstrip().startswith(PREAMBLE_PREFIX)]
-    if not rows:
-        raise DataError(f"{path}: file is empty")
-    first_line, header = rows[0]
-    has_header = any(_is_text(c) for c in header)
-    body = rows[1:] if has_header else rows
-    if has_header and "x" in header and "t" in header:
-        it, ix = header.index("t"), header.index("x")
-    elif len(header) == 1:
-        it, ix = None, 0
-    else:
-        missing = [c for c in INPUT_COLUMNS if c not in header] if has_header else list(INPUT_COLUMNS)
-        raise DataError(f"{path}, line {first_line}: missing column(s) {', '.join(missing)} "
-                        f"(need a header with t and x, or a single column of volts)")
-    if it is None and fs is None:
-        raise DataError(f"{path}: single-column file needs a sampling rate (--fs)")
-    if not body:
-        raise DataError(f"{path}: no samples after the header")
-    t = np.empty(len(body))
-    x = np.empty(len(body))
-    width = len(header)
-    for k, (line, row) in enumerate(body):
+    cap = int(LIMITS["csv_samples"].hi)
+    preamble: dict[str, str] = {}
+    header: list[str] | None = None
+    first_line = 0
+    has_header = False
+    it: int | None = None
+    ix = 0
+    width = 0
+    t, x, lines = array("d"), array("d"), array("q")
+    for line_no, line in _lines(path):
+        if header is None and not (t or x) and line.lstrip().startswith(PREAMBLE_PREFIX):
+            if not lines and header is None:
+                _preamble_line(path, line_no, line, preamble)
+            continue
+        row = [c.strip() for c in next(csv.reader([line]), [])]
+        if not any(row) or row[0].startswith(PREAMBLE_PREFIX):
+            continue
+        if header is None:
+            header, first_line = row, line_no
+            has_header = any(_is_text(c) for c in header)
+            if has_header and "x" in header and "t" in header:
+                it, ix = header.index("t"), header.index("x")
+            elif len(header) == 1:
+                ix = 0
+            else:
+                missing = [c for c in INPUT_COLUMNS if c not in header] if has_header else list(INPUT_COLUMNS)
+                raise DataError(f"{path}, line {first_line}: missing column(s) {', '.join(missing)} "
+                                f"(need a header with t and x, or a single column of volts)")
+            if it is None and fs is None:
+                raise DataError(f"{path}: single-column file needs a sampling rate (--fs)")
+            width = len(header)
+            if has_header:
+                continue
         if len(row) < width:
-            raise DataError(f"{path}, line {line}: expected {width} cells, got {len(row)}")
-        x[k] = _number(path, line, header[ix] if has_header else "x", row[ix])
+            raise DataError(f"{path}, line {line_no}: expected {width} cells, got {len(row)}")
+        if len(x) >= cap:
+            raise DataError(f"{path}: more than {cap} samples, the most a recording may have "
+                            f"(docs/runtime.md, Limits)")
+        x.append(_number(path, line_no, header[ix] if has_header else "x", row[ix]))
         if it is not None:
-            t[k] = _number(path, line, "t", row[it])
-            if k and t[k] <= t[k - 1]:
-                raise DataError(f"{path}, line {line}: time not increasing ({t[k]!r} after {t[k - 1]!r})")
-    if it is None:
-        assert fs is not None, "refused above: no t column and no fs"
-        t = np.arange(len(body)) / float(fs)
-    lines = np.array([line for line, _ in body], dtype=int)
-    return Recording(path, t, x, lines, it is not None, read_preamble(path))
+            tk = _number(path, line_no, "t", row[it])
+            if t and tk <= t[-1]:
+                raise DataError(f"{path}, line {line_no}: time not increasing ({tk!r} after {t[-1]!r})")
+            t.append(tk)
+        lines.append(line_no)
+    if header is None:
+        raise DataError(f"{path}: file is empty")
+    if not x:
+        raise DataError(f"{path}: no samples after the header")
+    xs = np.frombuffer(x, dtype=float).copy()
+    ts = np.frombuffer(t, dtype=float).copy() if it is not None else np.arange(xs.size) / float(fs or 1.0)
+    return Recording(path, ts, xs, np.frombuffer(lines, dtype=np.int64).astype(int), it is not None, preamble)
+
+
+def _lines(path: Path):
+    """``(line number, text)`` of a CSV, streamed: a line over ``LIMITS["csv_line_bytes"]``, a NUL
+    byte or bytes that are not UTF-8 are one :class:`DataError` (a binary file, /dev/zero)."""
+    from .validation import LIMITS
+
+    limit = int(LIMITS["csv_line_bytes"].hi)
+    line_no = 0
+    try:
+        with path.open(newline="", encoding="utf-8") as fh:
+            while True:
+                line = fh.readline(limit + 1)
+                if not line:
+                    return
+                line_no += 1
+                if len(line) > limit:
+                    raise DataError(f"{path}, line {line_no}: longer than {limit} characters (not a CSV of "
+                                    f"samples?)")
+                if "\x00" in line:
+                    raise DataError(f"{path}, line {line_no}: a NUL byte (a binary file?)")
+                yield line_no, line
+    except UnicodeDecodeError as err:
+        raise DataError(f"{path}, line {line_no + 1}: not UTF-8 text (byte 0x{err.object[err.start]:02x})") from None
+    except OSError as err:
+        raise DataError(f"{path}: cannot read: {err.strerror or err}") from None
+
+
+def _preamble_line(path: Path, line_no: int, line: str, out: dict[str, str]) -> None:
+    key, sep, value = line.lstrip()[len(PREAMBLE_PREFIX):].partition(":")
+    if not sep or not key.strip():
+        raise DataError(f"{path}, line {line_no}: expected '# key: value', got {line.strip()!r}")
+    out[key.strip()] = value.strip()
 
 
 def _is_text(cell: str) -> bool:
@@ -275,22 +323,15 @@ def read_preamble(path: str | os.PathLike) -> dict[str, str]:
     """
     path = Path(path)
     out: dict[str, str] = {}
-    try:
-        with path.open(newline="") as fh:
-            for line_no, line in enumerate(fh, 1):
-                if not line.lstrip().startswith(PREAMBLE_PREFIX):
-                    break
-                key, sep, value = line.lstrip()[len(PREAMBLE_PREFIX):].partition(":")
-                if not sep or not key.strip():
-                    raise DataError(f"{path}, line {line_no}: expected '# key: value', got {line.strip()!r}")
-                out[key.strip()] = value.strip()
-    except (OSError, UnicodeDecodeError) as err:
-        raise DataError(f"{path}: cannot read: {getattr(err, 'strerror', None) or err}") from None
+    for line_no, line in _lines(path):
+        if not line.lstrip().startswith(PREAMBLE_PREFIX):
+            break
+        _preamble_line(path, line_no, line, out)
     return out
 
 
 def write_columns(path: str | os.PathLike, columns: Mapping[str, Sequence | np.ndarray], *,
-                  preamble: Mapping[str, str] | None = None) -> None:
+                  preamble: Mapping[str, str] | None = None, replace: bool = True) -> None:
     """Write equal-length columns to a CSV atomically.
 
     The file appears under its name only once it is complete (written to a
@@ -305,6 +346,9 @@ def write_columns(path: str | os.PathLike, columns: Mapping[str, Sequence | np.n
         Column name to values; all the same length.
     preamble : mapping of str to str, optional
         Written first as ``# key: value`` lines (one line each; see :func:`read_preamble`).
+    replace : bool
+        Replace an earlier file of that name (a regular file only; a symlink is replaced,
+        never followed); False refuses any existing name (:class:`FileExistsError`).
 
     Examples
     --------
@@ -319,20 +363,16 @@ def write_columns(path: str | os.PathLike, columns: Mapping[str, Sequence | np.n
     cols = [np.asarray(columns[n]) for n in names]
     if len({c.shape[0] for c in cols}) > 1:
         raise ValueError(f"columns of {path} differ in length: {[c.shape[0] for c in cols]}")
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
-    try:
-        with os.fdopen(fd, "w", newline="") as fh:
-            for key, value in (preamble or {}).items():
-                if "\n" in f"{key}{value}" or ":" in key:
-                    raise ValueError(f"preamble of {path}: key {key!r} or its value spans lines or has ':'")
-                fh.write(f"{PREAMBLE_PREFIX} {key}: {value}\n")
-            w = csv.writer(fh, lineterminator="\n")
-            w.writerow(names)
-            w.writerows(zip(*(c.tolist() for c in cols)))
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    from .paths import new_file
+
+    with new_file(path, "w", replace=replace) as fh:
+        for key, value in (preamble or {}).items():
+            if "\n" in f"{key}{value}" or ":" in key:
+                raise ValueError(f"preamble of {path}: key {key!r} or its value spans lines or has ':'")
+            fh.write(f"{PREAMBLE_PREFIX} {key}: {value}\n")
+        w = csv.writer(fh, lineterminator="\n")
+        w.writerow(names)
+        w.writerows(zip(*(c.tolist() for c in cols)))
 
 
 def cell_float(x: object, *, lenient: bool = False) -> float:

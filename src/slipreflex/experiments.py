@@ -1,6 +1,6 @@
 """The paper's experiments on the simulated rig: protocol, trial grid, parallel runs.
 
-One *trial* (SPEC 4): build the rig for a bottle with the trial's seed, grasp
+One *trial* (docs/method.md section 4): build the rig for a bottle with the trial's seed, grasp
 to 0.8 N and settle, record ``rest_s`` of the bottle at rest, then apply the
 perturbation (the sudden 10 g drop, or the 500 ml pour at 1 L/min) while the
 method's reflex runs in closed loop, and record every stream until
@@ -57,11 +57,12 @@ from .interrupts import Interrupted
 from .paper_experiments import LANDING_S
 from .progress import Progress
 from .thresholds import calibrate, calibration_seed
-from .validation import choices, flag, integer, positive, set_field
+from .validation import choices, flag, integer, set_field, within
+from .warmup import STARTUP_S, TRIAL_SIM_SPEED, estimate_wall_s  # noqa: F401  (public here too)
 
 __all__ = [
     "METHODS", "EXPERIMENTS", "BOTTLE_NAMES", "DEFAULT_SEED", "ReproduceConfig", "Cell",
-    "trial_seed", "calibration_seed", "estimate_wall_s", "TRIAL_SIM_SPEED", "closing_speed", "calibrate",
+    "trial_seed", "calibration_seed", "estimate_wall_s", "TRIAL_SIM_SPEED", "grasp_seeds", "closing_speed", "calibrate",
     "run_trial",
     "ReproduceResult", "run_reproduce", "write_outputs", "method_context",
     "RESULTS_CSV_COLUMNS", "LANDING_S",
@@ -168,15 +169,14 @@ class ReproduceConfig:
     def __post_init__(self) -> None:
         for name in ("variations", "independent_seeds"):
             set_field(self, name, flag(name, getattr(self, name)))
-        set_field(self, "trials", integer("trials", self.trials, lo=1))
+        set_field(self, "trials", within("trials", self.trials))
         set_field(self, "seed", integer("seed", self.seed, lo=0))
         known_bottles = tuple(self.plant.bottles) if self.plant is not None else BOTTLE_NAMES
         for name, known in (("bottles", known_bottles), ("experiments", experiment_specs.names())):
             set_field(self, name, choices(name, getattr(self, name), known))
         set_field(self, "methods", choices("methods", self.methods, methods.names(), any_case=True))
-        for name in ("rest_s", "after_s", "calibration_s", "rest_k", "grasp_force_n"):
-            set_field(self, name, positive(name, getattr(self, name)))
-        set_field(self, "swt_persist", integer("swt_persist", self.swt_persist, lo=0))
+        for name in ("rest_s", "after_s", "calibration_s", "rest_k", "grasp_force_n", "swt_persist"):
+            set_field(self, name, within(name, getattr(self, name)))
         from .analysis.onset import OnsetParams
 
         need = OnsetParams().baseline_s + 0.05
@@ -280,6 +280,18 @@ def trial_seed(master: int, experiment: str, bottle: str, trial: int, method: st
     return _seed63(child)
 
 
+def grasp_seeds(config: ReproduceConfig, bottle: str) -> list[int]:
+    """The trial seeds of ``bottle`` in a run, trial by trial (what its grasp check simulates).
+
+    Examples
+    --------
+    >>> len(grasp_seeds(ReproduceConfig(trials=3), "TR"))
+    6
+    """
+    return list(dict.fromkeys(trial_seed(config.seed, e, bottle, k) for k in range(config.trials)
+                              for e in config.experiments))
+
+
 @functools.lru_cache(maxsize=64)
 def _cell_sequence(master: int, e: int, b: int) -> tuple[Any, tuple[int, ...], int]:
     """(entropy, spawn_key, pool_size) of ``SeedSequence(master).spawn(2)[e].spawn(3)[b]``.
@@ -299,34 +311,6 @@ def _cell_sequence(master: int, e: int, b: int) -> tuple[Any, tuple[int, ...], i
 def _seed63(ss: np.random.SeedSequence) -> int:
     """A seed sequence as the 63-bit integer results.csv records."""
     return int(ss.generate_state(2, dtype=np.uint64)[0] >> np.uint64(1))
-
-
-#: Simulated seconds per wall second of one trial (simulation, reflex, analysis) on one
-#: worker, for the run-time estimate printed before a reproduction starts.
-#: ``python benchmarks/bench_reproduce.py --jobs 2`` prints it as simulated s per CPU s (798 at load
-#: average 1.4, 514-562 at 2.9-3.8, default grid, compiled closed loop, an AMD EPYC core); 600
-#: leaves a margin. A busy machine runs slower, and the progress lines say so.
-TRIAL_SIM_SPEED: float = 600.0
-#: Wall seconds before the first trial: imports, threshold calibration, worker start.
-STARTUP_S: float = 3.0
-
-
-def estimate_wall_s(config: ReproduceConfig, jobs: int) -> float:
-    """A rough run time (s) of ``config`` on ``jobs`` workers, before it starts.
-
-    From the simulated time of every trial and :data:`TRIAL_SIM_SPEED`; the progress
-    lines then measure the real pace.
-
-    Examples
-    --------
-    >>> small = ReproduceConfig(trials=1, bottles=("TR",), methods=("dath",))
-    >>> estimate_wall_s(small, 1) < estimate_wall_s(ReproduceConfig(), 1)
-    True
-    """
-    per_trial = [config.duration(e) for e in config.experiments]
-    sim_s = sum(per_trial) * config.trials * len(config.bottles) * len(config.methods)
-    cells = config.trials * len(config.bottles) * len(config.methods) * len(config.experiments)
-    return STARTUP_S + sim_s / (TRIAL_SIM_SPEED * max(1, min(jobs, cells)))
 
 
 def closing_speed() -> float:
@@ -411,8 +395,13 @@ def run_trial(cell: Cell, config: ReproduceConfig, thresholds: dict[str, float],
         load_t=tr.t if exp.records_load else None, load=tr.water_ml if exp.records_load else None,
         threshold=float("nan") if threshold is None else float(threshold))
     truth = {round(e.onset, 9): e for e in tr.slip_events}
+    before = tr.fall_time is not None and tr.fall_time < t_pert      # fell in the grasp or the rest
+    from .analysis.metrics import grip_without_slip
+
+    unslipped = grip_without_slip(tr.cmd_t, tr.cmd_value, p0, tr.slip_events)
     rows = [dataclasses.replace(r, grasp_position=p0, grasp_force_n=float(grasp.force_n),
-                                perturbation_s=t_pert, **_true_slip(truth.get(round(r.true_onset_s, 9))))
+                                perturbation_s=t_pert, fell_before_load=before, grip_without_slip=unslipped,
+                                **_true_slip(truth.get(round(r.true_onset_s, 9))))
             for r in analyse_trial(streams)]
     plot = trial_plot(cell, spec, tr, reflex, rows, t_pert) if keep_plot else None
     return rows, plot
@@ -461,15 +450,24 @@ def run_reproduce(config: ReproduceConfig | None = None, *, jobs: int | None = N
     t0 = time.perf_counter()
     import scipy.signal  # noqa: F401  (once, here: forked workers inherit it; each took ~1 s to import it)
 
-    from .sim.calibration import check_grasp
+    from .grasping import check_run_grasp
+    from .warmup import warm_kernels
+
     for b in config.bottles:                    # a grasp that cannot hold a bottle fails here, at once
-        check_grasp(config.bottle(b), config.grasp_force_n)
+        check_run_grasp(config, b, grasp_seeds(config, b))
     thresholds = calibrate(config) if set(config.methods) & set(methods.calibrated()) else {}
     specs = {m: methods.get(m) for m in config.methods}
+    if jobs > 1:       # compiled here once: the forked workers inherit it (each compiled its own before)
+        warm_kernels(config, method_context(config, thresholds), specs,
+                     trial_seed(config.seed, config.experiments[0], config.bottles[0], 0))
     t_cal = time.perf_counter() - t0
     cells = config.cells()
     plot_method = methods.DATH if methods.DATH in config.methods else config.methods[0]
-    want = {c.key for c in cells if plots and c.trial == 0 and c.method == plot_method}
+    # every bottle's first trial with DATH (the paper's Figs. 10-12, 15); NMSD's and SWT-SD's on the
+    # first bottle, so their detections are seen too
+    extra = {methods.NMSD, methods.SWT} & set(config.methods)
+    want = {c.key for c in cells if plots and c.trial == 0
+            and (c.method == plot_method or (c.method in extra and c.bottle == config.bottles[0]))}
     # the methods of one trial seed (consecutive cells) run in one call and share its grasp
     groups = [tuple(g) for _, g in itertools.groupby(cells, lambda c: (c.experiment, c.bottle, c.trial, c.seed))]
     calls = {g: functools.partial(_run_paired, g, config, thresholds, frozenset(want), specs) for g in groups}

@@ -1,4 +1,4 @@
-"""Facts about the paper's hardware, defined once (shared SPEC section 3).
+"""Facts about the paper's hardware, defined once (docs/method.md section 3).
 
 Every module that needs a sampling rate, a finger range, a finger id or a
 protocol byte imports it from here; no other module repeats these numbers.

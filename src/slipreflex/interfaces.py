@@ -24,7 +24,8 @@ import numpy as np
 
 from .hardware import Finger
 
-__all__ = ["DaqSample", "SampleSource", "Hand", "Reflex", "CompiledReflex", "InputKind", "GraspResult", "Rig"]
+__all__ = ["DaqSample", "SampleSource", "TactileSample", "TactileSource", "Hand", "Reflex", "CompiledReflex",
+           "InputKind", "GraspResult", "Rig"]
 
 #: What a reflex reads: the slip sensor (one float per sample) or the 4 x 4
 #: tactile array (one ``(4, 4)`` float array of newtons per sample).
@@ -81,6 +82,58 @@ class SampleSource(Protocol):
     """
 
     def read(self, timeout: float) -> list[DaqSample]: ...
+
+    def close(self) -> None: ...
+
+
+@dataclass(frozen=True, slots=True)
+class TactileSample:
+    """One tactile frame, as a :class:`TactileSource` delivers it.
+
+    Parameters
+    ----------
+    seq : int
+        Frame number (consecutive from the source's start).
+    t : float
+        Seconds on the source's clock (for a hand that stamps nothing: when the frame arrived).
+    frame : numpy.ndarray
+        Forces (N) in the source's ``shape``: ``(4, 4)`` for the paper's array, ``(6,)`` for
+        one fingertip of the Ability Hand.
+
+    Examples
+    --------
+    >>> TactileSample(0, 0.0, np.zeros(6)).frame.shape
+    (6,)
+    """
+
+    seq: int
+    t: float
+    frame: np.ndarray
+
+
+@runtime_checkable
+class TactileSource(Protocol):
+    """Anything that yields tactile frames: a hand's touch sensors, a DAQ with a tactile array.
+
+    ``read_frames(timeout)`` returns the frames that arrived since the last call
+    (possibly none after ``timeout`` seconds) and never blocks longer; ``shape`` is the
+    shape of every frame and ``fs`` the rate (Hz) at which they come. A tactile method
+    (``input_kind == "tactile"``) reads one.
+
+    Examples
+    --------
+    >>> class Still:
+    ...     shape, fs = (6,), 260.0
+    ...     def read_frames(self, timeout): return []
+    ...     def close(self): pass
+    >>> isinstance(Still(), TactileSource)
+    True
+    """
+
+    shape: tuple[int, ...]
+    fs: float
+
+    def read_frames(self, timeout: float) -> list[TactileSample]: ...
 
     def close(self) -> None: ...
 

@@ -75,8 +75,8 @@ from .interfaces import InputKind, Reflex
 from .validation import choice, flag, positive, text
 
 __all__ = ["MethodSpec", "MethodContext", "Detections", "register", "unregister", "get", "names",
-           "make", "label", "canonical", "chain_method", "calibrated", "load_plugins", "ENTRY_POINT_GROUP",
-           "EntryPoint",
+           "make", "label", "canonical", "chain_method", "applicable", "INPUT_NAMES", "calibrated",
+           "load_plugins", "ENTRY_POINT_GROUP", "EntryPoint",
            "FIXED", "DATH", "NMSD", "SWT", "AUTHORS_GUI", "AUTHORS_CHAIN", "DATH_EVENT",
            "DATH_FLOOR", "DATH_LEAK"]
 
@@ -256,7 +256,7 @@ def load_plugins() -> tuple[str, ...]:
     ``pyproject.toml``::
 
         [project.entry-points."slipreflex.methods"]
-        my-method = "my_package.methods:SPEC"
+        my-method = "my_package.methods:MY_METHODS"
 
     where the object is a :class:`MethodSpec`, a sequence of them, or a
     function returning either. Entry points are read in name order the first
@@ -427,6 +427,45 @@ def make(name: str, *, p0: float = 0.0, context: MethodContext | None = None, **
     spec = get(name)
     ctx = dataclasses.replace(context or MethodContext(), method=spec.name)
     return spec.build(float(p0), ctx, **params)
+
+
+#: What each input kind is, for messages.
+INPUT_NAMES: dict[str, str] = {"slip": "slip-sensor samples", "tactile": "tactile frames"}
+
+
+def applicable(name: str, supplies: tuple[str, ...] | frozenset[str] | set[str], where: str) -> MethodSpec:
+    """The specification of ``name`` after checking its input is one ``where`` supplies.
+
+    Parameters
+    ----------
+    name : str
+        A registered method (any case).
+    supplies : collection of {"slip", "tactile"}
+        The input kinds the command's source gives.
+    where : str
+        What supplies them, for the message ("detect's CSV of slip-sensor volts").
+
+    Raises
+    ------
+    ParameterError
+        One line: an unknown method, or one whose input is not supplied, naming the
+        methods that would apply.
+
+    Examples
+    --------
+    >>> applicable("DATH-event", {"slip"}, "the DAQ").name
+    'dath-event'
+    >>> applicable("nmsd", {"slip"}, "the DAQ")      # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    slipreflex.errors.ParameterError: --method nmsd reads tactile frames, which the DAQ does not supply (methods ...)
+    """
+    spec = get(name)
+    if spec.input_kind not in supplies:
+        fits = [n for n, s in _registry().items() if s.input_kind in supplies]
+        raise ParameterError(f"--method {spec.name} reads {INPUT_NAMES[spec.input_kind]}, which {where} does "
+                             f"not supply (methods that apply: {', '.join(fits) or 'none'})")
+    return spec
 
 
 # --- the built-in methods -------------------------------------------------------------------

@@ -1,8 +1,15 @@
-"""Output paths checked before any work starts.
+"""The file-safety helpers of every command: where outputs go, how they are created, how
+user files are read.
 
-A command that will write files checks its output location first, so a typo in
-``--out`` costs one line and exit status 2, not a finished run that dies at the end
-(or a traceback from deep inside the run).
+* :func:`output_dir` checks an output location before any work starts, so a typo in
+  ``--out`` costs one line and exit status 2, not a finished run that dies at the end.
+* :func:`create_new`, :func:`new_file`, :func:`publish` and :func:`unique_name` create
+  files new (exclusive create, no symlink followed), whole or absent (a temporary file in
+  the same folder, named when complete): a command never overwrites or deletes what it did
+  not create.
+* :class:`OutputSet` replaces a command's set of outputs in a folder as one set.
+* :func:`read_capped`, :func:`read_text` and :func:`read_toml` read a user's file with a
+  size cap and one-line errors (a device, a binary or Latin-1 file, bad TOML).
 
 Examples
 --------
@@ -14,13 +21,23 @@ True
 
 from __future__ import annotations
 
+import contextlib
+import errno
+import itertools
+import json
 import os
+import shutil
+import stat
 import tempfile
+from collections.abc import Iterable, Iterator, Sequence
 from pathlib import Path
+from typing import IO, Any
 
 from .errors import ParameterError
+from .validation import LIMITS
 
-__all__ = ["output_dir"]
+__all__ = ["output_dir", "create_new", "publish", "new_file", "unique_name", "OutputSet", "MANIFEST",
+           "read_capped", "read_text", "read_toml", "MAX_TEXT_BYTES"]
 
 
 def output_dir(path: str | os.PathLike, option: str = "--out") -> Path:
@@ -72,3 +89,376 @@ def output_dir(path: str | os.PathLike, option: str = "--out") -> Path:
     except OSError as err:
         raise ParameterError(f"{option} {path}: cannot write into the directory ({err.strerror})") from None
     return p
+
+
+# --- files a command creates: never someone else's, whole or absent -------------------------
+
+#: Flags of an exclusive create that follows no symlink (a name that exists, a dangling
+#: symlink included, is refused).
+_NEW = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
+
+
+def create_new(path: str | os.PathLike, mode: str = "wb") -> IO[Any]:
+    """Open ``path`` for writing only if nothing, not even a symlink, has that name yet.
+
+    Parameters
+    ----------
+    path : path-like
+    mode : {"wb", "w"}
+
+    Returns
+    -------
+    file object
+
+    Raises
+    ------
+    FileExistsError
+        Something already has the name (it is left as it was).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "new.bin"
+    >>> with create_new(p) as fh:
+    ...     _ = fh.write(b"x")
+    >>> create_new(p)
+    Traceback (most recent call last):
+    ...
+    FileExistsError: [Errno 17] File exists: ...
+    """
+    fd = os.open(path, _NEW, 0o666)
+    try:
+        return os.fdopen(fd, mode) if "b" in mode else os.fdopen(fd, mode, newline="", encoding="utf-8")
+    except BaseException:
+        os.close(fd)
+        raise
+
+
+def publish(tmp: str | os.PathLike, final: str | os.PathLike) -> None:
+    """Give the complete file ``tmp`` the name ``final`` without replacing anything there.
+
+    A hard link is made and ``tmp`` removed, so an existing ``final`` (a file, a symlink)
+    is left alone and :class:`FileExistsError` raised (``tmp`` is then kept).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp()); _ = (d / "a.part").write_text("1")
+    >>> publish(d / "a.part", d / "a"); sorted(p.name for p in d.iterdir())
+    ['a']
+    """
+    try:
+        os.link(tmp, final, follow_symlinks=False)
+    except (PermissionError, NotImplementedError, OSError) as err:
+        if isinstance(err, FileExistsError):
+            raise
+        if os.path.lexists(final):  # no hard links here (some file systems): check, then rename
+            raise FileExistsError(errno.EEXIST, os.strerror(errno.EEXIST), os.fspath(final)) from None
+        os.rename(tmp, final)
+        return
+    os.unlink(tmp)
+
+
+@contextlib.contextmanager
+def new_file(path: str | os.PathLike, mode: str = "w", *, replace: bool = False) -> Iterator[IO[Any]]:
+    """Write a file that appears under its name only when complete.
+
+    The data goes to a temporary file created new in the same folder; at the end of the
+    block it gets the name (:func:`publish`; with ``replace`` an earlier file of that name
+    is replaced, never followed if it is a symlink). On an error or Ctrl-C the temporary
+    file is removed and nothing else changed.
+
+    Parameters
+    ----------
+    path : path-like
+    mode : {"w", "wb"}
+    replace : bool
+        Replace an existing file of that name (only for files the caller owns).
+
+    Raises
+    ------
+    FileExistsError
+        Without ``replace``, something has the name already.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "out.txt"
+    >>> with new_file(p) as fh:
+    ...     _ = fh.write("done")
+    >>> p.read_text()
+    'done'
+    """
+    path = Path(path)
+    if not replace and os.path.lexists(path):
+        raise FileExistsError(errno.EEXIST, os.strerror(errno.EEXIST), os.fspath(path))
+    if replace and os.path.lexists(path) and not path.is_file():
+        raise IsADirectoryError(errno.EISDIR, "exists and is not a regular file", os.fspath(path))
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part")
+    try:
+        os.fchmod(fd, 0o666 & ~_umask())   # mkstemp's 0600 would hide the output from the group
+        with (os.fdopen(fd, mode) if "b" in mode else os.fdopen(fd, mode, newline="", encoding="utf-8")) as fh:
+            yield fh
+        if replace:
+            os.replace(tmp, path)
+        else:
+            publish(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def unique_name(folder: str | os.PathLike, stem: str, suffix: str, *, also: Sequence[str] = ()) -> Path:
+    """``folder/stem+suffix``, or ``stem-2``, ``stem-3``... : the first name free (``also`` are
+    extra suffixes that must be free too, e.g. a ``.part`` beside the file).
+
+    The caller still creates the file with :func:`create_new` (two processes may pick the
+    same name; the second then gets :class:`FileExistsError` and asks again).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp()); _ = (d / "run.mcap").write_text("")
+    >>> unique_name(d, "run", ".mcap").name
+    'run-2.mcap'
+    """
+    folder = Path(folder)
+    for k in itertools.count(1):
+        name = folder / (f"{stem}{suffix}" if k == 1 else f"{stem}-{k}{suffix}")
+        if not any(os.path.lexists(f"{name}{x}") for x in ("", *also)):
+            return name
+    raise AssertionError("unreachable")  # pragma: no cover
+
+
+#: Name of the file in which a command lists the outputs it wrote into a folder.
+MANIFEST: str = ".slipreflex-outputs.json"
+
+
+class OutputSet:
+    """The files a command writes into a folder, replaced as one set.
+
+    The command writes into a fresh hidden folder inside ``folder`` (:meth:`stage`); when
+    everything is written, :meth:`commit` swaps the set in with Ctrl-C held off: the
+    previous run's outputs (those the folder's manifest lists) are removed and the new
+    ones renamed into place, so the folder never mixes two runs. A stopped write
+    (:meth:`abort`, also on an error) leaves the previous set untouched. A name the
+    command would write that exists but no manifest of this command lists (the user's
+    own file) is refused before any work (:meth:`check`).
+
+    Parameters
+    ----------
+    folder : path-like
+        The output folder (created if missing).
+    command : str
+        The command that owns the set (``"reproduce"``), recorded in the manifest.
+    option : str
+        The option that named the folder, for messages.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> out = OutputSet(pathlib.Path(tempfile.mkdtemp()) / "o", "demo")
+    >>> out.check(["a.csv"])
+    >>> staged = out.stage(); _ = (staged / "a.csv").write_text("1")
+    >>> out.commit(staged)
+    ['a.csv']
+    >>> sorted(p.name for p in out.folder.iterdir())
+    ['.slipreflex-outputs.json', 'a.csv']
+    """
+
+    def __init__(self, folder: str | os.PathLike, command: str, option: str = "--out") -> None:
+        self.folder = output_dir(folder, option)
+        self.command = command
+        self.option = option
+
+    def owned(self) -> list[str]:
+        """Names the previous run of this command wrote here (from the manifest; [] if none).
+
+        Examples
+        --------
+        >>> import tempfile
+        >>> OutputSet(tempfile.mkdtemp(), "demo").owned()
+        []
+        """
+        try:
+            doc = json.loads((self.folder / MANIFEST).read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            return []
+        if not isinstance(doc, dict) or doc.get("command") != self.command:
+            return []
+        return [n for n in doc.get("files", []) if isinstance(n, str) and n and "/" not in n
+                and n not in (".", "..")]
+
+    def check(self, names: Iterable[str]) -> None:
+        """Refuse (before any work) names that exist here and this command did not write.
+
+        Examples
+        --------
+        >>> import tempfile, pathlib
+        >>> d = pathlib.Path(tempfile.mkdtemp()); _ = (d / "report.md").write_text("mine")
+        >>> OutputSet(d, "demo").check(["report.md"])  # doctest: +ELLIPSIS
+        Traceback (most recent call last):
+        ...
+        slipreflex.errors.ParameterError: --out ...: report.md exists and was not written by slipreflex demo; ...
+        """
+        owned = set(self.owned())
+        for name in names:
+            if os.path.lexists(self.folder / name) and name not in owned:
+                raise ParameterError(f"{self.option} {self.folder}: {name} exists and was not written by "
+                                     f"slipreflex {self.command}; move it or choose another {self.option}")
+
+    def stage(self) -> Path:
+        """A fresh, empty hidden folder inside ``folder`` to write this run's outputs into.
+
+        Examples
+        --------
+        >>> import tempfile
+        >>> OutputSet(tempfile.mkdtemp(), "demo").stage().name.startswith(".demo-new-")
+        True
+        """
+        return Path(tempfile.mkdtemp(dir=self.folder, prefix=f".{self.command}-new-"))
+
+    def abort(self, staged: str | os.PathLike) -> None:
+        """Remove a staging folder (the previous outputs stay as they were).
+
+        Examples
+        --------
+        >>> import tempfile
+        >>> out = OutputSet(tempfile.mkdtemp(), "demo"); s = out.stage(); out.abort(s); s.exists()
+        False
+        """
+        shutil.rmtree(staged, ignore_errors=True)
+
+    def commit(self, staged: str | os.PathLike) -> list[str]:
+        """Swap the staged outputs in for the previous run's; returns the names now in place.
+
+        Examples
+        --------
+        >>> import tempfile
+        >>> out = OutputSet(tempfile.mkdtemp(), "demo"); s = out.stage()
+        >>> out.commit(s)
+        []
+        """
+        from .interrupts import signals_ignored
+
+        staged = Path(staged)
+        names = sorted(p.name for p in staged.iterdir())
+        self.check(names)  # a file the user put here meanwhile is still not ours to replace
+        with signals_ignored():
+            old = Path(tempfile.mkdtemp(dir=self.folder, prefix=f".{self.command}-old-"))
+            try:
+                for name in self.owned():
+                    if os.path.lexists(self.folder / name):
+                        os.rename(self.folder / name, old / name)
+                with new_file(self.folder / MANIFEST, replace=True) as fh:
+                    json.dump({"command": self.command, "files": names}, fh, indent=1)
+                    fh.write("\n")
+                for name in names:
+                    os.rename(staged / name, self.folder / name)
+            finally:
+                shutil.rmtree(old, ignore_errors=True)
+                shutil.rmtree(staged, ignore_errors=True)
+        return names
+
+
+# --- user input files: bounded reads, one-line errors ------------------------------------------
+
+#: Largest text input (TOML, results CSV) a command reads, bytes (``LIMITS["text_file_bytes"]``,
+#: docs/runtime.md "Limits").
+MAX_TEXT_BYTES: int = int(LIMITS["text_file_bytes"].hi)
+
+
+def _where(what: str, path: Any) -> str:
+    return f"{what} {os.fspath(path)}" if what else os.fspath(path)
+
+
+def read_capped(path: str | os.PathLike, what: str, limit: int = MAX_TEXT_BYTES, kind: str = "file") -> bytes:
+    """The bytes of a user's file, refusing a non-regular file or one over ``limit`` bytes.
+
+    Raises
+    ------
+    ParameterError
+        Missing, a folder, a device (``/dev/zero``), unreadable or too large; one line
+        naming ``what`` and the path.
+
+    Examples
+    --------
+    >>> read_capped("/dev/zero", "--objects")
+    Traceback (most recent call last):
+    ...
+    slipreflex.errors.ParameterError: --objects /dev/zero: not a regular file
+    """
+    p = os.fspath(path)
+    try:
+        fd = os.open(p, os.O_RDONLY | getattr(os, "O_CLOEXEC", 0))
+    except FileNotFoundError:
+        raise ParameterError(f"{_where(what, p)}: no such file") from None
+    except OSError as err:
+        raise ParameterError(f"{_where(what, p)}: cannot read: {err.strerror or err}") from None
+    st = os.fstat(fd)
+    if not stat.S_ISREG(st.st_mode):
+        os.close(fd)
+        raise ParameterError(f"{_where(what, p)}: " + (f"is a directory, not a {kind}" if stat.S_ISDIR(st.st_mode)
+                                                       else "not a regular file"))
+    with os.fdopen(fd, "rb") as fh:
+        if st.st_size > limit:
+            raise ParameterError(f"{_where(what, p)}: {st.st_size} bytes, more than the {limit} a command reads")
+        try:
+            data = fh.read(limit + 1)
+        except OSError as err:
+            raise ParameterError(f"{_where(what, p)}: cannot read: {err.strerror or err}") from None
+    if len(data) > limit:
+        raise ParameterError(f"{_where(what, p)}: more than the {limit} bytes a command reads")
+    return data
+
+
+def read_text(path: str | os.PathLike, what: str, limit: int = MAX_TEXT_BYTES, kind: str = "file") -> str:
+    """A user's text file as UTF-8 (:func:`read_capped`; a binary or Latin-1 file is one line).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "l1.toml"; _ = p.write_bytes(b"a = '\\xe9'")
+    >>> read_text(p, "--ranges")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    slipreflex.errors.ParameterError: --ranges ...l1.toml: not UTF-8 text (byte 0xe9 at offset 5)...
+    """
+    data = read_capped(path, what, limit, kind)
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as err:
+        raise ParameterError(f"{_where(what, path)}: not UTF-8 text (byte 0x{data[err.start]:02x} at "
+                             f"offset {err.start}); save it as UTF-8") from None
+    if "\x00" in text:
+        raise ParameterError(f"{_where(what, path)}: a binary file (NUL byte at offset {text.index(chr(0))})")
+    return text
+
+
+def read_toml(path: str | os.PathLike, what: str) -> dict[str, Any]:
+    """A user's TOML file as a dict; every failure is one :class:`ParameterError` line.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "o.toml"; _ = p.write_text("bottles = [")
+    >>> read_toml(p, "--objects")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    slipreflex.errors.ParameterError: --objects ...o.toml: invalid TOML: ...
+    """
+    import tomllib
+
+    text = read_text(path, what, kind="TOML file")
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise ParameterError(f"{_where(what, path)}: invalid TOML: {err}") from None
+    except RecursionError:
+        raise ParameterError(f"{_where(what, path)}: invalid TOML: nested too deeply") from None

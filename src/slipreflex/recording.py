@@ -23,18 +23,32 @@ started, on the PC's clock):
 /chain/state       per sample: filtered value, threshold in force, event (bool)
 /chain/events      one message per spike
 /chain/windows     one message per complete window: spike count
-/hand/commands     reflex commands: target (the reflex's output), fingers, targets (the
-                   position sent to each finger: its start plus the rise of the
-                   reflex's command, never below the start), sent (bool), note (why
-                   not sent: "at start", "stale", "rejected", "hand-port"), latency
+/hand/commands     reflex commands: target (the reflex's output), fingers, targets (empty:
+                   the loop sends no positions), grip (the grip, units, the command adds
+                   to each finger, sent as closing time), sent (bool), note (why
+                   not sent: "at start", "no rise", "stale", "rejected", "hand-port"), latency
                    (s from reading the bytes) and frame_latency (s from the frame's
                    own arrival)
 /board/state       (``run --board-reflex``) per sample: what the board's own chain sent
                    (spike, window, fault, hand, v, command, x in Q16 counts) and
                    ``match``, whether its Python twin agreed
+/hand/grip         with every command, the grip (units) it adds to each finger as flat
+                   fields (``thumb``, ``index``, ``middle``, ...; null for a finger not
+                   commanded): the per-finger form of /hand/commands' ``grip``, one plot
+                   line per finger
+/tactile/frames    (a tactile method) every frame as flat fields: ``total`` and ``peak`` (N),
+                   ``position`` (as /daq/samples), then one ``taxel_K`` per taxel (C order)
+/rig/truth         (``virtual-rig --live``) the simulated rig's truth per sample: the
+                   object's displacement and slip (m), velocity (m/s), the normal force
+                   per contact (N), its load (kg), slipping, fallen, and the measured
+                   finger positions
 /faults            watchdog, device and recording faults, with the action taken
 /stats             periodic DAQ and loop counters
 =================  ===========================================================
+
+Every field of a topic but ``/hand/commands`` (``fingers``, ``targets``) and ``/stats``
+(``counters``) is a scalar: what a live plot (``--live``, :mod:`slipreflex.live`) draws as
+one line. :func:`schema` gives a topic's schema, the one the recording and the live view share.
 
 Examples
 --------
@@ -60,14 +74,64 @@ from typing import IO, Any
 from .errors import DataError, SlipreflexError
 
 __all__ = [
-    "TOPICS", "METADATA_NAME", "RecordingError", "Recorder", "Recording", "read_recording",
+    "TOPICS", "METADATA_NAME", "RecordingError", "Recorder", "Recording", "read_recording", "schema",
+    "FINGER_FIELDS", "PART_SUFFIX", "CHECKSUM_KEY", "LIBRARY", "sealed", "verify", "PLANNED_SAMPLES",
 ]
+
+#: Key, in the :data:`METADATA_NAME` record, of the number of samples a run with a planned
+#: duration should record (``run --duration``): a reader then knows what a cut file misses.
+PLANNED_SAMPLES: str = "planned_samples"
 
 #: Name of the metadata record holding the chain parameters and run facts.
 METADATA_NAME: str = "slipreflex"
 
+#: A recording is written as ``NAME.part`` and named ``NAME`` when closed (a run killed mid-way
+#: leaves the ``.part``: ``slipreflex recover`` reads it).
+PART_SUFFIX: str = ".part"
+
+#: The writer's library string; it says the metadata records carry :data:`CHECKSUM_KEY`.
+LIBRARY: str = "slipreflex; metadata sha256"
+
+#: Key, in every metadata record this writer makes, of the record's checksum (MCAP metadata
+#: records have no CRC of their own): sha256 of the name and the other entries, 16 hex digits.
+CHECKSUM_KEY: str = "_sha256"
+
+
+def _digest(name: str, data: Mapping[str, str]) -> str:
+    import hashlib
+
+    doc = json.dumps([name, sorted((k, v) for k, v in data.items() if k != CHECKSUM_KEY)])
+    return hashlib.sha256(doc.encode()).hexdigest()[:16]
+
+
+def sealed(name: str, data: Mapping[str, Any]) -> dict[str, str]:
+    """A metadata record's entries as strings, with their checksum added.
+
+    Examples
+    --------
+    >>> rec = sealed("run", {"p0": 147}); verify("run", rec), verify("run", {**rec, "p0": "157"})
+    (True, False)
+    """
+    out = {str(k): str(v) for k, v in data.items()}
+    out[CHECKSUM_KEY] = _digest(name, out)
+    return out
+
+
+def verify(name: str, data: Mapping[str, str]) -> bool:
+    """True if the record carries its checksum and it matches.
+
+    Examples
+    --------
+    >>> verify("run", {"p0": "147"})
+    False
+    """
+    return data.get(CHECKSUM_KEY) == _digest(name, data)
+
 _N, _I, _B, _S = (["number", "null"], "integer", "boolean", "string")
 _ACCEL = {"ax": "number", "ay": "number", "az": "number"}
+#: The per-finger fields of /hand/grip and /rig/truth (the hand's fingers by name, lower case).
+FINGER_FIELDS: tuple[str, ...] = ("thumb", "index", "middle", "ring", "little", "thumb_rotator")
+_TAXEL = {"type": "number"}
 
 #: Every topic: its schema name and its fields with JSON-schema types.
 TOPICS: dict[str, tuple[str, dict[str, Any]]] = {
@@ -82,12 +146,20 @@ TOPICS: dict[str, tuple[str, dict[str, Any]]] = {
     "/chain/windows": ("slipreflex.Window", {"seq": _I, "t": "number", "count": _I}),
     "/hand/commands": ("slipreflex.Command", {"seq": _I, "t": "number", "target": "number",
                                               "fingers": {"type": "array", "items": {"type": _S}},
-                                              "targets": {"type": "object"},
+                                              "targets": {"type": "object"}, "grip": {"type": "object"},
                                               "sent": _B, "note": _S, "latency": _N,
                                               "frame_latency": _N}),
     "/board/state": ("slipreflex.BoardState", {"seq": _I, "t": "number", "spike": _B, "window": _B,
                                                "fault": _B, "hand": _B, "v": _I, "command": _I,
                                                "x": _I, "match": _B}),
+    "/hand/grip": ("slipreflex.FingerGrip", {"seq": _I, "t": "number", "sent": _B,
+                                                   **{f: _N for f in FINGER_FIELDS}}),
+    "/tactile/frames": ("slipreflex.TactileFrame", {"seq": _I, "t": "number", "total": "number",
+                                                    "peak": "number", "position": _N}),
+    "/rig/truth": ("slipreflex.RigTruth", {"t": "number", "displacement": "number", "slip": "number",
+                                           "velocity": "number", "normal_force": "number",
+                                           "load_mass": "number", "slipping": _B, "fallen": _B,
+                                           **{f: _N for f in FINGER_FIELDS}}),
     "/faults": ("slipreflex.Fault", {"time": "number", "kind": _S, "message": _S, "action": _S}),
     "/stats": ("slipreflex.Stats", {"time": "number", "counters": {"type": "object"}}),
 }
@@ -103,10 +175,46 @@ class RecordingError(SlipreflexError, OSError):
     """
 
 
-def _schema(name: str, fields: dict[str, Any]) -> bytes:
+def _schema(name: str, fields: dict[str, Any], extra: dict[str, Any] | None = None) -> bytes:
     props = {k: (v if isinstance(v, dict) else {"type": v}) for k, v in fields.items()}
     return json.dumps({"$schema": "http://json-schema.org/draft-07/schema#", "title": name,
-                       "type": "object", "properties": props}).encode()
+                       "type": "object", "properties": props, **(extra or {})}).encode()
+
+
+#: Topics with fields beyond their listed ones: /tactile/frames has one number per taxel.
+_EXTRA: dict[str, dict[str, Any]] = {
+    "/tactile/frames": {"patternProperties": {"^taxel_[0-9]+$": _TAXEL}},
+}
+
+
+def schema(topic: str) -> tuple[str, bytes]:
+    """The name and JSON schema (bytes) of a topic: the one definition the recording and the
+    live view (:mod:`slipreflex.live`) both use.
+
+    Parameters
+    ----------
+    topic : str
+        One of :data:`TOPICS`.
+
+    Returns
+    -------
+    (str, bytes)
+
+    Raises
+    ------
+    RecordingError
+        For an unknown topic.
+
+    Examples
+    --------
+    >>> name, data = schema("/chain/windows")
+    >>> name, json.loads(data)["properties"]["count"]
+    ('slipreflex.Window', {'type': 'integer'})
+    """
+    if topic not in TOPICS:
+        raise RecordingError(f"unknown topic {topic!r} (known: {', '.join(TOPICS)})")
+    name, fields = TOPICS[topic]
+    return name, _schema(name, fields, _EXTRA.get(topic))
 
 
 class Recorder:
@@ -169,13 +277,25 @@ class Recorder:
         self.error: OSError | None = None
         self.messages = 0
         self._closed = False
+        self.part_path: str | None = None
         if isinstance(path, (str, os.PathLike)):
+            from .paths import create_new
+
             self.path = os.fspath(path)
+            self.part_path = self.path + PART_SUFFIX
+            for name in (self.path, self.part_path):
+                if os.path.lexists(name):
+                    raise RecordingError(f"{name}: exists; a recording is always a new file (give another "
+                                         f"name, or move the old one)")
             try:
-                self._fh: IO[bytes] = open(self.path, "wb")
+                self._fh: IO[bytes] = create_new(self.part_path)
+            except FileExistsError:
+                raise RecordingError(f"{self.part_path}: exists; a recording is always a new file") from None
             except OSError as err:
                 raise RecordingError(f"{self.path}: cannot create recording: "
                                      f"{err.strerror or err}") from None
+            st = os.fstat(self._fh.fileno())
+            self._identity = (st.st_dev, st.st_ino)
             self._owns = True
         else:
             self.path = str(getattr(path, "name", "<stream>"))
@@ -183,18 +303,19 @@ class Recorder:
             self._owns = False
         try:
             self._writer = Writer(self._fh, chunk_size=chunk_size, compression=comp)
-            self._writer.start(profile="", library="slipreflex")
+            self._writer.start(profile="", library=LIBRARY)
             self._channels: dict[str, int] = {}
-            for topic, (name, fields) in TOPICS.items():
-                sid = self._writer.register_schema(name=name, encoding="jsonschema",
-                                                   data=_schema(name, fields))
+            for topic in TOPICS:
+                name, data = schema(topic)
+                sid = self._writer.register_schema(name=name, encoding="jsonschema", data=data)
                 self._channels[topic] = self._writer.register_channel(
                     topic=topic, message_encoding="json", schema_id=sid)
             for name, data in (metadata or {}).items():
-                self._writer.add_metadata(name, {str(k): str(v) for k, v in data.items()})
+                self._writer.add_metadata(name, sealed(name, data))
             self._writer.flush()
         except OSError as err:
             self._close_file()
+            self._remove_part()
             raise RecordingError(f"{self.path}: cannot write recording: {err.strerror or err}") from None
         self._last_flush = time.monotonic()
         self._seq = 0
@@ -310,7 +431,7 @@ class Recorder:
         if not self.ok:
             return False
         try:
-            self._writer.add_metadata(name, {str(k): str(v) for k, v in data.items()})
+            self._writer.add_metadata(name, sealed(name, data))
         except OSError as err:
             return self._failed(err)
         return True
@@ -342,6 +463,46 @@ class Recorder:
                 self._failed(err)
         self._closed = True
         self._close_file()
+        if self.part_path is not None and self._owns:
+            from .paths import publish
+
+            try:
+                publish(self.part_path, self.path)
+            except FileExistsError:   # someone made the name meanwhile: the recording keeps its .part name
+                self._failed(FileExistsError(f"{self.path} appeared during the run; the recording is "
+                                             f"{self.part_path}"))
+                self.path = self.part_path
+            except OSError as err:
+                self._failed(err)
+                self.path = self.part_path
+
+    def _remove_part(self) -> None:
+        """Remove the file this recorder created, if it is still the one it created."""
+        if self.part_path is None:
+            return
+        try:
+            st = os.lstat(self.part_path)
+        except OSError:
+            return
+        if (st.st_dev, st.st_ino) == getattr(self, "_identity", None):
+            os.unlink(self.part_path)
+
+    def discard(self) -> None:
+        """Close and remove the recording: for a run that never started (its ports did not open).
+
+        Only the file this recorder created in this run is removed, never another.
+
+        Examples
+        --------
+        >>> import tempfile, os
+        >>> p = os.path.join(tempfile.mkdtemp(), "r.mcap")
+        >>> rec = Recorder(p); rec.discard(); os.listdir(os.path.dirname(p))
+        []
+        """
+        if not self._closed:
+            self._closed = True
+            self._close_file()
+        self._remove_part()
 
     def __enter__(self) -> Recorder:
         return self
@@ -374,6 +535,11 @@ class Recording:
     before_damage : dict of str to int
         Messages per topic read before the first damaged record (all of them
         if nothing was damaged): the part a replay can check exactly.
+    bad_metadata : list of str
+        Metadata records whose checksum does not match (left out of ``metadata``).
+    sealed : bool
+        The writer sealed its metadata records with checksums (every recording
+        of this version; older ones are read unchecked).
 
     Examples
     --------
@@ -389,28 +555,32 @@ class Recording:
     damaged: list[tuple[int, str]] = field(default_factory=list)
     cut_at: int | None = None
     before_damage: dict[str, int] | None = None
+    bad_metadata: list[str] = field(default_factory=list)
+    sealed: bool = False
 
-    def expected_samples(self) -> int:
-        """About how many samples the run recorded: its summary, its last /stats, or the time span.
+    def expected_samples(self) -> int | None:
+        """How many samples the file should hold, when it says: its run summary, the count a run
+        with ``--duration`` planned (:data:`PLANNED_SAMPLES`), or its last /stats; else None.
 
         Examples
         --------
         >>> Recording("x.mcap", messages={"/stats": [{"counters": {"samples": 40}}]}).expected_samples()
         40
+        >>> Recording("x.mcap", metadata={METADATA_NAME: {PLANNED_SAMPLES: "6667"}}).expected_samples()
+        6667
+        >>> Recording("x.mcap").expected_samples() is None
+        True
         """
-        got = len(self.topic("/daq/samples"))
-        guesses = [got]
         summary = self.metadata.get("run_summary", {})
         if str(summary.get("samples", "")).isdigit():
-            guesses.append(int(summary["samples"]))
+            return int(summary["samples"])
+        planned = str(self.metadata.get(METADATA_NAME, {}).get(PLANNED_SAMPLES, ""))
+        if planned.isdigit():
+            return int(planned)
         stats = self.topic("/stats")
-        if stats and isinstance(stats[-1].get("counters", {}).get("samples"), int):
-            guesses.append(stats[-1]["counters"]["samples"])
-        samples = self.topic("/daq/samples")
-        if len(samples) > 1:
-            from .hardware import DAQ_PERIOD_S
-            guesses.append(round((samples[-1]["t"] - samples[0]["t"]) / DAQ_PERIOD_S) + 1)
-        return max(guesses)
+        if stats and self.cut_at is None and isinstance(stats[-1].get("counters", {}).get("samples"), int):
+            return stats[-1]["counters"]["samples"]
+        return None
 
     def gaps(self) -> str:
         """One line on what is missing, or "" for an intact file.
@@ -420,17 +590,25 @@ class Recording:
         >>> Recording("x.mcap", complete=True).gaps()
         ''
         >>> Recording("x.mcap", damaged=[(2061, "CRC")]).gaps()
-        'x.mcap: read 0 of about 0 samples; chunk at byte 2061 damaged (CRC)'
+        'x.mcap: read 0 samples (how many it should hold is not recorded); chunk at byte 2061 damaged (CRC)'
+        >>> Recording("x.mcap", complete=True, bad_metadata=["slipreflex"]).gaps()
+        "x.mcap: damaged metadata: record 'slipreflex' fails its checksum"
         """
-        parts = [f"chunk at byte {pos} damaged ({why})" for pos, why in self.damaged]
+        parts = [f"damaged metadata: record {name!r} fails its checksum" for name in self.bad_metadata]
+        parts += [f"chunk at byte {pos} damaged ({why})" for pos, why in self.damaged]
         if self.cut_at is not None:
             parts.append(f"cut short at byte {self.cut_at} (a crash?)")
         elif not self.complete and not self.damaged:
             parts.append("ends without its footer")
         if not parts:
             return ""
-        return (f"{self.path}: read {len(self.topic('/daq/samples'))} of about "
-                f"{self.expected_samples()} samples; " + "; ".join(parts))
+        got = len(self.topic("/daq/samples"))
+        if not self.complete or self.damaged:
+            want = self.expected_samples()
+            head = (f"read {got} of the {want} samples it should hold" if want is not None else
+                    f"read {got} samples (how many it should hold is not recorded)")
+            parts.insert(len(self.bad_metadata), head)
+        return f"{self.path}: " + "; ".join(parts)
 
     def topic(self, name: str) -> list[dict[str, Any]]:
         """Messages of one topic (empty list if none).
@@ -473,13 +651,15 @@ def read_recording(path: str | os.PathLike) -> Recording:
     ...
     slipreflex.recording.RecordingError: /nonexistent.mcap: cannot open recording: No such file or directory
     """
-    from mcap.records import Channel, Message, Metadata
+    from mcap.records import Channel, Header, Message, Metadata
 
     path = os.fspath(path)
     rec = Recording(path=path)
     topics: dict[int, str] = {}
     for pos, record in _scan(path, rec):
-        if isinstance(record, Channel):
+        if isinstance(record, Header):
+            rec.sealed = "metadata sha256" in str(record.library)
+        elif isinstance(record, Channel):
             topics[record.id] = record.topic
         elif isinstance(record, Message):
             topic = topics.get(record.channel_id)
@@ -493,7 +673,12 @@ def read_recording(path: str | os.PathLike) -> Recording:
             rec.messages.setdefault(topic, []).append(msg)
             rec.log_times.setdefault(topic, []).append(record.log_time)
         elif isinstance(record, Metadata):
-            rec.metadata[record.name] = dict(record.metadata)
+            data = dict(record.metadata)
+            if rec.sealed and not verify(record.name, data):
+                rec.bad_metadata.append(record.name)
+                continue
+            data.pop(CHECKSUM_KEY, None)
+            rec.metadata[record.name] = data
     if rec.before_damage is None:
         rec.before_damage = {t: len(m) for t, m in rec.messages.items()}
     return rec
@@ -544,14 +729,41 @@ def _resync(data: bytes, pos: int) -> int | None:
     return None
 
 
+def _read_bounded(path: str) -> bytes:
+    """The file's bytes, its magic checked first and its size capped (``LIMITS["recording_bytes"]``):
+    a device such as /dev/zero or a huge file is one line, not a MemoryError."""
+    import stat
+
+    from .validation import LIMITS
+
+    cap = int(LIMITS["recording_bytes"].hi)
+    try:
+        with open(path, "rb") as fh:
+            st = os.fstat(fh.fileno())
+            if stat.S_ISDIR(st.st_mode):
+                raise RecordingError(f"{path}: is a directory, not a recording")
+            head = fh.read(len(_MAGIC))
+            if head != _MAGIC:
+                if head and _MAGIC.startswith(head) and stat.S_ISREG(st.st_mode):
+                    raise DataError(f"{path}: cut short after {len(head)} bytes, before its first record")
+                raise DataError(f"{path}: not an MCAP file (no MCAP magic at its start)")
+            if stat.S_ISREG(st.st_mode) and st.st_size > cap:
+                raise DataError(f"{path}: {st.st_size} bytes, more than the {cap} a recording may have "
+                                f"(docs/runtime.md, Limits)")
+            data = head + fh.read(cap + 1 - len(head))
+    except OSError as err:
+        if isinstance(err, RecordingError):
+            raise
+        raise RecordingError(f"{path}: cannot open recording: {err.strerror or err}") from None
+    if len(data) > cap:
+        raise DataError(f"{path}: more than the {cap} bytes a recording may have (docs/runtime.md, Limits)")
+    return data
+
+
 def _scan(path: str, rec: Recording) -> Any:
     """Yield ``(offset, record)`` for every readable record of an MCAP file, skipping damaged
     records (noted in ``rec.damaged``) and stopping at a record a crash cut (``rec.cut_at``)."""
-    try:
-        with open(path, "rb") as fh:
-            data = fh.read()
-    except OSError as err:
-        raise RecordingError(f"{path}: cannot open recording: {err.strerror or err}") from None
+    data = _read_bounded(path)
     if not data.startswith(_MAGIC):
         if data and _MAGIC.startswith(data):
             raise DataError(f"{path}: cut short after {len(data)} bytes, before its first record")
@@ -609,6 +821,9 @@ def chain_params_of(rec: Recording):
     from .chain import ReflexParams
 
     raw = rec.metadata.get(METADATA_NAME, {}).get("reflex_params")
+    if raw is None and rec.bad_metadata:
+        raise DataError(f"{rec.path}: damaged metadata: record(s) {', '.join(map(repr, rec.bad_metadata))} "
+                        f"fail their checksum; the chain parameters cannot be trusted (nothing to replay)")
     if raw is None and not rec.complete:
         where = f"at byte {rec.cut_at}" if rec.cut_at is not None else "before its parameters"
         raise DataError(f"{rec.path}: cut short {where}, before the chain parameters were written "
@@ -831,7 +1046,8 @@ def export_csv(path: str | os.PathLike | Recording, out: str | os.PathLike | Non
     samples = rec.topic("/daq/samples")
     if not samples:
         raise DataError(f"{rec.path}: no slip-sensor samples to export")
-    main = Path(out) if out is not None else Path(rec.path).with_suffix(".csv")
+    src = str(rec.path)[:-len(PART_SUFFIX)] if str(rec.path).endswith(PART_SUFFIX) else str(rec.path)
+    main = Path(out) if out is not None else Path(src).with_suffix(".csv")   # run.mcap(.part) -> run.csv
     companions = {
         "imu": ("/daq/imu", ("t", "ax", "ay", "az")),
         "flow": ("/daq/flow", ("t", "pulses")),
@@ -843,6 +1059,9 @@ def export_csv(path: str | os.PathLike | Recording, out: str | os.PathLike | Non
     targets = [main] + [main.with_name(f"{main.stem}-{suffix}.csv") for suffix in companions]
     for target in targets:  # every destination checked before the first file is written
         _check_output(target)
+        if os.path.lexists(target):
+            raise RecordingError(f"{target}: exists; export writes new files only (give another --out, "
+                                 f"or move it)")
     _write_csv(main, {"t": [s["t"] for s in samples], "x": [s["slip_volts"] for s in samples]},
                preamble=export_preamble(rec))
     written = [str(main)]
@@ -888,7 +1107,7 @@ def export_preamble(rec: Recording) -> dict[str, str]:
 
 def _check_output(target: Any) -> None:
     """Refuse a destination that is a folder, a device or another non-regular file, or whose
-    folder does not exist: export never replaces anything but a regular file."""
+    folder does not exist."""
     if target.exists() and not target.is_file():
         raise RecordingError(f"{target}: exists and is not a regular file; refusing to replace it")
     if not target.parent.is_dir():
@@ -899,7 +1118,9 @@ def _write_csv(target: Any, columns: Mapping[str, Any], **kw: Any) -> None:
     from .csvfiles import write_columns
 
     try:
-        write_columns(target, columns, **kw)
+        write_columns(target, columns, replace=False, **kw)
+    except FileExistsError:
+        raise RecordingError(f"{target}: appeared meanwhile; export writes new files only") from None
     except OSError as err:
         raise RecordingError(f"{target}: cannot write: {err.strerror or err}") from None
 
@@ -914,7 +1135,7 @@ class RecoverResult:
     Attributes
     ----------
     messages : int
-        Messages written.
+        Messages written (at least one: a file with none is an error).
     metadata : tuple of str
         Names of the metadata records written.
     gaps : str
@@ -969,29 +1190,36 @@ def recover_recording(path: str | os.PathLike, out: str | os.PathLike) -> Recove
     >>> res.messages, res.gaps
     (1, '')
     """
-    import tempfile
     from pathlib import Path
 
-    from mcap.records import Channel, Message, Metadata, Schema
+    from mcap.records import Channel, Header, Message, Metadata, Schema
     from mcap.writer import CompressionType, Writer
+
+    from .paths import new_file
 
     src, dst = Path(path), Path(out)
     if dst.exists() and src.exists() and dst.resolve() == src.resolve():
         raise RecordingError(f"{dst}: recover writes a new file; give another --out than the recording")
     _check_output(dst)
+    if os.path.lexists(dst):
+        raise RecordingError(f"{dst}: exists; recover writes a new file (give another --out)")
     rec = Recording(path=os.fspath(path))
-    fd, tmp = tempfile.mkstemp(dir=dst.parent, prefix=f".{dst.name}.", suffix=".part")
     messages, names = 0, []
+    counted = ("/daq/samples", "/stats")   # what the summary line counts (Recording.gaps)
     try:
-        with os.fdopen(fd, "wb") as fh:
+        with new_file(dst, "wb") as fh:
             writer = Writer(fh, chunk_size=64 * 1024, compression=CompressionType.ZSTD)
-            writer.start(profile="", library="slipreflex recover")
+            writer.start(profile="", library="slipreflex recover; metadata sha256")
             schemas: dict[int, int] = {}
             channels: dict[int, int] = {}
+            topics: dict[int, str] = {}
             for _, r in _scan(os.fspath(path), rec):
-                if isinstance(r, Schema) and r.id not in schemas:
+                if isinstance(r, Header):
+                    rec.sealed = "metadata sha256" in str(r.library)
+                elif isinstance(r, Schema) and r.id not in schemas:
                     schemas[r.id] = writer.register_schema(name=r.name, encoding=r.encoding, data=r.data)
                 elif isinstance(r, Channel) and r.id not in channels:
+                    topics[r.id] = r.topic
                     channels[r.id] = writer.register_channel(
                         topic=r.topic, message_encoding=r.message_encoding,
                         schema_id=schemas.get(r.schema_id, 0), metadata=dict(r.metadata))
@@ -999,17 +1227,30 @@ def recover_recording(path: str | os.PathLike, out: str | os.PathLike) -> Recove
                     writer.add_message(channel_id=channels[r.channel_id], log_time=r.log_time,
                                        data=r.data, publish_time=r.publish_time, sequence=r.sequence)
                     messages += 1
+                    if topics[r.channel_id] in counted:
+                        try:
+                            rec.messages.setdefault(topics[r.channel_id], []).append(json.loads(r.data))
+                        except ValueError:
+                            pass
                 elif isinstance(r, Metadata):
-                    writer.add_metadata(r.name, dict(r.metadata))
+                    data = dict(r.metadata)
+                    if rec.sealed and not verify(r.name, data):
+                        rec.bad_metadata.append(r.name)   # copied as it is; the reader flags it again
+                    else:
+                        rec.metadata[r.name] = {k: v for k, v in data.items() if k != CHECKSUM_KEY}
+                    writer.add_metadata(r.name, data)
                     names.append(r.name)
+            if messages == 0:
+                raise DataError(f"{path}: no readable message to recover"
+                                + (f" ({rec.gaps().split(': ', 1)[-1]})" if rec.gaps() else "")
+                                + f"; {dst} not written")
             writer.finish()
-        os.replace(tmp, dst)
+    except FileExistsError:
+        raise RecordingError(f"{dst}: appeared meanwhile; recover writes a new file (give another --out)") from None
     except OSError as err:
-        Path(tmp).unlink(missing_ok=True)
+        if isinstance(err, RecordingError):
+            raise
         raise RecordingError(f"{dst}: cannot write: {err.strerror or err}") from None
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
     return RecoverResult(messages, tuple(names), rec.gaps())
 
 

@@ -85,7 +85,7 @@ from .interfaces import DaqSample, Hand, Reflex, SampleSource
 from .validation import number
 
 __all__ = ["Fault", "SampleRecord", "RunResult", "run_loop", "print_fault", "realtime_priority",
-           "drop_capabilities",
+           "tactile_message", "drop_capabilities",
            "WATCHDOG_S", "WATCHDOG_MIN_S", "WATCHDOG_MAX_S", "start_positions", "safe_start",
            "finger_offsets"]
 
@@ -553,7 +553,8 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
              duration: float | None = None, watchdog: float = WATCHDOG_S, poll: float = 0.01,
              fingers: Sequence[Finger] = TRIPOD, stop: threading.Event | None = None,
              on_fault: Callable[[Fault], None] | None = None, stats_interval: float = 1.0,
-             clock: Callable[[], float] = time.perf_counter, guard: bool = True) -> RunResult:
+             clock: Callable[[], float] = time.perf_counter, guard: bool = True,
+             taps: Sequence[Any] = ()) -> RunResult:
     """Run the reflex in real time until ``duration``, ``stop`` or Ctrl-C.
 
     Parameters
@@ -569,7 +570,10 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
         (:class:`~slipreflex.interfaces.Hand`); an optional ``reflex_running(bool)``
         is switched on for the run (the i-Limb's grip-only guard).
     reflex : Reflex
-        A slip reflex (``input_kind == "slip"``), e.g. :class:`slipreflex.chain.SlipReflex`.
+        A slip reflex (``input_kind == "slip"``), e.g. :class:`slipreflex.chain.SlipReflex`,
+        reading ``source``'s samples; or a tactile one (``"tactile"``, e.g. NMSD) reading the
+        frames of ``source``, then a :class:`~slipreflex.interfaces.TactileSource` (the Ability
+        Hand's touch sites), recorded on ``/tactile/frames``.
     p0 : float or mapping of Finger to float, optional
         Position each finger holds at start, as the grasp left it (default: the reflex's
         initial command): bookkeeping only. The loop starts with :func:`safe_start`; each
@@ -591,6 +595,10 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
         Monotonic clock (s); ``time.perf_counter`` if ``last_arrival`` is to be used.
     guard : bool
         Run the stall guard thread (holds the fingers if the loop stops iterating).
+    taps : sequence of Tap
+        Live publishers (:class:`slipreflex.taps.Tap`: the Foxglove view, LSL outlets): each
+        gets every message the recording gets, after the commands are out, through its
+        non-blocking ``put``; the caller starts and closes them.
 
     Returns
     -------
@@ -620,9 +628,7 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
     >>> [f.kind for f in r.faults], h.held >= 2      # the safe start's STOP, then the watchdog's
     (['watchdog'], True)
     """
-    if getattr(reflex, "input_kind", "slip") != "slip":
-        raise ParameterError(f"run_loop: reflex {getattr(reflex, 'name', reflex)!r} reads "
-                             f"{reflex.input_kind!r}, but the DAQ provides the slip sensor")
+    source = _source_for(source, reflex)
     if not WATCHDOG_MIN_S <= watchdog <= WATCHDOG_MAX_S:
         raise ParameterError(f"run_loop: watchdog must be in {WATCHDOG_MIN_S:g}..{WATCHDOG_MAX_S:g} s, "
                              f"got {watchdog!r}")
@@ -651,7 +657,7 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
     loop = _Loop(source, hand, reflex, start=start,
                  ref0=float(ref0) if ref_ok else start.get(SLIP_FINGER, next(iter(start.values()))),
                  recorder=recorder, duration=duration, watchdog=watchdog, poll=poll, stop=stop,
-                 on_fault=on_fault, stats_interval=stats_interval, clock=clock)
+                 on_fault=on_fault, stats_interval=stats_interval, clock=clock, taps=taps)
     if start_error is not None:
         loop.fault("hold-failed", f"safe start: {start_error}", "fingers stay where the grasp left them; "
                    "the watchdog holds again if samples stop")
@@ -666,6 +672,39 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
             guard_on(False)
 
 
+class _FrameReader:
+    """A :class:`~slipreflex.interfaces.TactileSource` as the loop reads a source."""
+
+    def __init__(self, source: Any) -> None:
+        self.tactile = source
+        self.port_name = getattr(source, "port_name", "the tactile source")
+
+    @property
+    def last_arrival(self) -> float:
+        return getattr(self.tactile, "last_arrival", math.nan)
+
+    def read(self, timeout: float) -> list[Any]:
+        return self.tactile.read_frames(timeout)
+
+    def close(self) -> None:
+        self.tactile.close()
+
+
+def _source_for(source: Any, reflex: Any) -> Any:
+    """The source the loop reads for this reflex's input (a one-line error if it has none)."""
+    kind = getattr(reflex, "input_kind", "slip")
+    name = getattr(reflex, "name", reflex)
+    if kind == "tactile":
+        if not callable(getattr(source, "read_frames", None)):
+            raise ParameterError(f"run_loop: reflex {name!r} reads tactile frames, but the source gives "
+                                 f"none (a TactileSource, e.g. the Ability Hand's touch sites)")
+        return _FrameReader(source)
+    if kind != "slip" or not callable(getattr(source, "read", None)):
+        raise ParameterError(f"run_loop: reflex {name!r} reads {kind!r}, but the source gives "
+                             f"slip-sensor samples only")
+    return source
+
+
 def _warm_up(reflex: Any) -> None:
     """Step a copy once, so that what the first step loads or compiles (about 0.3 s for the
     chain) happens before the clock starts, not on the first real sample (a stall that the
@@ -674,23 +713,29 @@ def _warm_up(reflex: Any) -> None:
         twin = copy.deepcopy(reflex)
     except Exception:  # noqa: BLE001 - a reflex that cannot be copied is simply not warmed up
         return
-    twin.step(0.0 if getattr(reflex, "input_kind", "slip") == "slip" else np.zeros((4, 4)), None)
+    shape = getattr(getattr(reflex, "params", None), "shape", (4, 4))
+    twin.step(0.0 if getattr(reflex, "input_kind", "slip") == "slip" else np.zeros(shape), None)
 
 
 class _Sink:
     """The loop's side of the recorder: never raises; its failure is reported once."""
 
-    def __init__(self, recorder: Any, t0: float, on_fail: Callable[[str], None]) -> None:
+    def __init__(self, recorder: Any, t0: float, on_fail: Callable[[str], None],
+                 taps: Sequence[Any] = ()) -> None:
         self.recorder = recorder
         self.ok = recorder is not None
+        self.taps = tuple(taps)
         self.t0 = t0
         self.wall0 = time.time_ns()
         self.on_fail = on_fail
         self.error: str | None = None
 
     def write(self, topic: str, msg: dict[str, Any], t: float) -> None:
-        if self.ok and not self.recorder.write(topic, msg, self.wall0 + int((t - self.t0) * 1e9)):
+        ns = self.wall0 + int((t - self.t0) * 1e9)
+        if self.ok and not self.recorder.write(topic, msg, ns):
             self.check()
+        for tap in self.taps:
+            tap.put(topic, msg, ns)
 
     def check(self) -> None:
         if self.ok and self.recorder.error is not None:
@@ -699,8 +744,15 @@ class _Sink:
             self.on_fail(self.error)
 
     def samples(self, records: list[SampleRecord], finger_names: list[str], last_flow: int | None) -> int | None:
+        if not (self.ok or self.taps):
+            return last_flow
         for r in records:
             s, arr = r.sample, r.arrival
+            frame = getattr(s, "frame", None)
+            if frame is not None:  # a tactile source's frame, flat
+                self.write("/tactile/frames", tactile_message(s, r.position), arr)
+                self._chain(r, finger_names)
+                continue
             self.write("/daq/samples", {"seq": s.seq, "t": s.t, "slip_volts": s.slip_volts,
                                         "flow_pulses": s.flow_pulses, "arrival": arr - self.t0,
                                         "position": _json_float(r.position)}, arr)
@@ -710,21 +762,42 @@ class _Sink:
             if s.flow_pulses != last_flow:
                 self.write("/daq/flow", {"seq": s.seq, "t": s.t, "pulses": s.flow_pulses}, arr)
             last_flow = s.flow_pulses
-            self.write("/chain/state", {"seq": s.seq, "t": s.t, "filtered": _json_float(r.filtered),
-                                        "threshold": _json_float(r.threshold) or 0.0, "event": r.event}, arr)
-            if r.event:
-                self.write("/chain/events", {"seq": s.seq, "t": s.t}, arr)
-            if r.count is not None:
-                self.write("/chain/windows", {"seq": s.seq, "t": s.t, "count": int(r.count)}, arr)
-            if r.board is not None:
-                self.write("/board/state", {"seq": s.seq, "t": s.t, **r.board}, arr)
-            if r.command is not None:
-                grip = {f.name.lower(): _json_float(v) for f, v in (r.grip or {}).items()}
-                self.write("/hand/commands", {"seq": s.seq, "t": s.t, "target": float(r.command),
-                                              "fingers": finger_names, "targets": {}, "grip": grip,
-                                              "sent": r.sent, "note": r.note, "latency": r.latency,
-                                              "frame_latency": r.frame_latency}, arr)
+            self._chain(r, finger_names)
         return last_flow
+
+    def _chain(self, r: SampleRecord, finger_names: list[str]) -> None:
+        """What the reflex did with one sample or frame: state, spikes, windows, commands."""
+        s, arr = r.sample, r.arrival
+        self.write("/chain/state", {"seq": s.seq, "t": s.t, "filtered": _json_float(r.filtered),
+                                    "threshold": _json_float(r.threshold) or 0.0, "event": r.event}, arr)
+        if r.event:
+            self.write("/chain/events", {"seq": s.seq, "t": s.t}, arr)
+        if r.count is not None:
+            self.write("/chain/windows", {"seq": s.seq, "t": s.t, "count": int(r.count)}, arr)
+        if r.board is not None:
+            self.write("/board/state", {"seq": s.seq, "t": s.t, **r.board}, arr)
+        if r.command is not None:
+            grip = {f.name.lower(): _json_float(v) for f, v in (r.grip or {}).items()}
+            self.write("/hand/commands", {"seq": s.seq, "t": s.t, "target": float(r.command),
+                                          "fingers": finger_names, "targets": {}, "grip": grip,
+                                          "sent": r.sent, "note": r.note, "latency": r.latency,
+                                          "frame_latency": r.frame_latency}, arr)
+            self.write("/hand/grip", {"seq": s.seq, "t": s.t, "sent": r.sent, **grip}, arr)
+
+
+def tactile_message(s: Any, position: float | None = None) -> dict[str, Any]:
+    """A tactile frame as its ``/tactile/frames`` message: flat fields, one per taxel.
+
+    Examples
+    --------
+    >>> from slipreflex.interfaces import TactileSample
+    >>> m = tactile_message(TactileSample(3, 0.5, np.array([[0.25, 0.5], [0.0, 1.0]])))
+    >>> m["total"], m["peak"], m["taxel_3"], m["position"]
+    (1.75, 1.0, 1.0, None)
+    """
+    flat = np.asarray(s.frame, dtype=np.float64).reshape(-1)
+    return {"seq": s.seq, "t": s.t, "total": float(flat.sum()), "peak": float(flat.max(initial=0.0)),
+            "position": _json_float(position), **{f"taxel_{k}": float(v) for k, v in enumerate(flat)}}
 
 
 class _Loop:
@@ -733,8 +806,9 @@ class _Loop:
     def __init__(self, source: Any, hand: Any, reflex: Any, *, start: dict[Finger, float],
                  ref0: float, recorder: Any, duration: float | None, watchdog: float, poll: float,
                  stop: threading.Event | None, on_fault: Callable[[Fault], None] | None,
-                 stats_interval: float, clock: Callable[[], float]) -> None:
+                 stats_interval: float, clock: Callable[[], float], taps: Sequence[Any] = ()) -> None:
         self.source, self.hand, self.reflex = source, hand, reflex
+        self.slip = getattr(reflex, "input_kind", "slip") == "slip"  # else a tactile frame per step
         self.fingers = tuple(start)
         self.finger_names = [f.name.lower() for f in self.fingers]
         self.start = start
@@ -754,7 +828,7 @@ class _Loop:
         self.res = RunResult(start={f.name.lower(): v for f, v in start.items()},
                              initial_command="STOP " + ",".join(self.finger_names), ceiling=self.ceiling)
         self.t0 = clock()
-        self.sink = _Sink(recorder, self.t0, self._recording_failed)
+        self.sink = _Sink(recorder, self.t0, self._recording_failed, taps)
         self.lock = threading.Lock()  # hand writes: the loop and the stall guard
         self.heartbeat = self.t0
         self.guard_faults: collections.deque[Fault] = collections.deque()
@@ -856,7 +930,7 @@ class _Loop:
         return restarted
 
     # -- step 2: process (the time-critical part) -------------------------------------
-    def process(self, samples: list[DaqSample], arrival: float) -> list[SampleRecord]:
+    def process(self, samples: list[Any], arrival: float) -> list[SampleRecord]:
         reflex, hand, out = self.reflex, self.hand, []
         for s in samples:
             pos = None
@@ -866,7 +940,7 @@ class _Loop:
                 pass
             if pos is not None:
                 pos -= self.slip_shift  # in the reflex's frame
-            cmd = reflex.step(s.slip_volts, pos)
+            cmd = reflex.step(s.slip_volts if self.slip else s.frame, pos)
             r = SampleRecord(s, arrival, self.clock() - (s.t + (self.offset or 0.0)), pos, cmd,
                              filtered=reflex.last_filtered, threshold=reflex.last_threshold,
                              event=bool(reflex.last_event), count=reflex.last_count,

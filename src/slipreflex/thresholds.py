@@ -1,4 +1,4 @@
-"""Thresholds of the calibrated methods on the simulated rig (shared SPEC section 2).
+"""Thresholds of the calibrated methods on the simulated rig (docs/method.md section 2).
 
 The comparison methods' thresholds come from one rule
 (:func:`slipreflex.baselines.rest_threshold`, k standard deviations of the

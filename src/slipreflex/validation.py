@@ -70,7 +70,7 @@ import numpy as np
 from .errors import ParameterError
 
 __all__ = ["number", "positive", "integer", "flag", "choice", "choices", "text", "instance", "set_field",
-           "build", "resolve_params"]
+           "build", "resolve_params", "Limit", "LIMITS", "within", "limits_markdown"]
 
 T = TypeVar("T")
 
@@ -368,3 +368,115 @@ def resolve_params(cls: type[T], params: Any, overrides: dict[str, Any]) -> T:
         return build(cls, {**fields, **overrides})
     return params
 
+
+
+@dataclasses.dataclass(frozen=True)
+class Limit:
+    """The plausible range of one size, duration, rate or count a user gives.
+
+    Parameters
+    ----------
+    lo, hi : float
+        Bounds (inclusive; ``lo`` exclusive with ``lo_open``).
+    unit : str
+    why : str
+        Where the bounds come from (shown in docs/runtime.md's table).
+    options : str
+        The command-line options it bounds.
+    lo_open : bool
+    whole : bool
+        An integer count.
+
+    Examples
+    --------
+    >>> LIMITS["trials"].hi
+    10000
+    """
+
+    lo: float
+    hi: float
+    unit: str
+    why: str
+    options: str
+    lo_open: bool = False
+    whole: bool = False
+
+
+#: THE table of plausible ranges of every size, duration, rate and count option (checked
+#: before any work starts; docs/runtime.md "Limits" prints it). The bounds are far outside any
+#: real use and far inside what would run for days or exhaust memory.
+LIMITS: dict[str, Limit] = {
+    "trials": Limit(1, 10_000, "", "trials per bottle, experiment and method (the paper ran 10; a run "
+                    "estimated over 10 minutes says how to shorten it)",
+                    "reproduce/study --trials", whole=True),
+    "plants": Limit(1, 100_000, "", "plants of a study (default 64); each plant runs the whole grid",
+                    "study --plants", whole=True),
+    "jobs": Limit(1, 1024, "", "worker processes", "reproduce --jobs, study --workers", whole=True),
+    "rest_s": Limit(0, 600, "s", "recorded rest before the perturbation; every simulated second of every "
+                    "trial is held in memory", "reproduce --rest", lo_open=True),
+    "after_s": Limit(0, 600, "s", "recording after the load, held in memory as the rest",
+                     "reproduce --after", lo_open=True),
+    "calibration_s": Limit(0, 600, "s", "each at-rest calibration recording", "reproduce --calibration",
+                           lo_open=True),
+    "rest_k": Limit(0, 100, "sd", "NMSD/SWT-SD threshold in standard deviations at rest", "reproduce --rest-k",
+                    lo_open=True),
+    "swt_persist": Limit(0, 10_000, "samples", "SWT-SD persistence (30 s at the DAQ's rate)",
+                         "reproduce --swt-persist", whole=True),
+    "grasp_force_n": Limit(0, 20, "N", "contact force at which the grasp stops (the paper's 0.8 N, 25 times)",
+                           "reproduce/virtual-rig --grasp-force", lo_open=True),
+    "duration_s": Limit(0, 7 * 86400, "s", "a real-time run or virtual rig (a week; 0 stops at once)",
+                        "run/virtual-rig --duration"),
+    "fs_hz": Limit(0, 1e6, "Hz", "sampling rate of a recording (the DAQ's is 333.33 Hz)", "detect/run --fs",
+                   lo_open=True),
+    "scan_distance_mm": Limit(0, 500, "mm", "scan length (the paper's 50 mm, 10 times)", "scan --distance",
+                              lo_open=True),
+    "scan_speed_mm_s": Limit(0.01, 1000, "mm/s", "scan speed (the paper's 1 mm/s)", "scan --speed"),
+    "scan_samples": Limit(1, 20_000_000, "samples", "distance / speed x the DAQ's rate (about 17 h of scan); "
+                          "every sample is held in memory", "scan --distance/--speed", whole=True),
+    "csv_samples": Limit(1, 50_000_000, "samples", "samples in a CSV recording (about 42 h at 333.33 Hz)",
+                         "detect", whole=True),
+    "csv_line_bytes": Limit(1, 1_000_000, "bytes", "one CSV line (a sample row is tens of bytes)",
+                            "detect, claims", whole=True),
+    "text_file_bytes": Limit(1, 64 * 1024 ** 2, "bytes", "a TOML or results file (64 MiB)",
+                             "--objects, --ranges, claims", whole=True),
+    "recording_bytes": Limit(1, 8e9, "bytes", "an MCAP recording; the reader holds the whole file in memory",
+                             "replay, export, recover", whole=True),
+}
+
+
+def within(name: str, value: Any, option: str | None = None) -> Any:
+    """``value`` checked against ``LIMITS[name]`` (as an int for counts); one line naming ``option``.
+
+    Examples
+    --------
+    >>> within("trials", 3)
+    3
+    >>> within("rest_s", 1e9, "--rest")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    slipreflex.errors.ParameterError: --rest must be a finite number > 0 and <= 600, got 1000000000.0 (plausible ...
+    """
+    lim = LIMITS[name]
+    label = option or name
+    try:
+        if lim.whole:
+            return integer(label, value, lo=int(lim.lo), hi=int(lim.hi))
+        return number(label, value, lo=lim.lo, hi=lim.hi, lo_open=lim.lo_open)
+    except ParameterError as err:
+        raise ParameterError(f"{err} (plausible range {'> ' if lim.lo_open else ''}{lim.lo:g}..{lim.hi:g}"
+                             f"{' ' + lim.unit if lim.unit else ''}; docs/runtime.md, Limits)") from None
+
+
+def limits_markdown() -> str:
+    """The :data:`LIMITS` table as markdown (docs/runtime.md carries it).
+
+    Examples
+    --------
+    >>> limits_markdown().splitlines()[0]
+    '| limit | range | options | why |'
+    """
+    rows = ["| limit | range | options | why |", "|---|---|---|---|"]
+    for name, lim in LIMITS.items():
+        lo = f"> {lim.lo:g}" if lim.lo_open else f"{lim.lo:g}"
+        rows.append(f"| {name} | {lo} .. {lim.hi:g} {lim.unit} | {lim.options} | {lim.why} |")
+    return "\n".join(rows)

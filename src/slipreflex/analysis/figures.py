@@ -6,13 +6,14 @@
   change (III) marked.
 * :func:`bar_chart` - mean and sd per bottle and method, like Figs. 13, 14,
   16 and 17, with the paper's values drawn beside ours.
-* :func:`success_chart` - success rates per bottle and method.
+* :func:`success_chart` - success per trial and per slip event, per bottle and method.
+* :func:`grip_chart` - how far the hand closed without a true slip under way.
 
 Examples
 --------
 >>> import os, tempfile
 >>> s = [{"experiment": "drop", "bottle": "TR", "method": "dath", "response_mean_ms": 50.0,
-...       "response_sd_ms": 5.0, "response_n": 10, "success_rate": 0.8, "success_n": 10}]
+...       "response_sd_ms": 5.0, "response_n": 10, "trial_success_rate": 0.8, "trial_success_n": 10}]
 >>> p = bar_chart(s, "drop", "response", os.path.join(tempfile.mkdtemp(), "b.png"))
 >>> p.stat().st_size > 1000
 True
@@ -32,7 +33,7 @@ from .. import experiment_specs
 from .. import methods as _registry
 from .paper import BOTTLE_ORDER, paper_value
 
-__all__ = ["TrialPlot", "plot_trial", "bar_chart", "success_chart"]
+__all__ = ["TrialPlot", "plot_trial", "bar_chart", "success_chart", "grip_chart"]
 
 
 def _color(m: str) -> str:
@@ -75,6 +76,10 @@ class TrialPlot:
     load_t: Any = None
     load: Any = None
     load_label: str = "volume (ml)"
+    counts_t: Any = None
+    counts: Any = None
+    sensor_threshold: float = float("nan")
+    load_at_onsets: Sequence[float] = ()
     onsets: Sequence[float] = ()
     responses: Sequence[float] = ()
     lasts: Sequence[float] = ()
@@ -123,11 +128,22 @@ def plot_trial(p: TrialPlot, path: str | Path) -> Path:
     axes = list(axes)
     every = list(axes)
     letters = iter("ABCDE")
+    ax_load = None
     if has_load:
-        ax = axes.pop(0)
+        ax = ax_load = axes.pop(0)
         ax.plot(p.load_t, p.load, color="tab:cyan", lw=1)
         ax.set_ylabel(p.load_label, fontsize=8)
-        ax.set_title(f"{next(letters)}) {p.load_label}", loc="left", fontsize=8, y=1.0)
+        ax.set_title(f"{next(letters)}) {p.load_label}, at each onset (I) and response (II)", loc="left",
+                     fontsize=8, y=1.0)
+        lt, lv = np.asarray(p.load_t, dtype=float), np.asarray(p.load, dtype=float)
+        for on, resp in zip(p.onsets, p.responses):
+            for x, mark, color in ((on, "o", "tab:red"), (resp, "s", "tab:green")):
+                if x is not None and math.isfinite(x):
+                    y = float(np.interp(x, lt, lv))
+                    ax.plot([x], [y], mark, color=color, ms=3.5, transform=ax.transData)
+                    if mark == "o":
+                        ax.annotate(f"{y:.0f} ml", (x, y), xytext=(3, 3), textcoords="offset points",
+                                    fontsize=6.5, color=color)
     ax_acc, ax_sen, ax_ev, ax_cmd = axes
     ax_acc.plot(p.accel_t, p.accel, color="0.4", lw=0.6, label="raw")
     if p.envelope is not None:
@@ -142,18 +158,29 @@ def plot_trial(p: TrialPlot, path: str | Path) -> Path:
     ax_acc.set_title(f"{next(letters)}) {p.accel_label}", loc="left", fontsize=8, y=1.0)
     if p.sensor is not None:
         ax_sen.plot(p.sensor_t, p.sensor, color="tab:blue", lw=0.8)
+        if not math.isnan(p.sensor_threshold):
+            ax_sen.axhline(p.sensor_threshold, color="tab:blue", ls=":", lw=0.8)
     ax_sen.set_title(f"{next(letters)}) {p.sensor_label}", loc="left", fontsize=8, y=1.0)
     ev = np.asarray([] if p.event_t is None else p.event_t, dtype=float)
     if ev.size:
         ax_ev.vlines(ev, 0, 1, color="k", lw=0.7)
     ax_ev.set_yticks([])
-    ax_ev.set_title(f"{next(letters)}) {p.event_label} ({ev.size})", loc="left", fontsize=8, y=1.0)
+    counted = ""
+    if p.counts_t is not None and len(p.counts_t):
+        ax_n = ax_ev.twinx()
+        ax_n.step(p.counts_t, p.counts, where="pre", color="tab:orange", lw=0.8, label="window count")
+        ax_n.set_ylabel("count", fontsize=7)
+        ax_n.set_ylim(bottom=0, top=max(1.0, float(np.max(p.counts))) * 1.15)
+        ax_n.tick_params(labelsize=7)
+        every.append(ax_n)
+        counted = ", spike count per window (orange)"
+    ax_ev.set_title(f"{next(letters)}) {p.event_label} ({ev.size}){counted}", loc="left", fontsize=8, y=1.0)
     if p.cmd_t is not None and len(p.cmd_t):
         ax_cmd.step(p.cmd_t, p.cmd_v, where="post", color="tab:green", lw=1.0)
     ax_cmd.set_ylabel("position", fontsize=8)
     ax_cmd.set_title(f"{next(letters)}) commanded finger position", loc="left", fontsize=8, y=1.0)
     ax_cmd.set_xlabel("time (s)")
-    for ax in (ax_acc, ax_sen, ax_ev, ax_cmd):
+    for ax in (ax_acc, ax_sen, ax_ev, ax_cmd) + ((ax_load,) if ax_load is not None else ()):
         _mark(ax, p.onsets, "tab:red", "I onset" if ax is ax_acc else None)
         _mark(ax, p.responses, "tab:green", "II response" if ax is ax_acc else None)
         _mark(ax, p.lasts, "tab:olive", "III last change" if ax is ax_acc else None, ":")
@@ -276,13 +303,15 @@ def _paper_rate(experiment: str, bottle: str, method: str) -> tuple[float, str] 
 def success_chart(summary: Sequence[dict[str, Any]], path: str | Path) -> Path:
     """Success rate per experiment, bottle and method, the paper's stated rates beside ours.
 
-    The axis runs from 0 to 100 %; a rate of zero is drawn as a visible "0" at the
-    base, a method not run as "n/a"; each bar says how many slip events it counts.
+    Bars: success per trial (every slip of the trial suppressed); white dots: success
+    per slip event. The axis runs from 0 to 100 %; a rate of zero is drawn as a visible
+    "0" at the base, a method not run as "n/a"; each bar says how many trials it counts.
 
     Examples
     --------
     >>> import os, tempfile
-    >>> s = [{"experiment": "pour", "bottle": "DK", "method": "nmsd", "success_rate": 1.0}]
+    >>> s = [{"experiment": "pour", "bottle": "DK", "method": "nmsd", "trial_success_rate": 1.0,
+    ...       "event_success_rate": 0.5}]
     >>> success_chart(s, os.path.join(tempfile.mkdtemp(), "s.png")).exists()
     True
     """
@@ -302,12 +331,17 @@ def success_chart(summary: Sequence[dict[str, Any]], path: str | Path) -> Path:
             xs = np.arange(len(bottles)) + (j - (len(methods) - 1) / 2) * width
             for x, b in zip(xs, bottles):
                 row = by.get((b, m), {})
-                rate = 100 * float(row.get("success_rate", np.nan))
-                n = row.get("success_n")
+                rate = 100 * float(row.get("trial_success_rate", np.nan))
+                n = row.get("trial_success_n")
+                per_event = 100 * float(row.get("event_success_rate", np.nan))
                 if np.isfinite(rate):
                     ax.bar(x, rate, width * 0.9, color=_color(m), edgecolor=_color(m), lw=1.2)
-                    label = ("0" if rate == 0 else "") + (f"\nn={n}" if n else "")
-                    ax.text(x, rate + 1.5, label.strip(), ha="center", va="bottom", fontsize=5.5)
+                    label = ("0" if rate == 0 else "") + (f"\n{n} trials" if n else "")
+                    ax.text(x, max(rate, per_event if np.isfinite(per_event) else 0) + 2.5, label.strip(),
+                            ha="center", va="bottom", fontsize=5.5)
+                    if np.isfinite(per_event):
+                        ax.plot(x, per_event, "o", mfc="white", mec="k", ms=4, zorder=6)
+                        shown["o"] = True
                 else:
                     ax.text(x, 1.5, "n/a", ha="center", va="bottom", fontsize=6, rotation=90)
                 paper = _paper_rate(e, b, m)
@@ -319,13 +353,63 @@ def success_chart(summary: Sequence[dict[str, Any]], path: str | Path) -> Path:
         ax.set_xticklabels(bottles)
         ax.set_ylim(0, 118)
         ax.set_yticks([0, 20, 40, 60, 80, 100])
-        ax.set_ylabel("successful trials (%)")
-        ax.set_title(f"Success, {e}: the slip stopped before the bottle fell", fontsize=8)
-    handles: list[Any] = [Patch(color=_color(m), label=f"{_registry.label(m)} (ours)") for m in shown if m not in "Dv"]
+        ax.set_ylabel("success (%)")
+        ax.set_title(f"Success, {e}: per trial (bars), per slip event (dots)", fontsize=8)
+    handles: list[Any] = [Patch(color=_color(m), label=f"{_registry.label(m)}, per trial (ours)") for m in shown
+                          if m not in ("D", "v", "o")]
+    if "o" in shown:
+        handles.append(Line2D([], [], ls="", marker="o", mfc="white", mec="k", ms=4, label="per slip event (ours)"))
     if "D" in shown:
         handles.append(Line2D([], [], ls="", marker="D", color="k", ms=4.5, label="paper, as stated"))
     if "v" in shown:
         handles.append(Line2D([], [], ls="", marker="v", color="k", ms=4.5, label="paper: under this"))
     fig.legend(handles=handles, fontsize=7, loc="center right")
     fig.tight_layout(rect=(0, 0, 1 - 1.5 / fig.get_figwidth(), 1))
+    return _save(plt, fig, path, layout=False)
+
+
+def grip_chart(summary: Sequence[dict[str, Any]], path: str | Path) -> Path:
+    """The grip the reflex added without slip: per experiment, bottle and method, mean ± sd per trial.
+
+    How far the hand closed (finger units) while the simulator had no true slip under
+    way: a squeeze at a knock or at the water's landing, before any slip, that the
+    response times and success rates do not show.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> s = [{"experiment": "pour", "bottle": "DK", "method": "dath", "grip_without_slip_mean": 350.0,
+    ...       "grip_without_slip_sd": 20.0, "grip_without_slip_n": 3}]
+    >>> grip_chart(s, os.path.join(tempfile.mkdtemp(), "g.png")).exists()
+    True
+    """
+    plt = _plt()
+    from matplotlib.patches import Patch
+
+    exps = [e for e in ("drop", "pour") if any(s["experiment"] == e for s in summary)] or ["drop"]
+    fig, axes = plt.subplots(1, len(exps), figsize=(4.4 * len(exps) + 1.6, 3.4), squeeze=False)
+    shown: list[str] = []
+    for ax, e in zip(axes[0], exps):
+        by, bottles, methods = _present(summary, e)
+        width = 0.8 / max(1, len(methods))
+        for j, m in enumerate(methods):
+            xs = np.arange(len(bottles)) + (j - (len(methods) - 1) / 2) * width
+            mean = np.array([float(by.get((b, m), {}).get("grip_without_slip_mean", np.nan)) for b in bottles])
+            sd = np.nan_to_num(np.array([float(by.get((b, m), {}).get("grip_without_slip_sd", np.nan))
+                                         for b in bottles]))
+            ok = np.isfinite(mean)
+            ax.bar(xs[ok], mean[ok], width * 0.9, yerr=[np.minimum(sd, mean)[ok], sd[ok]], capsize=2,
+                   color=_color(m))
+            for x, v in zip(xs[ok], mean[ok]):
+                ax.text(x, v, f"{v:.0f}", ha="center", va="bottom", fontsize=5.5)
+            if m not in shown:
+                shown.append(m)
+        ax.set_xticks(np.arange(len(bottles)))
+        ax.set_xticklabels(bottles)
+        ax.set_ylim(bottom=0)
+        ax.set_ylabel("finger units closed without slip")
+        ax.set_title(f"Grip added without slip, {e} (mean ± sd per trial)", fontsize=8)
+    fig.legend(handles=[Patch(color=_color(m), label=_registry.label(m)) for m in shown], fontsize=7,
+               loc="center right")
+    fig.tight_layout(rect=(0, 0, 1 - 1.3 / fig.get_figwidth(), 1))
     return _save(plt, fig, path, layout=False)

@@ -1,4 +1,4 @@
-"""The paper's per-slip metrics on recorded streams (SPEC 4).
+"""The paper's per-slip metrics on recorded streams (docs/method.md section 4).
 
 All times are in seconds on the recording's clock.
 
@@ -34,13 +34,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from ..errors import DataError, ParameterError
 
 __all__ = ["ACTIVITY_GAP_S", "Activity", "increases", "response_time", "controller_activity",
-           "suppressed"]
+           "suppressed", "grip_without_slip"]
 
 #: Largest pause (s) between two command increases of the same slip.
 ACTIVITY_GAP_S: float = 0.5
@@ -204,3 +205,29 @@ def suppressed(fell_out_time: float | None, window_end: float) -> bool:
     if fell_out_time is None or math.isnan(fell_out_time):
         return True
     return bool(fell_out_time >= window_end)
+
+
+def grip_without_slip(cmd_t, cmd_v, base: float, slips: Any) -> float:
+    """How far the commanded position rose (finger units) while no true slip was under way.
+
+    ``slips`` are the simulator's slip episodes (``onset``, ``end``; an open one lasts to
+    the end); ``base`` is the command in force before the first (the grasp position).
+    A reflex that squeezes at a knock, before any slip, shows here and not in its
+    response times.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace as E
+    >>> grip_without_slip([1.0, 2.0, 3.0], [150.0, 170.0, 175.0], 148.0, [E(onset=1.9, end=2.5)])
+    7.0
+    """
+    t = np.asarray(cmd_t, dtype=float)
+    v = np.asarray(cmd_v, dtype=float)
+    if t.size == 0:
+        return 0.0
+    rise = np.maximum(np.diff(np.concatenate(([base], v))), 0.0)
+    during = np.zeros(t.size, dtype=bool)
+    for ev in slips:
+        end = math.inf if ev.end is None else ev.end
+        during |= (t >= ev.onset) & (t <= end)
+    return float(rise[~during].sum())

@@ -1,4 +1,4 @@
-"""Slip onset from the bottle's accelerometer, as the paper measures it (SPEC 4).
+"""Slip onset from the bottle's accelerometer, as the paper measures it (docs/method.md section 4).
 
 The paper's recipe (section II-D), step by step:
 

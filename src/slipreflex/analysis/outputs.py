@@ -26,8 +26,10 @@ from pathlib import Path
 from typing import Any
 
 from .. import experiment_specs
+from ..methods import DATH
 from .paper import BOTTLE_ORDER
 from .report import (
+    GRIP_CAPTION,
     SUCCESS_CAPTION,
     SUMMARY_COLUMNS,
     bars_caption,
@@ -40,7 +42,8 @@ from .report import (
 )
 from .trial import RESULT_COLUMNS, TrialRow
 
-__all__ = ["ReproduceResult", "write_outputs", "trial_plot", "paper_part", "not_the_papers", "trial_outcome"]
+__all__ = ["ReproduceResult", "write_outputs", "trial_plot", "paper_part", "not_the_papers", "trial_outcome",
+           "scored", "zoom_window"]
 
 
 @dataclass
@@ -148,7 +151,7 @@ def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str 
     notices += [notice] if notice else []
     from .claims import judge_run, write_claims_csv
 
-    claims = () if partial or not paper.rows else judge_run(paper.rows, seed=result.config.seed,
+    claims = () if partial or not paper.rows else judge_run(scored(paper.rows), seed=result.config.seed,
                                                             plant=result.config.plant)
     if claims:
         paths["claims"] = write_claims_csv(out / "claims.csv", claims)
@@ -163,6 +166,19 @@ def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str 
     paths["report"] = out / "report.md"
     paths["report"].write_text(md)
     return paths
+
+
+def scored(rows: Sequence[Any]) -> list[Any]:
+    """The rows a method is judged on: every row but those of void trials (object out before the load).
+
+    Examples
+    --------
+    >>> scored([{"fell_before_load": True}, {"fell_before_load": False}])
+    [{'fell_before_load': False}]
+    """
+    from .report import void
+
+    return [r for r in rows if not void(r)]
 
 
 def not_the_papers(config: Any) -> list[str]:
@@ -231,8 +247,8 @@ def _figure_tasks(result: ReproduceResult, fig_dir: Path) -> list[tuple[str, str
         plot = result.plots[key]
         tasks.append((f"trial_{e}_{b}_{m}.png", trial_caption(e, b, m), F.plot_trial, (plot,)))
         ons = [x for x in plot.onsets if x == x]
-        if ons:
-            zoom = dataclasses.replace(plot, xlim=(min(ons) - 0.3, max(ons) + 0.7),
+        if ons and (m == DATH or not any(k[2] == DATH for k in result.plots)):    # one zoom per figure set
+            zoom = dataclasses.replace(plot, xlim=zoom_window(plot, e),
                                        title=plot.title + ", zoomed on its slips")
             tasks.append((f"trial_{e}_{b}_{m}_zoom.png", zoom_caption(b, m, e), F.plot_trial, (zoom,)))
     for e in result.config.experiments:
@@ -242,7 +258,38 @@ def _figure_tasks(result: ReproduceResult, fig_dir: Path) -> list[tuple[str, str
             tasks.append((f"bars_{e}_{metric}.png", bars_caption(e, metric),
                           functools.partial(F.bar_chart, what=what), (result.summary, e, metric)))
     tasks.append(("success.png", SUCCESS_CAPTION, F.success_chart, (result.summary,)))
+    tasks.append(("grip_without_slip.png", GRIP_CAPTION, F.grip_chart, (result.summary,)))
     return tasks
+
+
+#: A trial's zoom: from this long before its first onset (s) ...
+ZOOM_BEFORE_S: float = 0.08
+#: ... to this long after its last response (s), at least ``ZOOM_MIN_S`` wide; a drop's full
+#: figure spans 1.8 s, its zoom about a quarter of it.
+ZOOM_AFTER_S: float = 0.15
+ZOOM_MIN_S: float = 0.3
+
+
+def zoom_window(plot: Any, experiment: str) -> tuple[float, float]:
+    """The time span of a trial's zoomed figure: the first onset to the slip's responses.
+
+    A single-slip experiment (a drop) is zoomed on its onset and the reflex's first
+    commands (a few windows); one with slips seconds apart (a pour's segmented events)
+    on its first to last slip.
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace as P
+    >>> zoom_window(P(onsets=[2.0], responses=[2.05]), "drop")
+    (1.92, 2.22)
+    """
+    ons = [x for x in plot.onsets if x == x]
+    resp = [x for x in plot.responses if x == x] or ons
+    lo = min(ons) - ZOOM_BEFORE_S
+    segmented = experiment_specs.get(experiment).slip_events == "segmented" if experiment in experiment_specs.names() \
+        else False
+    hi = (max(ons) + 0.7) if segmented and len(ons) > 1 else max(resp) + ZOOM_AFTER_S
+    return round(lo, 9), round(max(hi, lo + ZOOM_MIN_S), 9)
 
 
 def _draw(task: tuple[Any, tuple, Path]) -> Path:
@@ -303,15 +350,15 @@ def trial_plot(cell: Any, spec: Any, tr: Any, reflex: Any, rows: Sequence[Any], 
     >>> cell = Cell("drop", "TX", "nmsd", 0, trial_seed(cfg.seed, "drop", "TX", 0))
     >>> _, plot = run_trial(cell, cfg, {"nmsd": 15.0}, keep_plot=True)
     >>> plot.event_label, plot.sensor.shape == plot.sensor_t.shape
-    ('NMSD detections', True)
+    ('NMSD detections the reflex computed', True)
     """
+    from ..sim.loop import reflex_log
     from .figures import TrialPlot
     from .onset import OnsetParams, accel_envelope
 
     axis = rows[0].axis
     env = accel_envelope(tr.t, tr.accel[:, axis], OnsetParams())
-    sensor_t, x = (tr.t, tr.volts) if spec.input_kind == "slip" else (tr.tactile_t, tr.tactile)
-    det = spec.detections(reflex, x) if spec.detections is not None else None
+    drawn = _drawn(spec, reflex, reflex_log(tr))
     exp = experiment_specs.get(cell.experiment)
     zoom = exp.zoom_s
     xlim = None if zoom is None else (t_pert - zoom[0], min(tr.t_end, t_pert + zoom[1]))
@@ -319,15 +366,36 @@ def trial_plot(cell: Any, spec: Any, tr: Any, reflex: Any, rows: Sequence[Any], 
     return TrialPlot(
         title=f"{cell.experiment} {cell.bottle} {cell.method} (trial {cell.trial}, seed {cell.seed})",
         accel_t=tr.t, accel=tr.accel[:, axis], accel_label=f"accelerometer ({axes[axis]} axis)",
-        envelope=env, threshold=float("nan"), sensor_t=None if det is None else sensor_t,
-        sensor=None if det is None else det.sensor,
-        sensor_label="" if det is None else det.sensor_label,
-        event_t=None if det is None else sensor_t[det.events],
-        event_label="" if det is None else det.event_label, cmd_t=tr.cmd_t, cmd_v=tr.cmd_value,
+        envelope=env, threshold=float("nan"), cmd_t=tr.cmd_t, cmd_v=tr.cmd_value,
         load_t=tr.t if exp.records_load else None, load=tr.water_ml if exp.records_load else None,
         onsets=[r.onset_s for r in rows], responses=[r.onset_s + r.response_ms / 1e3 for r in rows],
         lasts=[r.last_change_s for r in rows], true_onsets=[r.true_onset_s for r in rows],
-        xlim=xlim, outcome=trial_outcome(rows, tr.fall_time))
+        load_at_onsets=[r.load_at_onset for r in rows],
+        xlim=xlim, outcome=trial_outcome(rows, tr.fall_time), **drawn)
+
+
+def _drawn(spec: Any, reflex: Any, log: dict | None) -> dict[str, Any]:
+    """The sensor, detection and window-count panels from what the loop's reflex recorded.
+
+    Nothing is recomputed: a reflex that recorded nothing (no ``probe_slots``) leaves the
+    panels empty, labelled so.
+    """
+    if log is None:
+        return {"sensor_label": f"{spec.label}: the reflex recorded nothing to draw",
+                "event_label": "detections (not recorded)"}
+    t = log["t"]
+    if spec.input_kind == "slip":
+        counts = log["count"] >= 0
+        return {"sensor_t": t, "sensor": log["x"],
+                "sensor_label": f"slip sensor as the reflex filtered it, {reflex.params.cutoff:g} Hz low-pass (V)",
+                "event_t": t[log["event"] > 0], "event_label": "spikes the reflex computed",
+                "counts_t": t[counts], "counts": log["count"][counts],
+                "sensor_threshold": float("nan")}
+    unit = getattr(spec, "threshold_unit", "")
+    return {"sensor_t": t, "sensor": log["stat"],
+            "sensor_label": f"{spec.label} statistic the reflex computed ({unit}), threshold dotted",
+            "sensor_threshold": float(reflex.params.threshold),
+            "event_t": t[log["event"] > 0], "event_label": f"{spec.label} detections the reflex computed"}
 
 
 def trial_outcome(rows: Sequence[Any], fall_time: float | None) -> str:

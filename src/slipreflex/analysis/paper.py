@@ -1,4 +1,4 @@
-"""The paper's reported results, kept as data in one place (its section III).
+"""The paper's reported results, kept as data in one place (docs/method.md section 4).
 
 ``PAPER`` maps ``(experiment, metric, bottle, method)`` to a
 :class:`Reported` value (mean and sd in ms, or a note where the paper gives
@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 from ..methods import DATH, FIXED, NMSD, SWT
 
-__all__ = ["Reported", "PAPER", "PAPER_SUCCESS", "PAPER_NOTES", "paper_value",
+__all__ = ["PAPER_SCAN_VOLTS", "Reported", "PAPER", "PAPER_SUCCESS", "PAPER_NOTES", "paper_value",
            "EXPERIMENTS", "METRICS", "BOTTLE_ORDER", "bottle_key"]
 
 EXPERIMENTS: tuple[str, ...] = ("drop", "pour")
@@ -82,7 +82,7 @@ def _r(mean: float, sd: float, note: str = "") -> Reported:
     return Reported(float(mean), float(sd), note)
 
 
-#: The paper's table (its section III), ms.
+#: The paper's table (docs/method.md section 4), ms.
 PAPER: dict[tuple[str, str, str, str], Reported] = {
     ("drop", "response_ms", "TR", DATH): _r(50, 6.48),
     ("drop", "response_ms", "TR", FIXED): _r(55, 9.16),
@@ -144,3 +144,8 @@ def paper_value(experiment: str, metric: str, bottle: str, method: str) -> Repor
     743.0
     """
     return PAPER.get((experiment, metric, bottle, method))
+
+
+#: The paper's characterization scan (section II, Figs. 6-9): the filtered slip-sensor output on the
+#: white and on the black part of the test surface, volts (low, high).
+PAPER_SCAN_VOLTS: dict[str, tuple[float, float]] = {"white": (0.3, 0.5), "black": (3.32, 3.35)}

@@ -11,7 +11,7 @@ Examples
 ...          "response_ms": 50.0 + i, "total_ms": 300.0, "success": i < 2,
 ...          "onset_error_ms": 3.0, "n_events": 1} for i in range(3)]
 >>> s = summarize(rows)[0]
->>> s["response_mean_ms"], s["response_n"], round(s["success_rate"], 3)
+>>> s["response_mean_ms"], s["response_n"], round(s["trial_success_rate"], 3)
 (51.0, 3, 0.667)
 """
 
@@ -32,20 +32,22 @@ from ..methods import label as _label
 from .paper import BOTTLE_ORDER, EXPERIMENTS, PAPER, PAPER_SUCCESS, paper_value
 from .trial import RESULT_COLUMNS
 
-__all__ = ["SUMMARY_COLUMNS", "summarize", "write_csv", "read_csv", "terminal_table",
+__all__ = ["SUMMARY_COLUMNS", "summarize", "void", "void_notice", "NOT_COMPARED", "write_csv", "read_csv",
+           "terminal_table",
            "comparison_markdown", "success_markdown", "onset_markdown", "pour_slips_markdown",
            "differences",
            "report_markdown", "fmt_mean_sd", "group_key_order", "setup_lines", "discussion_text",
-           "trial_caption", "zoom_caption", "bars_caption", "SUCCESS_CAPTION", "paper_figure"]
+           "trial_caption", "zoom_caption", "bars_caption", "SUCCESS_CAPTION", "GRIP_CAPTION", "paper_figure"]
 
 #: Columns of summary.csv, in order.
 SUMMARY_COLUMNS: tuple[str, ...] = (
     "experiment", "bottle", "method", "n_trials", "n_rows", "n_events",
     "response_mean_ms", "response_sd_ms", "response_n",
     "total_mean_ms", "total_sd_ms", "total_n",
-    "success_rate", "success_n",
+    "trial_success_rate", "trial_success_n", "event_success_rate", "event_success_n",
+    "grip_without_slip_mean", "grip_without_slip_sd", "grip_without_slip_n",
     "onset_error_mean_ms", "onset_error_sd_ms", "onset_error_n",
-    "paper_response_ms", "paper_total_ms",
+    "paper_response_ms", "paper_total_ms", "n_void",
 )
 
 
@@ -80,42 +82,114 @@ def _table_methods(by: dict[tuple[str, str, str], Any]) -> list[str]:
             + sorted(ran - set(methods.names())))
 
 
-def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
-    """Mean, sd (ddof 1) and n per experiment, bottle and method, plus success rate.
+def _count(x: Any) -> int:
+    """A count cell as an int (a blank or NaN cell is 0)."""
+    v = cell_float(x)
+    return int(v) if v == v else 0
 
-    Success rate is over all rows (slip events; a trial without a detected slip
-    counts once). NaN timings (no onset, no response) are left out of the means
-    and counted in ``n``.
+
+def _flag(x: Any) -> float:
+    """A True/False cell (bool or its CSV text) as 1.0 / 0.0."""
+    return float(cell_bool(x))
+
+
+def void(row: Any) -> bool:
+    """Whether a row's trial is void: the object left the grasp before the perturbation.
+
+    Such a trial measures the grasp, not the method: it is reported apart (``n_void``)
+    and never scored.
 
     Examples
     --------
-    >>> summarize([])
-    []
+    >>> void({"fell_before_load": "True"}), void({"fell_before_load": False}), void({})
+    (True, False, False)
+    """
+    return bool(_flag(row.get("fell_before_load", False)))
+
+
+def _trial_key(r: Any) -> tuple:
+    return (str(r.get("trial")), str(r.get("seed")))
+
+
+def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Mean, sd (ddof 1) and n per experiment, bottle and method, plus success per trial and per event.
+
+    ``trial_success_rate``: the trials in which every slip was suppressed (the object
+    stayed in the grasp), over the trials; ``event_success_rate``: the rows that
+    succeeded, over all rows (slip events; a trial without a detected slip counts
+    once). ``grip_without_slip``: per trial, how far the hand closed (finger units)
+    while no true slip was under way (simulator truth; NaN on hardware). NaN timings
+    (no onset, no response) are left out of the means and counted in ``n``. Void
+    trials (the object fell out before the perturbation) are left out of everything
+    and counted in ``n_void``.
+
+    Examples
+    --------
+    >>> rows = [{"experiment": "drop", "bottle": "TR", "method": "dath", "trial": 0, "event": e,
+    ...          "success": e == 0, "grip_without_slip": 12.0} for e in (0, 1)]
+    >>> s = summarize(rows)[0]
+    >>> s["trial_success_rate"], s["trial_success_n"], s["event_success_rate"], s["event_success_n"]
+    (0.0, 1, 0.5, 2)
+    >>> s["grip_without_slip_mean"], s["n_void"]
+    (12.0, 0)
     """
     groups: dict[tuple[str, str, str], list[dict[str, Any]]] = {}
     for r in rows:
         groups.setdefault((r["experiment"], r["bottle"], r["method"]), []).append(r)
     out = []
     for key in sorted(groups, key=group_key_order):
-        g = groups[key]
+        everything = groups[key]
+        g = [r for r in everything if not void(r)]
         e, b, m = key
         rm, rs, rn = _stats(r.get("response_ms", math.nan) for r in g)
         tm, ts, tn = _stats(r.get("total_ms", math.nan) for r in g)
         em, es, en = _stats(r.get("onset_error_ms", math.nan) for r in g)
-        succ = [float(cell_bool(r.get("success", False))) for r in g]
+        succ = [_flag(r.get("success", False)) for r in g]
+        trials: dict[tuple, list[Any]] = {}
+        for r in g:
+            trials.setdefault(_trial_key(r), []).append(r)
+        per_trial = [min(_flag(r.get("success", False)) for r in t) for t in trials.values()]
+        gm, gs, gn = _stats(t[0].get("grip_without_slip", math.nan) for t in trials.values())
         pr, pt = paper_value(e, "response_ms", b, m), paper_value(e, "total_ms", b, m)
         out.append({
             "experiment": e, "bottle": b, "method": m,
-            "n_trials": len({(r.get("trial"), r.get("seed")) for r in g}),
+            "n_trials": len(trials),
             "n_rows": len(g),
             "n_events": int(sum(1 for r in g if cell_float(r.get("n_events", 1)) > 0)),
             "response_mean_ms": rm, "response_sd_ms": rs, "response_n": rn,
             "total_mean_ms": tm, "total_sd_ms": ts, "total_n": tn,
-            "success_rate": float(np.mean(succ)) if succ else float("nan"), "success_n": len(succ),
+            "trial_success_rate": float(np.mean(per_trial)) if per_trial else float("nan"),
+            "trial_success_n": len(per_trial),
+            "event_success_rate": float(np.mean(succ)) if succ else float("nan"), "event_success_n": len(succ),
+            "grip_without_slip_mean": gm, "grip_without_slip_sd": gs, "grip_without_slip_n": gn,
             "onset_error_mean_ms": em, "onset_error_sd_ms": es, "onset_error_n": en,
             "paper_response_ms": pr.text() if pr else "", "paper_total_ms": pt.text() if pt else "",
+            "n_void": len({_trial_key(r) for r in everything if void(r)}),
         })
     return out
+
+
+def _pct(s: dict[str, Any], kind: str) -> str:
+    """``"90% of 10"`` for a summary row's ``kind`` ("trial" or "event") success, ``"-"`` without one."""
+    n = _count(s.get(f"{kind}_success_n", 0))
+    return f"{100 * float(s[f'{kind}_success_rate']):.0f}% of {n}" if n else "-"
+
+
+def void_notice(summary: Sequence[dict[str, Any]]) -> str:
+    """The line that says which trials were void (object out before the perturbation), ``""`` if none.
+
+    Examples
+    --------
+    >>> line = void_notice([{"experiment": "drop", "bottle": "JAR", "method": "dath", "n_void": 2, "n_trials": 8}])
+    >>> line.startswith("Void trials (the object left the grasp before the perturbation"), line.split(": ")[1]
+    (True, 'drop JAR DATH 2 of 10. A stronger --grasp-force holds it.')
+    """
+    parts = [f"{s['experiment']} {s['bottle']} {_label(s['method'])} {int(s['n_void'])} of "
+             f"{int(s['n_void']) + int(s['n_trials'])}" for s in summary if _count(s.get("n_void", 0))]
+    if not parts:
+        return ""
+    return ("Void trials (the object left the grasp before the perturbation, so no method was tested; "
+            "not scored): " + ", ".join(parts) + ". A stronger --grasp-force holds it.")
 
 
 def _cell(v: Any) -> str:
@@ -140,9 +214,11 @@ def write_csv(path: str | Path, rows: Sequence[Any],
     >>> p.read_text().splitlines()
     ['a,b', '1.5,']
     """
+    from ..paths import new_file
+
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    with path.open("w", newline="") as fh:
+    with new_file(path, "w", replace=True) as fh:
         fh.writelines(f"# {n}\n" for n in notes)
         w = csv.writer(fh)
         w.writerow(columns)
@@ -186,18 +262,22 @@ def terminal_table(summary: Sequence[dict[str, Any]]) -> str:
     Examples
     --------
     >>> print(terminal_table([]))
-    exp   bottle method  response ms (n)   total ms (n)      success
+    exp   bottle method  response ms (n)   total ms (n)      success/trial success/slip event grip w/o slip
     """
     w = max([7] + [len(_label(s["method"])) for s in summary])
-    head = f"{'exp':5} {'bottle':6} {'method':{w}} {'response ms (n)':17} {'total ms (n)':17} success"
+    head = (f"{'exp':5} {'bottle':6} {'method':{w}} {'response ms (n)':17} {'total ms (n)':17} "
+            f"{'success/trial':13} {'success/slip event':18} grip w/o slip")
     lines = [head]
     for s in summary:
+        grip = s.get("grip_without_slip_mean", math.nan)
         lines.append(
             f"{s['experiment']:5} {s['bottle']:6} {_label(s['method']):{w}} "
             f"{fmt_mean_sd(s['response_mean_ms'], s['response_sd_ms'], s['response_n']):17} "
             f"{fmt_mean_sd(s['total_mean_ms'], s['total_sd_ms'], s['total_n']):17} "
-            f"{100 * s['success_rate']:.0f}% of {s['success_n']}")
-    return "\n".join(lines)
+            f"{_pct(s, 'trial'):13} {_pct(s, 'event'):18} "
+            + ("-" if not _finite(cell_float(grip)) else f"{float(grip):.0f} units"))
+    notice = void_notice(summary)
+    return "\n".join(lines + ([notice] if notice else []))
 
 
 def comparison_markdown(summary: Sequence[dict[str, Any]]) -> str:
@@ -222,7 +302,7 @@ def comparison_markdown(summary: Sequence[dict[str, Any]]) -> str:
                     p = paper_value(e, f"{metric}_ms", b, m)
                     s = by.get((e, b, m))
                     ours = fmt_mean_sd(s[f"{metric}_mean_ms"], s[f"{metric}_sd_ms"],
-                                       s[f"{metric}_n"]) if s else "not run"
+                                       s[f"{metric}_n"]) if s else NOT_COMPARED
                     cells += [p.text() if p else "-", ours]
                 lines.append(f"| {e}, {label} | {b} | " + " | ".join(cells) + " |")
     for e in exps:
@@ -230,37 +310,38 @@ def comparison_markdown(summary: Sequence[dict[str, Any]]) -> str:
         for m in order:
             pt = PAPER_SUCCESS.get((e, "all", m), "-")
             ours = [by[(e, b, m)] for b in bottles if (e, b, m) in by]
-            if ours:
-                n = sum(s["success_n"] for s in ours)
-                rate = sum(s["success_rate"] * s["success_n"] for s in ours) / n if n else math.nan
-                cells += [pt, f"{100 * rate:.0f}% of {n}"]
+            n = sum(s["event_success_n"] for s in ours)
+            if n:
+                rate = sum(s["event_success_rate"] * s["event_success_n"] for s in ours) / n
+                cells += [pt, f"{100 * rate:.0f}% of {n} slip events"]
             else:
-                cells += [pt, "not run"]
+                cells += [pt, NOT_COMPARED]
         lines.append(f"| {e}, success | all | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
 
+#: What a table cell says where this run has no comparable value: the method or bottle did not
+#: run, or ran only with objects or loads that are not the paper's (those are under 'Your objects').
+NOT_COMPARED: str = "no comparable run"
+
+
 def success_markdown(summary: Sequence[dict[str, Any]]) -> str:
-    """Success rates per experiment, bottle and method as a markdown table.
+    """Success per trial and per slip event, and the grip added without slip, as a markdown table.
 
     Examples
     --------
     >>> print(success_markdown([{"experiment": "drop", "bottle": "TX", "method": "dath",
-    ...                          "success_rate": 0.9, "success_n": 10}]).splitlines()[2])
-    | drop | TX | 90% (10) | 90 % | not run | - | not run | - | not run | - |
+    ...                          "trial_success_rate": 0.9, "trial_success_n": 10, "event_success_rate": 0.9,
+    ...                          "event_success_n": 10, "grip_without_slip_mean": 4.0}]).splitlines()[2])
+    | drop | TX | DATH | 90% of 10 | 90% of 10 | 4 | 90 % |
     """
-    by = {(s["experiment"], s["bottle"], s["method"]): s for s in summary}
-    order = _table_methods(by)
-    cols = " | ".join(f"{_label(m)} ours | paper" for m in order)
-    lines = [f"| experiment | bottle | {cols} |", "|---|---|" + "---|" * (2 * len(order))]
-    keys = sorted({(e, b) for e, b, _ in by}, key=lambda k: group_key_order((k[0], k[1], "")))
-    for e, b in keys:
-        cells = []
-        for m in order:
-            s = by.get((e, b, m))
-            cells.append(f"{100 * s['success_rate']:.0f}% ({s['success_n']})" if s else "not run")
-            cells.append(PAPER_SUCCESS.get((e, b, m), "-"))
-        lines.append(f"| {e} | {b} | " + " | ".join(cells) + " |")
+    lines = ["| experiment | bottle | method | success per trial | success per slip event | "
+             "grip added without slip (units) | paper |", "|---|---|---|---|---|---|---|"]
+    for s in sorted(summary, key=lambda s: group_key_order((s["experiment"], s["bottle"], s["method"]))):
+        e, b, m = s["experiment"], s["bottle"], s["method"]
+        grip = cell_float(s.get("grip_without_slip_mean", math.nan))
+        lines.append(f"| {e} | {b} | {_label(m)} | {_pct(s, 'trial')} | {_pct(s, 'event')} | "
+                     f"{'-' if math.isnan(grip) else format(grip, '.0f')} | {PAPER_SUCCESS.get((e, b, m), '-')} |")
     return "\n".join(lines)
 
 
@@ -385,10 +466,11 @@ def report_markdown(*, summary: Sequence[dict[str, Any]], rows: Sequence[Any],
     from .paper import PAPER_NOTES
 
     lines = ["# slipreflex reproduce: the paper's experiments on the simulated rig", ""]
-    lines += [line for n in notices for line in (f"**{n}**", "")]
+    voided = void_notice(summary)
+    lines += [line for n in [*notices, *([voided] if voided else [])] for line in (f"**{n}**", "")]
     lines += ["## Run", ""] + [f"- {s}" for s in setup] + [""]
     lines += ["## The paper's table beside ours", "",
-              "Mean ± sd (n) in ms; *paper* columns are the paper's section III values, "
+              "Mean ± sd (n) in ms; *paper* columns are the paper's section III / docs/method.md section 4 values, "
               "*ours* come from `results.csv` (one value per slip event). Response time: onset "
               "(accelerometer) to the first increase of the commanded finger position. Total: first "
               "to last change of the command for that slip (fixed, DATH) or the closing time the "
@@ -398,7 +480,12 @@ def report_markdown(*, summary: Sequence[dict[str, Any]], rows: Sequence[Any],
 
         lines += claims_section(claims)
     lines += ["## Success (slip suppressed before the bottle slipped out)", "",
-              success_markdown(summary), ""]
+              "*Per trial*: the trials in which the bottle stayed in the grasp through every slip; "
+              "*per slip event*: the slip events suppressed, over all slip events (a trial without a "
+              "detected slip counts once). *Grip added without slip*: how far the hand closed (finger "
+              "units, mean per trial) while no true slip was under way (the simulator's truth): a "
+              "pre-emptive squeeze, e.g. at the water's landing, that the response times do not show.",
+              "", success_markdown(summary), ""]
     lines += ["## Onset estimate vs the simulator's true onset", "",
               "Accelerometer onset minus the true onset of the slip (positive: the estimate is late).",
               "", onset_markdown(rows), ""]
@@ -505,7 +592,11 @@ def bars_caption(experiment: str, metric: str) -> str:
 
 
 #: Caption of the success chart.
-SUCCESS_CAPTION: str = "Success rates (slip suppressed before the bottle slipped out)"
+SUCCESS_CAPTION: str = ("Success per trial (bars) and per slip event (dots): the slip suppressed before the "
+                        "bottle slipped out")
+#: Caption of the grip-without-slip chart.
+GRIP_CAPTION: str = ("Grip added without slip: how far the hand closed (finger units, mean ± sd per trial) "
+                     "while no true slip was under way; a pre-emptive squeeze the response times do not show")
 
 
 def setup_lines(result: Any, command: str | None = None) -> list[str]:
@@ -606,7 +697,7 @@ class _Rows:
         from .trial import TrialRow
 
         # rows read back from results.csv are dicts of strings: type them once
-        self.rows = [r if isinstance(r, TrialRow) else TrialRow.from_dict(r) for r in result.rows]
+        self.rows = [r if isinstance(r, TrialRow) else TrialRow.from_dict(r) for r in result.rows if not void(r)]
         self.summary, self.config = result.summary, result.config
 
     def sel(self, **kw: Any) -> list[Any]:
@@ -685,7 +776,7 @@ def _fixed_vs_dath(d: _Rows) -> str:
     same = sum(1 for v in both if abs(v[F] - v[D]) < 1e-6)
     return (f"**Fixed threshold vs DATH response.** In {same} of {len(both)} paired slips "
             "(same seed, same bottle) the two chains responded at exactly the same time. That "
-            "follows from the method (docs/method.md): DATH changes the threshold only after the first "
+            "follows from the method (docs/method.md section 1.2): DATH changes the threshold only after the first "
             "spike, and the MPI raises the command at the end of the first window holding a spike, "
             "so on the same input the first response cannot differ. The paper's fixed and DATH "
             "trials were separate physical runs, so their response times differ by trial-to-trial "

@@ -103,6 +103,12 @@ class TrialRow(Mapping):
         The trial's grasp (slip-finger position, force) and when the load was applied.
     true_slip_ms, true_slip_mm : float
         How long and how far the simulator's slip episode slid.
+    fell_before_load : bool
+        The object left the grasp before the perturbation: the trial tested the grasp, not
+        the method, and is reported apart (void), never scored.
+    grip_without_slip : float
+        How far the hand closed in the trial (finger units) while no true slip was under
+        way (simulator truth; NaN on hardware): the same on every row of the trial.
 
     Examples
     --------
@@ -146,6 +152,8 @@ class TrialRow(Mapping):
     perturbation_s: float = _NAN
     true_slip_ms: float = _NAN
     true_slip_mm: float = _NAN
+    fell_before_load: bool = False
+    grip_without_slip: float = _NAN
 
     def __getitem__(self, name: str) -> Any:
         if not isinstance(name, str) or name not in _FIELDS:

@@ -1,4 +1,4 @@
-"""The paper's comparison methods on the 4 x 4 tactile array (shared SPEC section 2).
+"""The paper's comparison methods on the 4 x 4 tactile array (docs/method.md section 2).
 
 * :class:`NMSD` - neuromimetic slip detection after Osborn et al. (260 Hz);
 * :class:`SWTSD` - stationary-wavelet slip detection after Romeo et al. (380 Hz).

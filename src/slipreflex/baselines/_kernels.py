@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from .._numba_cache import CACHE
 from ._layout import (
     KIND_SWT,
     P_FS,
@@ -45,7 +46,7 @@ from ._layout import (
 )
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _feed(S, P, trig, hold):
     """Closer.feed: a trigger adds a quantum ("events"), or starts one when none runs ("hold")."""
     if trig and (not hold or S[S_REMAINING] <= 0.0):
@@ -53,7 +54,7 @@ def _feed(S, P, trig, hold):
         S[S_TRIGGERS] += 1.0
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _close(S, P, position):
     """Closer.step: one sample of the ramp; the new target, or NaN when it does not change.
 
@@ -81,7 +82,7 @@ def _close(S, P, position):
     return target if target != old else np.nan
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _nmsd_detect(S, P, frame):
     """NMSD on one flat frame: (largest |d_k - d_(k-1)|, any taxel over threshold)."""
     taxels = int(P[P_TAXELS])
@@ -102,7 +103,7 @@ def _nmsd_detect(S, P, frame):
     return stat, stat > P[P_THRESHOLD]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _swt_detect(S, P, frame):
     """SWT-SD on one flat frame: (largest |c_k|, some taxel over threshold for persist + 1 frames).
 
@@ -143,7 +144,7 @@ def _swt_detect(S, P, frame):
     return stat, level
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _tactile_step(S, P, frame, position):
     taxels = int(P[P_TAXELS])
     if frame.size != taxels:
@@ -166,7 +167,7 @@ def _tactile_step(S, P, frame, position):
     return _close(S, P, position)
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def tactile_step(S, P, frame, position):
     """One tactile frame through NMSD or SWT-SD (``P[P_KIND]``) and the closing rule.
 
@@ -178,19 +179,19 @@ def tactile_step(S, P, frame, position):
     return _tactile_step(S, P, frame, position)
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def closer_feed(S, P, trig, hold):
     """Closer.feed on a Closer's state."""
     _feed(S, P, trig, hold)
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def closer_step(S, P, position):
     """Closer.step on a Closer's state (NaN position: unknown; NaN result: no change)."""
     return _close(S, P, position)
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def closing_kernel(triggers, positions, hold, S, P, out):
     """The closing rule over whole arrays (closing_commands): ``out[k]`` the target or NaN."""
     for k in range(triggers.size):
@@ -198,7 +199,7 @@ def closing_kernel(triggers, positions, hold, S, P, out):
         out[k] = _close(S, P, positions[k])
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def tactile_kernel(frames, positions, S, P, out):
     """tactile_step over ``(K, taxels)`` frames (benchmarks and tests)."""
     for k in range(frames.shape[0]):

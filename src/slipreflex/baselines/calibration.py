@@ -1,4 +1,4 @@
-"""The one threshold rule of the comparison methods (shared SPEC section 2).
+"""The one threshold rule of the comparison methods (docs/method.md section 2).
 
 The paper gives no thresholds for NMSD or SWT-SD. We use one rule for both
 methods and every bottle: record the rig **at rest** (object grasped, nothing

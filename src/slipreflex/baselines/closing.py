@@ -1,4 +1,4 @@
-"""The NMSD closing rule, turned into finger position targets (shared SPEC section 2).
+"""The NMSD closing rule, turned into finger position targets (docs/method.md section 2).
 
 Osborn et al.'s reflex closes the fingers for a fixed time on every slip
 detection (45 ms in the paper); each further detection while the fingers are

@@ -1,4 +1,4 @@
-"""NMSD: neuromimetic slip detection after Osborn et al. (shared SPEC section 2).
+"""NMSD: neuromimetic slip detection after Osborn et al. (docs/method.md section 2).
 
 The comparison method of the paper's section II-E, on the 4 x 4 tactile array
 sampled at 260 Hz. For every taxel the force derivative is taken,

@@ -205,6 +205,21 @@ class TactileReflex(ABC):
         """
         return bool(self._S[_L.S_REMAINING] > 0.0)
 
+    @property
+    def probe_slots(self) -> dict[str, int]:
+        """The slots of the state vector a closed loop records after every frame (what it computed).
+
+        ``stat`` the frame's largest statistic, ``event`` 1 at a detection (rising edge),
+        ``level`` 1 while over the threshold, ``target`` the closing rule's target.
+
+        Examples
+        --------
+        >>> from slipreflex.baselines import NMSD
+        >>> sorted(NMSD(threshold=1.0, speed=500.0).probe_slots)
+        ['event', 'level', 'stat', 'target']
+        """
+        return {"stat": _L.S_STAT, "event": _L.S_EVENT, "level": _L.S_LEVEL, "target": _L.S_TARGET}
+
     def compiled(self) -> tuple[Any, np.ndarray, np.ndarray]:
         """The compiled step and the live state: ``(tactile_step, S, P)``.
 

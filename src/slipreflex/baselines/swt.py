@@ -1,6 +1,6 @@
 """SWT-SD: slip detection with the stationary wavelet transform after Romeo et al.
 
-The second comparison method of the paper's section II-E (shared SPEC
+The second comparison method of the paper's section II-E (docs/method.md
 section 2), on the 4 x 4 tactile array sampled at 380 Hz. For every taxel, the
 last ``window = 8`` samples (21 ms) are decomposed by :func:`pywt.swt` into
 three levels with the Haar wavelet, and the statistic is the level-3 detail

@@ -1,4 +1,4 @@
-"""The reflex signal chain of the paper (shared SPEC section 1).
+"""The reflex signal chain of the paper (docs/method.md section 1).
 
 Batch functions (:func:`lowpass`, :func:`encode`, :func:`count_windows`,
 :func:`mpi`, :func:`run_chain`) and streaming objects (:class:`LowPass`,

@@ -1,6 +1,6 @@
 """numba kernels of the chain: one per-sample update per stage, composed.
 
-The per-sample updates here are the arithmetic of SPEC 1.1-1.4 written once for
+The per-sample updates here are the arithmetic of docs/method.md sections 1.1-1.4 written once for
 compiled code; the streaming objects in the sibling modules perform exactly the
 same IEEE operations in the same order (no fastmath, so no FMA contraction), which
 is why batch and streaming agree bit for bit. Imported lazily by the batch
@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from .._numba_cache import CACHE
 from ._layout import (
     FILTER_BUTTERWORTH,
     FILTER_MEAN,
@@ -63,7 +64,7 @@ from ._layout import (
 )
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def sos_update(sos, zi, x):
     """One sample through every second-order section (scipy's sosfilt order)."""
     for s in range(sos.shape[0]):
@@ -74,10 +75,10 @@ def sos_update(sos, zi, x):
     return x
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def encoder_update(x, prev, acc, theta, remaining, clock, theta0, dath, dath_samples, floor,
                    acc_reset, leak, leak_on):
-    """SPEC 1.2 for one sample, with the accumulator's optional leak and periodic reset.
+    """docs/method.md section 1.2 for one sample, with the accumulator's optional leak and periodic reset.
 
     Returns (event, acc_before_reset, theta_used, acc, theta, remaining, clock).
     ``acc_reset <= 0`` means no periodic reset; ``leak_on`` multiplies the old
@@ -107,9 +108,9 @@ def encoder_update(x, prev, acc, theta, remaining, clock, theta0, dath, dath_sam
     return event, acc_seen, theta_used, acc, theta, remaining, clock
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def mpi_update(v, p_base, h, m_prev, zeros, kp, ki, reset_after, lo, hi, position):
-    """SPEC 1.4 for one window; a reset takes ``position`` as P0, or the command if it is NaN.
+    """docs/method.md section 1.4 for one window; a reset takes ``position`` as P0, or the command if it is NaN.
 
     ``reset_after < 0`` never resets.
     """
@@ -128,13 +129,13 @@ def mpi_update(v, p_base, h, m_prev, zeros, kp, ki, reset_after, lo, hi, positio
     return m, p_base, h, zeros
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def lowpass_kernel(raw, sos, zi, out):
     for k in range(raw.size):
         out[k] = sos_update(sos, zi, raw[k])
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def encode_kernel(x, prev, theta0, dath, dath_samples, floor, acc_reset, leak, leak_on,
                   events, acc_out, theta_out):
     acc = 0.0
@@ -151,7 +152,7 @@ def encode_kernel(x, prev, theta0, dath, dath_samples, floor, acc_reset, leak, l
         prev = x[k]
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def mpi_kernel(v, p0, m0, kp, ki, reset_after, lo, hi, out):
     p_base = p0
     h = 0.0
@@ -166,7 +167,7 @@ def mpi_kernel(v, p0, m0, kp, ki, reset_after, lo, hi, out):
 
 # --- the composed chain over a state array (layout: slipreflex.chain._layout) -------------
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _offsets(P):
     """Start of zi, of the event ring and of the mean ring in the state vector."""
     nsec = int(P[P_NSEC])
@@ -174,7 +175,7 @@ def _offsets(P):
     return nsec, slide, slide + int(P[P_N])
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _filter_step(S, P, raw, first):
     kind = P[P_FILTER]
     nsec, _slide, mean = _offsets(P)
@@ -210,7 +211,7 @@ def _filter_step(S, P, raw, first):
     return raw
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _encoder_step(S, P, x):
     event, acc_seen, theta_used, acc, theta, remaining, clock = encoder_update(
         x, S[S_PREV], S[S_ACC], S[S_THETA], int(S[S_REMAINING]), int(S[S_CLOCK]), P[P_THETA0],
@@ -226,7 +227,7 @@ def _encoder_step(S, P, x):
     return event
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _event_mpi_step(S, P, event, position):
     """The event-driven MPI for one sample; returns the new command or NaN if unchanged."""
     n = int(P[P_N])
@@ -256,7 +257,7 @@ def _event_mpi_step(S, P, event, position):
     return m if m != m_prev else np.nan
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _chain_step(S, P, raw, position):
     """One raw sample through the whole chain; the new command, or NaN for none.
 
@@ -300,7 +301,7 @@ def _chain_step(S, P, raw, position):
     return out
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def chain_step(S, P, raw, position):
     """One raw sample through the whole chain (state ``S``, parameters ``P``, layout in
     :mod:`slipreflex.chain._layout`); the new command, or NaN for none. ``position`` is the
@@ -308,7 +309,7 @@ def chain_step(S, P, raw, position):
     return _chain_step(S, P, raw, position)
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def chain_kernel(raw, S, P, x_out, events, acc_out, theta_out, counts, commands, sample_commands):
     """chain_step over a whole recording, keeping its per-sample and per-window outputs.
 
@@ -334,7 +335,7 @@ def chain_kernel(raw, S, P, x_out, events, acc_out, theta_out, counts, commands,
             commands[z] = S[S_M]
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def _staged_chain(raw, P, x_out, events, acc_out, theta_out, counts, commands, sample_commands):
     """chain_kernel's outputs from the initial state, one stage over the whole recording at a time."""
     nsec, _slide, _mean = _offsets(P)

@@ -51,7 +51,7 @@ __all__ = ["pack_params", "init_state"]
 #
 # S, the state, built by init_state(P); reset() is S[:] = init_state(P):
 #   S_STARTED      1 once a finite sample has arrived (filter and reference set)
-#   S_PREV, S_ACC, S_THETA, S_REMAINING, S_CLOCK   encoder state (SPEC 1.2 + periodic reset)
+#   S_PREV, S_ACC, S_THETA, S_REMAINING, S_CLOCK   encoder state (docs/method.md section 1.2 + periodic reset)
 #   S_COUNT, S_FILLED   spikes and samples in the current window
 #   S_PBASE, S_H, S_M   MPI: P0, integral h, command (never decreases)
 #   S_ZEROS        zero windows in a row (window MPI), samples since the last spike (event MPI)

@@ -1,4 +1,4 @@
-"""Event encoder: FA-I-like spikes by send-on-delta, fixed threshold or DATH (SPEC 1.2).
+"""Event encoder: FA-I-like spikes by send-on-delta, fixed threshold or DATH (docs/method.md section 1.2).
 
 For every filtered sample x_k the encoder accumulates the difference to the
 previous sample (paper Eq. 1), fires when ``|acc| > theta`` (Eq. 2, strictly

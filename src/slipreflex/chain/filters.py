@@ -1,4 +1,4 @@
-"""Low-pass stage: 2nd-order Butterworth, causal, started at steady state (SPEC 1.1).
+"""Low-pass stage: 2nd-order Butterworth, causal, started at steady state (docs/method.md section 1.1).
 
 The filter is designed by scipy (``butter(2, cutoff, fs=fs, output="sos")``) and run
 in second-order sections in scipy's ``sosfilt`` arithmetic; its state starts at the

@@ -1,4 +1,4 @@
-"""Monotonic PI controller on spike counts (paper Eq. 5-9, SPEC 1.4).
+"""Monotonic PI controller on spike counts (paper Eq. 5-9, docs/method.md section 1.4).
 
 Per window: ``h += v``; ``PI = P0 + Kp v + Ki h``; the command is the running
 maximum of PI, clipped to [lo, hi], so it never decreases. After

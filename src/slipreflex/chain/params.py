@@ -1,4 +1,4 @@
-"""Frozen, validated parameters of the reflex chain (shared SPEC section 1).
+"""Frozen, validated parameters of the reflex chain (docs/method.md section 1).
 
 Each stage has its own parameter class; :class:`ReflexParams` gathers them all
 flat, with the names and defaults of the batch functions, so one object
@@ -47,7 +47,7 @@ def _optional(check, name: str, value: Any, **bounds: Any) -> Any:
 
 @dataclass(frozen=True, slots=True)
 class FilterParams:
-    """Low-pass stage: 2nd-order Butterworth, causal (SPEC 1.1).
+    """Low-pass stage: 2nd-order Butterworth, causal (docs/method.md section 1.1).
 
     Parameters
     ----------
@@ -100,7 +100,7 @@ class FilterParams:
 
 @dataclass(frozen=True, slots=True)
 class EncoderParams:
-    """Event encoder: send-on-delta with a fixed threshold or DATH (SPEC 1.2).
+    """Event encoder: send-on-delta with a fixed threshold or DATH (docs/method.md section 1.2).
 
     Parameters
     ----------
@@ -158,7 +158,7 @@ class EncoderParams:
 
 @dataclass(frozen=True, slots=True)
 class WindowParams:
-    """Spike-count windows of ``n`` samples (SPEC 1.3).
+    """Spike-count windows of ``n`` samples (docs/method.md section 1.3).
 
     Examples
     --------
@@ -176,7 +176,7 @@ class WindowParams:
 
 @dataclass(frozen=True, slots=True)
 class MPIParams:
-    """Monotonic PI controller (SPEC 1.4).
+    """Monotonic PI controller (docs/method.md section 1.4).
 
     Parameters
     ----------
@@ -392,7 +392,7 @@ _PAPER_KINDS = {"filter_kind": "butterworth", "acc_reset": None, "acc_leak": Non
 
 
 def _authors_gui(fs: float) -> dict[str, Any]:
-    """The authors' rig code (formSlipExp.py) at ``fs``: SPEC 1.6 / docs/method.md."""
+    """The authors' rig code (formSlipExp.py) at ``fs``: docs/method.md section 1.6."""
     return {"filter_kind": "mean", "mean_samples": max(1, round(fs / 5)), "threshold": 0.005,
             "dath": False, "x0": 0.0, "acc_reset": max(1, int(0.1 * fs)), "n": max(1, int(0.03 * fs)),
             "p0": 125.0, "reset_after": None, "slip_finger_offset": 20.0}

@@ -1,4 +1,4 @@
-"""The composed reflex: filter -> encoder -> windows -> MPI (SPEC 1, Fig. 3).
+"""The composed reflex: filter -> encoder -> windows -> MPI (docs/method.md section 1, Fig. 3).
 
 :class:`SlipReflex` is the one object that runs in simulation, on hardware and
 in replay: one raw sample in, a new finger command out on the samples that
@@ -165,6 +165,22 @@ class SlipReflex:
     def reset(self) -> None:
         """Restore every stage to its initial state."""
         self._S[:] = self._S0
+
+    @property
+    def probe_slots(self) -> dict[str, int]:
+        """The slots of the state vector a closed loop records after every step (what it computed).
+
+        ``x`` the filtered sample, ``event`` 1 for a spike, ``theta`` the threshold in
+        force, ``acc`` the accumulator before its reset, ``count`` the window's spike
+        count at a window's end (-1 elsewhere), ``command`` the MPI's command.
+
+        Examples
+        --------
+        >>> sorted(SlipReflex().probe_slots)
+        ['acc', 'command', 'count', 'event', 'theta', 'x']
+        """
+        return {"x": _k.S_LAST_X, "event": _k.S_LAST_EVENT, "theta": _k.S_LAST_THETA, "acc": _k.S_LAST_ACC,
+                "count": _k.S_LAST_COUNT, "command": _k.S_M}
 
     def compiled(self):
         """The compiled step and this chain's live state: ``(chain_step, S, P)``.

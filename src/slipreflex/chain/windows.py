@@ -1,4 +1,4 @@
-"""Spike counts in non-overlapping windows of N samples (paper Eq. 3, SPEC 1.3).
+"""Spike counts in non-overlapping windows of N samples (paper Eq. 3, docs/method.md section 1.3).
 
 Windows are aligned to the first sample of the stream; an unfinished tail
 window is not emitted.

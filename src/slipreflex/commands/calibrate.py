@@ -15,8 +15,9 @@ in which case its pad friction is calibrated to it.
 Examples (shell)::
 
     slipreflex calibrate
-    slipreflex calibrate --objects my.toml --bottles JAR TR
+    slipreflex calibrate --objects my.toml --bottles JAR,TR
     slipreflex calibrate --objects my.toml --bottles JAR --first-slip-ml 150
+    slipreflex calibrate --figure out/calibration.png
 """
 
 from __future__ import annotations
@@ -32,8 +33,14 @@ ORDER = 45
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Command-line options of ``slipreflex calibrate``."""
     parser.add_argument("--objects", type=Path, default=None, help="TOML file of your own bottles and surfaces")
-    parser.add_argument("--bottles", nargs="+", default=None,
-                        help="bottles to calibrate (default: the paper's TR DK TX, plus every bottle of --objects)")
+    from ._lists import names_list
+
+    parser.add_argument("--bottles", type=names_list, default=None,
+                        help="comma-separated bottles to calibrate (default: the paper's TR,DK,TX, plus every "
+                             "bottle of --objects)")
+    parser.add_argument("--figure", type=Path, default=None, metavar="PNG",
+                        help="also draw the open-loop pours behind the numbers: the bottle's slide against "
+                             "the water in it, each calibration seed's first slip and the paper's ~200 ml")
     parser.add_argument("--first-slip-ml", type=float, default=None,
                         help="calibrate every listed bottle's pad friction so that its open-loop first slip comes "
                              "at this volume (default: the paper's bottles are calibrated to 200 ml, yours kept)")
@@ -56,7 +63,12 @@ def run(args: argparse.Namespace) -> int:
     target = args.first_slip_ml
     if target is not None and not 0 < target < 500:
         raise ParameterError(f"--first-slip-ml must be in (0, 500) ml, got {target!r}")
+    if args.figure is not None:
+        from ..paths import output_dir
+
+        output_dir(args.figure.parent, "--figure")      # before the work: a bad folder costs one line
     hand = HandParams()
+    drawn: dict = {}
     print(f"open-loop calibration: {hw.CONTACT_FORCE_N} N grasp, 500 ml at 1 L/min, no reflex "
           f"(paper: first slip near {PAPER_FIRST_SLIP_ML:g} ml, as its accelerometer and flow sensor saw it)")
     print("bottle  observed   true      pad mu_s/mu_k   cuff mu_s/mu_k  law          N/contact  capacity  gain")
@@ -83,4 +95,89 @@ def run(args: argparse.Namespace) -> int:
         print(f"{n:7s} {slip:>9s} {true:>9s}   {bottle.mu_s:5.3f}/{bottle.mu_k:5.3f}     {bottle.cuff_mu_s:5.3f}/"
               f"{bottle.cuff_mu_k:5.3f}     {law:12s} {g.force_n:5.2f} N  {cap:5.2f} N   "
               f"{grip_gain(hand, bottle):.3f} N/unit  ({note})")
+        drawn[n] = (bottle, ml)
+    if args.figure is not None:
+        print(f"wrote {calibration_figure(drawn, args.figure)}")
     return 0
+
+
+def open_loop_pour(bottle, seed: int, *, rest_s: float = 0.5, after_s: float = 3.0):
+    """One open-loop pour of the paper's calibration: (water in the bottle ml, slide mm, first slip ml).
+
+    The 0.8 N grasp, ``rest_s`` of rest, then the paper's pour with no reflex, until
+    ``after_s`` after the first gross slip (or the pour's end); the slide is the truth's
+    displacement of the bottle from where it was grasped.
+
+    Examples
+    --------
+    >>> from slipreflex.sim import BOTTLES
+    >>> ml, mm, first = open_loop_pour(BOTTLES["TR"], 0)
+    >>> 150 < first < 250 and ml.shape == mm.shape
+    True
+    """
+    import math
+
+    import numpy as np
+
+    from .. import hardware as hw
+    from ..sim import PAPER_POUR, Rig, simulate_open_loop
+
+    rig = Rig(bottle, seed=seed)
+    rig.grasp(hw.CONTACT_FORCE_N)
+    t0 = rig.t + rest_s
+    rig.perturb(PAPER_POUR, at=t0)
+    n0 = rig.onsets.size
+    end = t0 + PAPER_POUR.duration_s + 1.0
+    parts = []
+    while rig.t < end and not rig.fallen:
+        parts.append(simulate_open_loop(rig, min(0.5, end - rig.t)))
+        if rig.onsets.size > n0:
+            end = min(end, float(rig.onsets[n0]) + after_s)
+    t = np.concatenate([p.t for p in parts])
+    x = np.concatenate([p.daq.displacement for p in parts])
+    delay = math.sqrt(2.0 * PAPER_POUR.fall_height_m / hw.GRAVITY)
+
+    def ml(tt):
+        return np.clip(np.asarray(tt) - t0 - delay, 0.0, PAPER_POUR.duration_s) * PAPER_POUR.rate_l_min / 60.0 * 1e3
+
+    first = float(ml(rig.onsets[n0])) if rig.onsets.size > n0 else float("nan")
+    return ml(t), 1e3 * (x - x[0]), first
+
+
+def calibration_figure(drawn: dict, path: Path) -> Path:
+    """The open-loop calibration as a figure: per bottle, each seed's slide against the water in it.
+
+    ``drawn`` maps a bottle's name to (Bottle, its first slip in ml as printed).
+    """
+    import numpy as np
+
+    from ..analysis.figures import _plt, _save
+    from ..sim.calibration import CALIBRATION_SEEDS, PAPER_FIRST_SLIP_ML
+
+    plt = _plt()
+    names = list(drawn)
+    fig, axes = plt.subplots(1, len(names), figsize=(3.6 * len(names) + 0.6, 3.4), squeeze=False, sharey=True)
+    for ax, n in zip(axes[0], names):
+        bottle, ml = drawn[n]
+        travel = bottle.grip_travel_m * 1e3
+        ax.axhline(travel, color="0.5", ls=":", lw=0.8, label=f"falls out ({travel:g} mm)")
+        ax.axvspan(PAPER_FIRST_SLIP_ML - 20, PAPER_FIRST_SLIP_ML + 20, color="tab:red", alpha=0.15, lw=0,
+                   label=f"paper: first slip near {PAPER_FIRST_SLIP_ML:g} ml")
+        for k, seed in enumerate(CALIBRATION_SEEDS):
+            water, mm, first = open_loop_pour(bottle, seed)
+            keep = np.cumsum(mm > travel) <= 1           # up to the fall-out travel: the free fall is no slide
+            ax.plot(water[keep], np.minimum(mm[keep], travel), lw=0.9, color=f"C{k}", label=f"seed {seed}")
+            if first == first:
+                ax.plot([first], [float(mm[min(int((water <= first).sum()), mm.size - 1)])], "o", color=f"C{k}", ms=4)
+        if ml == ml:
+            ax.axvline(ml, color="k", ls="--", lw=0.9, label=f"first slip {ml:.0f} ml (mean of seeds)")
+        ax.set_title(f"{n}: pad mu_s {bottle.mu_s:.3f}, {bottle.mass_kg * 1e3:.0f} g", fontsize=8)
+        ax.set_xlabel("water in the bottle (ml)")
+        ax.set_xlim(0, 500)
+        ax.set_ylim(-1, travel * 1.12)
+        ax.legend(fontsize=6, loc="upper left")
+    axes[0][0].set_ylabel("slide of the bottle (mm)")
+    fig.suptitle("Open-loop calibration: the paper's pour (500 ml at 1 L/min), 0.8 N grasp, no reflex; "
+                 "dots: each seed's first gross slip", fontsize=8)
+    fig.tight_layout()
+    return _save(plt, fig, path, layout=False)

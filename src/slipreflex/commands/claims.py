@@ -49,21 +49,24 @@ def read_rows(path: Path) -> list:
     """
     from ..analysis.trial import TrialRow
     from ..errors import ParameterError
+    from ..paths import read_text
 
-    if not path.is_file():
+    if not path.exists():
         raise ParameterError(f"{path}: no such results file")
-    with path.open(newline="") as fh:
-        lines = [line for line in fh if not line.startswith("#")]
+    lines = [line for line in read_text(path, "").splitlines(keepends=True) if not line.startswith("#")]
     reader = csv.DictReader(lines)
-    missing = [c for c in NEEDED if c not in (reader.fieldnames or ())]
-    if missing:
-        raise ParameterError(f"{path}: not a results table: no column {', '.join(missing)}")
     rows = []
-    for i, d in enumerate(reader, start=2):
-        try:
-            rows.append(TrialRow.from_dict(d))
-        except (ValueError, TypeError) as e:
-            raise ParameterError(f"{path}, data line {i}: {e}") from None
+    try:
+        missing = [c for c in NEEDED if c not in (reader.fieldnames or ())]
+        if missing:
+            raise ParameterError(f"{path}: not a results table: no column {', '.join(missing)}")
+        for i, d in enumerate(reader, start=2):
+            try:
+                rows.append(TrialRow.from_dict(d))
+            except (ValueError, TypeError) as e:
+                raise ParameterError(f"{path}, data line {i}: {e}") from None
+    except csv.Error as e:
+        raise ParameterError(f"{path}: not a results table ({e})") from None
     return rows
 
 

@@ -43,8 +43,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     """
     d = _DEFAULTS
     p.add_argument("recording", type=Path, help="CSV with columns t (s) and x (V), or one column of volts")
-    p.add_argument("--method", choices=(FIXED, DATH), default=None,
-                   help="fixed threshold or Dynamic Adaptive Threshold (default: the file's, else dath)")
+    p.add_argument("--method", default=None,
+                   help="a registered method that reads the slip sensor: fixed, dath, or a variant of the "
+                        "chain (dath-event, dath-floor, dath-leak, authors-gui, ...; default: the file's, "
+                        "else dath); other options still override its parameters")
     p.add_argument("--preset", choices=sorted(PRESETS), default=None,
                    help="start from a named chain instead of the file's or the paper's: authors-gui is "
                         "the authors' rig code, dath-event DATH with the event-driven MPI (docs/method.md); "
@@ -103,16 +105,50 @@ def _sampling_rate(rec: Recording, given: float | None, base: ReflexParams | Non
     return from_t
 
 
+#: What detect's input supplies, for the method check.
+_INPUT = "detect's input (a CSV of slip-sensor volts)"
+
+
+def method_chain(name: str | None) -> tuple[str | None, ReflexParams | None]:
+    """``--method`` checked: its registered name, and the chain parameters of a chain variant
+    (None for fixed and dath, whose options and header decide the rest).
+
+    Examples
+    --------
+    >>> method_chain("DATH-event")[1].variants
+    ('mpi_mode',)
+    >>> method_chain("swt")                       # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    slipreflex.errors.ParameterError: --method swt reads tactile frames, which detect's input ... does not supply ...
+    """
+    from ..methods import applicable, make
+
+    if name is None:
+        return None, None
+    spec = applicable(name, {"slip"}, _INPUT)
+    if spec.name in (FIXED, DATH):
+        return spec.name, None
+    params = getattr(make(spec.name), "params", None)
+    if not isinstance(params, ReflexParams):
+        raise ParameterError(f"--method {spec.name} is not the chain with other parameters: give --board "
+                             f"and a CSV of ADC counts for the board's chain")
+    return spec.name, params
+
+
 def chain_params(args: argparse.Namespace, rec: Recording) -> ReflexParams:
-    """The chain to run: explicit options, else the file's header, else the defaults."""
+    """The chain to run: explicit options, else the method's or the file's header, else the defaults."""
+    method, variant = method_chain(args.method)
     base = _file_params(rec)
     fs = _sampling_rate(rec, args.fs, base)
     preset = getattr(args, "preset", None)
     values = (ReflexParams.preset(preset, fs=fs) if preset else base or _DEFAULTS).to_dict()
+    if variant is not None:
+        values = {**variant.to_dict(), "p0": values["p0"]}
     values.update({k: getattr(args, k) for k in _FIELDS if getattr(args, k) is not None})
-    if args.method is not None:
-        values["dath"] = args.method == DATH
-    elif base is None and not preset:
+    if method in (FIXED, DATH):
+        values["dath"] = method == DATH
+    elif base is None and not preset and variant is None:
         values["dath"] = True
     if args.no_filter:
         values["filter"] = False
@@ -148,6 +184,10 @@ def _saturation(res, t: np.ndarray, params: ReflexParams) -> str | None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the chain and write the two CSVs; print a summary."""
+    from ..validation import within
+
+    if args.fs is not None:
+        within("fs_hz", args.fs, "--fs")
     if args.board:
         if args.preset:
             raise ParameterError("--preset and --board: the board runs the paper's chain only")
@@ -165,7 +205,9 @@ def run(args: argparse.Namespace) -> int:
     source = " (chain and p0 from the file's header)" if "reflex_params" in rec.preamble else ""
     if args.preset:
         source = f" (preset {args.preset}: {', '.join(params.variants) or 'the paper chain'})"
-    print(f"{args.recording}: {rec.x.size} samples at {params.fs:.2f} Hz, method {params.name}{source}")
+    shown = method_chain(args.method)[0]
+    shown = params.name if shown in (None, FIXED, DATH) else shown
+    print(f"{args.recording}: {rec.x.size} samples at {params.fs:.2f} Hz, method {shown}{source}")
     print(f"  windows: {_ms(params.n, params.fs)}" + (f"; DATH: {_ms(params.dath_samples, params.fs)}"
                                                      if params.dath else ""))
     print(f"  events: {int(res.events.sum())}")
@@ -188,9 +230,16 @@ def _prefix(args: argparse.Namespace) -> Path:
 def _run_board(args: argparse.Namespace) -> int:
     """``detect --board``: the Python twin of the firmware over a CSV of ADC counts."""
     from ..board import BoardParams, read_adc_csv, run_board_chain, write_board_outputs
+    from ..hardware import FINGER_MAX
+    from ..methods import applicable
+    from ..validation import number
 
-    p0 = 0.0 if args.p0 is None else args.p0
-    method = args.method or DATH
+    p0 = number("--p0", 0.0 if args.p0 is None else args.p0, lo=0, hi=FINGER_MAX)
+    method = applicable(args.method or DATH, {"slip"}, _INPUT).name
+    method = {"dath-board": DATH, "fixed-board": FIXED}.get(method, method)
+    if method not in (FIXED, DATH):
+        raise ParameterError(f"--method {method} with --board: the board runs fixed or dath "
+                             f"(dath-board, fixed-board) only")
     if p0 != int(p0):
         raise ParameterError(f"--p0 must be a whole position with --board, got {p0!r}")
     prefix = _prefix(args)

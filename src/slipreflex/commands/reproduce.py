@@ -31,7 +31,7 @@ def _csv_list(kind: str, known, *, any_case: bool = False):
         from ..validation import choices
 
         try:
-            return choices(kind, [x.strip() for x in text.split(",") if x.strip()], known(),
+            return choices(kind, list(_names(text)), known(),
                            any_case=any_case)
         except ParameterError as err:
             raise argparse.ArgumentTypeError(str(err)) from None
@@ -40,7 +40,9 @@ def _csv_list(kind: str, known, *, any_case: bool = False):
 
 def _names(text: str) -> tuple[str, ...]:
     """A comma-separated list of names, checked later against the run's objects."""
-    return tuple(x.strip() for x in text.split(",") if x.strip())
+    from ._lists import names_list
+
+    return names_list(text)
 
 
 def own_objects(args: argparse.Namespace) -> dict:
@@ -103,14 +105,16 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    default=EXPERIMENTS,
                    help=f"comma-separated experiments (default: {','.join(EXPERIMENTS)})")
     p.add_argument("--seed", type=int, default=d["seed"], help=f"master seed (default {d['seed']})")
+    from ..sim import PAPER_DROP, PAPER_POUR
+
     p.add_argument("--drop-mass", type=float, default=None, metavar="KG",
-                   help="dropped mass in kg (default: the paper's, slipreflex.sim.PAPER_DROP)")
+                   help=f"dropped mass in kg (default {PAPER_DROP.mass_kg:g}, the paper's)")
     p.add_argument("--drop-height", type=float, default=None, metavar="M",
-                   help="drop height above the opening in m (default: the paper's, PAPER_DROP)")
+                   help=f"drop height above the opening in m (default {PAPER_DROP.height_m:g}, the paper's)")
     p.add_argument("--pour-rate", type=float, default=None, metavar="L_MIN",
-                   help="pour rate in L/min (default: the paper's, slipreflex.sim.PAPER_POUR)")
+                   help=f"pour rate in L/min (default {PAPER_POUR.rate_l_min:g}, the paper's)")
     p.add_argument("--pour-volume", type=float, default=None, metavar="ML",
-                   help="poured volume in ml (default: the paper's, PAPER_POUR)")
+                   help=f"poured volume in ml (default {PAPER_POUR.volume_ml:g}, the paper's)")
     p.add_argument("--rest", type=float, default=d["rest_s"], metavar="S",
                    help=f"rest recorded before the perturbation, s (default {d['rest_s']:g})")
     p.add_argument("--after", type=float, default=d["after_s"], metavar="S",
@@ -139,14 +143,12 @@ def run(args: argparse.Namespace) -> int:
     Ctrl-C or SIGTERM stops the run within about two seconds and writes what finished,
     marked partial; exit status 130.
     """
-    from ..errors import ParameterError
     from ..experiments import ReproduceConfig, estimate_wall_s, run_reproduce
     from ..interrupts import Interrupted, signals_ignored, sigterm_interrupts
-    from ..paths import output_dir
+    from ..paths import OutputSet
     from ..progress import format_duration
 
-    if args.jobs is not None and args.jobs < 1:
-        raise ParameterError(f"--jobs must be >= 1, got {args.jobs}")
+    check_limits(args, _LIMITED)
     config = ReproduceConfig(
         trials=args.trials, bottles=tuple(args.bottles), methods=tuple(args.methods),
         experiments=tuple(args.experiments), seed=args.seed, drop_mass_kg=args.drop_mass,
@@ -154,10 +156,21 @@ def run(args: argparse.Namespace) -> int:
         rest_s=args.rest, after_s=args.after, calibration_s=args.calibration, rest_k=args.rest_k,
         swt_persist=args.swt_persist, variations=not args.no_variations,
         independent_seeds=args.independent_seeds, grasp_force_n=args.grasp_force, **own_objects(args))
-    output_dir(args.out, "--out")                    # before the first trial, not after the last
+    outputs = OutputSet(args.out, NAME)             # before the first trial, not after the last
+    outputs.check(OUTPUT_NAMES)
+    from ..experiments import grasp_seeds
+    from ..grasping import check_run_grasp
+
+    for b in config.bottles:                         # a grasp that cannot hold: one line, before the estimate
+        check_run_grasp(config, b, grasp_seeds(config, b))
     jobs = int(args.jobs or os.cpu_count() or 1)
-    n, estimate = len(config.cells()), estimate_wall_s(config, jobs)
+    from ..warmup import COLD_COMPILE_S, cold_kernels
+
+    cold = bool(cold_kernels())
+    n, estimate = len(config.cells()), estimate_wall_s(config, jobs, cold=cold)
     print(f"{n} trials on {jobs} worker(s): about {format_duration(estimate)}"
+          + (f" (first run: about {COLD_COMPILE_S:g} s of it compiles the kernels once; later runs "
+             "load them from numba's cache)" if cold else "")
           + (" (a long run: fewer --trials, --bottles or --methods shorten it)" if estimate > LONG_RUN_S else ""),
           file=sys.stderr, flush=True)
     command = "slipreflex " + " ".join(shlex.quote(a) for a in sys.argv[1:]) if sys.argv[1:] else None
@@ -167,34 +180,72 @@ def run(args: argparse.Namespace) -> int:
                                    plots=not args.no_figures)
     except Interrupted as stop:
         with signals_ignored():
-            paths = _write(stop.partial, args.out, command)
+            paths = _write(stop.partial, outputs, command)
+        if paths is None:
+            return 130
         print(f"slipreflex reproduce: {stop.partial.partial_note}; wrote the finished trials to "
-              f"{paths['results'].parent}/ (results.csv, summary.csv, report.md marked partial)",
+              f"{outputs.folder}/ (results.csv, summary.csv, report.md marked partial)",
               file=sys.stderr)
         return 130
-    _write(result, args.out, command)
-    return 0
+    return 0 if _write(result, outputs, command) is not None else 130
+
+
+#: Everything ``reproduce`` writes into ``--out``; replaced as one set (slipreflex.paths.OutputSet).
+OUTPUT_NAMES: tuple[str, ...] = ("results.csv", "summary.csv", "report.md", "figures")
+
+#: Options bounded by slipreflex.validation.LIMITS: (option, its dest, the limit's name).
+_LIMITED = (("--trials", "trials", "trials"), ("--rest", "rest", "rest_s"), ("--after", "after", "after_s"),
+            ("--calibration", "calibration", "calibration_s"), ("--rest-k", "rest_k", "rest_k"),
+            ("--swt-persist", "swt_persist", "swt_persist"), ("--grasp-force", "grasp_force", "grasp_force_n"),
+            ("--jobs", "jobs", "jobs"))
+
+
+def check_limits(args: argparse.Namespace, limited) -> None:
+    """Every bounded option within its plausible range (before any work), named by its option."""
+    from ..validation import within
+
+    for option, dest, limit in limited:
+        value = getattr(args, dest, None)
+        if value is not None:
+            within(limit, value, option)
 
 
 #: A run estimated longer than this (s) says how to shorten it before it starts.
 LONG_RUN_S: float = 600.0
 
 
-def _write(result, out: Path, command: str | None) -> dict:
+def _write(result, outputs, command: str | None) -> dict | None:
+    """Write the outputs into a fresh staging folder, then swap them in as one set.
+
+    Ctrl-C while writing leaves the previous outputs untouched: one "interrupted" line,
+    and None (the caller exits 130).
+    """
     from ..analysis.claims import claims_terminal, judge_run
-    from ..analysis.outputs import paper_part
+    from ..analysis.outputs import paper_part, scored
     from ..analysis.report import terminal_table
     from ..experiments import write_outputs
 
-    paths = write_outputs(result, out, command=command)
+    staged = outputs.stage()
+    try:
+        write_outputs(result, staged, command=command)
+        outputs.commit(staged)
+    except KeyboardInterrupt:
+        outputs.abort(staged)
+        print(f"slipreflex reproduce: interrupted while writing the outputs; {outputs.folder}/ holds the "
+              "previous run's outputs, untouched", file=sys.stderr, flush=True)
+        return None
+    except BaseException:
+        outputs.abort(staged)
+        raise
+    paths = {name: outputs.folder / name for name in ("results.csv", "summary.csv", "report.md")}
     paper, _, notice = paper_part(result)
     if notice:
         print(notice)
     print(terminal_table(result.summary))
     if not result.partial_note and paper.rows:
-        print(claims_terminal(judge_run(paper.rows, seed=result.config.seed, plant=result.config.plant)))
+        print(claims_terminal(judge_run(scored(paper.rows), seed=result.config.seed, plant=result.config.plant)))
+    claims = "" if result.partial_note or not paper.rows else ", claims.csv"
     print(f"{len(result.rows)} rows from {result.trials_finished} trials in {result.wall_s:.1f} s "
-          f"({result.jobs} jobs); wrote {paths['results'].parent}/"
-          "{results.csv, summary.csv, report.md" + (", claims.csv" if "claims" in paths else "")
-          + ("" if result.partial_note else ", figures/") + "}")
+          f"({result.jobs} jobs); wrote {outputs.folder}/"
+          "{results.csv, summary.csv, report.md" + claims + ("" if result.partial_note else ", figures/") + "}")
     return paths

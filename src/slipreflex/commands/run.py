@@ -23,9 +23,10 @@ from ..errors import ParameterError
 from ..hardware import DAQ_FS, FINGER_MAX, FINGER_MIN, SLIP_FINGER, TRIPOD, Finger
 from ..methods import DATH, FIXED
 from ..runtime import WATCHDOG_MAX_S, WATCHDOG_MIN_S, WATCHDOG_S
+from ._live import add_live_arguments, check_live_arguments, close_taps, open_taps
 
 NAME = "run"
-HELP = "run the slip reflex in real time: read the DAQ port, drive the i-Limb port, record to MCAP"
+HELP = "run the slip reflex in real time: read the DAQ (or the hand's touch sensors), drive the hand, record to MCAP"
 ORDER = 30
 
 
@@ -35,19 +36,28 @@ def add_chain_arguments(p: argparse.ArgumentParser) -> None:
 
     d = ReflexParams()
     g = p.add_argument_group("reflex chain")
-    g.add_argument("--method", choices=(FIXED, DATH), default=DATH,
-                   help="fixed threshold or Dynamic Adaptive Threshold (default: dath)")
-    g.add_argument("--preset", choices=("authors-gui", "dath-event"), default=None,
-                   help="a named chain instead of the options below: authors-gui is the authors' rig "
-                        "code (the middle finger gets the command + 20), dath-event DATH with the "
-                        "event-driven MPI (docs/method.md); only --fs may be given with it")
+    g.add_argument("--method", default=DATH,
+                   help="a registered method: fixed or dath (default; the options below apply), a "
+                        "variant of the chain on the slip sensor (dath-event, dath-floor, dath-leak, "
+                        "authors-gui, ...), or a tactile method (nmsd, swt) reading the touch sensors "
+                        "of a hand that has them (--hand-type ability) with --tactile-threshold")
+    g.add_argument("--tactile-threshold", type=float, default=None,
+                   help="a tactile method's threshold, in its unit (N/s for nmsd, N for swt), as "
+                        "calibrated at rest")
+    from ..chain.params import PRESETS
+
+    g.add_argument("--preset", choices=sorted(PRESETS), default=None,
+                   help="a named chain instead of the options below (the presets of 'detect'): "
+                        "authors-gui is the authors' rig code (the middle finger gets the command + 20), "
+                        "dath-event DATH with the event-driven MPI (docs/method.md); only --fs may be "
+                        "given with it")
     g.add_argument("--fs", type=float, default=DAQ_FS,
                    help=f"sampling rate the chain assumes, Hz (the DAQ's {DAQ_FS:.2f})")
     g.add_argument("--cutoff", type=float, default=d.cutoff, help=f"low-pass cutoff, Hz ({d.cutoff:g})")
     g.add_argument("--no-filter", action="store_true", help="input is already filtered")
     g.add_argument("--threshold", type=float, default=d.threshold, help=f"theta0 in V ({d.threshold:g})")
     g.add_argument("--dath-samples", type=int, default=d.dath_samples, help=f"DATH duration D ({d.dath_samples})")
-    g.add_argument("--dath-floor", type=float, default=d.dath_floor, help="DATH floor in V (0)")
+    g.add_argument("--dath-floor", type=float, default=d.dath_floor, help=f"DATH floor in V ({d.dath_floor:g})")
     g.add_argument("--n", type=int, default=d.n, help=f"samples per window ({d.n})")
     g.add_argument("--kp", type=float, default=d.kp, help=f"proportional gain ({d.kp:g})")
     g.add_argument("--ki", type=float, default=d.ki, help=f"integral gain ({d.ki:g})")
@@ -62,8 +72,8 @@ _PRESET_REPLACES = {"--cutoff": "cutoff", "--threshold": "threshold", "--dath-sa
 
 
 def chain_params(args: argparse.Namespace, p0: float):
-    """Build the ReflexParams the options describe (a ``--preset`` with any other chain option
-    is an error naming it, rather than one of them being silently ignored).
+    """Build the ReflexParams the options describe for fixed or dath (a ``--preset`` with any other
+    chain option is an error naming it, rather than one of them being silently ignored).
 
     ``p0`` is the MPI's bookkeeping only (the hand gets the command's rises as closing time,
     :mod:`slipreflex.grip`), so the command's ceiling is ``p0`` plus one whole finger travel:
@@ -123,17 +133,84 @@ def parse_p0(text: str) -> dict[Finger, float]:
     return start_positions(given, TRIPOD, where="--p0")
 
 
+def method_spec(args: argparse.Namespace):
+    """``--method`` checked against what ``--daq`` and ``--hand-type`` supply (one-line errors)."""
+    from ..hands import get_hand
+    from ..methods import applicable
+
+    hand = get_hand(args.hand_type)
+    supplies = {"slip"} if args.daq else set()
+    if hand.tactile:
+        supplies.add("tactile")
+    where = " and ".join(([f"--daq {args.daq}"] if args.daq else ["no --daq"])
+                         + [f"the {hand.label}" + ("'s touch sensors" if hand.tactile else "")])
+    spec = applicable(args.method, supplies, where)
+    chain_given = [o for o, k in _PRESET_REPLACES.items() if getattr(args, k) != getattr(_chain_defaults(), k)]
+    if spec.name not in (FIXED, DATH):
+        if args.preset or chain_given or args.no_filter:
+            what = f"--preset {args.preset}" if args.preset else (chain_given or ["--no-filter"])[0]
+            raise ParameterError(f"--method {spec.name} is a registered method with its own parameters; "
+                                 f"{what} applies to fixed and dath only")
+        if args.board_reflex:
+            raise ParameterError(f"--method {spec.name} cannot be used with --board-reflex (fixed or dath)")
+    if spec.input_kind == "tactile":
+        thr = args.tactile_threshold
+        if thr is None or not (math.isfinite(thr) and thr > 0):
+            raise ParameterError(f"--method {spec.name} needs --tactile-threshold > 0 ({spec.threshold_unit}, "
+                                 f"calibrated at rest), got {thr}")
+    elif args.tactile_threshold is not None:
+        raise ParameterError(f"--tactile-threshold is for a tactile method; --method {spec.name} reads the "
+                             f"slip sensor")
+    return spec, hand
+
+
+def _chain_defaults():
+    from ..chain import ReflexParams
+
+    return ReflexParams()
+
+
+def build_reflex(args: argparse.Namespace, p0: dict[Finger, float]) -> tuple[Any, dict[str, str]]:
+    """The reflex ``--method`` names and what the recording's metadata says about it."""
+    from ..chain import ReflexParams, SlipReflex
+    from ..methods import MethodContext, make
+
+    spec, hand = method_spec(args)
+    start = p0[SLIP_FINGER]
+    if spec.name in (FIXED, DATH):
+        params = chain_params(args, start)
+        reflex: Any = SlipReflex.from_params(params)
+        if args.preset:
+            reflex.name = args.preset
+        return reflex, {"reflex_params": json.dumps(params.to_dict())}
+    if spec.input_kind == "slip":
+        reflex = make(spec.name, p0=start)
+        if isinstance(getattr(reflex, "params", None), ReflexParams):  # the ceiling fixed and dath get
+            reflex = make(spec.name, p0=start, hi=start + (FINGER_MAX - FINGER_MIN))
+    else:
+        reflex = make(spec.name, p0=start, shape=hand.tactile_shape,
+                      context=MethodContext(thresholds={spec.name: args.tactile_threshold}))
+    params = getattr(reflex, "params", None)
+    if isinstance(params, ReflexParams):
+        return reflex, {"reflex_params": json.dumps(params.to_dict())}
+    return reflex, {"method_params": repr(params)}
+
+
 def check_arguments(args: argparse.Namespace) -> dict[Finger, float]:
     """Check every option of ``run`` (before any port is opened); return the per-finger p0."""
-    if args.duration is not None and not (math.isfinite(args.duration) and args.duration > 0):
-        raise ParameterError(f"--duration must be a number of seconds > 0, got {args.duration}")
+    from ..validation import within
+
+    if args.duration is not None:
+        within("duration_s", args.duration, "--duration")
+    within("fs_hz", args.fs, "--fs")
     if not (WATCHDOG_MIN_S <= args.watchdog <= WATCHDOG_MAX_S):
         raise ParameterError(f"--watchdog must be in {WATCHDOG_MIN_S:g}..{WATCHDOG_MAX_S:g} s "
                              f"(a hold needs a bounded wait), got {args.watchdog}")
     p0 = parse_p0(args.p0)
-    chain_params(args, p0[SLIP_FINGER])  # validates every chain option
+    build_reflex(args, p0)  # validates the method and every chain option
     if getattr(args, "board_reflex", False):
         _check_board_arguments(args)
+    check_live_arguments(args)
     return p0
 
 
@@ -158,17 +235,27 @@ def _check_board_arguments(args: argparse.Namespace) -> None:
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``slipreflex run``."""
-    p.add_argument("--daq", required=True, help="DAQ serial port (e.g. /dev/ttyACM0, or a virtual-rig path)")
-    p.add_argument("--hand", required=True, help="i-Limb control unit serial port (e.g. /dev/ttyUSB0)")
+    from ..hands import hand_names
+
+    p.add_argument("--daq", default=None,
+                   help="DAQ serial port (e.g. /dev/ttyACM0, or a virtual-rig path); needed by a method "
+                        "that reads the slip sensor")
+    p.add_argument("--hand", required=True,
+                   help="the hand's serial port (i-Limb control unit e.g. /dev/ttyUSB0; Ability Hand UART)")
+    p.add_argument("--hand-type", default="ilimb", choices=hand_names(),
+                   help="which hand is on --hand (slipreflex.hands; default ilimb); ability: the PSYONIC "
+                        "Ability Hand, whose index fingertip's touch sensors a tactile method reads")
     p.add_argument("--p0", required=True,
                    help="position (0..500) at which each tripod finger holds the object, as the grasp "
-                        "routine left it: thumb=149,index=147,middle=147 (virtual-rig prints this), "
+                        "routine left it: thumb=148,index=148,middle=148 (virtual-rig prints this line for "
+                        "its default bottle), "
                         "or one value for all three (each finger once). Bookkeeping only: the loop "
                         "starts with STOP (fingers stay where they are), the MPI starts from the "
                         "middle finger's p0, and the hand only ever gets the command's rises as "
                         "closing time (no OPEN, no position; docs/runtime.md)")
     p.add_argument("--record", type=Path, default=None,
-                   help="MCAP file to record to (default: run-YYYYmmdd-HHMMSS.mcap here)")
+                   help="new MCAP file to record to, never an existing one (default: run-YYYYmmdd-HHMMSS.mcap "
+                        "here, -2, -3... when taken); written as NAME.part and named NAME when the run ends")
     p.add_argument("--no-record", action="store_true", help="do not record")
     p.add_argument("--duration", type=float, default=None, help="stop after this many seconds")
     p.add_argument("--watchdog", type=float, default=WATCHDOG_S,
@@ -184,28 +271,77 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--board-p0", type=int, default=0,
                    help="with --board-reflex: the REFLEX_P0 the board was built with (default 0)")
     add_chain_arguments(p)
+    add_live_arguments(p)
+
+
+def _p0_text(p0: dict[Finger, float]) -> str:
+    return ",".join(f"{f.name.lower()}={v:g}" for f, v in p0.items())
+
+
+def _open_run_taps(args: argparse.Namespace, reflex: Any, tactile: bool) -> list[Any]:
+    """``--live`` / ``--lsl`` for this run: the topics its reflex and source give."""
+    from ..live import RUN_TOPICS
+
+    topics = RUN_TOPICS + (("/board/state",) if args.board_reflex else ())
+    if tactile:
+        topics = ("/tactile/frames",) + tuple(t for t in topics if not t.startswith("/daq/"))
+    return open_taps(args, topics, lsl_source=args.daq or args.hand, fs=getattr(reflex, "fs", None),
+                     taxels=math.prod(getattr(reflex.params, "shape", ())) if tactile else 0)
+
+
+def _recorder(path: Path | None, meta: dict):
+    """A new recording: ``path`` (never an existing file), or a free ``run-YYYYmmdd-HHMMSS[-N].mcap`` here."""
+    from ..paths import unique_name
+    from ..recording import METADATA_NAME, PART_SUFFIX, Recorder, RecordingError
+
+    if path is not None:
+        return Recorder(path, metadata={METADATA_NAME: meta})
+    stem = f"run-{datetime.datetime.now():%Y%m%d-%H%M%S}"
+    for _ in range(100):      # two runs started in the same second get -2, -3...
+        try:
+            return Recorder(unique_name(".", stem, ".mcap", also=(PART_SUFFIX,)),
+                            metadata={METADATA_NAME: meta})
+        except RecordingError as err:
+            if "exists" not in str(err):
+                raise
+    raise ParameterError(f"no free recording name {stem}-N.mcap here; give --record")
+
+
+def _metadata(args: argparse.Namespace, reflex: Any, p0: dict[Finger, float],
+              board_meta: dict[str, str]) -> dict[str, str]:
+    """The run's facts for the recording's metadata."""
+    from ..recording import PLANNED_SAMPLES
+
+    fs = float(getattr(reflex, "fs", DAQ_FS))
+    meta = {"version": __version__, "reflex": reflex.name, "hand_type": args.hand_type,
+            "fingers": json.dumps([f.name.lower() for f in TRIPOD]),
+            "p0": json.dumps({f.name.lower(): v for f, v in p0.items()}),
+            "daq": str(args.daq), "hand": args.hand, "watchdog_s": repr(args.watchdog),
+            "started": datetime.datetime.now(datetime.UTC).isoformat(), "rate_hz": repr(fs),
+            **board_meta}
+    if args.duration is not None:   # a reader of a file cut short then knows what it misses
+        meta[PLANNED_SAMPLES] = str(round(args.duration * fs))
+    return meta
 
 
 def run(args: argparse.Namespace) -> int:
     """Open the devices and the recording, run the loop, print the summary."""
-    from ..chain import SlipReflex
+    import contextlib
+
     from ..devices.daq import SerialDaq
-    from ..devices.ilimb import ILimb
-    from ..recording import METADATA_NAME, Recorder
+    from ..hands import open_hand
     from ..runtime import drop_capabilities, print_fault, realtime_priority, run_loop
 
     p0 = check_arguments(args)  # everything, before a port opens or a byte is sent
-    params = chain_params(args, p0[SLIP_FINGER])
-    reflex: Any = SlipReflex.from_params(params)
-    if args.preset:
-        reflex.name = args.preset
-    board_meta: dict[str, str] = {}
+    reflex: Any
+    reflex, board_meta = build_reflex(args, p0)
+    tactile = getattr(reflex, "input_kind", "slip") == "tactile"
     if args.board_reflex:
         from ..board import BoardParams, CheckedBoardReflex
 
         bparams = BoardParams.firmware(dath=args.method == DATH, p0=args.board_p0)
         reflex = CheckedBoardReflex(bparams)
-        board_meta = {"board_params": json.dumps(bparams.to_dict())}
+        board_meta = {**board_meta, "board_params": json.dumps(bparams.to_dict())}
     if args.realtime:
         print(realtime_priority(), flush=True)
     dropped = drop_capabilities()  # the loop keeps nothing it does not need (docs/runtime.md)
@@ -220,38 +356,38 @@ def run(args: argparse.Namespace) -> int:
 
     recorder = None
     if not args.no_record:
-        path = args.record or Path(f"run-{datetime.datetime.now():%Y%m%d-%H%M%S}.mcap")
-        meta = {"version": __version__, "reflex": reflex.name,
-                "reflex_params": json.dumps(params.to_dict()),
-                "fingers": json.dumps([f.name.lower() for f in TRIPOD]),
-                "p0": json.dumps({f.name.lower(): v for f, v in p0.items()}),
-                "daq": args.daq, "hand": args.hand, "watchdog_s": repr(args.watchdog),
-                "started": datetime.datetime.now(datetime.UTC).isoformat(), **board_meta}
-        recorder = Recorder(path, metadata={METADATA_NAME: meta})  # fails before the ports open
+        recorder = _recorder(args.record, _metadata(args, reflex, p0, board_meta))  # before the ports open
+    taps: list[Any] = []
     old = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
     started = False
     try:
-        with SerialDaq(args.daq) as daq, ILimb(args.hand) as hand:
+        taps = _open_run_taps(args, reflex, tactile)
+        with contextlib.ExitStack() as devices:
+            hand = devices.enter_context(open_hand(args.hand_type, args.hand,
+                                                   **({"fs": reflex.fs} if tactile else {})))
+            daq = None if tactile else devices.enter_context(SerialDaq(args.daq))
             started = True
-            print(f"running {reflex.name} reflex: daq {args.daq}, hand {args.hand}, p0 "
-                  + ",".join(f"{f.name.lower()}={v:g}" for f, v in p0.items())
-                  + (f", recording {recorder.path}" if recorder else "") + " (Ctrl-C stops)",
-                  flush=True)
-            source: Any = daq
+            print(f"running {reflex.name} reflex: "
+                  + (f"touch sensors of the {args.hand_type} hand" if tactile else f"daq {args.daq}")
+                  + f", hand {args.hand_type} on {args.hand}, p0 " + _p0_text(p0)
+                  + (f", recording {recorder.path}" if recorder else "") + " (Ctrl-C stops)", flush=True)
+            source: Any = hand if tactile else daq
             if args.board_reflex:
                 from ..board import BoardSource
 
                 source = BoardSource(daq, reflex)
             # run_loop starts with STOP: the fingers stay where the grasp left them
             res = run_loop(source, hand, reflex, p0=p0, recorder=recorder, duration=args.duration,
-                           watchdog=args.watchdog, stop=stop, on_fault=print_fault)
+                           watchdog=args.watchdog, stop=stop, on_fault=print_fault, taps=taps)
     finally:
         for s, h in old.items():
             signal.signal(s, h)
+        close_taps(taps)
         if recorder is not None:
-            recorder.close()
-            if not started:  # the ports did not open: leave no empty recording behind
-                Path(recorder.path).unlink(missing_ok=True)
+            if started:
+                recorder.close()
+            else:  # the ports did not open: remove the recording this run created, nothing else
+                recorder.discard()
     if stop.is_set():
         print("stopped by signal", flush=True)
     print(res.summary(), flush=True)

@@ -1,7 +1,8 @@
 """``slipreflex scan``: the simulated characterization scan of the slip sensor (paper Fig. 4-9).
 
 The sensor moves 5 cm down the white/black test surface at 1 mm/s, 3 mm
-away (:func:`slipreflex.sim.scan`); the command writes the trace as CSV and
+away (:func:`slipreflex.sim.scan`), or over ``--layout``; ``--distance`` longer than the
+layout is an error (the scan never runs past its surfaces). The command writes the trace as CSV and
 a figure like the paper's Fig. 6-9 (filtered signal; accumulator with the
 threshold; spikes; fixed threshold and DATH), and prints the voltage range
 on white and on black, the spike count of each method and the smallest
@@ -29,7 +30,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Command-line options of ``slipreflex scan``."""
     parser.add_argument("--seed", type=int, default=0, help="texture and noise seed (default 0)")
     parser.add_argument("--speed", type=float, default=1.0, help="scan speed in mm/s (default 1, the paper's)")
-    parser.add_argument("--distance", type=float, default=50.0, help="scan length in mm (default 50)")
+    parser.add_argument("--distance", type=float, default=50.0,
+                        help="scan length in mm (default 50, the paper's layout; at most the layout's length)")
     parser.add_argument("--threshold", type=float, default=0.008, help="base threshold in V (default 0.008)")
     parser.add_argument("--out", type=Path, default=Path("out/scan"), help="output directory (default out/scan)")
     parser.add_argument("--no-figure", action="store_true", help="skip the PNG figure")
@@ -44,23 +46,48 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run the scan, write the files, print the numbers."""
     from ..errors import ParameterError
-    from ..paths import output_dir
+    from ..hardware import DAQ_FS
+    from ..paths import OutputSet
     from ..sim import scan
+    from ..sim.scan import PAPER_LAYOUT
+    from ..validation import number, within
 
-    if args.speed <= 0 or args.distance <= 0:
-        raise ParameterError("--speed and --distance must be > 0")
-    out: Path = output_dir(args.out, "--out")
-    kw: dict[str, Any] = {"layout": _layout(args)} if args.layout is not None else {}
+    within("scan_speed_mm_s", args.speed, "--speed")
+    within("scan_distance_mm", args.distance, "--distance")
+    within("scan_samples", int(args.distance / args.speed * DAQ_FS) + 1, "--distance / --speed x the DAQ rate")
+    number("--threshold", args.threshold, lo=0.0, hi=10.0)
+    if args.objects is not None and not args.objects.is_file():
+        raise ParameterError(f"--objects {args.objects}: no such file")
+    layout = _layout(args) if args.layout is not None else list(PAPER_LAYOUT)
+    if args.objects is not None and args.layout is None:
+        _layout_names(args)         # the file is read and checked even when no layout uses it
+    length_mm = 1e3 * sum(length for _, length in layout)
+    if args.distance > length_mm + 1e-9:
+        what = f"--layout {args.layout!r}" if args.layout is not None else "the paper's layout"
+        raise ParameterError(f"--distance {args.distance:g} mm is longer than {what} ({length_mm:g} mm): "
+                             f"give --distance {length_mm:g} or less, or a longer --layout")
+    outputs = OutputSet(args.out, NAME)
+    outputs.check(OUTPUT_NAMES)
+    kw: dict[str, Any] = {"layout": layout} if args.layout is not None else {}
     result = scan(seed=args.seed, speed=args.speed * 1e-3, distance=args.distance * 1e-3, **kw)
     summary = result.analyse(threshold=args.threshold)
+    staged = outputs.stage()
+    try:
+        frame = result.to_frame()
+        with (staged / "scan.csv").open("w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(list(frame))
+            cols = [np.asarray(v) for v in frame.values()]
+            for i in range(result.t.size):
+                w.writerow([repr(float(c[i])) if c.dtype.kind == "f" else str(int(c[i])) for c in cols])
+        if not args.no_figure:
+            _figure(result, summary, staged / "scan.png", args.threshold)
+        outputs.commit(staged)
+    except BaseException:
+        outputs.abort(staged)
+        raise
+    out = outputs.folder
     csv_path = out / "scan.csv"
-    frame = result.to_frame()
-    with csv_path.open("w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(list(frame))
-        cols = [np.asarray(v) for v in frame.values()]
-        for i in range(result.t.size):
-            w.writerow([repr(float(c[i])) if c.dtype.kind == "f" else str(int(c[i])) for c in cols])
     print(f"scan: {args.distance:g} mm at {args.speed:g} mm/s, seed {args.seed}, {result.t.size} samples")
     shown = _shown(summary)
     for region in shown:
@@ -76,23 +103,34 @@ def run(args: argparse.Namespace) -> int:
         print(f"  on {region}: " + "; ".join(parts))
     print(f"  wrote {csv_path}")
     if not args.no_figure:
-        png = out / "scan.png"
-        _figure(result, summary, png, args.threshold)
-        print(f"  wrote {png}")
+        print(f"  wrote {out / 'scan.png'}")
     return 0
 
 
-def _layout(args: argparse.Namespace) -> list:
-    """``--layout`` as (Surface, length_m) pairs; names from the built-ins or ``--objects``."""
-    from ..errors import ParameterError
+#: What ``scan`` writes into ``--out``, replaced as one set (slipreflex.paths.OutputSet).
+OUTPUT_NAMES: tuple[str, ...] = ("scan.csv", "scan.png")
+
+
+def _layout_names(args: argparse.Namespace) -> dict:
+    """The surfaces ``--objects`` adds (its surfaces, and its bottles' surfaces by bottle name)."""
     from ..sim import load_objects
-    from ..sim.objects import resolve_surface
 
     objs = load_objects(args.objects) if args.objects is not None else None
     extra: dict[str, Any] = dict(objs.surfaces) if objs else {}
     if objs:
         extra.update({n: b.surface for n, b in objs.bottles.items()})
+    return extra
+
+
+def _layout(args: argparse.Namespace) -> list:
+    """``--layout`` as (Surface, length_m) pairs; names from the built-ins or ``--objects``."""
+    from ..errors import ParameterError
+    from ..sim.objects import resolve_surface
+
+    extra = _layout_names(args)
     out = []
+    if not args.layout.replace(",", "").strip():
+        raise ParameterError("--layout: empty; give NAME:MM parts, e.g. 'stand:5,white:10,black:30,stand:5'")
     for i, part in enumerate(p.strip() for p in args.layout.split(",") if p.strip()):
         name, sep, mm = part.partition(":")
         try:
@@ -136,13 +174,34 @@ def _figure(result, summary, path: Path, threshold: float) -> None:
         ax.axvline(a * 1000, ls="--", c="grey", lw=0.6)
         ax.text((a + b) * 500, 0.97, name, transform=ax.get_xaxis_transform(), ha="center", va="top",
                 fontsize=8, bbox={"fc": "white", "ec": "0.6", "lw": 0.5, "pad": 1.5})
-    ax.set(title="A  filtered slip-sensor output over the scan (shaded: the test surface's regions)",
-           xlabel="position (mm)", ylabel="V")
+    from ..analysis.paper import PAPER_SCAN_VOLTS
+
+    banded = False
+    for name, a, b in result.regions:         # the paper's level on white and on black, where they lie
+        if name in PAPER_SCAN_VOLTS:
+            lo, hi = PAPER_SCAN_VOLTS[name]
+            ax.fill_between([a * 1000, b * 1000], lo - 0.01, hi + 0.01, color="tab:red", alpha=0.25, lw=0,
+                            label=None if banded else "paper's level (Figs. 6-9)", zorder=1)
+            low = lo < 0.5 * float(np.nanmax(x))     # the label inside the axes: above a low band, below a high one
+            ax.text(b * 1000 - 0.5, hi + 0.03 if low else lo - 0.06, f"paper {lo:g}-{hi:g} V", ha="right",
+                    va="bottom" if low else "top", fontsize=7, color="tab:red")
+            banded = True
+    if banded:
+        ax.legend(fontsize=7, loc="center right")
+    ax.set(title="A  filtered slip-sensor output over the scan (shaded: the test surface's regions; red: "
+                 "the paper's levels)", xlabel="position (mm)", ylabel="V")
     for col, name in enumerate(shown):
         a, b = regions[name]
         sel = (pos >= a + 2.5) & (pos <= b - 2.5)
         axb = fig.add_subplot(gs[1, col])
         axb.plot(pos[sel], x[sel], lw=0.8)
+        base = name.split("@")[0]
+        if base in PAPER_SCAN_VOLTS:
+            lo, hi = PAPER_SCAN_VOLTS[base]
+            axb.axhspan(lo, hi, color="tab:red", alpha=0.2, lw=0)
+            seen = lo <= x[sel].max() and hi >= x[sel].min()
+            axb.text(0.99, 0.02, f"paper {lo:g}-{hi:g} V (red band{'' if seen else ', off this scale'})",
+                     transform=axb.transAxes, ha="right", va="bottom", fontsize=7, color="tab:red")
         axb.set(title=f"B  {name}: filtered output", ylabel="V")
         axc = fig.add_subplot(gs[2, col], sharex=axb)
         for meth, color in ((FIXED, "C0"), (DATH, "C2")):

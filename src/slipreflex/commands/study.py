@@ -23,6 +23,7 @@ claim  verdict           holds (95% CI)     text
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import shlex
 import sys
 from pathlib import Path
@@ -48,6 +49,12 @@ def _list(kind: str, known: Any):
     return parse
 
 
+#: The tables and figures ``study`` writes into ``--out``, replaced as one set (the Parquet parts
+#: and study.json are the study's resumable state, kept across runs).
+OUTPUT_NAMES: tuple[str, ...] = ("results.parquet", "results.csv", "plants.csv", "claims.csv", "sensitivity.csv",
+                                 "study.md", "figures")
+
+
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``slipreflex study``."""
     from .. import experiment_specs, methods
@@ -71,6 +78,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="TOML file narrowing, widening or fixing uncertain constants")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="a running Dask scheduler, tcp://HOST:PORT (default: a local cluster)")
+    p.add_argument("--dashboard", default=None, metavar="HOST:PORT",
+                   help="serve the local cluster's Dask dashboard there, e.g. 127.0.0.1:8787 (default: no "
+                        "dashboard; it has no authentication, so keep it on 127.0.0.1)")
     p.add_argument("--workers", type=int, default=None,
                    help="local Dask worker processes (default: all cores; 0: no Dask, this process)")
     p.add_argument("--no-calibration", action="store_true",
@@ -107,29 +117,47 @@ def require_study_extra() -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the study, write the outputs, print the claims' fractions."""
-    from ..errors import ParameterError
-
     require_study_extra()
+    from ..paths import OutputSet
     from ..study import StudyConfig, run_study
     from ..study.analyse import claim_fractions, plant_table, write_outputs
+    from ..validation import within
 
-    if args.trials < 1:
-        raise ParameterError(f"--trials must be >= 1, got {args.trials}")
+    within("trials", args.trials, "--trials")
+    within("plants", args.plants, "--plants")
+    if args.workers:
+        within("jobs", args.workers, "--workers")
     config = StudyConfig(plants=args.plants, design=args.design, trials=args.trials, bottles=tuple(args.bottles),
                          methods=tuple(args.methods), experiments=tuple(args.experiments), seed=args.seed,
                          ranges=args.ranges, calibrate=not args.no_calibration)
+    if args.out.is_dir():   # a file of the user's where the study writes its tables: refused before any work
+        OutputSet(args.out, NAME).check(OUTPUT_NAMES)
     try:
         result = run_study(config, args.out, workers=args.workers, scheduler=args.scheduler,
-                           progress=not args.no_progress)
+                           progress=not args.no_progress, dashboard=args.dashboard)
     except KeyboardInterrupt:
         from ..study import read_parts
 
         done = len(read_parts(args.out, config.fingerprint()))
         print(f"slipreflex study: interrupted; {done} finished plant(s) kept in {args.out}/parts, "
-              "run the same command again to resume", file=sys.stderr)
+              "run the same command again to resume" if done else
+              "slipreflex study: interrupted before any plant finished; nothing kept", file=sys.stderr)
         return 130
     command = "slipreflex " + " ".join(shlex.quote(a) for a in sys.argv[1:]) if sys.argv[1:] else None
-    paths = write_outputs(result, figures=not args.no_figures, command=command)
+    outputs = OutputSet(args.out, NAME)
+    staged = outputs.stage()
+    try:
+        write_outputs(dataclasses.replace(result, out=staged), figures=not args.no_figures, command=command)
+        outputs.commit(staged)
+    except KeyboardInterrupt:
+        outputs.abort(staged)
+        print(f"slipreflex study: interrupted while writing the tables; {args.out}/ keeps the previous ones and "
+              "every finished plant (run the same command again)", file=sys.stderr)
+        return 130
+    except BaseException:
+        outputs.abort(staged)
+        raise
+    paths = {"study_md": outputs.folder / "study.md"}
     plants = plant_table(result.parts)
     from ..study.analyse import pooled_scan
 

@@ -3,7 +3,10 @@
 Prints the two device paths and the grasp position, then runs in real time
 until ``q``, Ctrl-C, SIGTERM or ``--duration``. A drop or a pour is triggered
 by a key (``d`` / ``p`` then Enter), a signal (SIGUSR1 / SIGUSR2) or a
-schedule (``--schedule "drop@2.0,pour@5.0"``, seconds after start).
+schedule (``--schedule "drop@2.0,pour@5.0"``, seconds after ``slipreflex run`` connects,
+or after the rig's start with ``--schedule-from start``); each is announced as it starts.
+At exit the summary gives the fall's time (if the bottle fell) on the rig's clock, and the
+slide capped at the grip's fall-out travel.
 
 Examples
 --------
@@ -17,6 +20,7 @@ p0: thumb=213,index=212,middle=212
 from __future__ import annotations
 
 import argparse
+import os
 import select
 import signal
 import sys
@@ -40,10 +44,25 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--grasp-force", type=float, default=None, metavar="N",
                    help="contact force at which the grasp stops closing, N (default: the paper's 0.8)")
     p.add_argument("--seed", type=int, default=0, help="random seed of the simulation (0)")
-    p.add_argument("--schedule", default="", help='perturbations, e.g. "drop@2.0,pour@5.0" (s after start)')
+    p.add_argument("--schedule", default="",
+                   help='perturbations, e.g. "drop@2.0,pour@5.0" (s after --schedule-from)')
+    p.add_argument("--schedule-from", choices=("connect", "start"), default="connect",
+                   help="the schedule counts from when 'slipreflex run' connects (its first hand packet; "
+                        "the default) or from the rig's start")
     p.add_argument("--link-dir", default=None,
-                   help="also create DIR/daq and DIR/hand symlinks to the ports (stable paths; DIR is created)")
+                   help="also create DIR/daq and DIR/hand symlinks to the ports (stable paths; DIR is created; "
+                        "existing DIR/daq or DIR/hand is an error, and only the links made are removed at exit)")
     p.add_argument("--duration", type=float, default=None, help="exit after this many seconds")
+    from ..hands import hand_names
+    from ._live import add_live_arguments
+
+    p.add_argument("--hand-type", default="ilimb", choices=hand_names(),
+                   help="the hand behind the hand port (default ilimb; ability: the Ability Hand's UART, "
+                        "with its fingertip touch sensors fed from the simulated tactile arrays)")
+    p.add_argument("--method", default=None,
+                   help="the method 'run' will use: checked against what this rig supplies (the slip "
+                        "sensor; tactile frames with --hand-type ability) and put in the printed run line")
+    add_live_arguments(p, lsl=False)
     p.add_argument("--realtime", action="store_true",
                    help="run the rig's real-time thread under SCHED_FIFO (it stands in for hardware "
                         "that a busy PC cannot slow; Linux, needs privileges)")
@@ -68,15 +87,95 @@ def _objects(args: argparse.Namespace):
     return table[args.bottle], loads
 
 
+def _announce(dev, grasp, args: argparse.Namespace, hand, method, schedule) -> None:
+    """The lines a user needs first: the ports, p0, the grasp, the run line, keys, the schedule."""
+    print(f"daq: {dev.daq_path}", flush=True)
+    print(f"hand: {dev.hand_path}", flush=True)
+    print(f"p0: {grasp.p0_text()}", flush=True)
+    print(f"grasp: bottle {args.bottle}, {grasp.force_n:.2f} N per contact, "
+          f"{'stable' if grasp.stable else 'NOT stable'}", flush=True)
+    tactile = method is not None and method.input_kind == "tactile"
+    line = "slipreflex run" + ("" if tactile else f" --daq {dev.daq_path}") + f" --hand {dev.hand_path}"
+    if hand.name != "ilimb":
+        line += f" --hand-type {hand.name}"
+    if method is not None:
+        line += f" --method {method.name}" + (" --tactile-threshold T" if tactile else "")
+    print(f"run: {line} --p0 {grasp.p0_text()}", flush=True)
+    print("keys: d+Enter drop, p+Enter pour, q+Enter quit; SIGUSR1 drop, SIGUSR2 pour", flush=True)
+    if schedule:
+        when = "after 'run' connects" if args.schedule_from == "connect" else "after now"
+        print("schedule: " + ", ".join(f"{k} {t:g} s" for k, t in schedule) + f" {when}", flush=True)
+    if args.realtime:
+        from ..runtime import realtime_priority
+
+        print(f"rig: {realtime_priority()}", flush=True)  # the rig's thread inherits it
+
+
+def _serve(dev, args: argparse.Namespace, stop: threading.Event, pending: list[str]) -> None:
+    """Run until q, a signal, --duration or the rig's end; keys and signals start perturbations."""
+    t0 = time.monotonic()
+    stdin_open = sys.stdin is not None and not sys.stdin.closed
+    while not stop.is_set():
+        if args.duration is not None and time.monotonic() - t0 >= args.duration:
+            break
+        while pending:
+            dev.trigger(pending.pop(0), "signal")
+        if not dev.running:
+            break
+        if not stdin_open:
+            stop.wait(0.1)
+            continue
+        try:
+            ready, _, _ = select.select([sys.stdin], [], [], 0.1)  # pyright: ignore[reportArgumentType]
+        except (OSError, ValueError):
+            stdin_open = False
+            continue
+        if ready and sys.stdin is not None:
+            line = sys.stdin.readline()
+            if not line:
+                stdin_open = False  # EOF: keep running on schedule and signals
+                continue
+            key = line.strip().lower()[:1]
+            if key == "q":
+                break
+            if key in ("d", "p"):
+                dev.trigger("drop" if key == "d" else "pour", "key")
+
+
+def _check_arguments(args: argparse.Namespace) -> None:
+    """Bounded --duration and --grasp-force; a --link-dir whose daq/hand names are free (before the grasp)."""
+    from ..errors import ParameterError
+    from ..paths import output_dir
+    from ..validation import within
+
+    if args.duration is not None:
+        within("duration_s", args.duration, "--duration")
+    if args.grasp_force is not None:
+        within("grasp_force_n", args.grasp_force, "--grasp-force")
+    if args.link_dir is not None:
+        link_dir = output_dir(args.link_dir, "--link-dir")      # before the grasp: a bad DIR costs one line
+        for name in ("daq", "hand"):
+            if os.path.lexists(link_dir / name):
+                raise ParameterError(f"--link-dir {args.link_dir}: {name} exists; the rig makes its links "
+                                     f"new and removes only those (move it or choose another --link-dir)")
+
+
 def run(args: argparse.Namespace) -> int:
     """Grasp, open the ports, run in real time, print a summary at exit."""
     from ..devices.simrig import SimRig
     from ..devices.virtual import VirtualDevices, parse_schedule
-    from ..paths import output_dir
+    from ..hands import get_hand
+    from ..methods import applicable
+    from ._live import check_live_arguments, close_taps, open_taps
 
     schedule = parse_schedule(args.schedule)
-    if args.link_dir is not None:
-        output_dir(args.link_dir, "--link-dir")      # before the grasp: a bad DIR costs one line
+    _check_arguments(args)
+    check_live_arguments(args)
+    hand = get_hand(args.hand_type)
+    method = None
+    if args.method is not None:
+        method = applicable(args.method, {"slip", "tactile"} if hand.tactile else {"slip"},
+                            f"the virtual rig with the {hand.label}")
     bottle, loads = _objects(args)
     rig = SimRig(bottle=bottle, seed=args.seed, **loads)
     grasp = rig.grasp(args.grasp_force)
@@ -91,57 +190,38 @@ def run(args: argparse.Namespace) -> int:
 
     old = {s: signal.signal(s, on_signal)
            for s in (signal.SIGINT, signal.SIGTERM, signal.SIGUSR1, signal.SIGUSR2)}
-    dev = VirtualDevices(rig, link_dir=args.link_dir, schedule=schedule)
-    try:
-        print(f"daq: {dev.daq_path}", flush=True)
-        print(f"hand: {dev.hand_path}", flush=True)
-        print(f"p0: {grasp.p0_text()}", flush=True)
-        print(f"grasp: bottle {args.bottle}, {grasp.force_n:.2f} N per contact, "
-              f"{'stable' if grasp.stable else 'NOT stable'}", flush=True)
-        print(f"run: slipreflex run --daq {dev.daq_path} --hand {dev.hand_path} --p0 {grasp.p0_text()}",
-              flush=True)
-        print("keys: d+Enter drop, p+Enter pour, q+Enter quit; SIGUSR1 drop, SIGUSR2 pour", flush=True)
-        if args.realtime:
-            from ..runtime import realtime_priority
 
-            print(f"rig: {realtime_priority()}", flush=True)  # the rig's thread inherits it
+    def announce(text: str) -> None:
+        print(text, flush=True)
+
+    taps = open_taps(args, ("/rig/truth",))
+
+    def publish_truth(_rig: object) -> None:  # the rig's thread: one /rig/truth per advance
+        msg = rig.truth()
+        for tap in taps:
+            tap.put("/rig/truth", msg, time.time_ns())
+
+    try:
+        dev = VirtualDevices(rig, link_dir=args.link_dir, schedule=schedule, schedule_from=args.schedule_from,
+                             on_event=announce, on_advance=publish_truth if taps else None,
+                             hand_type=hand.name)
+    except BaseException:
+        close_taps(taps)
+        raise
+    try:
+        _announce(dev, grasp, args, hand, method, schedule)
         dev.start()
-        t0 = time.monotonic()
-        stdin_open = sys.stdin is not None and not sys.stdin.closed
-        while not stop.is_set():
-            if args.duration is not None and time.monotonic() - t0 >= args.duration:
-                break
-            while pending:
-                kind = pending.pop(0)
-                dev.trigger(kind)
-                print(f"{kind} at {dev.elapsed:.2f} s (signal)", flush=True)
-            if not dev.running:
-                break
-            if stdin_open:
-                try:
-                    ready, _, _ = select.select([sys.stdin], [], [], 0.1)  # pyright: ignore[reportArgumentType]
-                except (OSError, ValueError):
-                    stdin_open = False
-                    continue
-                if ready and sys.stdin is not None:
-                    line = sys.stdin.readline()
-                    if not line:
-                        stdin_open = False  # EOF: keep running on schedule and signals
-                        continue
-                    key = line.strip().lower()[:1]
-                    if key == "q":
-                        break
-                    if key in ("d", "p"):
-                        dev.trigger("drop" if key == "d" else "pour")
-                        print(f"{'drop' if key == 'd' else 'pour'} at {dev.elapsed:.2f} s", flush=True)
-            else:
-                stop.wait(0.1)
+        _serve(dev, args, stop, pending)
     finally:
         for s, h in old.items():
             signal.signal(s, h)
-        dev.stop()
+        try:
+            dev.stop()
+        finally:
+            close_taps(taps)
     print(f"stopped after {dev.elapsed:.1f} s: {dev.frames_written} frames sent, "
-          f"{dev.hand_packets} hand packets applied ({dev.hand_parser.rejected} rejected), "
+          f"{dev.hand_packets} hand packets applied "
+          f"({(dev.emulator or dev.hand_parser).rejected} rejected), "
           f"perturbations {[(k, round(t, 2)) for k, t in dev.triggered]}", flush=True)
     print(rig.status(), flush=True)
     return 0

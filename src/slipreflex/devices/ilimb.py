@@ -1,4 +1,4 @@
-"""The i-Limb control unit's serial protocol and a driver for it (SPEC section 3).
+"""The i-Limb control unit's serial protocol and a driver for it (docs/method.md section 3).
 
 A command packet is the start byte :data:`~slipreflex.hardware.ILIMB_START`, one
 byte with the number of data bytes (4 per finger), then per finger

@@ -99,8 +99,42 @@ class SimRig:
                 from None
         self.rig.perturb(exp.perturbation(self), at=self.rig.t)   # reads this rig's drop and pour
 
+    def tactile(self, finger: Any) -> Any:
+        """One ``(4, 4)`` tactile frame (N) of a tripod finger now (the virtual Ability Hand's touch).
+
+        Examples
+        --------
+        >>> from slipreflex.hardware import Finger
+        >>> r = SimRig("TR"); _ = r.grasp(); float(r.tactile(Finger.INDEX).sum()) > 0.5
+        True
+        """
+        return self.rig.tactile(finger)
+
+    def truth(self) -> dict[str, Any]:
+        """The rig's truth now, as a ``/rig/truth`` message (:data:`slipreflex.recording.TOPICS`).
+
+        Examples
+        --------
+        >>> r = SimRig("TR"); _ = r.grasp(); m = r.truth()
+        >>> m["fallen"], m["middle"] > 0, m["ring"] is None
+        (False, True, True)
+        """
+        from ..hardware import TRIPOD
+        from ..recording import FINGER_FIELDS
+
+        r = self.rig
+        pos = r.hand.positions()
+        fingers = {f.name.lower(): float(v) for f, v in pos.items() if f in TRIPOD}
+        return {"t": r.t, "displacement": r.displacement, "slip": r.slip, "velocity": r.velocity,
+                "normal_force": r.normal_force, "load_mass": r.load_mass, "slipping": bool(r.slipping),
+                "fallen": bool(r.fallen), **{f: fingers.get(f) for f in FINGER_FIELDS}}
+
     def status(self) -> str:
-        """One line of truth: displacement, slip, fallen, load.
+        """One line of truth: displacement, slip, load, and held or when it fell.
+
+        Times are on this rig's clock (seconds since the first :meth:`advance_to`, the
+        virtual rig's); after a fall the displacement and the slide are capped at the
+        grip's fall-out travel (the free fall after it is no slide).
 
         Examples
         --------
@@ -108,6 +142,11 @@ class SimRig:
         True
         """
         r = self.rig
-        return (f"bottle {r.bottle.name}: displaced {r.displacement * 1e3:.2f} mm, slid "
-                f"{r.slip * 1e3:.2f} mm, load {r.load_mass * 1e3:.1f} g, "
-                f"{'FALLEN' if r.fallen else 'held'} at t={r.t:.2f} s")
+        t0 = r.t if self._t0 is None else self._t0
+        fell = r.fall_time
+        cap = r.bottle.grip_travel_m if fell is not None else float("inf")
+        where = (f"FALLEN at t={fell - t0:.2f} s (slid out of the grip's "
+                 f"{r.bottle.grip_travel_m * 1e3:g} mm travel; stopped at t={r.t - t0:.2f} s)" if fell is not None
+                 else f"held at t={r.t - t0:.2f} s")
+        return (f"bottle {r.bottle.name}: displaced {min(r.displacement, cap) * 1e3:.2f} mm, slid "
+                f"{min(r.slip, cap) * 1e3:.2f} mm, load {r.load_mass * 1e3:.1f} g, {where}")

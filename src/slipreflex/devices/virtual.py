@@ -57,7 +57,10 @@ from ..hardware import DAQ_PERIOD_S, FINGER_SPEED_UNITS_S, PWM_MAX, Finger, Hand
 from . import wire
 from .ilimb import PacketParser, value_range
 
-__all__ = ["PtyPort", "VirtualDevices", "parse_schedule"]
+__all__ = ["PtyPort", "VirtualDevices", "parse_schedule", "SCHEDULE_FROM"]
+
+#: What a schedule's times may count from: the rig's start or the client's first hand packet.
+SCHEDULE_FROM: tuple[str, ...] = ("connect", "start")
 
 
 class PtyPort:
@@ -71,7 +74,9 @@ class PtyPort:
     ----------
     link : str, optional
         Also make this symlink point to the slave (kept up to date across
-        :meth:`unplug` / :meth:`replug`); :attr:`path` is then the link.
+        :meth:`unplug` / :meth:`replug`); :attr:`path` is then the link. It is
+        created new (anything already there is an error, never replaced) and
+        removed at the end only while it is still this port's symlink.
 
     Examples
     --------
@@ -128,13 +133,18 @@ class PtyPort:
         tty.setraw(slave)
         os.set_blocking(master, False)
         self.master, self._slave = master, slave
-        self.slave_name = os.ttyname(slave)
+        old_slave, self.slave_name = self.slave_name, os.ttyname(slave)
         if self.link:
-            tmp = f"{self.link}.tmp{os.getpid()}"
-            if os.path.lexists(tmp):
-                os.unlink(tmp)
-            os.symlink(self.slave_name, tmp)
-            os.replace(tmp, self.link)
+            try:
+                os.symlink(self.slave_name, self.link)   # never replaces what is there
+            except FileExistsError:
+                if not self._is_our_link(old_slave):
+                    self.close()
+                    raise ParameterError(f"{self.link}: exists and is not this rig's link; move it or "
+                                         f"choose another --link-dir") from None
+                tmp = f"{self.link}.tmp{os.getpid()}"
+                os.symlink(self.slave_name, tmp)
+                os.replace(tmp, self.link)
 
     def unplug(self) -> None:
         """Make the device vanish: close the pty (and remove the link).
@@ -147,12 +157,18 @@ class PtyPort:
         False
         >>> p.close()
         """
-        if self.link and os.path.lexists(self.link):
-            os.unlink(self.link)
+        if self.link and self._is_our_link(self.slave_name):
+            os.unlink(self.link)   # only the symlink this port made, never a file put there since
         for fd in (self.master, self._slave):
             if fd is not None:
                 os.close(fd)
         self.master = self._slave = None
+
+    def _is_our_link(self, target: str) -> bool:
+        try:
+            return bool(target and self.link) and os.readlink(str(self.link)) == target
+        except OSError:   # gone, or not a symlink
+            return False
 
     def write(self, data: bytes) -> bool:
         """Write without blocking; bytes that do not fit are dropped and counted.
@@ -276,13 +292,27 @@ class VirtualDevices:
     link_dir : str, optional
         Directory in which ``daq`` and ``hand`` symlinks name the ports.
     schedule : iterable of (kind, seconds), optional
-        Perturbations at fixed times after :meth:`start`.
+        Perturbations at fixed times after ``schedule_from``.
+    schedule_from : {"start", "connect"}
+        What the schedule's times count from: :meth:`start`, or the first packet on the
+        hand port (a client such as ``slipreflex run`` connected: it sends STOP first).
+    on_event : callable, optional
+        ``on_event(text)`` is called in the rig's thread with one line for each
+        perturbation as it starts (``"drop at 5.00 s (schedule)"``) and when the client
+        connects.
     period : float
         Sample period (s) used to wake up; the rig decides the sample times.
     script : iterable of (seconds, callable), optional
         Actions ``fn(devices)`` run in the rig's thread at fixed times after
         :meth:`start` (e.g. ``(1.0, lambda d: d.unplug("hand"))``), for
         scripted fault tests.
+    hand_type : str
+        The hand behind the hand port, a name of :mod:`slipreflex.hands` ("ilimb": i-Limb
+        packets applied to ``rig.hand``; "ability": the Ability Hand's UART, each command
+        answered with the measured positions and touch sites).
+    on_advance : callable, optional
+        ``on_advance(rig)``, called in the rig's thread after each advance (``virtual-rig
+        --live`` puts the rig's truth on its live view); it must not block.
 
     Attributes
     ----------
@@ -316,18 +346,36 @@ class VirtualDevices:
 
     def __init__(self, rig: Any, *, link_dir: str | None = None,
                  schedule: Iterable[tuple[str, float]] = (), period: float = DAQ_PERIOD_S,
-                 script: Iterable[tuple[float, Any]] = ()) -> None:
+                 script: Iterable[tuple[float, Any]] = (), schedule_from: str = "start",
+                 on_event: Any = None, on_advance: Any = None, hand_type: str = "ilimb") -> None:
+        from ..hands import get_hand
+
+        if schedule_from not in SCHEDULE_FROM:
+            raise ParameterError(f"schedule_from must be one of {', '.join(SCHEDULE_FROM)}, got {schedule_from!r}")
+        self.schedule_from = schedule_from
+        self.on_event = on_event
+        #: Seconds since :meth:`start` when the client connected (its first hand packet), NaN before.
+        self.connected_at = math.nan
+        spec = get_hand(hand_type)
+        self.hand_type = spec.name
+        #: the hand's side of its protocol (None: the i-Limb's packets, applied below)
+        self.emulator = spec.virtual(rig) if spec.virtual is not None else None
         self.rig = rig
+        self.on_advance = on_advance
         self.period = period
         self.daq = PtyPort(os.path.join(link_dir, "daq") if link_dir else None)
-        self.hand = PtyPort(os.path.join(link_dir, "hand") if link_dir else None)
+        try:
+            self.hand = PtyPort(os.path.join(link_dir, "hand") if link_dir else None)
+        except BaseException:
+            self.daq.close()      # removes only the daq link it made
+            raise
         self.hand_parser = PacketParser()
         self.frames_written = 0
         self.hand_packets = 0
         self.hand_errors = 0
         self.triggered: list[tuple[str, float]] = []
-        self._schedule = sorted([(t, ("perturb", kind)) for kind, t in schedule]
-                                + [(t, ("script", fn)) for t, fn in script], key=lambda x: x[0])
+        self._schedule = sorted([(t, ("perturb", kind, "schedule")) for kind, t in schedule], key=lambda x: x[0])
+        self._script = sorted([(t, ("script", fn)) for t, fn in script], key=lambda x: x[0])
         self._requests: queue.SimpleQueue = queue.SimpleQueue()
         self._stop = threading.Event()
         self._wake_r, self._wake_w = os.pipe()
@@ -409,8 +457,8 @@ class VirtualDevices:
         self._requests.put(item)
         self._wake()
 
-    def trigger(self, kind: str) -> None:
-        """Start a perturbation ("drop" or "pour") now.
+    def trigger(self, kind: str, source: str = "key") -> None:
+        """Start a perturbation ("drop" or "pour") now; ``source`` names who asked (announced).
 
         Raises
         ------
@@ -419,7 +467,7 @@ class VirtualDevices:
         """
         if kind not in experiment_specs.names():
             raise ParameterError(f"unknown perturbation {kind!r} (known: {', '.join(experiment_specs.names())})")
-        self._request("perturb", kind)
+        self._request("perturb", kind, source)
 
     def inject_daq(self, data: bytes) -> None:
         """Send raw bytes on the DAQ port between frames (garbage, torn frames)."""
@@ -451,6 +499,7 @@ class VirtualDevices:
         if kind == "perturb":
             self.rig.perturb(item[1])
             self.triggered.append((item[1], self.elapsed))
+            self._announce(f"{item[1]} at {self.elapsed:.2f} s ({item[2] if len(item) > 2 else 'key'})")
         elif kind == "inject":
             self.daq.write(item[1])
         elif kind == "pause":
@@ -465,6 +514,10 @@ class VirtualDevices:
             item[1](self.rig)
         elif kind == "script":
             item[1](self)
+
+    def _announce(self, text: str) -> None:
+        if self.on_event is not None:
+            self.on_event(text)
 
     def _apply_packet(self, cmds: tuple) -> None:
         hand = self.rig.hand
@@ -508,20 +561,32 @@ class VirtualDevices:
             except queue.Empty:
                 return
 
+    def _connected(self, schedule: list) -> None:
+        """The client's first hand packet: the clock a ``connect`` schedule counts from starts now."""
+        self.connected_at = self.elapsed
+        waiting = " (the schedule starts now)" if self.schedule_from == "connect" and schedule else ""
+        self._announce(f"client connected at {self.connected_at:.2f} s{waiting}")
+
     def _loop(self) -> None:
-        schedule = list(self._schedule)
+        schedule, script = list(self._schedule), list(self._script)
         while not self._stop.is_set():
             t = time.perf_counter() - self._t0
-            while schedule and schedule[0][0] <= t:
+            origin = 0.0 if self.schedule_from == "start" else self.connected_at
+            while schedule and schedule[0][0] <= t - origin:      # NaN origin: not yet connected
                 self._handle(schedule.pop(0)[1])
+            while script and script[0][0] <= t:
+                self._handle(script.pop(0)[1])
             self._drain()
-            for s in self.rig.advance_to(t):
+            samples = self.rig.advance_to(t)
+            for s in samples:
                 self._last_seq = s.seq
                 if self._daq_paused:
                     continue
                 seq = s.seq - self._seq_offset
                 self.daq.write(wire.encode_sample(dataclasses.replace(s, seq=seq)))
                 self.frames_written += 1
+            if samples and self.on_advance is not None:
+                self.on_advance(self.rig)
             # Sleep until the next sample is due, waking early for hand packets.
             t = time.perf_counter() - self._t0
             timeout = max(0.0, (math.floor(t / self.period) + 1) * self.period - t)
@@ -537,6 +602,16 @@ class VirtualDevices:
                     pass
             if self.hand.master is not None and self.hand.master in ready:
                 data = self.hand.read()
+                if self.emulator is not None:
+                    reply = self.emulator.feed(data)
+                    self.hand_packets = self.emulator.commands
+                    if self.hand_packets and math.isnan(self.connected_at):
+                        self._connected(schedule)
+                    if reply:
+                        self.hand.write(reply)
+                    continue
                 for cmds in self.hand_parser.feed(data):
                     self.hand_packets += 1
+                    if self.hand_packets == 1:
+                        self._connected(schedule)
                     self._apply_packet(cmds)

@@ -114,7 +114,7 @@ REFLEX_SPIKE: int = 0x01
 REFLEX_WINDOW: int = 0x02
 #: The reading was out of range or stuck: the chain skipped it (and the hand holds).
 REFLEX_FAULT: int = 0x04
-#: A hand packet with this command was queued on the board's hand UART.
+#: A hand packet (CLOSE or STOP) was queued on the board's hand UART at this sample.
 REFLEX_HAND: int = 0x08
 _KNOWN_REFLEX = REFLEX_SPIKE | REFLEX_WINDOW | REFLEX_FAULT | REFLEX_HAND
 # reflex bits, v, command, x: offsets 18..25 of a version-2 frame.
@@ -159,7 +159,7 @@ class ReflexFields:
     spike = _bit("bits", REFLEX_SPIKE, "The encoder fired on this sample.")
     window = _bit("bits", REFLEX_WINDOW, "This sample completed a window.")
     fault = _bit("bits", REFLEX_FAULT, "The reading was skipped as out of range or stuck.")
-    hand = _bit("bits", REFLEX_HAND, "A hand packet was queued with this sample's command.")
+    hand = _bit("bits", REFLEX_HAND, "A hand packet (CLOSE or STOP, hand2560) was queued at this sample.")
 
 
 def crc16(data: bytes | bytearray | memoryview, crc: int = 0xFFFF) -> int:

@@ -1,6 +1,6 @@
 """The simulated rig: grasp physics with stick-slip, the i-Limb hand and the paper's sensors.
 
-Stands in for the paper's hardware (shared SPEC sections 3 and 4) so the
+Stands in for the paper's hardware (docs/method.md sections 3 and 4) so the
 whole system runs without it, deterministically under a seed.
 
 Public API

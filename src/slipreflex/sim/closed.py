@@ -47,6 +47,7 @@ from numba import njit, types
 from numba.core import caching as _caching
 
 from .. import hardware as hw
+from .._numba_cache import CACHE
 from ..errors import ParameterError
 from ..hardware import Finger, HandCommand
 from . import kernel as K
@@ -104,8 +105,8 @@ class _Stamped:
 
 
 _LOCATORS = getattr(getattr(_caching, "CacheImpl", None), "_locator_classes", None)
-_CACHE = isinstance(_LOCATORS, list)   # another numba: no cache rather than a stale one
-if _CACHE and not any(issubclass(c, _Stamped) for c in _LOCATORS):
+_CACHE = CACHE and isinstance(_LOCATORS, list)   # another numba: no cache rather than a stale one
+if CACHE and isinstance(_LOCATORS, list) and not any(issubclass(c, _Stamped) for c in _LOCATORS):
     _LOCATORS[:0] = [type(f"_Stamped{base.__name__}", (_Stamped, base), {})
                      for base in (_caching.UserProvidedCacheLocator, _caching.InTreeCacheLocator,
                                   _caching.UserWideCacheLocator)]
@@ -118,7 +119,7 @@ _COMMON = (_f1, _f1, _f1, _i1, _f1, _u1, _f2, _f2, _f1, _f1, _i1, _i1,  # RS RP 
            _f1, _i1, _f2, _f2, _f2, _f1, _f1, _f2, _f2, _f2, _i1)  # cfg cnt daq ev tac cmd_t cmd_v s_daq s_ev s_tac s_n
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _apply_due(n, S, tgt, spd, q_i, q_v, masks, cnt, speed):
     """SimHand.apply_due(n) on the array queue, then the rig's copy into S."""
     head = cnt[N_QHEAD]
@@ -148,7 +149,7 @@ def _apply_due(n, S, tgt, spd, q_i, q_v, masks, cnt, speed):
         S[K.S_SPD0 + i] = spd[i]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _enqueue(q_i, q_v, cnt, step, kind, group, value):
     """bisect.insort by (due step, sequence number), as SimHand.command queues."""
     count = cnt[N_COUNT]
@@ -168,14 +169,14 @@ def _enqueue(q_i, q_v, cnt, step, kind, group, value):
     cnt[N_QLEN] += 1
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _due(at, n, cfg):
     """SimHand.command's due step for a command sent at ``at``."""
     step = np.int64(np.ceil((at + cfg[CF_LAT]) / cfg[CF_DT] - _ROUND))
     return n if step < n else step
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _command(c, ts, n, cfg, q_i, q_v, cnt, cmd_g, cmd_off, g_level, g_until, cmd_t, cmd_v):
     """The loop's grip sender for command ``c`` at ``ts`` (sim/loop.py's ``_grip_sender``: per finger
     group, a rise becomes CLOSE at ``max(ts, until)`` and STOP ``rise / speed`` later) and its record."""
@@ -195,7 +196,7 @@ def _command(c, ts, n, cfg, q_i, q_v, cnt, cmd_g, cmd_off, g_level, g_until, cmd
     cnt[N_CMD] = k + 1
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _room(C, D, tac_rates, cfg, cnt, q_i, q_v, daq, ev, tac, cmd_t, n_groups, horizon, fs_in):
     """Whether every output can take what advancing to ``horizon`` may produce (else the caller grows them)."""
     dt = cfg[CF_DT]
@@ -221,7 +222,7 @@ def _room(C, D, tac_rates, cfg, cnt, q_i, q_v, daq, ev, tac, cmd_t, n_groups, ho
             and cnt[N_QLEN] + 2.0 * inputs * n_groups <= q_i.shape[0])
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _append(out, filled, rows, n):
     """Copy the first ``n`` rows of ``rows`` after the ``filled`` rows of ``out``; the new fill."""
     for r in range(n):
@@ -230,7 +231,7 @@ def _append(out, filled, rows, n):
     return filled + n
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _advance(horizon, S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, tgt, spd, q_i, q_v,
              masks, cfg, cnt, daq, ev, tac, s_daq, s_ev, s_tac, s_n):
     """Rig._advance_rows(horizon): apply due commands, run the physics to the next due step or the end."""
@@ -259,8 +260,11 @@ def _advance(horizon, S, C, P, keys, D, W, track, tac_rates, tac_next, tac_conta
 @njit(cache=_CACHE)
 def _closed_slip(step, RS, RP, S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, tgt, spd, q_i, q_v,
                  masks, cmd_g, cmd_off, g_level, g_until, cfg, cnt, daq, ev, tac, cmd_t, cmd_v, s_daq, s_ev, s_tac,
-                 s_n):
-    """The slip-sensor closed loop: one compiled step per DAQ row. Returns _DONE, _GROW or _BAD_COMMAND."""
+                 s_n, probe, rec):
+    """The slip-sensor closed loop: one compiled step per DAQ row. Returns _DONE, _GROW or _BAD_COMMAND.
+
+    After each step, row k of ``rec`` gets the sample's time and the reflex's state slots
+    ``RS[probe]`` (what it computed: spike, threshold, window count; :func:`run_compiled`)."""
     t_end = cfg[CF_TEND]
     dt = cfg[CF_DT]
     daq_t = cfg[CF_DAQ_T]
@@ -278,6 +282,10 @@ def _closed_slip(step, RS, RP, S, C, P, keys, D, W, track, tac_rates, tac_next, 
         n = C[K.C_N]
         for k in range(k0, cnt[N_DAQ]):
             c = step(RS, RP, daq[k, K.O_VOLTS], np.rint(daq[k, K.O_Q2]))
+            if rec.shape[1]:
+                rec[k, 0] = daq[k, K.O_T]
+                for j in range(probe.size):
+                    rec[k, j + 1] = RS[probe[j]]
             if c == c:
                 if not np.isfinite(c):
                     cmd_v[cnt[N_CMD]] = c
@@ -289,8 +297,9 @@ def _closed_slip(step, RS, RP, S, C, P, keys, D, W, track, tac_rates, tac_next, 
 @njit(cache=_CACHE)
 def _closed_tactile(step, RS, RP, S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, tgt, spd, q_i,
                     q_v, masks, cmd_g, cmd_off, g_level, g_until, cfg, cnt, daq, ev, tac, cmd_t, cmd_v, s_daq, s_ev,
-                    s_tac, s_n, tkey, tstate, frames3, frames2):
-    """The tactile closed loop: one compiled step per frame of sampler ``cfg[CF_SI]``."""
+                    s_tac, s_n, tkey, tstate, frames3, frames2, probe, rec):
+    """The tactile closed loop: one compiled step per frame of sampler ``cfg[CF_SI]`` (``rec`` as
+    in :func:`_closed_slip`, one row per frame)."""
     t_end = cfg[CF_TEND]
     dt = cfg[CF_DT]
     si = np.int64(cfg[CF_SI])
@@ -332,6 +341,10 @@ def _closed_tactile(step, RS, RP, S, C, P, keys, D, W, track, tac_rates, tac_nex
             else:
                 pos = S[K.S_Q0 + 2]
             c = step(RS, RP, frames2[f], np.rint(pos))
+            if rec.shape[1]:
+                rec[f, 0] = ts
+                for j in range(probe.size):
+                    rec[f, j + 1] = RS[probe[j]]
             if c == c:
                 if not np.isfinite(c):
                     cmd_v[cnt[N_CMD]] = c
@@ -341,8 +354,8 @@ def _closed_tactile(step, RS, RP, S, C, P, keys, D, W, track, tac_rates, tac_nex
 
 
 _SIGNATURES = {
-    "slip": (types.FunctionType(SLIP_STEP), *_COMMON),
-    "tactile": (types.FunctionType(TACTILE_STEP), *_COMMON, types.uint64, _f3, _f3, _f2),
+    "slip": (types.FunctionType(SLIP_STEP), *_COMMON, _i1, _f2),
+    "tactile": (types.FunctionType(TACTILE_STEP), *_COMMON, types.uint64, _f3, _f3, _f2, _i1, _f2),
 }
 
 
@@ -377,6 +390,7 @@ class _Buffers:
     q_i: np.ndarray
     q_v: np.ndarray
     frames: np.ndarray
+    rec: np.ndarray
 
     def grow(self) -> None:
         """Double every buffer (their filled parts kept)."""
@@ -459,7 +473,7 @@ def _cfg(rig, t_end: float, sampler) -> np.ndarray:
 
 
 def run_compiled(rig, reflex, t_end: float, split: list[tuple[tuple[Finger, ...], float]],
-                 sampler, start: float) -> tuple[np.ndarray, np.ndarray]:
+                 sampler, start: float, record: list | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Run the closed loop to ``t_end`` in the compiled kernels; return (command times, values).
 
     ``split`` is how a command's rises go to the tripod fingers
@@ -468,6 +482,9 @@ def run_compiled(rig, reflex, t_end: float, split: list[tuple[tuple[Finger, ...]
     ``sampler`` is the tactile reflex's :class:`TactileSampler` (None for a slip
     reflex). The rig, its hand and samplers are left as the Python loop leaves
     them (before its last open-loop stretch to ``t_end``, which the caller runs).
+    With ``record`` (a list) and a reflex with ``probe_slots`` (name -> slot of its
+    state), ``record`` gets one array: per input the reflex took, its time and those
+    slots after the step (:func:`slipreflex.sim.loop.reflex_log`).
     :func:`~slipreflex.sim.run_closed_loop` calls it; call that instead.
 
     Examples
@@ -495,9 +512,13 @@ def run_compiled(rig, reflex, t_end: float, split: list[tuple[tuple[Finger, ...]
     g_until = np.array([max((rig.hand.closing_until.get(f, -math.inf) for f in g), default=-math.inf)
                         for g, _ in split], dtype=np.float64)
     n_tac = int(sum(span * fs + 4 for fs in A.tac_rates))
+    slots = dict(getattr(reflex, "probe_slots", {}) or {}) if record is not None else {}
+    probe = np.array(list(slots.values()), dtype=np.int64)
+    n_rec = int(span * hw.DAQ_FS) + 16 if sampler is None else n_in
     buf = _Buffers(daq=np.empty((int(span * hw.DAQ_FS) + 16, K.O_SIZE)), ev=np.empty((4096, 3)),
                    tac=np.empty((n_tac + 16, K.T_SIZE)), cmd_t=np.empty(n_in), cmd_v=np.empty(n_in),
-                   q_i=q_i, q_v=q_v, frames=np.empty((n_in if sampler is not None else 0,) + hw.TACTILE_SHAPE))
+                   q_i=q_i, q_v=q_v, frames=np.empty((n_in if sampler is not None else 0,) + hw.TACTILE_SHAPE),
+                   rec=np.empty((n_rec if slots else 0, len(slots) + 1 if slots else 0)))
     cnt = np.zeros(N_SIZE, dtype=np.int64)
     cnt[N_QLEN], cnt[N_COUNT], cnt[N_POSPTR] = q_len, count, -1
     cfg = _cfg(rig, t_end, sampler)
@@ -515,10 +536,10 @@ def run_compiled(rig, reflex, t_end: float, split: list[tuple[tuple[Finger, ...]
                       A.targets, A.speeds, buf.q_i, buf.q_v, masks, cmd_g, cmd_off, g_level, g_until, cfg, cnt, buf.daq,
                       buf.ev, buf.tac, buf.cmd_t, buf.cmd_v, s_daq, s_ev, s_tac, s_n)
             if sampler is None:
-                status = _kernel(kind)(step, *common)
+                status = _kernel(kind)(step, *common, probe, buf.rec)
             else:
                 status = _kernel(kind)(step, *common, key, tstate, buf.frames,
-                                       buf.frames.reshape(buf.frames.shape[0], -1))
+                                       buf.frames.reshape(buf.frames.shape[0], -1), probe, buf.rec)
             if status == _GROW:
                 buf.grow()
     finally:   # also when the reflex's step raised: the rig then stands where the Python loop's would
@@ -527,6 +548,9 @@ def run_compiled(rig, reflex, t_end: float, split: list[tuple[tuple[Finger, ...]
             if until > -math.inf:
                 rig.hand.closing_until.update({f: until for f in g})
     nc = int(cnt[N_CMD])
+    if slots and record is not None:
+        n_fed = int(cnt[N_DAQ] if sampler is None else cnt[N_FRAMES])
+        record.append((tuple(slots), buf.rec[:n_fed].copy()))
     if status == _BAD_COMMAND:
         raise ParameterError(f"hand command value must be finite, got {buf.cmd_v[nc]!r}")
     return buf.cmd_t[:nc].copy(), buf.cmd_v[:nc].copy()

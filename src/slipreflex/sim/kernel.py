@@ -69,6 +69,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from .._numba_cache import CACHE
 from .._slots import Layout
 
 __all__: list[str] = []
@@ -171,20 +172,20 @@ _S30, _S27, _S31, _S11 = np.uint64(30), np.uint64(27), np.uint64(31), np.uint64(
 _TWO53 = 1.0 / 9007199254740992.0
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _mix(z):
     z = (z ^ (z >> _S30)) * _M1
     z = (z ^ (z >> _S27)) * _M2
     return z ^ (z >> _S31)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _uniform(key, i):
     h = _mix(key + np.uint64(i) * _GOLDEN)
     return (float(h >> _S11) + 0.5) * _TWO53
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def normal(key, i):
     """Standard normal number ``i`` of the stream ``key`` (counter-based, Box-Muller)."""
     u1 = _uniform(key, 2 * i)
@@ -192,7 +193,7 @@ def normal(key, i):
     return np.sqrt(-2.0 * np.log(u1)) * np.cos(2.0 * np.pi * u2)
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def normal_pair(key, i):
     """Standard normal numbers ``2 i`` and ``2 i + 1`` of the stream ``key``: both of one Box-Muller pair
     (the uniforms ``2 i``, ``2 i + 1``; ``normal(key, i)`` is the first of them)."""
@@ -202,13 +203,13 @@ def normal_pair(key, i):
     return r * np.cos(2.0 * np.pi * u2), r * np.sin(2.0 * np.pi * u2)
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def derive_key(key, i):
     """A new stream key from ``key`` and a small integer (wrap-around arithmetic)."""
     return _mix(key ^ (np.uint64(i) * _GOLDEN))
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _track_at(pos, off, dx, nt):
     """Index ``i`` and fraction ``fr`` of surface position ``pos`` on a track of ``nt`` samples (clamped)."""
     fi = (pos + off) / dx
@@ -222,7 +223,7 @@ def _track_at(pos, off, dx, nt):
     return i, fi - i
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _sensor_volts(rho, extra, gap, vcc, vsat, knee, vnoise, key, k, lsb, code_max):
     """OPR5005 output (ADC volts) for reflectance ``rho`` with the finger ``extra`` metres further than
     the gap (before contact), electrical noise number ``k`` of stream ``key``, 10-bit ADC."""
@@ -244,7 +245,7 @@ def _sensor_volts(rho, extra, gap, vcc, vsat, knee, vnoise, key, k, lsb, code_ma
     return code * lsb
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _quant_g(val, lsb, full_range):
     c = np.floor(val / lsb + 0.5)
     hi = np.floor(full_range / lsb + 0.5) - 1.0
@@ -256,7 +257,7 @@ def _quant_g(val, lsb, full_range):
     return c * lsb
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _litres(W, t):
     """Litres through the flow sensor at ``t`` (the pumps start at ``W_START``)."""
     litres = 0.0
@@ -267,7 +268,7 @@ def _litres(W, t):
     return litres
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _rs_solve(R, K, N, mu_st, a, v0, z_guess, w_guess=-1.0):
     """Scalar core of :func:`rs_slide_speed`: returns ``(w, z, iterations, converged)``.
 
@@ -313,7 +314,7 @@ def _rs_solve(R, K, N, mu_st, a, v0, z_guess, w_guess=-1.0):
     return v0 * np.expm1(z), z, it, converged
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def rs_slide_speed(R, K, N, mu_st, a, v0, C, z_guess=0.0):
     """Sliding speed ``w >= 0`` of a rate-state contact: ``R - K w = N (mu_st + a ln(1 + w / v0))``.
 
@@ -334,7 +335,7 @@ def rs_slide_speed(R, K, N, mu_st, a, v0, C, z_guess=0.0):
     return w, z
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _rs_contact(kt, ct, s, mus, muk, phi, z_prev, w_prev, a, v0, dc, heal_s, heal_decay, x, v, nc, dt):
     """One step of a rate-state contact (implicit, return mapping); scalars in and out.
 
@@ -379,7 +380,7 @@ def _rs_contact(kt, ct, s, mus, muk, phi, z_prev, w_prev, a, v0, dc, heal_s, hea
     return F, s, w, z, d, phi, it, ok
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _coulomb_contact(kt, ct, s, mus, muk, vs, stuck, d, w, x, v, nc):
     """Coulomb-Stribeck contact before the bottle moves (explicit); returns ``(F, stuck, d, w)``.
 
@@ -397,7 +398,7 @@ def _coulomb_contact(kt, ct, s, mus, muk, vs, stuck, d, w, x, v, nc):
     return d * (muk + (mus - muk) * np.exp(-wr * wr)) * nc, stuck, d, w
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def _coulomb_post(F, kt, decay, s, d, x_old, x_new, dt):
     """Coulomb-Stribeck contact after the bottle moved: the massless pad relaxes toward
     ``F / k_t`` exactly, the anchor follows, and the contact sticks when it stops.
@@ -411,7 +412,7 @@ def _coulomb_post(F, kt, decay, s, d, x_old, x_new, dt):
     return sn, 0.0, abs(wn)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=CACHE, inline="always")
 def slosh_mode(mw, radius, rho, zeta0, phi_jet):
     """First antisymmetric slosh mode of ``mw`` kg of water in an upright cylinder of ``radius``.
 
@@ -455,7 +456,7 @@ def slosh_zeta0(radius, nu, g, damp_factor=1.0):
     return 0.79 * (nu / (g ** 0.5 * radius ** 1.5)) ** 0.5 * damp_factor
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_end, daq_out, tac_out, ev_out,
                counts):
     """Advance the physics to step ``n_end``; write DAQ rows, tactile snapshots and events.
@@ -787,7 +788,7 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
     counts[2] = nev
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def tactile_frames(snap, key, gain0, patch_sigma, shear_shift, noise, resolution, alpha, hyst, drift, state,
                    out):
     """Build ``(4, 4)`` frames (N per taxel) from tactile snapshots of one contact.
@@ -853,7 +854,7 @@ def tactile_frames(snap, key, gain0, patch_sigma, shear_shift, noise, resolution
                     out[r, b, a] = y
 
 
-@njit(cache=True)
+@njit(cache=CACHE)
 def volts_along(P, track, keys, positions, out):
     """Slip-sensor volts at surface positions (sample k uses noise number k); for the scan."""
     for k in range(positions.shape[0]):

@@ -62,7 +62,7 @@ from ..interfaces import Reflex
 from .objects import Drop, Pour
 from .rig import DaqBlock, Rig, SlipEvent
 
-__all__ = ["SimTrace", "run_closed_loop", "TRACE_COLUMNS"]
+__all__ = ["SimTrace", "run_closed_loop", "TRACE_COLUMNS", "reflex_log"]
 
 #: Columns of :meth:`SimTrace.to_frame` / :meth:`SimTrace.write_csv` (DAQ-rate streams), with units.
 TRACE_COLUMNS: dict[str, str] = {
@@ -223,10 +223,12 @@ class SimTrace:
         >>> p.read_text().splitlines()[0].split(",")[:3]
         ['t', 'volts', 'accel_x']
         """
+        from ..paths import new_file
+
         path = Path(path)
         frame = self.to_frame()
         cols = list(frame)
-        with path.open("w", newline="") as fh:
+        with new_file(path, "w", replace=True) as fh:
             w = csv.writer(fh)
             w.writerow(cols)
             arrs = [np.asarray(frame[c]) for c in cols]
@@ -406,35 +408,72 @@ def run_closed_loop(rig: Rig, reflex: Reflex, duration: float, *,
     t_end = t0 + duration
     fs = float(reflex.fs) if kind == "tactile" else tactile_fs
     tac_s = rig.tactile_sampler(float(fs), Finger.INDEX, keep=True) if fs else None
+    record: list = []
     try:
         from .closed import compilable, run_compiled
 
         if compiled and compilable(rig, reflex, fingers):
             reflex_sampler = tac_s if kind == "tactile" else None
-            cmd_t, cmd_v = run_compiled(rig, reflex, t_end, groups, reflex_sampler, start)
+            cmd_t, cmd_v = run_compiled(rig, reflex, t_end, groups, reflex_sampler, start, record=record)
             if reflex_sampler is not None:
                 reflex_sampler.read()     # the loop consumed them
         elif kind == "slip":
-            cmd_t, cmd_v = _python_slip(rig, reflex, t_end, _grip_sender(rig.hand, groups, start))
+            cmd_t, cmd_v = _python_slip(rig, reflex, t_end, _grip_sender(rig.hand, groups, start), record)
         else:
             assert tac_s is not None
-            cmd_t, cmd_v = _python_tactile(rig, reflex, t_end, _grip_sender(rig.hand, groups, start), tac_s)
+            cmd_t, cmd_v = _python_tactile(rig, reflex, t_end, _grip_sender(rig.hand, groups, start), tac_s,
+                                           record)
         if rig.t < t_end - _EPS:
             rig.advance_block(t_end)
     finally:
         if tac_s is not None:
             tac_s.close()
     tac_t, tac = tac_s.history if tac_s is not None else (np.zeros(0), np.zeros((0,) + hw.TACTILE_SHAPE))
-    return _trace(rig, t0, getattr(reflex, "name", type(reflex).__name__), cmd_t, cmd_v, tac_t, tac)
+    trace = _trace(rig, t0, getattr(reflex, "name", type(reflex).__name__), cmd_t, cmd_v, tac_t, tac)
+    if record:
+        names, rows = record[0]
+        trace.extra["reflex"] = {"t": rows[:, 0].copy(), **{n: rows[:, j + 1].copy() for j, n in enumerate(names)}}
+    return trace
+
+
+def reflex_log(trace: SimTrace) -> dict[str, np.ndarray] | None:
+    """What the loop's reflex computed, input by input, as the loop recorded it (None: nothing recorded).
+
+    A reflex with ``probe_slots`` (name -> slot of its state vector, e.g. the chain's
+    filtered sample, spike, threshold in force and window count) has those slots
+    recorded after every input it took, with the input's time under ``"t"``: the
+    spikes a figure draws are the ones the controller saw.
+
+    Examples
+    --------
+    >>> from slipreflex.sim import Rig
+    >>> from slipreflex.chain import SlipReflex
+    >>> rig = Rig("TR"); g = rig.grasp()
+    >>> log = reflex_log(run_closed_loop(rig, SlipReflex(p0=g.position), 0.1))
+    >>> sorted(log)[:3], log["t"].size
+    (['acc', 'command', 'count'], 33)
+    """
+    return trace.extra.get("reflex")
+
+
+def _probe(reflex: Reflex, record: list | None):
+    """(names, state vector, slots) of the reflex's recorded state, or None."""
+    slots = dict(getattr(reflex, "probe_slots", {}) or {}) if record is not None else {}
+    compiled = getattr(reflex, "compiled", None)
+    if not slots or compiled is None:
+        return None
+    return tuple(slots), compiled()[1], np.array(list(slots.values()), dtype=np.int64)
 
 
 _EPS = 1e-12
 
 
-def _python_slip(rig: Rig, reflex: Reflex, t_end: float, send):
+def _python_slip(rig: Rig, reflex: Reflex, t_end: float, send, record: list | None = None):
     """The Python loop for a slip reflex: one ``reflex.step`` per DAQ sample."""
     cmd_t: list[float] = []
     cmd_v: list[float] = []
+    probe = _probe(reflex, record)
+    rows: list = []
     step = reflex.step
     dt = rig.physics.dt
     lat = rig.hand.latency
@@ -445,19 +484,29 @@ def _python_slip(rig: Rig, reflex: Reflex, t_end: float, send):
         times, volts_a, mids_a = rig.advance_slip(horizon)
         for v, pos, ts_k in zip(volts_a.tolist(), np.rint(mids_a).tolist(), times.tolist()):
             c = step(v, position=pos)
+            if probe is not None:
+                rows.append([ts_k, *probe[1][probe[2]].tolist()])
             if c is not None:
                 send(float(c), ts_k)
                 cmd_t.append(ts_k)
                 cmd_v.append(float(c))
         if rig.t >= t_end - _EPS and rig.next_daq_time > t_end + _EPS:
             break
+    _keep(record, probe, rows)
     return cmd_t, cmd_v
 
 
-def _python_tactile(rig: Rig, reflex: Reflex, t_end: float, send, tac_s):
+def _keep(record: list | None, probe, rows: list) -> None:
+    if probe is not None and record is not None:
+        record.append((probe[0], np.asarray(rows, dtype=float).reshape(len(rows), len(probe[0]) + 1)))
+
+
+def _python_tactile(rig: Rig, reflex: Reflex, t_end: float, send, tac_s, record: list | None = None):
     """The Python loop for a tactile reflex: one ``reflex.step`` per frame of ``tac_s``."""
     cmd_t: list[float] = []
     cmd_v: list[float] = []
+    probe = _probe(reflex, record)
+    rows: list = []
     step = reflex.step
     lat = rig.hand.latency
     while tac_s.next_time <= t_end + _EPS:
@@ -471,10 +520,13 @@ def _python_tactile(rig: Rig, reflex: Reflex, t_end: float, send, tac_s):
             ts_k = float(tt[k])
             pos = float(round(rig.finger_position_at(ts_k, Finger.MIDDLE)))
             c = step(frames[k], position=pos)
+            if probe is not None:
+                rows.append([ts_k, *probe[1][probe[2]].tolist()])
             if c is not None:
                 send(float(c), ts_k)
                 cmd_t.append(ts_k)
                 cmd_v.append(float(c))
         if rig.t >= t_end - _EPS and tac_s.next_time > t_end + _EPS:
             break
+    _keep(record, probe, rows)
     return cmd_t, cmd_v

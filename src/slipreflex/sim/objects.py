@@ -50,7 +50,6 @@ slipreflex.errors.ParameterError: Drop.mass_kg must be a finite number > 0 and <
 
 from __future__ import annotations
 
-import tomllib
 from collections.abc import Mapping
 from dataclasses import MISSING, dataclass, field, fields
 from pathlib import Path
@@ -131,7 +130,7 @@ class Surface:
         _check("Surface", "reflectance", self.reflectance, lo=0.0, hi=1.0)
         _check("Surface", "texture", self.texture, lo=0.0, hi=0.5)
         _check("Surface", "texture_exponent", self.texture_exponent, lo=-1.0, hi=3.0)
-        _check("Surface", "texture_min_wavelength_m", self.texture_min_wavelength_m, lo=2e-6)
+        _check("Surface", "texture_min_wavelength_m", self.texture_min_wavelength_m, lo=2e-6, hi=0.05)
         _check("Surface", "texture_max_wavelength_m", self.texture_max_wavelength_m, lo=0.0, lo_open=True,
                hi=0.05)
         if self.texture_max_wavelength_m <= self.texture_min_wavelength_m:
@@ -299,15 +298,17 @@ class Bottle:
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
             raise ParameterError(f"Bottle.name must be a non-empty string, got {self.name!r}")
-        _check("Bottle", "mass_kg", self.mass_kg, lo=0.0, lo_open=True)
+        # upper bounds: what a prosthetic tripod grip can hold at all (i-Limb digits lift a few kg)
+        _check("Bottle", "mass_kg", self.mass_kg, lo=0.0, lo_open=True, hi=5.0)
         _check("Bottle", "height_m", self.height_m, lo=0.0, lo_open=True, hi=1.0)
         _check("Bottle", "diameter_m", self.diameter_m, lo=0.005, hi=0.11)
         _check("Bottle", "mu_s", self.mu_s, lo=0.0, lo_open=True, hi=5.0)
         _check("Bottle", "mu_k", self.mu_k, lo=0.0, lo_open=True, hi=5.0)
         if self.mu_k > self.mu_s:
             raise ParameterError(f"Bottle.mu_k must be <= mu_s, got mu_k={self.mu_k!r} > mu_s={self.mu_s!r}")
-        _check("Bottle", "stribeck_velocity_m_s", self.stribeck_velocity_m_s, lo=0.0, lo_open=True)
-        _check("Bottle", "wall_stiffness_n_m", self.wall_stiffness_n_m, lo=0.0, lo_open=True)
+        _check("Bottle", "stribeck_velocity_m_s", self.stribeck_velocity_m_s, lo=0.0, lo_open=True, hi=1.0)
+        # 1e5 N/m: a glass wall under a fingertip; stiffer walls change nothing (the pad yields first)
+        _check("Bottle", "wall_stiffness_n_m", self.wall_stiffness_n_m, lo=0.0, lo_open=True, hi=1e5)
         _check("Bottle", "grip_travel_m", self.grip_travel_m, lo=0.0, lo_open=True, hi=0.09)
         for f in ("friction_law", "cuff_friction_law"):
             if getattr(self, f) not in FRICTION_LAWS:
@@ -527,21 +528,17 @@ def load_objects(path: str | Path) -> Objects:
     >>> load_objects(p).bottles["B"].surface.name
     'DK'
     """
+    from ..paths import read_toml
+
     path = Path(path)
-    try:
-        with path.open("rb") as fh:
-            doc = tomllib.load(fh)
-    except FileNotFoundError:
-        raise ParameterError(f"{path}: no such file") from None
-    except IsADirectoryError:
-        raise ParameterError(f"{path}: is a directory, not a TOML file") from None
-    except OSError as err:
-        raise ParameterError(f"{path}: cannot read: {err.strerror}") from None
-    except tomllib.TOMLDecodeError as err:
-        raise ParameterError(f"{path}: invalid TOML: {err}") from None
+    doc = read_toml(path, "")
     unknown = sorted(set(doc) - {"surfaces", "bottles", "drops", "pours"})
     if unknown:
         raise ParameterError(f"{path}: unknown table [{unknown[0]}] (use surfaces, bottles, drops, pours)")
+    for kind in ("surfaces", "bottles", "drops", "pours"):
+        if kind in doc and not isinstance(doc[kind], dict):
+            raise ParameterError(f"{path}: {kind} must be a table of named entries ([{kind}.NAME]), "
+                                 f"got {type(doc[kind]).__name__} {doc[kind]!r:.40}")
     out = Objects()
     for name, table in (doc.get("surfaces") or {}).items():
         out.surfaces[name] = _build(Surface, table, f"{path}: surfaces.{name}", name=name)

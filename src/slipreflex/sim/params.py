@@ -11,7 +11,7 @@ the package.
 Sources are marked in each field's description:
 
 * **datasheet**: the part's datasheet (OPR5005, MPU6050, YF-S201);
-* **paper**: the paper or the shared SPEC;
+* **paper**: the paper or the docs/method.md;
 * **estimate**: a physical estimate, with the reason given.
 
 Examples

@@ -40,7 +40,6 @@ Examples
 from __future__ import annotations
 
 import math
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
@@ -52,7 +51,7 @@ from .objects import BOTTLES, Bottle
 from .params import FlowParams, HandParams, ImuParams, PhysicsParams, SlipSensorParams, TactileParams, WaterParams
 
 __all__ = ["UncertainConstant", "UNCERTAIN", "Plant", "plant_from_values", "load_ranges", "nominal_values",
-           "DISTRIBUTIONS", "markdown_table"]
+           "DISTRIBUTIONS", "markdown_table", "WIDEN_LIMIT", "plausible_limits"]
 
 #: Distributions a constant may have: uniform on [low, high], or log-uniform (for
 #: constants known to within a factor, such as stiffnesses and speeds).
@@ -489,14 +488,10 @@ def load_ranges(path: str | Path, table: Mapping[str, UncertainConstant] | None 
     (True, 0.02)
     """
     table = UNCERTAIN if table is None else table
+    from ..paths import read_toml
+
     path = Path(path)
-    try:
-        with path.open("rb") as fh:
-            doc = tomllib.load(fh)
-    except (FileNotFoundError, IsADirectoryError):
-        raise ParameterError(f"{path}: no such file") from None
-    except tomllib.TOMLDecodeError as err:
-        raise ParameterError(f"{path}: invalid TOML: {err}") from None
+    doc = read_toml(path, "")
     out = dict(table)
     for name, spec in doc.items():
         if name not in table:
@@ -521,8 +516,34 @@ def load_ranges(path: str | Path, table: Mapping[str, UncertainConstant] | None 
                     raise ParameterError(f"{path}: {name}: low {lo!r} > high {hi!r}")
                 nom = min(max(nom, lo), hi)
             kw["nominal"] = nom
+        lo_lim, hi_lim = plausible_limits(c)
+        for key in ("low", "high", "nominal"):
+            v = kw.get(key)
+            if isinstance(v, (int, float)) and not isinstance(v, bool) and not (lo_lim <= v <= hi_lim):
+                which = "fixed" if "fixed" in spec else key
+                raise ParameterError(f"{path}: {name}.{which} = {v!r} {c.unit} is outside the plausible "
+                                     f"{lo_lim:g}..{hi_lim:g} {c.unit} (the table's range widened "
+                                     f"{WIDEN_LIMIT:g}-fold; docs/simulator.md)")
         try:
             out[name] = replace(c, **kw)
         except ParameterError as err:
             raise ParameterError(f"{path}: {err}") from None
     return MappingProxyType(out)
+
+
+#: How far a ranges file may widen a constant beyond the table's plausible range: a factor on
+#: each side (a value 10 times outside what the sources allow is a typo, not a plant).
+WIDEN_LIMIT: float = 10.0
+
+
+def plausible_limits(c: UncertainConstant) -> tuple[float, float]:
+    """The values a ranges file may give ``c``: its range widened :data:`WIDEN_LIMIT`-fold each way.
+
+    Examples
+    --------
+    >>> plausible_limits(UNCERTAIN["hand_latency"])
+    (0.0005, 0.3)
+    """
+    lo = c.low / WIDEN_LIMIT if c.low > 0 else (0.0 if c.low == 0 else c.low - (WIDEN_LIMIT - 1) * (c.high - c.low))
+    hi = c.high * WIDEN_LIMIT if c.high > 0 else c.high + (WIDEN_LIMIT - 1) * (c.high - c.low)
+    return float(lo), float(hi)

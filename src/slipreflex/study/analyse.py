@@ -256,7 +256,9 @@ def _cell(v: Any) -> str:
 
 
 def _write_csv(path: Path, rows: Sequence[Mapping[str, Any]], columns: Sequence[str]) -> Path:
-    with path.open("w", newline="") as fh:
+    from ..paths import new_file
+
+    with new_file(path, "w", replace=True) as fh:
         w = csv.writer(fh, lineterminator="\n")
         w.writerow(columns)
         for r in rows:

@@ -33,6 +33,7 @@ Examples
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import hashlib
 import json
@@ -49,8 +50,8 @@ from ..errors import ParameterError
 from .design import DESIGNS, draw_design
 
 __all__ = ["StudyConfig", "PlantOutcome", "run_plant", "run_study", "StudyRun", "PARTS_DIR", "STUDY_SCAN_BASE",
-           "scan_seed_base",
-           "read_parts", "part_path", "DEFAULT_PLANTS", "DEFAULT_TRIALS"]
+           "scan_seed_base", "read_parts", "part_path", "DEFAULT_PLANTS", "DEFAULT_TRIALS", "probe_scheduler",
+           "SCHEDULER_TIMEOUT_S"]
 
 #: Plants of the default study (a power of two keeps the Sobol' design balanced; see docs/study.md).
 DEFAULT_PLANTS: int = 64
@@ -125,8 +126,9 @@ class StudyConfig:
 
         if self.design not in DESIGNS:
             raise ParameterError(f"design: unknown {self.design!r} (known: {', '.join(DESIGNS)})")
-        if isinstance(self.plants, bool) or not isinstance(self.plants, int) or self.plants < 1:
-            raise ParameterError(f"plants must be an integer >= 1, got {self.plants!r}")
+        from ..validation import within
+
+        object.__setattr__(self, "plants", within("plants", self.plants))
         if isinstance(self.scan_seeds, bool) or not isinstance(self.scan_seeds, int) or self.scan_seeds < 1:
             raise ParameterError(f"scan_seeds must be an integer >= 1, got {self.scan_seeds!r}")
         if self.ranges is not None:
@@ -482,42 +484,176 @@ class _Progress:
         self.trial_bar.close()
 
 
-def _check_out(out: Path, config: StudyConfig) -> None:
-    """Refuse an --out that holds another study (before any work)."""
+#: Options of ``slipreflex study`` by StudyConfig field, for the message naming what differs.
+_OPTIONS = {"plants": "--plants", "design": "--design", "trials": "--trials", "bottles": "--bottles",
+            "methods": "--methods", "experiments": "--experiments", "seed": "--seed", "ranges": "--ranges",
+            "calibrate": "--no-calibration", "scan": "scan"}
+
+
+def _differences(old: Mapping[str, Any], config: StudyConfig) -> list[str]:
+    """What differs between the study recorded in study.json and ``config``, as options."""
+    from .. import __version__
+
+    new = config.to_dict()
+    was = old.get("config", {}) if isinstance(old.get("config"), dict) else {}
+
+    def show(v: Any) -> str:
+        return ",".join(map(str, v)) if isinstance(v, list) else str(v)
+
+    out = [f"{_OPTIONS.get(k, k)} {show(new[k])} (the study there: {show(was.get(k))})"
+           for k in new if k in was and was[k] != new[k]]
+    if not out and old.get("version") not in (None, __version__):
+        out.append(f"the slipreflex version {__version__} (the study there: {old.get('version')})")
+    if not out and new.get("ranges"):
+        out.append(f"the content of --ranges {new['ranges']} (same name, other constants)")
+    return out or ["the study's constants (its fingerprint)"]
+
+
+def _check_out(out: Path, config: StudyConfig) -> bool:
+    """Refuse an --out that holds another study (before any work), naming the arguments that
+    differ; record this one. True if this call created study.json (a failed start removes it)."""
+    from .. import __version__
+
     meta = out / "study.json"
     fp = config.fingerprint()
-    if meta.exists():
+    created = not os.path.lexists(meta)
+    if not created:
         try:
-            old = json.loads(meta.read_text()).get("fingerprint")
+            old = json.loads(meta.read_text())
         except (OSError, ValueError):
-            old = None
-        if old != fp:
-            raise ParameterError(f"--out {out}: holds another study (study.json fingerprint {old}, this "
-                                 f"one {fp}); choose another directory or delete it")
+            old = {}
+        old = old if isinstance(old, dict) else {}
+        if old.get("fingerprint") != fp:
+            raise ParameterError(f"--out {out}: holds another study; this one differs in "
+                                 + "; ".join(_differences(old, config))
+                                 + ". Give the same arguments to resume it, or another --out")
+        return False
     try:
         out.mkdir(parents=True, exist_ok=True)
-        meta.write_text(json.dumps({"fingerprint": fp, "config": config.to_dict()}, indent=1, sort_keys=True)
-                        + "\n")
+        from ..paths import new_file
+
+        with new_file(meta, replace=True) as fh:
+            fh.write(json.dumps({"fingerprint": fp, "version": __version__, "config": config.to_dict()},
+                                indent=1, sort_keys=True) + "\n")
     except OSError as err:
         raise ParameterError(f"--out {out}: cannot write: {err.strerror}") from None
+    return True
 
 
-def _client(workers: int | None, scheduler: str | None):
+#: Seconds a ``--scheduler`` has to answer as a Dask scheduler (its handshake) before the study
+#: gives up with one line.
+SCHEDULER_TIMEOUT_S: float = 10.0
+#: The largest first handshake a Dask scheduler sends (bytes); anything claiming more is not one.
+_HANDSHAKE_MAX = 1 << 20
+
+
+def probe_scheduler(address: str, timeout: float | None = None) -> None:
+    """Check that ``address`` answers as a Dask scheduler, within ``timeout`` seconds.
+
+    A Dask scheduler sends its handshake as soon as a client connects: a little-endian
+    8-byte length, then that many bytes starting with a small frame count. Anything else
+    (an SSH banner, an HTTP server waiting for a request, a closed port) is refused here in
+    one line, before Dask's own client would wait for minutes or try to allocate what a
+    foreign banner's first bytes claim. ``tls://`` addresses are left to Dask's client.
+
+    Raises
+    ------
+    ParameterError
+        ``--scheduler ADDRESS: ...``, naming what was wrong.
+
+    Examples
+    --------
+    >>> probe_scheduler("tcp://127.0.0.1:1", timeout=1)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    slipreflex.errors.ParameterError: --scheduler tcp://127.0.0.1:1: cannot connect (...)
+    """
+    import socket
+    import struct
+
+    timeout = SCHEDULER_TIMEOUT_S if timeout is None else timeout
+    where = f"--scheduler {address}"
+    scheme, _, rest = address.rpartition("://")
+    if scheme not in ("", "tcp"):
+        return
+    host, sep, port = rest.rpartition(":")
+    if not sep or not port.isdigit() or not host:
+        raise ParameterError(f"{where}: expected tcp://HOST:PORT")
+    host = host.strip("[]")
+    deadline = time.monotonic() + timeout
+
+    def read_exact(sock: Any, n: int) -> bytes:
+        buf = b""
+        while len(buf) < n:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise TimeoutError
+            sock.settimeout(left)
+            got = sock.recv(n - len(buf))
+            if not got:
+                raise ConnectionError("closed the connection")
+            buf += got
+        return buf
+
+    try:
+        with socket.create_connection((host, int(port)), timeout=timeout) as sock:
+            try:
+                size = struct.unpack("<Q", read_exact(sock, 8))[0]
+                if not 16 <= size <= _HANDSHAKE_MAX:
+                    raise ValueError
+                frames = struct.unpack("<Q", read_exact(sock, 8))[0]
+                if not 1 <= frames <= 64:
+                    raise ValueError
+            except TimeoutError:
+                raise ParameterError(f"{where}: no Dask handshake within {timeout:g} s (not a Dask "
+                                     f"scheduler?)") from None
+            except (ValueError, ConnectionError):
+                raise ParameterError(f"{where}: answers, but not as a Dask scheduler") from None
+    except OSError as err:
+        raise ParameterError(f"{where}: cannot connect ({err.strerror or err})") from None
+
+
+def _client(workers: int | None, scheduler: str | None, dashboard: str | None = None):
+    import logging
+    import signal
+
     from dask.distributed import Client, LocalCluster
 
     if scheduler:
+        probe_scheduler(scheduler)
         try:
-            return Client(scheduler, timeout="20s"), None, scheduler
-        except (OSError, ValueError) as err:   # unreachable, timed out, or not an address
+            return Client(scheduler, timeout=f"{SCHEDULER_TIMEOUT_S:g}s"), None, scheduler
+        except (OSError, ValueError, TimeoutError) as err:   # unreachable, timed out, or not an address
             raise ParameterError(f"--scheduler {scheduler}: cannot connect: {err}") from None
     n = int(workers or os.cpu_count() or 1)
-    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                           dashboard_address=":0")   # a free port: two studies may run side by side
+    # The workers start with SIGINT ignored (an ignored signal stays ignored in the spawned
+    # interpreter): a Ctrl-C reaches the whole process group, and only this process acts on it.
+    # Here SIGINT is blocked meanwhile (Linux keeps a blocked signal pending even while it is
+    # ignored), so a Ctrl-C during the start is acted on as soon as the cluster is up.
+    main = _main_thread()
+    if main:
+        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
+                               dashboard_address=dashboard,   # type: ignore[arg-type]  # None: no dashboard
+                               silence_logs=logging.ERROR)    # the workers' warnings are Dask's business
+    finally:
+        if main:
+            signal.signal(signal.SIGINT, old)
+            signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
     return Client(cluster), cluster, f"LocalCluster({n})"
 
 
+def _main_thread() -> bool:
+    import threading
+
+    return threading.current_thread() is threading.main_thread()
+
+
 def run_study(config: StudyConfig, out: str | Path, *, workers: int | None = None, scheduler: str | None = None,
-              progress: bool = True, on_plant: Callable[[PlantOutcome], None] | None = None) -> StudyRun:
+              progress: bool = True, on_plant: Callable[[PlantOutcome], None] | None = None,
+              dashboard: str | None = None) -> StudyRun:
     """Run every plant not yet finished in ``out``; write one Parquet part per plant as it finishes.
 
     Parameters
@@ -534,6 +670,9 @@ def run_study(config: StudyConfig, out: str | Path, *, workers: int | None = Non
         Progress on stderr.
     on_plant : callable, optional
         Called with each plant's outcome after its part is written.
+    dashboard : str, optional
+        ``HOST:PORT`` for the local cluster's Dask dashboard (default: none; it has no
+        authentication, so keep it on 127.0.0.1).
 
     Returns
     -------
@@ -551,7 +690,13 @@ def run_study(config: StudyConfig, out: str | Path, *, workers: int | None = Non
     out = Path(out)
     if workers is not None and workers < 0:
         raise ParameterError(f"--workers must be >= 0, got {workers}")
-    _check_out(out, config)
+    if workers is not None:
+        from ..validation import within
+
+        if workers != 0:
+            within("jobs", workers, "--workers")
+    out_existed = os.path.isdir(out)
+    created = _check_out(out, config)
     t0 = time.perf_counter()
     fp = config.fingerprint()
     plants = config.plant_values()
@@ -570,31 +715,77 @@ def run_study(config: StudyConfig, out: str | Path, *, workers: int | None = Non
     where = "serial"
     try:
         if todo and (workers != 0 or scheduler):
-            where = _run_dask(todo, plants, config, workers, scheduler, finished, fp)
+            where = _run_dask(todo, plants, config, workers, scheduler, finished, fp, dashboard)
         else:
             for i in todo:
                 finished(run_plant(i, plants[i], config))
+    except BaseException:
+        if created and not computed and not have:   # a failed start leaves no lock on --out
+            (out / "study.json").unlink(missing_ok=True)
+            if not out_existed:      # the folder this run made, if it is still empty
+                for folder in (out / PARTS_DIR, out):
+                    with contextlib.suppress(OSError):
+                        folder.rmdir()
+        raise
     finally:
         bar.close()
     return StudyRun(config, out, read_parts(out, fp), computed, time.perf_counter() - t0, where)
 
 
+#: Loggers hushed after a Ctrl-C (their shutdown messages are expected, not news).
+_QUIET_LOGGERS: tuple[str, ...] = ("distributed", "tornado", "asyncio")
+#: Seconds the client and the local cluster get to close after a Ctrl-C.
+_STOP_CLOSE_S: float = 3.0
+
+
 def _run_dask(todo: list[int], plants: list[dict], config: StudyConfig, workers: int | None,
-              scheduler: str | None, finished: Callable[[PlantOutcome], None], fp: str) -> str:
+              scheduler: str | None, finished: Callable[[PlantOutcome], None], fp: str,
+              dashboard: str | None = None) -> str:
+    import logging
+    import signal
+
     from dask.distributed import as_completed
 
-    client, cluster, where = _client(workers, scheduler)
+    from ..interrupts import signals_ignored
+
+    client, cluster, where = _client(workers, scheduler, dashboard)
     futures = []
+    quiet = [logging.getLogger(n) for n in _QUIET_LOGGERS]
+    levels = [q.level for q in quiet]
+
+    def hush(signum: int, frame: Any) -> None:
+        # A stop is quick and quiet: Dask's shutdown chatter (cancelled tasks, closed streams,
+        # killed workers) is not the user's business; the caller prints one line. The loggers
+        # are hushed here, before the interrupt reaches Dask's event loop.
+        for q in quiet:
+            q.setLevel(logging.CRITICAL)
+        raise KeyboardInterrupt
+
+    old = signal.signal(signal.SIGINT, hush) if _main_thread() else None
+    stopped = False
     try:
         futures = [client.submit(run_plant, i, plants[i], config, key=f"slipreflex-study-{fp}-{i}", pure=False)
                    for i in todo]
         for fut in as_completed(futures):
             finished(fut.result())
             fut.release()
+    except KeyboardInterrupt:
+        stopped = True
+        for q in quiet:
+            q.setLevel(logging.CRITICAL)
+        raise
     finally:
-        for f in futures:
-            f.cancel()
-        client.close()
-        if cluster is not None:
-            cluster.close()
+        with signals_ignored():
+            if old is not None:
+                signal.signal(signal.SIGINT, old)
+            for f in futures:
+                f.cancel()
+            # after a stop, a close that takes long is abandoned: the workers are this process's
+            # children and end with it
+            with contextlib.suppress(Exception) if stopped else contextlib.nullcontext():
+                client.close(timeout=_STOP_CLOSE_S if stopped else None)
+                if cluster is not None:
+                    cluster.close(timeout=_STOP_CLOSE_S if stopped else None)
+        for q, lv in zip(quiet, levels):
+            q.setLevel(lv)
     return where
