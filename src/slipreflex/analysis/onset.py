@@ -326,3 +326,4 @@ def episodes(t, envelope, threshold: float, window: tuple[float, float],
         if env[i0:i1 + 1].max() >= p.peak_factor * threshold:
             out.append((i0, i1))
     return out
+

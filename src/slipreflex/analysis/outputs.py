@@ -13,7 +13,7 @@ Examples
 >>> res = run_reproduce(ReproduceConfig(trials=1, bottles=("TX",), methods=("fixed",),
 ...                                     experiments=("drop",)), jobs=1, progress=False, plots=False)
 >>> sorted(write_outputs(res, tempfile.mkdtemp()))[:3]
-['bars_drop_response.png', 'bars_drop_total.png', 'grip_without_slip.png']
+['bars_drop_response.png', 'bars_drop_total.png', 'claims']
 """
 
 from __future__ import annotations
@@ -30,6 +30,7 @@ from .. import experiment_specs
 from ..interrupts import worker_signals
 from ..methods import DATH
 from . import figures as F
+from .claims import judge_run, write_claims_csv
 from .figures import TrialPlot
 from .onset import OnsetParams, accel_envelope
 from .paper import BOTTLE_ORDER
@@ -131,7 +132,8 @@ def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str 
     Returns
     -------
     dict
-        Paths by name ("results", "summary", "report", and one per figure).
+        Paths by name ("results", "summary", "report", "claims" (claims.csv: the paper's claims
+        judged, unless the run is partial or has none of the paper's cells), and one per figure).
 
     Examples
     --------
@@ -141,7 +143,7 @@ def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str 
     >>> res = run_reproduce(cfg, jobs=1, progress=False)
     >>> paths = write_outputs(res, tempfile.mkdtemp())
     >>> sorted(p for p in paths if not p.endswith(".png"))
-    ['report', 'results', 'summary']
+    ['claims', 'report', 'results', 'summary']
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -155,13 +157,15 @@ def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str 
                "and no figures were drawn nor claims judged."] if partial else []
     paper, others, notice = paper_part(result)
     notices += [notice] if notice else []
-    from .claims import judge_run  # deferred: late-bound (tests patch slipreflex.analysis.claims.judge_run)
 
+    claims = () if partial or not paper.rows else judge_run(scored(paper.rows), seed=result.config.seed,
+                                                            plant=result.config.plant)
+    if claims:
+        paths["claims"] = write_claims_csv(out / "claims.csv", claims)
     md = report_markdown(summary=paper.summary, rows=paper.rows, figures=figs,
                          setup=setup_lines(result, command), notices=notices,
                          discussion=list(discussion) if discussion is not None else discussion_text(paper),
-                         claims=() if partial or not paper.rows else judge_run(
-                             scored(paper.rows), seed=result.config.seed, plant=result.config.plant))
+                         claims=claims)
     if others:
 
         md += ("\n## Your objects (no paper values)\n\n```\n" + terminal_table(others) + "\n```\n")

@@ -1,8 +1,9 @@
 """``slipreflex reproduce``: the paper's drop and pour experiments on the simulated rig.
 
-Runs every trial (by default 10 trials x 3 bottles x 2 experiments x 4
+Runs every trial (by default 20 trials x 3 bottles x 2 experiments x 4
 methods) in parallel, analyses them as the paper does, and writes
-``results.csv``, ``summary.csv``, ``report.md`` and PNG figures to ``--out``.
+``results.csv``, ``summary.csv``, ``report.md``, ``claims.csv`` (the paper's claims, each
+with its verdict class, reason and interval) and PNG figures to ``--out``.
 
 Examples
 --------
@@ -250,8 +251,9 @@ def _write(result, outputs, command: str | None) -> dict | None:
         print(notice)
     print(terminal_table(result.summary))
     if not result.partial_note and paper.rows:
-        print(claims_terminal(judge_run(scored(paper.rows), seed=result.config.seed)))
+        print(claims_terminal(judge_run(scored(paper.rows), seed=result.config.seed, plant=result.config.plant)))
+    claims = "" if result.partial_note or not paper.rows else ", claims.csv"
     print(f"{len(result.rows)} rows from {result.trials_finished} trials in {result.wall_s:.1f} s "
           f"({result.jobs} jobs); wrote {outputs.folder}/"
-          "{results.csv, summary.csv, report.md" + ("" if result.partial_note else ", figures/") + "}")
+          "{results.csv, summary.csv, report.md" + claims + ("" if result.partial_note else ", figures/") + "}")
     return paths

@@ -159,7 +159,11 @@ UNCERTAIN: Mapping[str, UncertainConstant] = MappingProxyType({c.name: c for c i
        "paper Fig. 15 and III-B: the first pour slip 'at about 200 ml' (read as +-30 ml); the pads' mu_s "
        "is calibrated to it (Plant.calibrated)", "calibration.first_slip_ml"),
     _c("pad_mu_k_ratio", "1", round(_B["TR"].mu_k / _B["TR"].mu_s, 6), 0.6, 1.0, "uniform",
-       "estimate: kinetic friction of rubber on polymers 0-40 % below static", "bottle.mu_k/mu_s"),
+       "estimate: kinetic friction of rubber on polymers 0-40 % below static; the smooth PET bottles (TR, DK: "
+       "one polymer, one finish)", "bottle[TR,DK].mu_k/mu_s"),
+    _c("pad_mu_k_ratio_TX", "1", round(_B["TX"].mu_k / _B["TX"].mu_s, 6), 0.6, 1.0, "uniform",
+       "estimate: kinetic friction of rubber on polymers 0-40 % below static; TX's vinyl tape, drawn apart "
+       "from the smooth bottles", "bottle[TX].mu_k/mu_s"),
     _c("stribeck_velocity", "m/s", _B["TR"].stribeck_velocity_m_s, 1e-4, 1e-2, "loguniform",
        "estimate: soft polymer contacts lose their static friction over 0.1-10 mm/s",
        "bottle.stribeck_velocity_m_s"),
@@ -387,6 +391,9 @@ def plant_from_values(values: Mapping[str, float] | None = None, *,
     Returns
     -------
     Plant
+        ``plant_from_values({})`` is the built-in plant: the paper's bottles as
+        :data:`~slipreflex.sim.BOTTLES` holds them, bit for bit (a ratio
+        constant at a bottle's own ratio keeps that bottle's field).
 
     Raises
     ------
@@ -423,7 +430,10 @@ def plant_from_values(values: Mapping[str, float] | None = None, *,
             else:
                 raise ParameterError(f"{name}: unknown target {target!r}")
     for b, fld, val, ratio_of in ratios:
+        own = getattr(BOTTLES[b], fld) / getattr(BOTTLES[b], ratio_of)
         base = bottle_set[b][ratio_of] if ratio_of in bottle_set[b] else getattr(BOTTLES[b], ratio_of)
+        if base == getattr(BOTTLES[b], ratio_of) and round(own, 6) == val:
+            continue    # the bottle's own ratio on its own base: keep its own field, bit for bit
         bottle_set[b][fld] = val * base
     defaults = {"hand": HandParams, "slip_sensor": SlipSensorParams, "imu": ImuParams,
                 "tactile": TactileParams, "flow": FlowParams, "physics": PhysicsParams, "water": WaterParams}

@@ -2,13 +2,15 @@
 
 One *plant* is one draw of the uncertain constants. :func:`run_plant`
 builds it (:func:`slipreflex.sim.uncertain.plant_from_values`), calibrates
-its pads so the open-loop first pour slip comes at the paper's 200 ml
+its pads so the open-loop first pour slip, as the accelerometer recipe observes it, comes at
+its drawn volume (the paper's "about 200 ml")
 (:func:`slipreflex.sim.calibration.calibrate_bottle`, per bottle), runs the
 reproduce grid on it (same master seed for every plant: every plant faces
 the same trials, so plants differ by physics only) and the characterization
-scan with its slip sensor, and judges the paper's claims
-(:func:`slipreflex.analysis.claims.judge`). It never raises: an error is
-recorded with the plant.
+scans with its slip sensor (its own texture seeds), and judges the paper's
+claims (:func:`slipreflex.analysis.claims.judge`). A plant whose calibrated
+observed first slip leaves the paper's band is rejected (counted apart, no
+trials). It never raises: an error is recorded with the plant.
 
 :func:`run_study` sends the plants to a ``dask.distributed`` cluster (a
 ``LocalCluster`` of single-threaded worker processes by default, or the
@@ -50,7 +52,10 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
+import numpy as np
+
 from .. import __version__, methods
+from ..analysis.claims import judge
 from ..errors import ParameterError
 from ..experiments import BOTTLE_NAMES, DEFAULT_SEED, EXPERIMENTS, ReproduceConfig
 from ..interrupts import signals_ignored
@@ -60,8 +65,8 @@ from ..thresholds import calibrate
 from ..validation import within
 from .design import DESIGNS, draw_design
 
-__all__ = ["StudyConfig", "PlantOutcome", "run_plant", "run_study", "StudyRun", "PARTS_DIR",
-           "read_parts", "part_path", "DEFAULT_PLANTS", "DEFAULT_TRIALS", "probe_scheduler",
+__all__ = ["StudyConfig", "PlantOutcome", "run_plant", "run_study", "StudyRun", "PARTS_DIR", "STUDY_SCAN_BASE",
+           "scan_seed_base", "read_parts", "part_path", "DEFAULT_PLANTS", "DEFAULT_TRIALS", "probe_scheduler",
            "SCHEDULER_TIMEOUT_S"]
 
 #: Plants of the default study (a power of two keeps the Sobol' design balanced; see docs/study.md).
@@ -104,7 +109,10 @@ class StudyConfig:
     calibrate : bool
         Calibrate each plant's pad friction to the paper's open-loop first slip (200 ml).
     scan : bool
-        Run each plant's characterization scan (claims 1-2).
+        Run each plant's characterization scans (claims 1-2).
+    scan_seeds : int
+        Texture seeds of each plant's scans (its own seeds: :func:`scan_seed_base`); the
+        study judges claims 1-2 on all plants' scans pooled (``plants x scan_seeds`` draws).
 
     Examples
     --------
@@ -124,6 +132,7 @@ class StudyConfig:
     ranges: str | None = None
     calibrate: bool = True
     scan: bool = True
+    scan_seeds: int = 4
     _table: Any = field(default=None, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -133,6 +142,8 @@ class StudyConfig:
             raise ParameterError(f"design: unknown {self.design!r} (known: {', '.join(DESIGNS)})")
 
         object.__setattr__(self, "plants", within("plants", self.plants))
+        if isinstance(self.scan_seeds, bool) or not isinstance(self.scan_seeds, int) or self.scan_seeds < 1:
+            raise ParameterError(f"scan_seeds must be an integer >= 1, got {self.scan_seeds!r}")
         if self.ranges is not None:
             object.__setattr__(self, "ranges", str(self.ranges))
         table = UNCERTAIN if self.ranges is None else load_ranges(self.ranges)
@@ -194,7 +205,7 @@ class StudyConfig:
 
         rc = self.reproduce_config()
         doc = {"version": __version__, "plants": self.plants, "design": self.design, "seed": self.seed,
-               "calibrate": self.calibrate, "scan": self.scan,
+               "calibrate": self.calibrate, "scan": self.scan, "scan_seeds": self.scan_seeds,
                "grid": {f.name: repr(getattr(rc, f.name)) for f in dataclasses.fields(rc) if f.name != "plant"},
                "table": {k: [c.low, c.high, c.nominal, c.distribution] for k, c in self.table.items()}}
         return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()[:20]
@@ -224,14 +235,18 @@ class PlantOutcome:
     rows : list of dict
         One per trial and slip (constants and calibration as columns); empty on error.
     claims : list of (int, str, str)
-        (claim number, verdict, numbers); empty on error.
+        (claim number, verdict, reason); empty on error or when the plant was rejected.
     error : str
         ``""``, or the exception (type and message) that stopped the plant.
     trials : int
         Closed-loop trials it ran.
     calibration : dict
-        What its calibration found (calibrated ``mu_s`` and first slip per
-        bottle, the calibration's note); empty without calibration.
+        What its calibration found (calibrated ``mu_s``, observed and true first
+        slip per bottle, the calibration's note, ``rejected``: why its observed
+        first slip leaves the paper's band, or ``""``); empty without calibration.
+    scan : dict
+        Its scan ensemble's numbers (:class:`~slipreflex.sim.scan.ScanEnsemble` fields as
+        lists); empty without scans.
 
     Examples
     --------
@@ -246,6 +261,23 @@ class PlantOutcome:
     error: str
     trials: int
     calibration: dict = field(default_factory=dict)
+    scan: dict = field(default_factory=dict)
+
+
+#: First texture seed of the study's scans; plant ``i`` scans seeds ``base + i * scan_seeds`` onwards.
+STUDY_SCAN_BASE: int = 1_000_000_000
+
+
+def scan_seed_base(index: int, config: StudyConfig) -> int:
+    """First texture seed of plant ``index``'s scans: every plant gets its own.
+
+    Examples
+    --------
+    >>> cfg = StudyConfig(plants=2)
+    >>> scan_seed_base(1, cfg) - scan_seed_base(0, cfg) == cfg.scan_seeds
+    True
+    """
+    return STUDY_SCAN_BASE + int(index) * config.scan_seeds
 
 
 def _calibrated(plant: Any, table: Mapping) -> tuple[Any, dict[str, Any]]:
@@ -270,12 +302,19 @@ def _calibrated(plant: Any, table: Mapping) -> tuple[Any, dict[str, Any]]:
         try:
             cals[name] = calibrate_bottle(bottle, plant.first_slip_ml, rig_kwargs=kw, seeds=CALIBRATION_SEEDS)
         except ParameterError:
-            cals[name] = calibrate_bottle(bottle, plant.first_slip_ml, rig_kwargs=kw, seeds=DEFAULT_SEEDS,
-                                          band_ml=(c.low, c.high))
+            try:
+                cals[name] = calibrate_bottle(bottle, plant.first_slip_ml, rig_kwargs=kw, seeds=DEFAULT_SEEDS,
+                                              band_ml=(c.low, c.high))
+            except ParameterError as err:   # no friction meets the paper's observed fact: counted apart
+                return plant, {"calibration_note": "", "rejected": f"{err}"}
     plant = replace(plant, bottles=MappingProxyType({n: k.bottle for n, k in cals.items()}))
     extra: dict[str, Any] = {f"calibrated_mu_s_{n}": float(k.mu_s) for n, k in cals.items()}
     extra.update({f"calibrated_first_slip_ml_{n}": float(k.first_slip_ml) for n, k in cals.items()})
+    extra.update({f"true_first_slip_ml_{n}": float(k.true_first_slip_ml) for n, k in cals.items()})
     extra["calibration_note"] = "; ".join(k.note for k in cals.values() if k.note)
+    out = [f"{n} {k.first_slip_ml:.0f} ml" for n, k in cals.items() if not c.low <= k.first_slip_ml <= c.high]
+    extra["rejected"] = (f"observed first slip outside the paper's {c.low:g}-{c.high:g} ml: " + ", ".join(out)
+                         if out else "")
     return plant, extra
 
 
@@ -288,13 +327,11 @@ def run_plant(index: int, values: Mapping[str, float], config: StudyConfig) -> P
     ...                   calibrate=False, scan=False)
     >>> out = run_plant(0, cfg.plant_values()[0], cfg)
     >>> out.error, len(out.rows), out.claims[2][1]
-    ('', 1, 'not testable here')
+    ('', 1, 'not-decidable')
     """
-    from ..analysis.claims import (  # deferred: late-bound (tests patch slipreflex.analysis.claims.judge_run)
-        judge,
-        judge_run,
-    )
+
     from ..experiments import run_trial  # deferred: late-bound (tests patch slipreflex.experiments.run_trial)
+    from ..sim.scan import scan_ensemble  # deferred: heavy (llvmlite, numba, scipy)
     from ..sim.uncertain import plant_from_values  # deferred: heavy (numba kernels)
 
     values = {k: float(v) for k, v in values.items()}
@@ -303,20 +340,30 @@ def run_plant(index: int, values: Mapping[str, float], config: StudyConfig) -> P
         extra: dict[str, Any] = {}
         if config.calibrate:
             plant, extra = _calibrated(plant, config.table)
+            if extra["rejected"]:    # counted apart: it contradicts the paper's open-loop fact
+                return PlantOutcome(index, values, [{"plant": index, **values, **extra, "error": ""}], [], "", 0,
+                                    extra)
         rc = config.reproduce_config(plant)
 
         thresholds = calibrate(rc) if set(rc.methods) & set(methods.calibrated()) else {}
         rows = []
         for cell in rc.cells():
             rows += run_trial(cell, rc, thresholds)[0]
-        judged = judge_run(rows, seed=config.seed, plant=plant) if config.scan else judge(rows)
-        verdicts = [(r.number, r.verdict, r.numbers) for r in judged]
+        ens = scan_ensemble(config.scan_seeds, base=scan_seed_base(index, config),
+                            sensor=plant.slip_sensor) if config.scan else None
+        judged = judge(rows, ens, plant)
+        verdicts = [(r.number, r.verdict, r.reason) for r in judged]
         out_rows = [{"plant": index, **values, **extra, "error": "", **dict(r)} for r in rows]
-        return PlantOutcome(index, values, out_rows, verdicts, "", len(rc.cells()), extra)
+        scan = {} if ens is None else {k: np.asarray(getattr(ens, k)).tolist() for k in _SCAN_FIELDS}
+        return PlantOutcome(index, values, out_rows, verdicts, "", len(rc.cells()), extra, scan)
     except Exception as err:   # a plant that raises is recorded, the study goes on
         last = traceback.extract_tb(err.__traceback__)[-1]
         msg = f"{type(err).__name__}: {err} ({Path(last.filename).name}:{last.lineno})"
         return PlantOutcome(index, values, [{"plant": index, **values, "error": msg}], [], msg, 0)
+
+
+_SCAN_FIELDS = ("seeds", "white_lo", "white_hi", "black_lo", "black_hi", "fixed_gap", "dath_gap", "fixed_spikes",
+                "dath_spikes")
 
 
 def part_path(out: Path, index: int) -> Path:
@@ -346,7 +393,7 @@ def write_part(out: Path, outcome: PlantOutcome, fingerprint: str) -> Path:
     table = _arrow_table(outcome.rows)
     meta = {"fingerprint": fingerprint, "plant": outcome.plant, "error": outcome.error,
             "claims": outcome.claims, "trials": outcome.trials, "values": outcome.values,
-            "calibration": outcome.calibration}
+            "calibration": outcome.calibration, "scan": outcome.scan}
     table = table.replace_schema_metadata({_META_KEY: json.dumps(meta).encode()})
     path = part_path(out, outcome.plant)
     path.parent.mkdir(parents=True, exist_ok=True)
