@@ -155,7 +155,9 @@ def test_run_dath_with_the_daq_and_the_ability_hand(tmp_path, capsys):
     from slipreflex.sim import Pour
 
     # a fast pour: past the first slip (200 ml) about 2.5 s after it starts
-    dev, grasp = _virtual(tmp_path, Pour(rate_l_min=6.0, volume_ml=300.0), schedule=[("pour", 0.5)])
+    # the pour's clock starts at run's first packet, so a slow start under load cannot miss it
+    dev, grasp = _virtual(tmp_path, Pour(rate_l_min=6.0, volume_ml=300.0), schedule=[("pour", 0.5)],
+                          schedule_from="connect")
     with dev:
         code = main(["run", "--daq", dev.daq_path, "--hand", dev.hand_path, "--hand-type", "ability",
                      "--p0", grasp.p0_text(), "--duration", "4.0", "--record", str(path)])
