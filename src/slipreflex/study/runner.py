@@ -778,6 +778,7 @@ def _run_dask(todo: list[int], plants: list[dict], config: StudyConfig, workers:
                 client.close(timeout=_STOP_CLOSE_S if stopped else None)
                 if cluster is not None:
                     cluster.close(timeout=_STOP_CLOSE_S if stopped else None)
-        for q, lv in zip(quiet, levels):
-            q.setLevel(lv)
+        if not stopped:  # after a stop the event loop may still report closed streams: stay hushed
+            for q, lv in zip(quiet, levels):
+                q.setLevel(lv)
     return where
