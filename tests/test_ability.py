@@ -119,7 +119,6 @@ def test_run_nmsd_on_the_ability_hands_touch_sensors_over_the_virtual_hand(tmp_p
     """``run --hand-type ability --method nmsd``: no DAQ, the fingertip is the tactile source."""
     from slipreflex.cli import main
     from slipreflex.recording import read_recording
-
     from slipreflex.sim import Drop
 
     path = tmp_path / "nmsd.mcap"
