@@ -9,7 +9,8 @@ Usage::
 The table goes between the README's two markers; every value comes from the run's
 summary (DATH unless the row says otherwise), the paper's column from
 :mod:`slipreflex.analysis.paper`, and the open-loop first slip from
-:func:`slipreflex.sim.calibration.first_slip_ml` on the paper's bottles.
+:func:`slipreflex.sim.calibration.first_slip_ml` on the paper's bottles. The run's
+``claims.csv`` beside the summary gives the claims' verdict table between its own markers.
 """
 
 from __future__ import annotations
@@ -20,6 +21,20 @@ from pathlib import Path
 
 README = Path(__file__).resolve().parent.parent / "README.md"
 BEGIN, END = "<!-- results table begins -->", "<!-- results table ends -->"
+CLAIMS_BEGIN, CLAIMS_END = "<!-- claims table begins -->", "<!-- claims table ends -->"
+
+
+def claims_table(claims: list[dict]) -> str:
+    """The claims' verdicts as a markdown table (claim, verdict, value [interval]) from a claims.csv's rows."""
+    def num(x: str) -> str:
+        return f"{float(x):.3g}" if x not in ("", "nan") else ""
+
+    lines = ["| # | claim | verdict | value [95 % interval] |", "|---|---|---|---|"]
+    for r in claims:
+        v = num(r["value"])
+        iv = f" [{num(r['low'])}, {num(r['high'])}]" if num(r["low"]) else ""
+        lines.append(f"| {r['claim']} | {r['text']} | {r['verdict']} | {v + iv or '-'} |")
+    return "\n".join(lines)
 
 
 def _cells(summary: list[dict], experiment: str, method: str) -> dict[str, dict]:
@@ -75,13 +90,17 @@ def main(argv: list[str]) -> int:
     with open(args[0], newline="") as fh:
         summary = list(csv.DictReader(line for line in fh if not line.startswith("#")))
     text = table(summary, {b: first_slip_ml(BOTTLES[b]) for b in BOTTLES})
+    claims_csv = Path(args[0]).parent / "claims.csv"
+    claims = claims_table(list(csv.DictReader(claims_csv.open(newline="")))) if claims_csv.is_file() else None
     if "--write" not in argv:
-        print(text)
+        print(text + ("\n\n" + claims if claims else ""))
         return 0
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     from splice_report import replace_marked
 
     error = replace_marked(README, BEGIN, END, text)
+    if not error and claims:
+        error = replace_marked(README, CLAIMS_BEGIN, CLAIMS_END, claims)
     if error:
         print(f"readme_results: {error}", file=sys.stderr)
         return 2

@@ -13,7 +13,7 @@ docs quote in one commit. Steps:
 
 1. ``slipreflex reproduce --jobs 2 --out /tmp/repro --no-progress`` (the default run; the
    command docs/reproduce.md records, so a rerun changes only what the code changes);
-2. ``scripts/readme_results.py SUMMARY --write``: README's results table;
+2. ``scripts/readme_results.py SUMMARY --write``: README's results and claims tables;
 3. ``scripts/splice_report.py REPORT``: the run's report in docs/reproduce.md;
 4. ``scripts/benchmark_table.py --write``: the real-data benchmark tables of README.md and
    docs/benchmark.md.
@@ -33,7 +33,7 @@ SCRIPTS = ROOT / "scripts"
 STEPS: list[tuple[str, tuple[str, ...], list[str]]] = [
     ("reproduce", (), [sys.executable, "-m", "slipreflex", "reproduce", "--jobs", "{jobs}", "--out", "{out}",
                        "--no-progress"]),
-    ("README results table", ("results table",),
+    ("README results and claims tables", ("results table", "claims table"),
      [sys.executable, str(SCRIPTS / "readme_results.py"), "{out}/summary.csv", "--write"]),
     ("docs/reproduce.md report", ("report.md",),
      [sys.executable, str(SCRIPTS / "splice_report.py"), "{out}/report.md"]),

@@ -29,9 +29,9 @@ from slipreflex.sim import PAPER_DROP, PAPER_POUR, HandParams
 def test_config_defaults_come_from_the_simulator_and_validate():
     c = ReproduceConfig()
     assert (c.trials, c.bottles, c.methods, c.experiments) == (
-        10, ("TR", "DK", "TX"), ("dath", "fixed", "nmsd", "swt"), ("drop", "pour"))
+        20, ("TR", "DK", "TX"), ("dath", "fixed", "nmsd", "swt"), ("drop", "pour"))
     assert c.drop == PAPER_DROP and c.pour == PAPER_POUR
-    assert len(c.cells()) == 240
+    assert len(c.cells()) == 480
     assert ReproduceConfig(drop_mass_kg=0.02, pour_rate_l_min=2.0).pour.rate_l_min == 2.0
     for bad in (dict(trials=0), dict(methods=("dath", "x")), dict(bottles=()), dict(seed=-1),
                 dict(rest_s=0.1), dict(drop_mass_kg=-1.0), dict(experiments=("drop", "drop")),

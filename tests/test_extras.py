@@ -14,6 +14,9 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 STUDY_ONLY = ("dask", "distributed", "pyarrow", "SALib")
+# What `import slipreflex` alone must not load: the study extra and every heavy or device-only
+# dependency its modules import inside functions (marked `# deferred:`).
+NOT_ON_IMPORT = STUDY_ONLY + ("matplotlib", "pywt", "foxglove", "pylsl")
 
 # Import every module of the package (the study's too: its heavy imports sit inside its
 # functions), build the CLI and run `detect` on the shipped example; then list what loaded.
@@ -56,6 +59,14 @@ def test_the_study_packages_are_an_extra_not_a_dependency():
     for name in ("dask", "pyarrow", "salib"):
         assert name not in base, f"{name} is still a base dependency"
         assert name in study, f"{name} is missing from the study extra"
+
+
+def test_import_slipreflex_loads_no_heavy_or_optional_package():
+    code = ("import sys, slipreflex\n"
+            f"print('LOADED:', ' '.join(sorted({{m.split('.')[0] for m in sys.modules}} & set({NOT_ON_IMPORT!r}))))")
+    res = _python(code)
+    assert res.returncode == 0, res.stderr
+    assert res.stdout.strip() == "LOADED:", f"`import slipreflex` loaded {res.stdout.strip()}"
 
 
 @pytest.mark.slow

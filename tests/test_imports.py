@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import ast
 import functools
+import re
 from pathlib import Path
 
 import pytest
@@ -101,6 +102,53 @@ def _cycle(edges: dict[str, dict[str, str]]) -> list[str] | None:
         if v not in state and (found := dfs(v)):
             return found
     return None
+
+
+# Why an import may sit inside a function, as a trailing comment on the statement: it keeps a heavy or
+# optional dependency out of `import slipreflex`; or tests patch the name at its source module (to
+# fix later: patch where it is used); or moving it up would close a cycle (to fix later).
+DEFERRED = re.compile(r"#\s*deferred: (heavy|optional extra|late-bound|would close a cycle) \(?\S")
+
+
+def _unmarked_function_imports(source: str, where: str) -> list[str]:
+    """``"where:line: statement"`` for each import inside a def or lambda without a ``# deferred:`` reason."""
+    lines = source.splitlines()
+    found: list[str] = []
+
+    def visit(node: ast.AST, inside: bool) -> None:
+        for child in ast.iter_child_nodes(node):
+            if isinstance(child, ast.If) and "TYPE_CHECKING" in ast.unparse(child.test):
+                continue
+            if inside and isinstance(child, ast.Import | ast.ImportFrom):
+                text = "\n".join(lines[child.lineno - 1:child.end_lineno])
+                if not DEFERRED.search(text):
+                    found.append(f"{where}:{child.lineno}: {ast.unparse(child)}")
+            visit(child, inside or isinstance(child, ast.FunctionDef | ast.AsyncFunctionDef | ast.Lambda))
+
+    visit(ast.parse(source), False)
+    return found
+
+
+def test_every_function_level_import_says_why_it_is_deferred():
+    unmarked = [hit for name, path in sorted(MODULES.items())
+                for hit in _unmarked_function_imports(path.read_text(), str(path.relative_to(SRC)))]
+    assert not unmarked, ("imports inside functions must sit at the module top unless marked "
+                          "'# deferred: heavy (NAME)' or '# deferred: optional extra (NAME)':\n" + "\n".join(unmarked))
+
+
+def test_the_marker_check_finds_an_unmarked_import():
+    source = (
+        "import json\n"
+        "def f():\n"
+        "    import pywt  # deferred: heavy (pywt)\n"
+        "    from .paths import (  # deferred: optional extra (study: pyarrow)\n"
+        "        new_file)\n"
+        "    import csv\n"
+        "    g = lambda: __import__('x')\n"
+        "    class C:\n"
+        "        def m(self):\n"
+        "            from . import hardware  # just because\n")
+    assert _unmarked_function_imports(source, "m.py") == ["m.py:6: import csv", "m.py:10: from . import hardware"]
 
 
 def test_the_graph_is_read_from_every_module():

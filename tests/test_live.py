@@ -254,7 +254,8 @@ def test_virtual_rig_live_publishes_the_rigs_truth(tmp_path):
 
     _foxglove()
     proc = subprocess.Popen([sys.executable, "-m", "slipreflex", "virtual-rig", "--live", "127.0.0.1:0",
-                             "--duration", "4", "--schedule", "drop@0.5"],
+                             "--duration", "4", "--schedule", "drop@0.5",
+                             "--schedule-from", "start"],  # no run connects: count from the rig's start
                             stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         url = None

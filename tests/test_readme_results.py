@@ -27,3 +27,15 @@ def test_table_reads_dath_cells_and_pools_success_over_bottles():
 def test_readme_holds_each_marker_once():
     readme = (ROOT / "README.md").read_text()
     assert readme.count(SCRIPT["BEGIN"]) == 1 and readme.count(SCRIPT["END"]) == 1
+
+
+def test_claims_table_from_a_claims_csv():
+    rows = [{"claim": "3", "text": "Drop: DATH faster", "verdict": "fails-definition", "value": "0.0", "low": "0.0",
+             "high": "0.0"},
+            {"claim": "8", "text": "under 85 ms", "verdict": "fails-paper", "value": "", "low": "", "high": ""},
+            {"claim": "5", "text": "twice", "verdict": "fails-plant", "value": "0.4213", "low": "0.28", "high": "0.65"}]
+    text = SCRIPT["claims_table"](rows)
+    assert "| 3 | Drop: DATH faster | fails-definition | 0 [0, 0] |" in text
+    assert "| 8 | under 85 ms | fails-paper | - |" in text and "| 0.421 [0.28, 0.65] |" in text
+    readme = (ROOT / "README.md").read_text()
+    assert readme.count(SCRIPT["CLAIMS_BEGIN"]) == 1 and readme.count(SCRIPT["CLAIMS_END"]) == 1

@@ -44,4 +44,4 @@ def test_the_dry_run_lists_the_steps_in_order():
     assert res.returncode == 0, res.stderr
     lines = res.stdout.splitlines()
     assert [line.split(":")[1].strip() for line in lines] == [name for name, _, _ in regenerate.STEPS]
-    assert "--jobs 2" in lines[0] and "(writes: results table)" in lines[1]
+    assert "--jobs 2" in lines[0] and "(writes: results table, claims table)" in lines[1]

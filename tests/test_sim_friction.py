@@ -129,8 +129,10 @@ def test_capacity_under_slow_loading_is_pads_static_plus_cuff_kinetic():
 
 
 def test_the_paper_bottles_are_calibrated_to_the_first_pour_slip():
+    # observed as the paper's instruments see it: within the calibration's 2 % plus one flow-sensor pulse
     for name in ("TR", "TX"):
-        assert first_slip_ml(BOTTLES[name]) == pytest.approx(PAPER_FIRST_SLIP_ML, abs=3.0)
+        assert first_slip_ml(BOTTLES[name]) == pytest.approx(PAPER_FIRST_SLIP_ML, abs=4.0 + 1000.0 / 450.0)
+        assert first_slip_ml(BOTTLES[name], observed=False) < first_slip_ml(BOTTLES[name])
     # the stored constant is what the calibration computes (objects.PAPER_PAD_MU_S), to the iteration's
     # tolerance (1 ml, about 0.005 in mu_s)
     c = calibrate_bottle(BOTTLES["DK"])
@@ -141,7 +143,8 @@ def test_the_paper_bottles_are_calibrated_to_the_first_pour_slip():
 def test_a_different_plant_recalibrates_instead_of_moving_the_volume():
     soft = {"hand": HandParams(latency_s=0.025, pad_normal_stiffness_n_m=1500.0)}
     coulomb = dataclasses.replace(BOTTLES["TR"], friction_law="coulomb", cuff_friction_law="coulomb")
-    for bottle, kw, tol in ((BOTTLES["TR"], soft, 1.0), (coulomb, None, 5.0)):
+    # the observed first slip moves in flow-sensor pulses (2.2 ml): within the calibration's 2 %
+    for bottle, kw, tol in ((BOTTLES["TR"], soft, 0.02 * 250.0), (coulomb, None, 0.02 * 250.0)):
         c = calibrate_bottle(bottle, 250.0, rig_kwargs=kw, seeds=(0,))
         assert first_slip_ml(c.bottle, rig_kwargs=kw, seeds=(0,)) == pytest.approx(250.0, abs=tol)
         assert c.mu_k / c.mu_s == pytest.approx(bottle.mu_k / bottle.mu_s)
@@ -161,7 +164,9 @@ def test_calibrate_command_on_paper_and_user_bottles(tmp_path, capsys):
     assert main(["calibrate", "--bottles", "TR"]) == 0
     line = [s for s in capsys.readouterr().out.splitlines() if s.startswith("TR")][0]
     tr = BOTTLES["TR"]
-    assert float(line.split()[1]) == pytest.approx(PAPER_FIRST_SLIP_ML, abs=0.5)
+    # observed (the calibrated one) within the calibration's tolerance; the true onset comes earlier
+    assert float(line.split()[1]) == pytest.approx(PAPER_FIRST_SLIP_ML, abs=0.02 * PAPER_FIRST_SLIP_ML)
+    assert float(line.split()[3]) < float(line.split()[1])
     assert f"{tr.mu_s:5.3f}/{tr.mu_k:5.3f}" in line and "built-in, calibrated to 200 ml" in line
     f = tmp_path / "jar.toml"
     f.write_text('[bottles.JAR]\nmass_kg = 0.25\ndiameter_m = 0.07\nmu_s = 0.4\nmu_k = 0.3\nsurface = "TX"\n')
@@ -169,6 +174,6 @@ def test_calibrate_command_on_paper_and_user_bottles(tmp_path, capsys):
     assert "falls at grasp" in capsys.readouterr().out          # kept: 0.8 N cannot hold 250 g at mu 0.4
     assert main(["calibrate", "--objects", str(f), "--bottles", "JAR", "--first-slip-ml", "150"]) == 0
     line = [s for s in capsys.readouterr().out.splitlines() if s.startswith("JAR")][0]
-    assert float(line.split()[1]) == pytest.approx(150.0, abs=1.0)
+    assert float(line.split()[1]) == pytest.approx(150.0, abs=0.02 * 150.0)
     assert main(["calibrate", "--bottles", "NOPE"]) == 2
     assert "unknown bottle 'NOPE'" in capsys.readouterr().err

@@ -116,9 +116,10 @@ def test_tactile_rates_shape_and_force(fs):
     n_c = rig._grasp.force_n
     # the sum reads the contact force, a little high: taxels clip their noise at 0 N
     assert n_c - 0.01 < total[rest].mean() < n_c + 0.08
-    # a slipping contact produces transients well above the resting frame-to-frame changes
+    # a slipping contact produces transients above the resting frame-to-frame changes (1.5-2.6 times on
+    # seeds 0-7 since the pads were calibrated to the observed first slip: less friction, a softer release)
     d = np.abs(np.diff(frames, axis=0)).max(axis=(1, 2))
-    assert d[t[1:] > rig.onsets[-1] - 0.01].max() > 2 * d[rest[1:]].max()
+    assert d[t[1:] > rig.onsets[-1] - 0.01].max() > 1.4 * d[rest[1:]].max()
 
 
 def test_flow_pulses_per_litre():
@@ -156,7 +157,7 @@ def _squeeze(hand, sensor=None):
     rig = Rig("TX", seed=6, hand=hand, slip_sensor=sensor)
     rig.grasp()
     pos = rig.hand.positions()[hw.SLIP_FINGER]
-    rig.hand.set_positions({f: pos + 40 for f in hw.TRIPOD})
+    rig.hand.set_positions({f: pos + 80 for f in hw.TRIPOD})
     tr = simulate_open_loop(rig, 1.0)
     assert tr.daq.normal_force[-1] > 3 * tr.daq.normal_force[0]
     assert np.ptp(tr.daq.displacement) < 1e-9            # the bottle does not move
@@ -168,7 +169,8 @@ def test_squeezing_moves_the_sensor_spot_only_through_the_fingertip_own_motion()
 
     # without the fingertip's rolling and the gap's opening the signal does not move when nothing slides ...
     assert _squeeze(HandParams(spot_travel_per_unit_m=0.0), SlipSensorParams(gap_dent_fraction=0.0)) == 0
-    # ... with the rolling, closing 40 units sweeps the spot ~0.7 mm over the texture: the chain sees its own action
+    # ... with the rolling, closing 80 units sweeps the spot about 1.5 mm over the texture: the chain sees its own
+    # action (through the spot's 0.8 mm blur, a 0.76 mm sweep of 40 units no longer shows)
     assert _squeeze(HandParams(), SlipSensorParams(gap_dent_fraction=0.0)) > 0
 
 

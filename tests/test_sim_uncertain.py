@@ -54,7 +54,7 @@ def test_bottle_selectors_and_ratio_targets():
 
     table = {**UNCERTAIN, "tx_only": UncertainConstant("tx_only", "1", 1.0, 0.5, 1.5, "uniform", "test",
                                                        ("bottle[TX].mu_s",))}
-    p = plant_from_values({"tx_only": 1.2, "pad_mu_k_ratio": 0.5}, table=table)
+    p = plant_from_values({"tx_only": 1.2, "pad_mu_k_ratio": 0.5, "pad_mu_k_ratio_TX": 0.5}, table=table)
     assert p.bottles["TX"].mu_s == 1.2 and p.bottles["TR"].mu_s == BOTTLES["TR"].mu_s
     assert p.bottles["TX"].mu_k == pytest.approx(0.6)
     assert p.bottles["TR"].mu_k == pytest.approx(0.5 * BOTTLES["TR"].mu_s)
@@ -66,7 +66,8 @@ def test_first_slip_target_recalibrates_the_pads():
     c = p.calibrated(seeds=(0,))
     from slipreflex.sim.calibration import first_slip_ml
 
-    assert first_slip_ml(c.bottles["DK"], rig_kwargs=c.rig_kwargs(), seeds=(0,)) == pytest.approx(230.0, abs=1.0)
+    # the observed first slip moves in flow-sensor pulses (2.2 ml): within the calibration's 2 %
+    assert first_slip_ml(c.bottles["DK"], rig_kwargs=c.rig_kwargs(), seeds=(0,)) == pytest.approx(230.0, abs=4.6)
 
 
 def test_plant_builds_rigs_with_its_parameters():
@@ -154,3 +155,24 @@ def test_a_reproduction_on_a_drawn_plant_runs_in_worker_processes_as_in_one():
     one = run_reproduce(cfg, jobs=1, progress=False, plots=False)
     two = run_reproduce(cfg, jobs=2, progress=False, plots=False)
     assert [repr(r) for r in one.rows] == [repr(r) for r in two.rows] and one.rows
+
+
+@pytest.mark.slow
+def test_the_nominal_plant_is_the_built_in_plant_bit_for_bit():
+    from slipreflex.experiments import ReproduceConfig, run_reproduce
+    from slipreflex.sim import BOTTLES
+
+    p = plant_from_values({})
+    assert dict(p.bottles) == dict(BOTTLES)
+    assert p.bottles["TX"].mu_k / p.bottles["TX"].mu_s != p.bottles["TR"].mu_k / p.bottles["TR"].mu_s
+    kw = dict(trials=1, bottles=("TX",), methods=("dath",), experiments=("drop",))
+    a = run_reproduce(ReproduceConfig(**kw), jobs=1, progress=False, plots=False).rows
+    b = run_reproduce(ReproduceConfig(**kw, plant=p), jobs=1, progress=False, plots=False).rows
+    assert [repr(dict(r)) for r in a] == [repr(dict(r)) for r in b]        # NaN-aware: same bits
+
+
+def test_the_tape_s_pad_friction_is_drawn_apart_from_the_smooth_bottles():
+    q = plant_from_values({"pad_mu_k_ratio": 0.9, "pad_mu_k_ratio_TX": 0.65})
+    ratio = {b: q.bottles[b].mu_k / q.bottles[b].mu_s for b in q.bottles}
+    assert ratio["TR"] == pytest.approx(0.9) and ratio["DK"] == pytest.approx(0.9)
+    assert ratio["TX"] == pytest.approx(0.65)

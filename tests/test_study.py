@@ -150,21 +150,34 @@ def test_a_scheduler_and_one_worker_give_the_same_rows(tmp_path):
 
 
 def test_claim_fractions_and_wilson():
+    from scipy.stats import binomtest
+
     lo, hi = wilson(5, 10)
-    assert lo < 0.5 < hi and hi - 0.5 == pytest.approx(0.5 - lo)
+    assert (lo, hi) == pytest.approx(tuple(binomtest(5, 10).proportion_ci(method="wilson")))
     assert wilson(0, 10)[0] == 0.0 and wilson(10, 10)[1] == 1.0
-    plants = [{"error": "", "claim_3": v} for v in ["holds"] * 3 + ["fails", "not testable here"]]
+    plants = [{"error": "", "claim_3": v} for v in ["holds"] * 3 + ["fails-plant", "unresolved"]]
     plants.append({"error": "ValueError: x"})
+    plants.append({"error": "", "rejected": "observed first slip outside 170-230 ml: TR 240 ml", "claim_3": "holds"})
     r = claim_fractions(plants)[2]
-    assert (r["plants"], r["errors"], r["holds"], r["fails"], r["not_testable"]) == (5, 1, 3, 1, 1)
-    assert r["holds_fraction"] == 0.6 and r["not_testable_fraction"] == 0.2
+    got = (r["plants"], r["errors"], r["rejected"], r["holds"], r["fails_plant"], r["unresolved"])
+    assert got == (5, 1, 1, 3, 1, 1)
+    assert r["value"] == 0.6 and r["verdict"] == "unresolved" and "3 of 5 plants" in r["reason"]
+
+
+def test_the_study_verdict_of_a_claim_the_equations_decide_is_theirs():
+    plants = [{"error": "", "claim_3": "fails-definition", "reason_3": "same encoder"} for _ in range(6)]
+    plants += [{"error": "", "claim_3": "holds", "reason_3": ""}]
+    r = claim_fractions(plants)[2]
+    assert r["verdict"] == "fails-definition" and r["reason"] == "6 of 7 plants: same encoder"
+    many = [{"error": "", "claim_5": "fails-plant"} for _ in range(30)] + [{"error": "", "claim_5": "holds"}]
+    assert claim_fractions(many)[4]["verdict"] == "fails-plant"
 
 
 def test_sensitivity_finds_the_deciding_constant_with_sobol_indices():
     design = draw_design(UNCERTAIN, 8 * (len(varying(UNCERTAIN)) + 2), "saltelli", seed=1)
     mid = UNCERTAIN["hand_latency"]
     cut = (mid.low + mid.high) / 2
-    plants = [{**v, "error": "", "claim_8": HOLDS if v["hand_latency"] < cut else "fails"} for v in design]
+    plants = [{**v, "error": "", "claim_8": HOLDS if v["hand_latency"] < cut else "fails-plant"} for v in design]
     sens = [r for r in sensitivity(plants, UNCERTAIN, design="saltelli", seed=1) if r["claim"] == 8]
     top = min((r for r in sens if r["rank"] > 0), key=lambda r: r["rank"])
     assert top["constant"] == "hand_latency" and top["sobol_st"] > 0.5 and top["spearman_rho"] < -0.5
@@ -181,3 +194,38 @@ def test_outputs_and_figures(tmp_path):
     assert "| 8 | DATH responds in under 85 ms" in md and "## What the map says" in md
     header = (tmp_path / "results.csv").read_text().splitlines()[0].split(",")
     assert {"plant", "error", "hand_latency", "response_ms"} <= set(header)
+
+
+@pytest.mark.slow
+def test_every_plant_scans_its_own_texture_seeds_and_the_study_pools_them(tmp_path):
+    from slipreflex.study.analyse import pooled_scan
+    from slipreflex.study.runner import run_plant
+
+    cfg = StudyConfig(plants=2, **{**TINY, "scan": True})
+    a, b = (run_plant(i, v, cfg) for i, v in enumerate(cfg.plant_values()))
+    assert len(a.scan["seeds"]) == cfg.scan_seeds and set(a.scan["seeds"]).isdisjoint(b.scan["seeds"])
+    run = run_study(cfg, tmp_path, workers=0, progress=False)
+    assert len(pooled_scan(run.parts)) == 2 * cfg.scan_seeds
+    first = claim_fractions(plant_table(run.parts), pooled_scan(run.parts))[0]
+    assert "scans pooled over the plants" in first["reason"]
+
+
+def test_a_plant_whose_observed_first_slip_leaves_the_band_is_counted_apart(monkeypatch):
+    from slipreflex.study import runner
+
+    def off_band(plant, table):
+        return plant, {"calibrated_first_slip_ml_TX": 260.0, "calibration_note": "",
+                       "rejected": "observed first slip outside the paper's 170-230 ml: TX 260 ml"}
+
+    monkeypatch.setattr(runner, "_calibrated", off_band)
+    cfg = StudyConfig(plants=1, **{**TINY, "calibrate": True})
+    out = runner.run_plant(0, cfg.plant_values()[0], cfg)
+    assert out.error == "" and out.trials == 0 and out.claims == [] and "TX 260 ml" in out.calibration["rejected"]
+    rec = plant_table({0: ({"values": out.values, "error": "", "claims": [], "calibration": out.calibration}, [])})
+    assert claim_fractions(rec)[0]["rejected"] == 1 and claim_fractions(rec)[0]["plants"] == 0
+
+
+def test_a_claim_most_plants_cannot_decide_is_unresolved_in_the_study():
+    plants = [{"error": "", "claim_6": "unresolved"} for _ in range(30)] + [{"error": "", "claim_6": "fails-plant"}]
+    r = claim_fractions(plants)[5]
+    assert r["verdict"] == "unresolved" and "30 of 31 plants unresolved" in r["reason"]

@@ -93,7 +93,7 @@ def _decide() -> bool:
     if folder is not None:
         os.environ["NUMBA_CACHE_DIR"] = folder
         if "numba" in sys.modules:          # numba read its configuration already
-            from numba.core import config
+            from numba.core import config  # deferred: heavy (numba)
 
             config.CACHE_DIR = folder  # pyright: ignore[reportAttributeAccessIssue]
     if warning:

@@ -32,15 +32,23 @@ Examples
 
 from __future__ import annotations
 
+import csv
 import dataclasses
+import json
 import math
+from collections import deque
 from dataclasses import dataclass
+from fractions import Fraction
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from . import hardware as hw
 from .chain.encoder import dath_update
+from .chain.filters import _design
+from .chain.params import ReflexParams
+from .csvfiles import write_columns
 from .errors import DataError, ParameterError
 from .methods import Detections, MethodContext
 from .validation import instance
@@ -91,7 +99,6 @@ def grip_time_ratio(speed: float = hw.FINGER_SPEED_UNITS_S, period: float = hw.D
     >>> grip_time_ratio()
     (8, 15)
     """
-    from fractions import Fraction
 
     units_per_sample = Fraction(repr(float(speed))) * Fraction(repr(float(period)))
     if units_per_sample <= 0:
@@ -154,7 +161,6 @@ def quantize_lowpass(fs: float = hw.DAQ_FS, cutoff: float = 10.0) -> tuple[int, 
     >>> quantize_lowpass()
     (131201, -29103869, 12851457)
     """
-    from .chain.filters import _design
 
     sos, _ = _design(float(fs), float(cutoff))
     one = 1 << COEF_Q
@@ -179,7 +185,6 @@ def board_params_from_json(text: str, where: Any = "board_params") -> BoardParam
     >>> board_params_from_json(json.dumps(p.to_dict())) == p
     True
     """
-    import json
 
     try:
         return BoardParams(**json.loads(text))
@@ -287,7 +292,6 @@ class BoardParams:
         ...
         slipreflex.errors.ParameterError: acc_leak=32.0: the board's fixed-point chain runs the paper's method only ...
         """
-        from .chain.params import ReflexParams
 
         if params is not None and kwargs:
             raise TypeError("give either params or keyword parameters, not both")
@@ -849,8 +853,6 @@ def read_adc_csv(path) -> np.ndarray:
     >>> read_adc_csv(p).tolist()
     [300, 301]
     """
-    import csv
-    from pathlib import Path
 
     path = Path(path)
     try:
@@ -891,9 +893,7 @@ def write_board_outputs(prefix, events, counts, commands) -> tuple[Any, Any]:
     >>> w.read_text().splitlines()
     ['window,v,command', '0,0,0']
     """
-    from pathlib import Path
 
-    from .csvfiles import write_columns
 
     events = np.asarray(events, dtype=np.int64)
     counts = np.asarray(counts, dtype=np.int64)
@@ -940,7 +940,6 @@ class CheckedBoardReflex(BoardReflex):
 
     def __init__(self, params: BoardParams | None = None, **kwargs) -> None:
         super().__init__(params, **kwargs)
-        from collections import deque
 
         self._frames: Any = deque()
         self._reset_check()

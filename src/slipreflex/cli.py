@@ -20,6 +20,7 @@ import sys
 from collections.abc import Sequence
 
 from . import __version__, commands
+from .commands._lists import list_hint
 from .errors import SlipreflexError
 
 __all__ = ["main", "build_parser"]
@@ -77,7 +78,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     args, extra = parser.parse_known_args(argv)
     if extra:
-        from .commands._lists import list_hint
 
         hint = list_hint(argv, extra)
         if hint is None:

@@ -23,6 +23,7 @@ from __future__ import annotations
 import csv
 import math
 import os
+from array import array
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -30,10 +31,12 @@ from pathlib import Path
 import numpy as np
 
 from .errors import DataError
+from .paths import new_file
+from .validation import LIMITS
 
 __all__ = ["INPUT_COLUMNS", "SAMPLE_COLUMNS", "WINDOW_COLUMNS", "read_slip_csv", "write_columns",
            "read_preamble", "PREAMBLE_PREFIX", "Recording", "read_recording", "irregular_steps",
-           "JITTER_TOLERANCE", "cell_float", "cell_bool"]
+           "JITTER_TOLERANCE", "cell_float", "cell_bool", "finite_cell"]
 
 #: A time step further than this fraction from the median step is a gap or jitter
 #: (the chain assumes uniform sampling; a missing 3 ms sample is a 100 % step).
@@ -48,7 +51,21 @@ SAMPLE_COLUMNS: tuple[str, ...] = ("t", "x", "threshold", "event")
 WINDOW_COLUMNS: tuple[str, ...] = ("t_end", "v", "command")
 
 
-def _number(path: Path, line: int, column: str, cell: str) -> float:
+def finite_cell(path: Path, line: int, column: str, cell: str) -> float:
+    """One CSV cell as a finite float, or a ``DataError`` naming the file, line and column.
+
+    The one check every CSV reader of the package applies to a numeric cell.
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> finite_cell(Path("a.csv"), 3, "x", "0.25")
+    0.25
+    >>> finite_cell(Path("a.csv"), 3, "x", "nan")
+    Traceback (most recent call last):
+    ...
+    slipreflex.errors.DataError: a.csv, line 3: column 'x' is not finite: 'nan'
+    """
     try:
         value = float(cell)
     except ValueError:
@@ -195,9 +212,7 @@ def read_recording(path: str | os.PathLike, fs: float | None = None) -> Recordin
     >>> read_recording("examples/slip_example.csv").x.size > 0
     True
     """
-    from array import array
 
-    from .validation import LIMITS
 
     path = Path(path)
     cap = int(LIMITS["csv_samples"].hi)
@@ -238,9 +253,9 @@ def read_recording(path: str | os.PathLike, fs: float | None = None) -> Recordin
         if len(x) >= cap:
             raise DataError(f"{path}: more than {cap} samples, the most a recording may have "
                             f"(docs/runtime.md, Limits)")
-        x.append(_number(path, line_no, header[ix] if has_header else "x", row[ix]))
+        x.append(finite_cell(path, line_no, header[ix] if has_header else "x", row[ix]))
         if it is not None:
-            tk = _number(path, line_no, "t", row[it])
+            tk = finite_cell(path, line_no, "t", row[it])
             if t and tk <= t[-1]:
                 raise DataError(f"{path}, line {line_no}: time not increasing ({tk!r} after {t[-1]!r})")
             t.append(tk)
@@ -257,7 +272,6 @@ def read_recording(path: str | os.PathLike, fs: float | None = None) -> Recordin
 def _lines(path: Path):
     """``(line number, text)`` of a CSV, streamed: a line over ``LIMITS["csv_line_bytes"]``, a NUL
     byte or bytes that are not UTF-8 are one :class:`DataError` (a binary file, /dev/zero)."""
-    from .validation import LIMITS
 
     limit = int(LIMITS["csv_line_bytes"].hi)
     line_no = 0
@@ -363,7 +377,6 @@ def write_columns(path: str | os.PathLike, columns: Mapping[str, Sequence | np.n
     cols = [np.asarray(columns[n]) for n in names]
     if len({c.shape[0] for c in cols}) > 1:
         raise ValueError(f"columns of {path} differ in length: {[c.shape[0] for c in cols]}")
-    from .paths import new_file
 
     with new_file(path, "w", replace=replace) as fh:
         for key, value in (preamble or {}).items():

@@ -44,21 +44,24 @@ from typing import Any
 import numpy as np
 
 from . import experiment_specs, methods
+from .analysis.metrics import grip_without_slip
+from .analysis.onset import OnsetParams
 from .analysis.outputs import ReproduceResult, trial_plot, write_outputs
 from .analysis.paper import BOTTLE_ORDER, bottle_key
 from .analysis.paper import EXPERIMENTS as PAPER_EXPERIMENTS
-from .analysis.trial import RESULT_COLUMNS
+from .analysis.trial import RESULT_COLUMNS, TrialStreams, analyse_trial
 from .baselines.calibration import REST_K
 from .baselines.swt import SWT_WINDOW
 from .errors import ParameterError
+from .grasping import check_run_grasp
 from .grid import Cell, grid_result, run_cells
-from .hardware import CONTACT_FORCE_N
+from .hardware import CONTACT_FORCE_N, SLIP_FINGER
 from .interrupts import Interrupted
 from .paper_experiments import LANDING_S
 from .progress import Progress
 from .thresholds import calibrate, calibration_seed
 from .validation import choices, flag, integer, set_field, within
-from .warmup import STARTUP_S, TRIAL_SIM_SPEED, estimate_wall_s  # noqa: F401  (public here too)
+from .warmup import STARTUP_S, TRIAL_SIM_SPEED, estimate_wall_s, warm_kernels  # noqa: F401  (public here too)
 
 __all__ = [
     "METHODS", "EXPERIMENTS", "BOTTLE_NAMES", "DEFAULT_SEED", "ReproduceConfig", "Cell",
@@ -94,7 +97,8 @@ class ReproduceConfig:
     Parameters
     ----------
     trials : int
-        Trials per bottle, experiment and method (paper: 10).
+        Trials per bottle, experiment and method (paper: 10; default 20, so that the claims'
+        verdict classes do not hang on one master seed's draws: docs/reproduce.md).
     bottles, methods, experiments : tuple of str
         Subsets of :data:`BOTTLE_NAMES`, :data:`METHODS`, :data:`EXPERIMENTS`.
     seed : int
@@ -137,14 +141,14 @@ class ReproduceConfig:
     Examples
     --------
     >>> ReproduceConfig().trials, ReproduceConfig().methods
-    (10, ('dath', 'fixed', 'nmsd', 'swt'))
+    (20, ('dath', 'fixed', 'nmsd', 'swt'))
     >>> ReproduceConfig(bottles=("XX",))
     Traceback (most recent call last):
     ...
     slipreflex.errors.ParameterError: bottles: unknown 'XX' (known: TR, DK, TX)
     """
 
-    trials: int = 10
+    trials: int = 20
     bottles: tuple[str, ...] = BOTTLE_NAMES
     methods: tuple[str, ...] = METHODS
     experiments: tuple[str, ...] = EXPERIMENTS
@@ -176,7 +180,6 @@ class ReproduceConfig:
         set_field(self, "methods", choices("methods", self.methods, methods.names(), any_case=True))
         for name in ("rest_s", "after_s", "calibration_s", "rest_k", "grasp_force_n", "swt_persist"):
             set_field(self, name, within(name, getattr(self, name)))
-        from .analysis.onset import OnsetParams
 
         need = OnsetParams().baseline_s + 0.05
         if self.rest_s < need:
@@ -193,7 +196,7 @@ class ReproduceConfig:
         >>> ReproduceConfig(drop_mass_kg=0.02).drop.mass_kg
         0.02
         """
-        from .sim import PAPER_DROP
+        from .sim import PAPER_DROP  # deferred: heavy (numba kernels)
 
         return _override(self.drop_object or PAPER_DROP, mass_kg=self.drop_mass_kg, height_m=self.drop_height_m)
 
@@ -206,7 +209,7 @@ class ReproduceConfig:
         >>> round(ReproduceConfig(pour_volume_ml=100).pour.duration_s, 1)
         6.0
         """
-        from .sim import PAPER_POUR
+        from .sim import PAPER_POUR  # deferred: heavy (numba kernels)
 
         return _override(self.pour_object or PAPER_POUR, rate_l_min=self.pour_rate_l_min, volume_ml=self.pour_volume_ml)
 
@@ -218,7 +221,7 @@ class ReproduceConfig:
         >>> ReproduceConfig().bottle("TX").name
         'TX'
         """
-        from .sim import BOTTLES
+        from .sim import BOTTLES  # deferred: heavy (numba kernels)
 
         return (self.plant.bottles if self.plant is not None else BOTTLES)[name]
 
@@ -364,10 +367,8 @@ def run_trial(cell: Cell, config: ReproduceConfig, thresholds: dict[str, float],
     >>> rows[0].n_events, rows[0].success
     (1, True)
     """
-    from .analysis.trial import TrialStreams, analyse_trial
-    from .hardware import SLIP_FINGER
-    from .sim import run_closed_loop
-    from .sim.variations import VariationSpread, grasped_rig
+    from .sim import run_closed_loop  # deferred: heavy (numba kernels)
+    from .sim.variations import VariationSpread, grasped_rig  # deferred: heavy (numba kernels)
 
     plant = {} if config.plant is None else {"rig_kwargs": config.plant.rig_kwargs(),
                                              "bottles": dict(config.plant.bottles)}
@@ -395,7 +396,6 @@ def run_trial(cell: Cell, config: ReproduceConfig, thresholds: dict[str, float],
         threshold=float("nan") if threshold is None else float(threshold))
     truth = {round(e.onset, 9): e for e in tr.slip_events}
     before = tr.fall_time is not None and tr.fall_time < t_pert      # fell in the grasp or the rest
-    from .analysis.metrics import grip_without_slip
 
     unslipped = grip_without_slip(tr.cmd_t, tr.cmd_value, p0, tr.slip_events)
     rows = [dataclasses.replace(r, grasp_position=p0, grasp_force_n=float(grasp.force_n),
@@ -420,7 +420,7 @@ def run_reproduce(config: ReproduceConfig | None = None, *, jobs: int | None = N
     Parameters
     ----------
     config : ReproduceConfig, optional
-        The run (default: the paper's 10 x 3 x 2 x 4 grid).
+        The run (default: 20 trials x 3 bottles x 2 experiments x 4 methods; the paper ran 10).
     jobs : int, optional
         Worker processes (default: the machine's cores); 1 runs in this process.
     progress : bool
@@ -447,10 +447,7 @@ def run_reproduce(config: ReproduceConfig | None = None, *, jobs: int | None = N
     if jobs < 1:
         raise ParameterError(f"jobs must be >= 1, got {jobs}")
     t0 = time.perf_counter()
-    import scipy.signal  # noqa: F401  (once, here: forked workers inherit it; each took ~1 s to import it)
 
-    from .grasping import check_run_grasp
-    from .warmup import warm_kernels
 
     for b in config.bottles:                    # a grasp that cannot hold a bottle fails here, at once
         check_run_grasp(config, b, grasp_seeds(config, b))

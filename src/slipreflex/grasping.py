@@ -39,7 +39,7 @@ def grasp_holds(config: Any, bottle: str, force: float, seeds) -> list[bool]:
     >>> grasp_holds(cfg, "TR", 0.8, grasp_seeds(cfg, "TR")[:1])
     [True]
     """
-    from .sim.variations import VariationSpread, grasped_rig
+    from .sim.variations import VariationSpread, grasped_rig  # deferred: heavy (numba kernels)
 
     plant = {} if config.plant is None else {"rig_kwargs": config.plant.rig_kwargs(),
                                              "bottles": dict(config.plant.bottles)}
@@ -96,7 +96,7 @@ def check_run_grasp(config: Any, bottle: str, seeds) -> None:
     >>> from slipreflex.experiments import ReproduceConfig
     >>> check_run_grasp(ReproduceConfig(trials=1, bottles=("TR",)), "TR", [1])
     """
-    from .sim.calibration import GraspFailed, check_grasp
+    from .sim.calibration import GraspFailed, check_grasp  # deferred: heavy (numba kernels)
 
     try:
         check_grasp(config.bottle(bottle), config.grasp_force_n)

@@ -26,6 +26,7 @@ from typing import Any
 from . import experiment_specs, methods
 from .analysis.outputs import ReproduceResult
 from .analysis.paper import bottle_key
+from .analysis.report import summarize
 from .interrupts import stop_pool, worker_signals
 
 __all__ = ["Cell", "run_cells", "row_order", "grid_result"]
@@ -130,7 +131,6 @@ def grid_result(config: Any, cells: Sequence[Any], done: Mapping[Any, tuple], th
     >>> res.partial_note
     'interrupted after 0 of 1 trials'
     """
-    from .analysis.report import summarize
 
     fin = [c for c in cells if c in done]
     rows = sorted((r for c in fin for r in done[c][0]), key=row_order)

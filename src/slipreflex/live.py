@@ -88,7 +88,7 @@ def require_foxglove(option: str = "--live") -> Any:
     'foxglove'
     """
     try:
-        import foxglove
+        import foxglove  # deferred: optional extra (live: foxglove)
     except ImportError as err:
         raise ParameterError(f"{option} needs foxglove-sdk: pip install 'slipreflex[live]' ({err})") from None
     return foxglove

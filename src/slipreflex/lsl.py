@@ -76,7 +76,7 @@ def require_pylsl(option: str = "--lsl") -> Any:
     'pylsl'
     """
     try:
-        import pylsl
+        import pylsl  # deferred: optional extra (lsl: pylsl)
     except ImportError as err:
         raise ParameterError(f"{option} needs pylsl: pip install 'slipreflex[lsl]' ({err})") from None
     except (OSError, RuntimeError) as err:  # pylsl raises when liblsl cannot be found or loaded

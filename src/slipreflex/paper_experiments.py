@@ -105,7 +105,7 @@ def paper_drop() -> Any:
     >>> paper_drop().mass_kg
     0.01
     """
-    from .sim import PAPER_DROP  # function-level: keeps the simulator (numba) out of the registry's import
+    from .sim import PAPER_DROP  # deferred: heavy (numba kernels)
 
     return PAPER_DROP
 
@@ -118,6 +118,6 @@ def paper_pour() -> Any:
     >>> paper_pour().volume_ml
     500.0
     """
-    from .sim import PAPER_POUR  # function-level: keeps the simulator (numba) out of the registry's import
+    from .sim import PAPER_POUR  # deferred: heavy (numba kernels)
 
     return PAPER_POUR

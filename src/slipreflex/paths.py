@@ -29,11 +29,13 @@ import os
 import shutil
 import stat
 import tempfile
+import tomllib
 from collections.abc import Iterable, Iterator, Sequence
 from pathlib import Path
 from typing import IO, Any
 
 from .errors import ParameterError
+from .interrupts import signals_ignored
 from .validation import LIMITS
 
 __all__ = ["output_dir", "create_new", "publish", "new_file", "unique_name", "OutputSet", "MANIFEST",
@@ -345,7 +347,6 @@ class OutputSet:
         >>> out.commit(s)
         []
         """
-        from .interrupts import signals_ignored
 
         staged = Path(staged)
         names = sorted(p.name for p in staged.iterdir())
@@ -453,7 +454,6 @@ def read_toml(path: str | os.PathLike, what: str) -> dict[str, Any]:
     ...
     slipreflex.errors.ParameterError: --objects ...o.toml: invalid TOML: ...
     """
-    import tomllib
 
     text = read_text(path, what, kind="TOML file")
     try:

@@ -94,7 +94,7 @@ class Progress:
             isatty = getattr(self.file, "isatty", None)
             tty = bool(isatty and isatty())
         if self._enabled and tty:
-            from tqdm import tqdm
+            from tqdm import tqdm  # deferred: heavy (tqdm)
             self._bar = tqdm(total=self.total, file=self.file, desc=desc, unit=unit, dynamic_ncols=True)
 
     def update(self, n: int = 1) -> None:

@@ -63,15 +63,23 @@ Examples
 
 from __future__ import annotations
 
+import hashlib
 import io
 import json
 import os
+import stat
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import IO, Any
 
+from .board import BoardReflex, board_params_from_json
+from .chain import ReflexParams, SlipReflex
+from .csvfiles import write_columns
 from .errors import DataError, SlipreflexError
+from .paths import create_new, new_file, publish
+from .validation import LIMITS
 
 __all__ = [
     "TOPICS", "METADATA_NAME", "RecordingError", "Recorder", "Recording", "read_recording", "schema",
@@ -98,7 +106,6 @@ CHECKSUM_KEY: str = "_sha256"
 
 
 def _digest(name: str, data: Mapping[str, str]) -> str:
-    import hashlib
 
     doc = json.dumps([name, sorted((k, v) for k, v in data.items() if k != CHECKSUM_KEY)])
     return hashlib.sha256(doc.encode()).hexdigest()[:16]
@@ -267,7 +274,7 @@ class Recorder:
                  metadata: Mapping[str, Mapping[str, str]] | None = None,
                  chunk_size: int = 16 * 1024, flush_interval: float = 0.25,
                  compression: str = "zstd") -> None:
-        from mcap.writer import CompressionType, Writer
+        from mcap.writer import CompressionType, Writer  # deferred: heavy (mcap)
 
         comp = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4,
                 "none": CompressionType.NONE}.get(compression)
@@ -279,7 +286,6 @@ class Recorder:
         self._closed = False
         self.part_path: str | None = None
         if isinstance(path, (str, os.PathLike)):
-            from .paths import create_new
 
             self.path = os.fspath(path)
             self.part_path = self.path + PART_SUFFIX
@@ -464,7 +470,6 @@ class Recorder:
         self._closed = True
         self._close_file()
         if self.part_path is not None and self._owns:
-            from .paths import publish
 
             try:
                 publish(self.part_path, self.path)
@@ -651,7 +656,7 @@ def read_recording(path: str | os.PathLike) -> Recording:
     ...
     slipreflex.recording.RecordingError: /nonexistent.mcap: cannot open recording: No such file or directory
     """
-    from mcap.records import Channel, Header, Message, Metadata
+    from mcap.records import Channel, Header, Message, Metadata  # deferred: heavy (mcap)
 
     path = os.fspath(path)
     rec = Recording(path=path)
@@ -696,8 +701,8 @@ def _parse_record(data: bytes, pos: int) -> tuple[int, list[Any] | None, str]:
 
     Returns ``(end, records, why)``: ``records`` is None when it is damaged or cut.
     """
-    from mcap.exceptions import EndOfFile
-    from mcap.stream_reader import StreamReader
+    from mcap.exceptions import EndOfFile  # deferred: heavy (mcap)
+    from mcap.stream_reader import StreamReader  # deferred: heavy (mcap)
 
     op = data[pos]
     end = pos + _RECORD_HEAD + int.from_bytes(data[pos + 1:pos + _RECORD_HEAD], "little")
@@ -732,9 +737,7 @@ def _resync(data: bytes, pos: int) -> int | None:
 def _read_bounded(path: str) -> bytes:
     """The file's bytes, its magic checked first and its size capped (``LIMITS["recording_bytes"]``):
     a device such as /dev/zero or a huge file is one line, not a MemoryError."""
-    import stat
 
-    from .validation import LIMITS
 
     cap = int(LIMITS["recording_bytes"].hi)
     try:
@@ -818,7 +821,6 @@ def chain_params_of(rec: Recording):
     >>> chain_params_of(Recording("r.mcap", metadata=meta)).dath
     True
     """
-    from .chain import ReflexParams
 
     raw = rec.metadata.get(METADATA_NAME, {}).get("reflex_params")
     if raw is None and rec.bad_metadata:
@@ -960,12 +962,10 @@ def replay(path: str | os.PathLike | Recording) -> ReplayResult:
     >>> replay(path).identical
     True
     """
-    from .chain import SlipReflex
 
     rec = path if isinstance(path, Recording) else read_recording(path)
     board_params = rec.metadata.get(METADATA_NAME, {}).get("board_params")
     if board_params is not None:
-        from .board import BoardReflex, board_params_from_json
 
         reflex: Any = BoardReflex(board_params_from_json(board_params, rec.path))
     else:
@@ -1040,7 +1040,6 @@ def export_csv(path: str | os.PathLike | Recording, out: str | os.PathLike | Non
     >>> read_slip_csv(files[0])[1].tolist()
     [0.4, 1.4, 2.4]
     """
-    from pathlib import Path
 
     rec = path if isinstance(path, Recording) else read_recording(path)
     samples = rec.topic("/daq/samples")
@@ -1115,7 +1114,6 @@ def _check_output(target: Any) -> None:
 
 
 def _write_csv(target: Any, columns: Mapping[str, Any], **kw: Any) -> None:
-    from .csvfiles import write_columns
 
     try:
         write_columns(target, columns, replace=False, **kw)
@@ -1190,12 +1188,10 @@ def recover_recording(path: str | os.PathLike, out: str | os.PathLike) -> Recove
     >>> res.messages, res.gaps
     (1, '')
     """
-    from pathlib import Path
 
-    from mcap.records import Channel, Header, Message, Metadata, Schema
-    from mcap.writer import CompressionType, Writer
+    from mcap.records import Channel, Header, Message, Metadata, Schema  # deferred: heavy (mcap)
+    from mcap.writer import CompressionType, Writer  # deferred: heavy (mcap)
 
-    from .paths import new_file
 
     src, dst = Path(path), Path(out)
     if dst.exists() and src.exists() and dst.resolve() == src.resolve():

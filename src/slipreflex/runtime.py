@@ -65,6 +65,7 @@ from __future__ import annotations
 
 import collections
 import copy
+import ctypes
 import gc
 import json
 import math
@@ -1344,7 +1345,6 @@ def drop_capabilities() -> str:
     eff, prm = _capabilities()
     if not (eff or prm):
         return ""
-    import ctypes
 
     held = [name for bit, name in _CAP_NAMES.items() if (eff | prm) >> bit & 1]
     header = (ctypes.c_uint32 * 2)(0x20080522, 0)   # _LINUX_CAPABILITY_VERSION_3, this process

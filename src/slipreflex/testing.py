@@ -44,7 +44,9 @@ from typing import Any
 
 import numpy as np
 
+from . import experiment_specs, methods
 from . import hardware as hw
+from .baselines import REST_K, rest_statistic
 from .errors import DataError
 from .interfaces import Reflex
 
@@ -139,8 +141,6 @@ def reflex_for_check(name: str, *, shape: tuple[int, ...] | None = None, **param
     >>> reflex_for_check("nmsd", shape=(7,)).params.shape
     (7,)
     """
-    from . import methods
-    from .baselines import REST_K, rest_statistic
 
     spec = methods.get(name)
     if shape is not None:
@@ -362,7 +362,6 @@ def check_method(name: str, *, shape: tuple[int, ...] | None = None) -> CheckRep
     >>> check_method("swt").commands > 0
     True
     """
-    from . import methods
 
     spec = methods.get(name)
     reflex = reflex_for_check(name, shape=shape)
@@ -417,9 +416,14 @@ def check_experiment(name: str, config: Any = None, *, method: str = "fixed") ->
     >>> [r.experiment for r in check_experiment("drop")]
     ['drop']
     """
-    from . import experiment_specs, methods
-    from .experiments import Cell, ReproduceConfig, calibrate, run_trial, trial_seed
-    from .sim import Rig
+    from .experiments import (  # deferred: late-bound (tests patch slipreflex.experiments.run_trial)
+        Cell,
+        ReproduceConfig,
+        calibrate,
+        run_trial,
+        trial_seed,
+    )
+    from .sim import Rig  # deferred: heavy (numba kernels)
 
     spec = experiment_specs.get(name)
 

@@ -22,6 +22,7 @@ import numpy as np
 
 from . import methods
 from .analysis.paper import BOTTLE_ORDER, EXPERIMENTS
+from .baselines import rest_statistic
 from .errors import ParameterError
 
 __all__ = ["calibration_seed", "calibrate"]
@@ -69,8 +70,7 @@ def calibrate(config: Any) -> dict[str, float]:
     >>> sorted(th), th["nmsd"] > 0 and th["swt"] > 0
     (['nmsd', 'swt'], True)
     """
-    from .baselines import rest_statistic
-    from .sim import Rig, simulate_open_loop
+    from .sim import Rig, simulate_open_loop  # deferred: heavy (numba kernels)
 
     specs = [methods.get(m) for m in methods.calibrated()]
     stats: dict[str, list[np.ndarray]] = {s.name: [] for s in specs}

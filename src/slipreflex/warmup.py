@@ -14,7 +14,10 @@ True
 from __future__ import annotations
 
 import dataclasses
+import importlib
 from typing import Any
+
+from .hardware import SLIP_FINGER
 
 __all__ = ["COLD_COMPILE_S", "KERNELS", "cold_kernels", "warm_kernels", "TRIAL_SIM_SPEED", "STARTUP_S",
            "estimate_wall_s"]
@@ -80,7 +83,6 @@ def cold_kernels() -> list[str]:
     >>> isinstance(cold_kernels(), list)
     True
     """
-    import importlib
 
     cold = []
     for module, name in KERNELS:
@@ -116,9 +118,8 @@ def warm_kernels(config: Any, context: Any, specs: dict[str, Any], seed: int) ->
     >>> warm_kernels(cfg, methods.MethodContext(), {"dath": methods.get("dath")}, 1)
     ['dath']
     """
-    from .hardware import SLIP_FINGER
-    from .sim import run_closed_loop
-    from .sim.variations import VariationSpread, grasped_rig
+    from .sim import run_closed_loop  # deferred: heavy (numba kernels)
+    from .sim.variations import VariationSpread, grasped_rig  # deferred: heavy (numba kernels)
 
     plant = {} if config.plant is None else {"rig_kwargs": config.plant.rig_kwargs(),
                                              "bottles": dict(config.plant.bottles)}

@@ -27,8 +27,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import DataError
+from .onset import OnsetParams, accel_envelope, episodes, rest_threshold_of, select_axis
 
-__all__ = ["MERGE_S", "LEAD_S", "SlipEvent", "segment_events"]
+__all__ = ["MERGE_S", "LEAD_S", "SlipEvent", "segment_events", "first_pour_slip"]
 
 #: Above-threshold episodes closer than this (s) belong to one slip.
 MERGE_S: float = 1.0
@@ -105,7 +106,6 @@ def segment_events(t, envelope, threshold: float, interval: tuple[float, float],
     env = np.asarray(envelope, dtype=np.float64)
     if t.shape != env.shape or t.ndim != 1:
         raise DataError(f"times and envelope must be 1-D of equal length, got {t.shape}, {env.shape}")
-    from .onset import episodes
 
     lo, hi = float(interval[0]), float(interval[1])
     eps = episodes(t, env, threshold, (lo, hi), params)
@@ -125,3 +125,36 @@ def segment_events(t, envelope, threshold: float, interval: tuple[float, float],
         w1 = onsets[i + 1] - lead_s if i + 1 < len(onsets) else end_all
         out.append(SlipEvent(onsets[i], float(t[i1]), (w0, w1)))
     return out
+
+
+def first_pour_slip(t, accel, volume_ml, window: tuple[float, float], params=None) -> tuple[float, float]:
+    """(onset s, volume ml at it) of a pour recording's first slip, as a pour trial is analysed (NaN if none).
+
+    The axis, envelope and rest threshold of :func:`slipreflex.analysis.onset.detect_onset`, the
+    episodes segmented into slips as :func:`segment_events` does for a pour; the
+    volume is ``volume_ml`` (the flow sensor's) at the first slip's onset. The open-loop
+    calibration of the simulated plant calls it (``slipreflex.sim.calibration``).
+
+    Examples
+    --------
+    >>> t = np.arange(0, 6, 1 / 333.0)
+    >>> acc = np.random.default_rng(0).normal(0, 0.002, (t.size, 3))
+    >>> acc[t >= 4.0, 2] += 0.05
+    >>> on, ml = first_pour_slip(t, acc, 10.0 * t, (1.0, 5.9))
+    >>> bool(4.0 <= on < 4.03), bool(40.0 <= ml < 40.3)
+    (True, True)
+    """
+
+    p = params or OnsetParams()
+    t = np.asarray(t, dtype=float)
+    lo, hi = float(window[0]), float(window[1])
+    if t.size < 8 or hi <= lo:
+        return float("nan"), float("nan")
+    a = np.asarray(accel, dtype=float)
+    axis = select_axis(t, a, (lo, hi), baseline_s=p.baseline_s)
+    env = accel_envelope(t, a[:, axis], p)
+    found = segment_events(t, env, rest_threshold_of(t, env, p), (lo, hi), params=p)
+    if not found:
+        return float("nan"), float("nan")
+    on = found[0].onset
+    return on, float(np.interp(on, t, np.asarray(volume_ml, dtype=float)))

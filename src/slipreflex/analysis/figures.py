@@ -31,7 +31,7 @@ import numpy as np
 
 from .. import experiment_specs
 from .. import methods as _registry
-from .paper import BOTTLE_ORDER, paper_value
+from .paper import BOTTLE_ORDER, PAPER_SUCCESS, paper_value
 
 __all__ = ["TrialPlot", "plot_trial", "bar_chart", "success_chart", "grip_chart"]
 
@@ -42,10 +42,10 @@ def _color(m: str) -> str:
 
 
 def _plt():
-    import matplotlib
+    import matplotlib  # deferred: heavy (matplotlib)
 
     matplotlib.use("Agg", force=True)
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # deferred: heavy (matplotlib)
 
     return plt
 
@@ -250,8 +250,8 @@ def bar_chart(summary: Sequence[dict[str, Any]], experiment: str, metric: str,
     """
     plt = _plt()
     by, bottles, methods = _present(summary, experiment)
-    from matplotlib.lines import Line2D
-    from matplotlib.patches import Patch
+    from matplotlib.lines import Line2D  # deferred: heavy (matplotlib)
+    from matplotlib.patches import Patch  # deferred: heavy (matplotlib)
 
     fig, ax = plt.subplots(figsize=(7.8, 3.4))
     width = 0.8 / max(1, len(methods))
@@ -291,7 +291,6 @@ def bar_chart(summary: Sequence[dict[str, Any]], experiment: str, metric: str,
 
 def _paper_rate(experiment: str, bottle: str, method: str) -> tuple[float, str] | None:
     """The paper's stated success (percent, marker): "D" a value, "v" an upper bound."""
-    from .paper import PAPER_SUCCESS
 
     text = PAPER_SUCCESS.get((experiment, bottle, method)) or PAPER_SUCCESS.get((experiment, "all", method))
     if not text:
@@ -316,8 +315,8 @@ def success_chart(summary: Sequence[dict[str, Any]], path: str | Path) -> Path:
     True
     """
     plt = _plt()
-    from matplotlib.lines import Line2D
-    from matplotlib.patches import Patch
+    from matplotlib.lines import Line2D  # deferred: heavy (matplotlib)
+    from matplotlib.patches import Patch  # deferred: heavy (matplotlib)
 
     exps = [e for e in experiment_specs.names() if any(s["experiment"] == e for s in summary)]
     exps += sorted({s["experiment"] for s in summary} - set(exps))
@@ -384,7 +383,7 @@ def grip_chart(summary: Sequence[dict[str, Any]], path: str | Path) -> Path:
     True
     """
     plt = _plt()
-    from matplotlib.patches import Patch
+    from matplotlib.patches import Patch  # deferred: heavy (matplotlib)
 
     exps = [e for e in ("drop", "pour") if any(s["experiment"] == e for s in summary)] or ["drop"]
     fig, axes = plt.subplots(1, len(exps), figsize=(4.4 * len(exps) + 1.6, 3.4), squeeze=False)

@@ -209,7 +209,7 @@ def accel_envelope(t, signal, params: OnsetParams | None = None) -> np.ndarray:
     >>> float(np.max(np.abs(env)))
     0.0
     """
-    from scipy import signal as sps
+    from scipy import signal as sps  # deferred: heavy (scipy)
 
     p = params or OnsetParams()
     t, a, fs = _check(t, signal)
@@ -326,3 +326,4 @@ def episodes(t, envelope, threshold: float, window: tuple[float, float],
         if env[i0:i1 + 1].max() >= p.peak_factor * threshold:
             out.append((i0, i1))
     return out
+

@@ -13,7 +13,7 @@ Examples
 >>> res = run_reproduce(ReproduceConfig(trials=1, bottles=("TX",), methods=("fixed",),
 ...                                     experiments=("drop",)), jobs=1, progress=False, plots=False)
 >>> sorted(write_outputs(res, tempfile.mkdtemp()))[:3]
-['bars_drop_response.png', 'bars_drop_total.png', 'grip_without_slip.png']
+['bars_drop_response.png', 'bars_drop_total.png', 'claims']
 """
 
 from __future__ import annotations
@@ -21,12 +21,18 @@ from __future__ import annotations
 import dataclasses
 import functools
 from collections.abc import Sequence
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from .. import experiment_specs
+from ..interrupts import worker_signals
 from ..methods import DATH
+from . import figures as F
+from .claims import judge_run, write_claims_csv
+from .figures import TrialPlot
+from .onset import OnsetParams, accel_envelope
 from .paper import BOTTLE_ORDER
 from .report import (
     GRIP_CAPTION,
@@ -36,7 +42,9 @@ from .report import (
     discussion_text,
     report_markdown,
     setup_lines,
+    terminal_table,
     trial_caption,
+    void,
     write_csv,
     zoom_caption,
 )
@@ -124,7 +132,8 @@ def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str 
     Returns
     -------
     dict
-        Paths by name ("results", "summary", "report", and one per figure).
+        Paths by name ("results", "summary", "report", "claims" (claims.csv: the paper's claims
+        judged, unless the run is partial or has none of the paper's cells), and one per figure).
 
     Examples
     --------
@@ -134,7 +143,7 @@ def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str 
     >>> res = run_reproduce(cfg, jobs=1, progress=False)
     >>> paths = write_outputs(res, tempfile.mkdtemp())
     >>> sorted(p for p in paths if not p.endswith(".png"))
-    ['report', 'results', 'summary']
+    ['claims', 'report', 'results', 'summary']
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -148,15 +157,16 @@ def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str 
                "and no figures were drawn nor claims judged."] if partial else []
     paper, others, notice = paper_part(result)
     notices += [notice] if notice else []
-    from .claims import judge_run
 
+    claims = () if partial or not paper.rows else judge_run(scored(paper.rows), seed=result.config.seed,
+                                                            plant=result.config.plant)
+    if claims:
+        paths["claims"] = write_claims_csv(out / "claims.csv", claims)
     md = report_markdown(summary=paper.summary, rows=paper.rows, figures=figs,
                          setup=setup_lines(result, command), notices=notices,
                          discussion=list(discussion) if discussion is not None else discussion_text(paper),
-                         claims=() if partial or not paper.rows else judge_run(
-                             scored(paper.rows), seed=result.config.seed, plant=result.config.plant))
+                         claims=claims)
     if others:
-        from .report import terminal_table
 
         md += ("\n## Your objects (no paper values)\n\n```\n" + terminal_table(others) + "\n```\n")
     paths["report"] = out / "report.md"
@@ -172,7 +182,6 @@ def scored(rows: Sequence[Any]) -> list[Any]:
     >>> scored([{"fell_before_load": True}, {"fell_before_load": False}])
     [{'fell_before_load': False}]
     """
-    from .report import void
 
     return [r for r in rows if not void(r)]
 
@@ -190,7 +199,7 @@ def not_the_papers(config: Any) -> list[str]:
     >>> not_the_papers(ReproduceConfig(drop_mass_kg=0.02))
     ['drop (20 g from 2 cm)']
     """
-    from ..sim import BOTTLES
+    from ..sim import BOTTLES  # deferred: heavy (numba kernels)
 
     out = [f"bottle {b}" for b in config.bottles if b not in BOTTLES or config.bottle(b) != BOTTLES[b]]
     for e in config.experiments:
@@ -233,7 +242,6 @@ def paper_part(result: ReproduceResult) -> tuple[ReproduceResult, list[dict[str,
 
 def _figure_tasks(result: ReproduceResult, fig_dir: Path) -> list[tuple[str, str, Any, tuple]]:
     """(file name, caption, drawing function, its arguments before the path) of every figure of a run."""
-    from . import figures as F
 
     tasks: list[tuple[str, str, Any, tuple]] = []
     order = experiment_specs.names()
@@ -300,7 +308,6 @@ def _write_figures(result: ReproduceResult, out: Path, paths: dict[str, Path],
     The figures are independent, so ``jobs`` > 1 draws them in that many processes (a
     figure costs a few tenths of a second, mostly matplotlib's text layout).
     """
-    from . import figures as F
 
     fig_dir = out / "figures"
     tasks = _figure_tasks(result, fig_dir)
@@ -309,9 +316,7 @@ def _write_figures(result: ReproduceResult, out: Path, paths: dict[str, Path],
     if jobs == 1:
         drawn = [_draw(w) for w in work]
     else:
-        from concurrent.futures import ProcessPoolExecutor
 
-        from ..interrupts import worker_signals
 
         F._plt()                       # imported once here, so the forked workers start warm
         with ProcessPoolExecutor(max_workers=jobs, initializer=worker_signals) as ex:
@@ -348,9 +353,7 @@ def trial_plot(cell: Any, spec: Any, tr: Any, reflex: Any, rows: Sequence[Any], 
     >>> plot.event_label, plot.sensor.shape == plot.sensor_t.shape
     ('NMSD detections the reflex computed', True)
     """
-    from ..sim.loop import reflex_log
-    from .figures import TrialPlot
-    from .onset import OnsetParams, accel_envelope
+    from ..sim.loop import reflex_log  # deferred: heavy (numba kernels)
 
     axis = rows[0].axis
     env = accel_envelope(tr.t, tr.accel[:, axis], OnsetParams())

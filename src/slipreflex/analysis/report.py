@@ -27,10 +27,17 @@ from typing import Any
 import numpy as np
 
 from .. import experiment_specs, methods
+from .. import hardware as hw
+from ..baselines import CLOSE_S
+from ..baselines.swt import SWT_LEVEL
+from ..chain import ReflexParams
 from ..csvfiles import cell_bool, cell_float
 from ..methods import label as _label
-from .paper import BOTTLE_ORDER, EXPERIMENTS, PAPER, PAPER_SUCCESS, paper_value
-from .trial import RESULT_COLUMNS
+from ..paths import new_file
+from .claims import claims_section
+from .onset import OnsetParams
+from .paper import BOTTLE_ORDER, EXPERIMENTS, PAPER, PAPER_NOTES, PAPER_SUCCESS, paper_value
+from .trial import MAX_RESPONSE_S, RESULT_COLUMNS, TrialRow
 
 __all__ = ["SUMMARY_COLUMNS", "summarize", "void", "void_notice", "NOT_COMPARED", "write_csv", "read_csv",
            "terminal_table",
@@ -214,7 +221,6 @@ def write_csv(path: str | Path, rows: Sequence[Any],
     >>> p.read_text().splitlines()
     ['a,b', '1.5,']
     """
-    from ..paths import new_file
 
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -463,7 +469,6 @@ def report_markdown(*, summary: Sequence[dict[str, Any]], rows: Sequence[Any],
     >>> "![A bar chart](fig.png)" in md and "- seed 1" in md
     True
     """
-    from .paper import PAPER_NOTES
 
     lines = ["# slipreflex reproduce: the paper's experiments on the simulated rig", ""]
     voided = void_notice(summary)
@@ -476,7 +481,6 @@ def report_markdown(*, summary: Sequence[dict[str, Any]], rows: Sequence[Any],
               "to last change of the command for that slip (fixed, DATH) or the closing time the "
               "method generated (NMSD, SWT-SD).", "", comparison_markdown(summary), ""]
     if claims:
-        from .claims import claims_section
 
         lines += claims_section(claims)
     lines += ["## Success (slip suppressed before the bottle slipped out)", "",
@@ -546,7 +550,6 @@ def _and_join(words: Sequence[str]) -> str:
 
 def _window_ms() -> float:
     """One MPI window of the paper's chain (ms): N samples at the DAQ's rate."""
-    from .. import hardware as hw
 
     return 1e3 * hw.WINDOW_N / hw.DAQ_FS
 
@@ -612,7 +615,6 @@ def setup_lines(result: Any, command: str | None = None) -> list[str]:
     >>> "4 sd" in " ".join(setup_lines(r))
     True
     """
-    from .. import hardware as hw
 
     c = result.config
     lines = [f"command: `{command}`"] if command else []
@@ -643,17 +645,14 @@ def setup_lines(result: Any, command: str | None = None) -> list[str]:
 
 def _plant_lines(c: Any) -> list[str]:
     """The plant's open-loop first slip and contact friction, computed for the run's bottles."""
-    from .. import hardware as hw
-    from ..sim import BOTTLES
-    from ..sim.calibration import plant_lines
+    from ..sim import BOTTLES  # deferred: heavy (numba kernels)
+    from ..sim.calibration import plant_lines  # deferred: heavy (numba kernels)
 
     names = [b for b in c.bottles if b in BOTTLES]
     return plant_lines([BOTTLES[b] for b in names], getattr(c, "grasp_force_n", hw.CONTACT_FORCE_N)) if names else []
 
 
 def _chain_line() -> str:
-    from .. import hardware as hw
-    from ..chain import ReflexParams
 
     rp = ReflexParams()
     return (f"{_label(methods.FIXED)} / {_label(methods.DATH)}: the paper's chain (theta0 = "
@@ -672,9 +671,7 @@ def _threshold_line(thresholds: dict[str, float], c: Any) -> str:
 
 
 def _analysis_lines(c: Any) -> list[str]:
-    from ..sim import BOTTLES
-    from .onset import OnsetParams
-    from .trial import MAX_RESPONSE_S
+    from ..sim import BOTTLES  # deferred: heavy (numba kernels)
 
     op = OnsetParams()
     travel = sorted({c.bottle(b).grip_travel_m if hasattr(c, "bottle") else BOTTLES[b].grip_travel_m
@@ -694,7 +691,6 @@ class _Rows:
     """The rows of a run with the selections the discussion needs."""
 
     def __init__(self, result: Any) -> None:
-        from .trial import TrialRow
 
         # rows read back from results.csv are dicts of strings: type them once
         self.rows = [r if isinstance(r, TrialRow) else TrialRow.from_dict(r) for r in result.rows if not void(r)]
@@ -819,7 +815,6 @@ def _paper_chain_totals() -> tuple[float, float]:
 
 
 def _total_paragraph(d: _Rows) -> str:
-    from ..baselines import CLOSE_S
 
     drops = [r for r in d.sel(experiment="drop") if _finite(r.true_slip_ms)]
     chain = [r for r in d.rows if r.method in (methods.FIXED, methods.DATH) and r.n_increases > 0]
@@ -839,9 +834,6 @@ def _total_paragraph(d: _Rows) -> str:
 
 
 def _tactile_paragraph(d: _Rows) -> str:
-    from .. import hardware as hw
-    from ..baselines.swt import SWT_LEVEL
-    from .trial import MAX_RESPONSE_S
 
     tactile = {m for m in methods.names() if methods.get(m).input_kind == "tactile"}
     tac = [r for r in d.rows if r.method in tactile and r.n_events > 0]
@@ -880,8 +872,7 @@ def _pour_slips_paragraph(d: _Rows) -> str:
 
 
 def _stiff_grasp_sentence(kept: Sequence[Any]) -> str:
-    from .. import hardware as hw
-    from ..sim import BOTTLES, HandParams
+    from ..sim import BOTTLES, HandParams  # deferred: heavy (numba kernels)
 
     hp = HandParams()
     k_n = 1.0 / (1.0 / hp.pad_normal_stiffness_n_m + 1.0 / hp.finger_stiffness_n_m
@@ -926,7 +917,6 @@ def _success_paragraph(d: _Rows) -> str:
 
 
 def _pour_response_sentences(d: _Rows) -> list[str]:
-    from .. import hardware as hw
 
     ran = [m for m in methods.names() if d.sel(experiment="pour", method=m)]
     med = {m: _median(r.response_ms for r in d.sel(experiment="pour", method=m)) for m in ran}

@@ -40,6 +40,7 @@ from ..errors import ParameterError
 from ..hardware import FINGER_MAX, FINGER_MIN
 from ..validation import instance, number, set_field
 from . import _layout as _L
+from ._layout import init_state, pack_closing
 
 __all__ = ["CLOSE_S", "ClosingParams", "Closer", "closing_commands"]
 
@@ -137,7 +138,6 @@ class Closer:
     """
 
     def __init__(self, params: ClosingParams) -> None:
-        from ._layout import init_state, pack_closing
 
         self.params = instance("params", params, ClosingParams)
         _load_kernels()
@@ -229,7 +229,7 @@ def _load_kernels():
     """Import the compiled kernels (numba) once, on first use; return the module."""
     global _K
     if _K is None:
-        from . import _kernels
+        from . import _kernels  # deferred: heavy (numba kernels)
 
         _K = _kernels
     return _K
@@ -269,7 +269,6 @@ def closing_commands(triggers, params: ClosingParams, *, mode: TriggerMode = "ev
     pos = np.full(trig.shape, np.nan) if positions is None else np.asarray(positions, dtype=np.float64)
     if pos.shape != trig.shape:
         raise ParameterError(f"positions must have shape {trig.shape}, got {pos.shape}")
-    from ._layout import init_state, pack_closing
 
     P = pack_closing(params)
     out = np.empty(trig.shape)

@@ -96,7 +96,7 @@ def _kernel(wavelet: str = SWT_WAVELET, level: int = SWT_LEVEL, window: int = SW
     unit impulses gives the exact weights it applies to a window; using them
     costs a dot product per step instead of a full decomposition.
     """
-    import pywt
+    import pywt  # deferred: heavy (pywt)
 
     eye = np.eye(window)
     k = pywt.swt(eye, wavelet, level=level, axis=-1)[0][1][:, 0]

@@ -21,7 +21,7 @@ import numpy as np
 
 from .. import methods as registry
 from ..csvfiles import write_columns
-from .run import MethodRun
+from .run import MethodRun, reduce_channels
 
 __all__ = ["RUN_COLUMNS", "SUMMARY_COLUMNS", "write_runs", "summarize", "write_summary", "format_table",
            "markdown_table", "plot_trial_runs"]
@@ -178,10 +178,10 @@ def markdown_table(summary: Sequence[dict[str, Any]]) -> str:
 
 
 def _plt():
-    import matplotlib
+    import matplotlib  # deferred: heavy (matplotlib)
 
     matplotlib.use("Agg", force=True)
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # deferred: heavy (matplotlib)
 
     return plt
 
@@ -233,7 +233,6 @@ def plot_trial_runs(trial, runs: Sequence[MethodRun], path: str | Path, *, calib
     ...                 reduction="z-sum").stat().st_size > 10_000
     True
     """
-    from .run import reduce_channels
 
     plt = _plt()
     t = trial.t

@@ -48,7 +48,9 @@ from typing import Any
 import numpy as np
 
 from .. import methods as registry
+from ..baselines import rest_threshold
 from ..baselines.calibration import REST_K
+from ..chain import SlipReflex, run_chain
 from ..errors import DataError, ParameterError
 from ..validation import number
 from .scoring import Score, score
@@ -198,7 +200,6 @@ def applicable(name: str, trial: RecordedTrial) -> str | None:
     >>> applicable("dath-board", tr)
     "runs the microcontroller's fixed-point chain on 0-5 V DAQ volts, not on this data's units"
     """
-    from ..chain import SlipReflex
 
     spec = registry.get(name)
     if spec.detections is None:
@@ -265,7 +266,7 @@ def to_rate(t: np.ndarray, x: np.ndarray, fs_target: float) -> tuple[np.ndarray,
     >>> fs2, len(t2), round(float(np.abs(x2[8:-8] - np.sin(2 * np.pi * 2 * t2[8:-8])).max()), 2) < 0.05
     (240.0, 237, True)
     """
-    from scipy.signal import resample_poly
+    from scipy.signal import resample_poly  # deferred: heavy (scipy.signal)
 
     fs = (len(t) - 1) / (t[-1] - t[0])
     ratio = Fraction(fs_target / fs).limit_denominator(_MAX_DENOMINATOR)
@@ -299,7 +300,6 @@ def _quantum(x: np.ndarray) -> float:
 
 
 def _chain_run(name: str, trial: RecordedTrial, cfg: BenchmarkConfig, rate: str):
-    from ..chain import run_chain
 
     spec = registry.get(name)
     base = _trial_reflex(name)
@@ -334,7 +334,6 @@ def _chain_run(name: str, trial: RecordedTrial, cfg: BenchmarkConfig, rate: str)
 
 
 def _tactile_run(name: str, trial: RecordedTrial, cfg: BenchmarkConfig, rate: str):
-    from ..baselines import rest_threshold
 
     spec = registry.get(name)
     base = _trial_reflex(name)

@@ -25,7 +25,6 @@ Examples
 from __future__ import annotations
 
 import csv
-import math
 import os
 import re
 from dataclasses import dataclass, field
@@ -33,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..csvfiles import read_preamble
+from ..csvfiles import finite_cell, read_preamble
 from ..errors import DataError
 
 __all__ = ["Layout", "RecordedTrial", "read_trial", "read_folder", "TIME_COLUMN", "SLIP_COLUMN",
@@ -222,16 +221,6 @@ class RecordedTrial:
         return self.channels.reshape(len(self.t), *self.layout.shape)[..., k]
 
 
-def _cell(path: Path, line: int, column: str, text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise DataError(f"{path}, line {line}: column '{column}' is not a number: {text!r}") from None
-    if not math.isfinite(value):
-        raise DataError(f"{path}, line {line}: column '{column}' is not finite: {text!r}")
-    return value
-
-
 def read_trial(path: str | os.PathLike) -> RecordedTrial:
     """Read and check one trial file (see the module docstring for the format).
 
@@ -282,7 +271,7 @@ def read_trial(path: str | os.PathLike) -> RecordedTrial:
         if len(row) != len(head):
             raise DataError(f"{path}, line {line}: {len(row)} cells, the header has {len(head)}")
         for c, text in enumerate(row):
-            data[r, c] = _cell(path, line, head[c], text)
+            data[r, c] = finite_cell(path, line, head[c], text)
     t = data[:, head.index(TIME_COLUMN)]
     bad = np.flatnonzero(np.diff(t) <= 0)
     if bad.size:

@@ -38,9 +38,12 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import hardware as hw
+from ..baselines import nmsd_statistic, rest_threshold, swt_statistic
 from ..baselines.calibration import REST_K
 from ..csvfiles import write_columns
 from ..methods import NMSD, SWT
+from .report import _plt
 
 __all__ = ["Comparison", "compare", "write_comparison", "format_comparison", "plot_comparison",
            "MEASURES", "SLIP_WINDOW_S"]
@@ -100,9 +103,8 @@ def _noise(frames: np.ndarray) -> np.ndarray:
 def _measures_of(frames: np.ndarray, fs: float, onset_index: int | None, calibration_s: float,
                  rest_k: float) -> dict[str, float]:
     """The measures of one recording ``frames`` (K, rows, cols) at ``fs``."""
-    from scipy.stats import kurtosis
+    from scipy.stats import kurtosis  # deferred: heavy (scipy.stats)
 
-    from ..baselines import nmsd_statistic, rest_threshold, swt_statistic
 
     f = np.asarray(frames, dtype=float).reshape(len(frames), -1)
     cal = f[: max(8, int(round(calibration_s * fs)))]
@@ -147,7 +149,7 @@ def _load_noise_ratio(f: np.ndarray, n_cal: int, onset_index: int | None, noise:
 
 def _spectrum(frames: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray]:
     """Median over taxels of the Welch spectrum of each taxel (linear trend removed), normalised to its mean."""
-    from scipy.signal import welch
+    from scipy.signal import welch  # deferred: heavy (scipy.signal)
 
     d = np.asarray(frames, float).reshape(len(frames), -1)
     f, p = welch(d, fs=fs, nperseg=min(32, len(d)), detrend="linear", axis=0)
@@ -158,8 +160,7 @@ def _spectrum(frames: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray]:
 def _simulated(fs: float, calibration_s: float, seed: int, kind: str):
     """Index-array frames of the simulated rig: at rest for ``calibration_s``, then a pour
     (until its first slip) or a drop; returns ``(frames, t, onset index)``."""
-    from .. import hardware as hw
-    from ..sim import Drop, Pour, Rig, simulate_open_loop
+    from ..sim import Drop, Pour, Rig, simulate_open_loop  # deferred: heavy (numba kernels)
 
     rig = Rig("TR", seed=seed)
     rig.grasp(hw.CONTACT_FORCE_N)
@@ -274,7 +275,6 @@ def plot_comparison(c: Comparison, path: str | Path) -> Path:
     >>> plot_comparison(c, __import__("tempfile").mkdtemp() + "/v.png").suffix
     '.png'
     """
-    from .report import _plt
 
     plt = _plt()
     fig, (a, b) = plt.subplots(1, 2, figsize=(11, 4))

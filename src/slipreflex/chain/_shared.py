@@ -19,7 +19,7 @@ FILTER_ORDER = 2
 def _design(fs: float, cutoff: float) -> tuple[np.ndarray, np.ndarray]:
     """Second-order sections and their steady-state factors, read only (cached)."""
     # function-level: keeps scipy.signal (about 0.5 s) out of `import slipreflex`
-    from scipy.signal import butter, sosfilt_zi
+    from scipy.signal import butter, sosfilt_zi  # deferred: heavy (scipy.signal)
 
     sos = np.asarray(butter(FILTER_ORDER, cutoff, fs=fs, output="sos"))
     zi = np.asarray(sosfilt_zi(sos))

@@ -74,7 +74,7 @@ def encode_trace(x, threshold: float = DEFAULT_THRESHOLD, dath: bool = False, da
     acc = np.empty(k)
     theta = np.empty(k)
     if k:
-        from ._kernels import encode_kernel
+        from ._kernels import encode_kernel  # deferred: heavy (numba kernels)
 
         prev = xs[0] if p.x0 is None else p.x0
         encode_kernel(xs, prev, p.threshold, p.dath, p.dath_samples, p.dath_floor, p.acc_reset or 0,

@@ -81,7 +81,7 @@ def lowpass(raw, fs: float = DAQ_FS, cutoff: float = 10.0) -> np.ndarray:
     r = as_samples("raw", raw)
     out = np.empty_like(r)
     if r.size:
-        from ._kernels import lowpass_kernel
+        from ._kernels import lowpass_kernel  # deferred: heavy (numba kernels)
 
         sos, zi = _design(p.fs, p.cutoff)
         lowpass_kernel(r, sos, zi * r[0], out)

@@ -61,7 +61,7 @@ def mpi(v, p0: float = 0.0, kp: float = 5.0, ki: float = 5.0, reset_after: int |
         raise DataError(f"v[{i}] is {counts[i]!r}: counts must be finite and >= 0")
     out = np.empty_like(counts)
     if counts.size:
-        from ._kernels import mpi_kernel
+        from ._kernels import mpi_kernel  # deferred: heavy (numba kernels)
 
         reset_after = -1 if p.reset_after is None else p.reset_after
         mpi_kernel(counts, p.p0, _clip(p.p0, p.lo, p.hi), p.kp, p.ki, reset_after, p.lo, p.hi, out)

@@ -27,6 +27,7 @@ from .._slots import slot
 from ..hardware import DAQ_FS, SLIP_FINGER, Finger
 from . import _layout as _k
 from ._checks import as_samples
+from ._layout import init_state, pack_params
 from .params import ReflexParams
 
 if TYPE_CHECKING:
@@ -86,7 +87,6 @@ class SlipReflex:
         if params is not None and kwargs:
             raise TypeError("give either params or keyword parameters, not both")
         self.params = params if params is not None else ReflexParams.from_dict(kwargs)
-        from ._layout import init_state, pack_params
 
         _load_step()
         self.name = self.params.name
@@ -231,7 +231,7 @@ _chain_step: Any = None  # the compiled step, imported with the first chain (num
 def _load_step() -> None:
     global _chain_step
     if _chain_step is None:
-        from ._kernels import chain_step
+        from ._kernels import chain_step  # deferred: heavy (numba kernels)
 
         _chain_step = chain_step
 
@@ -323,8 +323,7 @@ def run_chain(raw, params: ReflexParams | None = None, **kwargs) -> ChainResult:
         raise TypeError("give either params or keyword parameters, not both")
     p = params if params is not None else ReflexParams.from_dict(kwargs)
     r = as_samples("raw", raw)
-    from ._kernels import chain_kernel, empty_like_chain
-    from ._layout import init_state, pack_params
+    from ._kernels import chain_kernel, empty_like_chain  # deferred: heavy (numba kernels)
 
     out = empty_like_chain(r.size, p.n)
     if r.size:

@@ -15,12 +15,17 @@ import sys
 from collections.abc import Iterable
 from typing import Any
 
+from ..errors import ParameterError
+from ..hardware import DAQ_FS
+from ..live import DEFAULT_PORT, LiveView, parse_address, require_foxglove
+from ..lsl import LslOutlets, require_pylsl
+from ..taps import close_all
+
 __all__ = ["add_live_arguments", "check_live_arguments", "open_taps", "close_taps"]
 
 
 def add_live_arguments(p: argparse.ArgumentParser, *, lsl: bool = True) -> None:
     """Add ``--live [HOST:]PORT`` (and ``--lsl [NAME]``)."""
-    from ..live import DEFAULT_PORT
 
     g = p.add_argument_group("watching a run live")
     g.add_argument("--live", metavar="[HOST:]PORT", nargs="?", const=str(DEFAULT_PORT), default=None,
@@ -35,16 +40,13 @@ def add_live_arguments(p: argparse.ArgumentParser, *, lsl: bool = True) -> None:
 
 def check_live_arguments(args: argparse.Namespace) -> None:
     """Check ``--live`` / ``--lsl`` and their packages before any work starts."""
-    from ..live import parse_address, require_foxglove
 
     if getattr(args, "live", None) is not None:
         parse_address(args.live)
         require_foxglove()
     if getattr(args, "lsl", None) is not None:
-        from ..lsl import require_pylsl
 
         if not args.lsl.strip():
-            from ..errors import ParameterError
 
             raise ParameterError("--lsl: the stream name is empty")
         require_pylsl()
@@ -56,14 +58,11 @@ def open_taps(args: argparse.Namespace, topics: Iterable[str], *, lsl_source: st
     taps: list[Any] = []
     try:
         if getattr(args, "live", None) is not None:
-            from ..live import LiveView
 
             view = LiveView(args.live, topics)
             taps.append(view.start())
             print(f"live view: {view.url} (Foxglove: Open connection -> Foxglove WebSocket)", flush=True)
         if getattr(args, "lsl", None) is not None:
-            from ..hardware import DAQ_FS
-            from ..lsl import LslOutlets
 
             outlets = LslOutlets(args.lsl, source_id=f"{args.lsl}@{lsl_source}" if lsl_source else None,
                                  fs=fs or DAQ_FS, taxels=taxels)
@@ -77,7 +76,6 @@ def open_taps(args: argparse.Namespace, topics: Iterable[str], *, lsl_source: st
 
 def close_taps(taps: Iterable[Any]) -> None:
     """Close the taps; a tap that dropped messages or failed is a warning on stderr."""
-    from ..taps import close_all
 
     for note in close_all(taps):
         print(f"slipreflex: warning: {note}", file=sys.stderr, flush=True)

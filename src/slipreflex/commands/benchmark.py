@@ -12,6 +12,15 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+import numpy as np
+
+from ..baselines.calibration import REST_K
+from ..benchmark import BenchmarkConfig, read_folder, shipped_dataset
+from ..benchmark.report import format_table, plot_trial_runs, summarize, write_runs, write_summary
+from ..benchmark.run import RATES, REDUCTIONS
+from ..benchmark.vs_sim import compare, format_comparison, plot_comparison, write_comparison
+from ..paths import output_dir
+
 NAME = "benchmark"
 HELP = "score every detection method on recorded labelled slip trials (default: the shipped real data set)"
 ORDER = 35
@@ -19,8 +28,6 @@ ORDER = 35
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``slipreflex benchmark``."""
-    from ..baselines.calibration import REST_K
-    from ..benchmark.run import RATES, REDUCTIONS
 
     p.add_argument("folder", type=Path, nargs="?", default=None,
                    help="folder of trial CSV files (docs/benchmark.md; default: the shipped imanlab-slip set)")
@@ -46,10 +53,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Read and check every trial, run the methods, write and print the results."""
-    from ..benchmark import BenchmarkConfig, read_folder, shipped_dataset
-    from ..benchmark.report import format_table, plot_trial_runs, summarize, write_runs, write_summary
-    from ..benchmark.run import plan, run_trial
-    from ..paths import output_dir
+    from ..benchmark.run import plan, run_trial  # deferred: late-bound (tests patch slipreflex.benchmark.run.run_trial)
 
     names = [m for item in args.methods or () for m in item.split(",") if m.strip()]
     cfg = BenchmarkConfig(methods=tuple(names) if names else None,
@@ -59,7 +63,6 @@ def run(args: argparse.Namespace) -> int:
     trials = read_folder(folder)
     names, skipped = plan(trials, cfg)
     out = output_dir(args.out, "--out")
-    import numpy as np
 
     fs = [tr.fs for tr in trials]
     steps = np.concatenate([np.diff(tr.t) for tr in trials]) * 1e3
@@ -88,7 +91,6 @@ def run(args: argparse.Namespace) -> int:
     print(f"wrote {out / 'benchmark.csv'}, {out / 'summary.csv'}"
           + ("" if args.no_figures else f" and {len(trials)} figure(s)"))
     if args.vs_sim:
-        from ..benchmark.vs_sim import compare, format_comparison, plot_comparison, write_comparison
 
         cmp = compare(trials, calibration_s=cfg.calibration_s, seed=args.seed)
         write_comparison(cmp, out / "vs_sim.csv")

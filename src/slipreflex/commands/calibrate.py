@@ -1,8 +1,11 @@
 """``slipreflex calibrate``: the plant's open-loop calibration, bottle by bottle.
 
 For every bottle it prints the open-loop first pour slip (ml of water in the
-bottle when it first slips with the 0.8 N grasp and no reflex), the pads'
-and the cuff's friction, the grasp's normal force per contact, its static
+bottle when it first slips with the 0.8 N grasp and no reflex) twice: as the
+paper's instruments observe it (the accelerometer-onset recipe that analyses
+the trials, the flow sensor's volume: the number calibrated) and the
+simulator's true onset (all contacts sliding, creep included, earlier); then
+the pads' and the cuff's friction, the grasp's normal force per contact, its static
 capacity and its grip gain per position unit. The paper's bottles are
 calibrated to the paper's 200 ml (their built-in pad friction is the result
 of this calibration); a user's bottle from ``--objects`` keeps the friction
@@ -20,7 +23,16 @@ Examples (shell)::
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
+
+import numpy as np
+
+from .. import hardware as hw
+from ..analysis.figures import _plt, _save
+from ..errors import ParameterError
+from ..paths import output_dir
+from ._lists import names_list
 
 NAME = "calibrate"
 HELP = "open-loop calibration: first pour slip and friction per bottle (paper: first slip near 200 ml)"
@@ -30,7 +42,6 @@ ORDER = 45
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Command-line options of ``slipreflex calibrate``."""
     parser.add_argument("--objects", type=Path, default=None, help="TOML file of your own bottles and surfaces")
-    from ._lists import names_list
 
     parser.add_argument("--bottles", type=names_list, default=None,
                         help="comma-separated bottles to calibrate (default: the paper's TR,DK,TX, plus every "
@@ -45,11 +56,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Calibrate or check each bottle and print one line per bottle."""
-    from .. import hardware as hw
-    from ..errors import ParameterError
-    from ..sim import BOTTLES, HandParams, load_objects
-    from ..sim.calibration import PAPER_FIRST_SLIP_ML, calibrate_bottle, first_slip_ml
-    from ..sim.contacts import grip_gain, static_capacity
+    from ..sim import BOTTLES, HandParams, load_objects  # deferred: heavy (numba kernels)
+    from ..sim.calibration import (  # deferred: heavy (llvmlite, numba, scipy)
+        PAPER_FIRST_SLIP_ML,
+        calibrate_bottle,
+        first_slip,
+    )
+    from ..sim.contacts import grip_gain, static_capacity  # deferred: heavy (numba kernels)
 
     own = load_objects(args.objects).bottles if args.objects is not None else {}
     known = {**BOTTLES, **own}
@@ -61,15 +74,14 @@ def run(args: argparse.Namespace) -> int:
     if target is not None and not 0 < target < 500:
         raise ParameterError(f"--first-slip-ml must be in (0, 500) ml, got {target!r}")
     if args.figure is not None:
-        from ..paths import output_dir
 
         output_dir(args.figure.parent, "--figure")      # before the work: a bad folder costs one line
     hand = HandParams()
     drawn: dict = {}
     print(f"open-loop calibration: {hw.CONTACT_FORCE_N} N grasp, 500 ml at 1 L/min, no reflex "
-          f"(paper: first slip near {PAPER_FIRST_SLIP_ML:g} ml)")
-    print("bottle  first slip   pad mu_s/mu_k   cuff mu_s/mu_k  law          N/contact  capacity  gain")
-    from ..sim import Rig
+          f"(paper: first slip near {PAPER_FIRST_SLIP_ML:g} ml, as its accelerometer and flow sensor saw it)")
+    print("bottle  observed   true      pad mu_s/mu_k   cuff mu_s/mu_k  law          N/contact  capacity  gain")
+    from ..sim import Rig  # deferred: heavy (numba kernels)
 
     for n in names:
         bottle = known[n]
@@ -80,14 +92,16 @@ def run(args: argparse.Namespace) -> int:
             note = f"calibrated to {goal:g} ml"
         elif goal is not None:
             note = f"built-in, calibrated to {goal:g} ml"
-        ml = first_slip_ml(bottle)
+        fs = first_slip(bottle)
+        ml, true_ml = fs.observed_ml, fs.true_ml
         rig = Rig(bottle, seed=0)
         g = rig.grasp()
         cap = static_capacity(bottle, g.force_n)
         law = bottle.friction_law if bottle.friction_law == bottle.cuff_friction_law else \
             f"{bottle.friction_law}/{bottle.cuff_friction_law}"
         slip = "none" if ml != ml else ("falls at grasp" if ml == 0 else f"{ml:6.1f} ml")
-        print(f"{n:7s} {slip:>10s}   {bottle.mu_s:5.3f}/{bottle.mu_k:5.3f}     {bottle.cuff_mu_s:5.3f}/"
+        true = "none" if true_ml != true_ml else ("-" if true_ml == 0 else f"{true_ml:6.1f} ml")
+        print(f"{n:7s} {slip:>9s} {true:>9s}   {bottle.mu_s:5.3f}/{bottle.mu_k:5.3f}     {bottle.cuff_mu_s:5.3f}/"
               f"{bottle.cuff_mu_k:5.3f}     {law:12s} {g.force_n:5.2f} N  {cap:5.2f} N   "
               f"{grip_gain(hand, bottle):.3f} N/unit  ({note})")
         drawn[n] = (bottle, ml)
@@ -110,12 +124,9 @@ def open_loop_pour(bottle, seed: int, *, rest_s: float = 0.5, after_s: float = 3
     >>> 150 < first < 250 and ml.shape == mm.shape
     True
     """
-    import math
 
-    import numpy as np
 
-    from .. import hardware as hw
-    from ..sim import PAPER_POUR, Rig, simulate_open_loop
+    from ..sim import PAPER_POUR, Rig, simulate_open_loop  # deferred: heavy (numba kernels)
 
     rig = Rig(bottle, seed=seed)
     rig.grasp(hw.CONTACT_FORCE_N)
@@ -144,10 +155,8 @@ def calibration_figure(drawn: dict, path: Path) -> Path:
 
     ``drawn`` maps a bottle's name to (Bottle, its first slip in ml as printed).
     """
-    import numpy as np
 
-    from ..analysis.figures import _plt, _save
-    from ..sim.calibration import CALIBRATION_SEEDS, PAPER_FIRST_SLIP_ML
+    from ..sim.calibration import CALIBRATION_SEEDS, PAPER_FIRST_SLIP_ML  # deferred: heavy (numba kernels)
 
     plt = _plt()
     names = list(drawn)

@@ -2,15 +2,17 @@
 
 Reads a ``results.csv`` (written by ``slipreflex reproduce``, by an older version of it,
 or by your own analysis with the same columns: see
-:data:`slipreflex.analysis.trial.RESULT_COLUMNS`) and prints the claims table that
-``reproduce`` prints: each of the paper's claims (docs/method.md section 4.1) as *holds*, *fails* or *not
-testable here*, with the numbers behind the verdict. Claims 1-2 are judged on a
-characterization scan of the simulated slip sensor seeded with ``--seed``.
+:data:`slipreflex.analysis.trial.RESULT_COLUMNS`), prints the claims table that
+``reproduce`` prints (each of the paper's claims with its verdict class: holds,
+fails-definition, fails-paper, fails-plant, unresolved or not-decidable, its reason and
+the interval behind it) and writes it as ``claims.csv`` beside the results (or to
+``--out``). Claims 1-2 are judged on the characterization scan of the simulated slip
+sensor over texture seeds from ``--seed``.
 
 Examples (shell)::
 
     slipreflex claims out/reproduce/results.csv
-    slipreflex claims old-run/results.csv --seed 20191215
+    slipreflex claims old-run/results.csv --seed 20191215 --out old-run/claims-now.csv
 """
 
 from __future__ import annotations
@@ -18,6 +20,12 @@ from __future__ import annotations
 import argparse
 import csv
 from pathlib import Path
+
+from ..analysis.claims import claims_terminal, judge_run, write_claims_csv
+from ..analysis.trial import TrialRow
+from ..errors import ParameterError
+from ..experiments import ReproduceConfig
+from ..paths import read_text
 
 NAME = "claims"
 HELP = "judge the paper's claims on a results.csv (yours, or an earlier run's)"
@@ -29,11 +37,13 @@ NEEDED = ("experiment", "bottle", "method", "trial", "event", "n_events", "respo
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Command-line options of ``slipreflex claims``."""
-    from ..experiments import ReproduceConfig
 
     parser.add_argument("results", type=Path, help="a results.csv (one row per trial and slip event)")
     parser.add_argument("--seed", type=int, default=ReproduceConfig().seed,
-                        help="seed of the slip-sensor scan behind claims 1-2 (default: reproduce's master seed)")
+                        help="first texture seed of the slip-sensor scans behind claims 1-2 (default: reproduce's "
+                             "master seed)")
+    parser.add_argument("--out", type=Path, default=None, metavar="CLAIMS.csv",
+                        help="where to write the claims table (default: claims.csv beside RESULTS.csv)")
 
 
 def read_rows(path: Path) -> list:
@@ -42,9 +52,6 @@ def read_rows(path: Path) -> list:
     Raises :class:`~slipreflex.errors.ParameterError` naming the file (and line) when it
     is missing, lacks a column the claims read, or holds a value that does not parse.
     """
-    from ..analysis.trial import TrialRow
-    from ..errors import ParameterError
-    from ..paths import read_text
 
     if not path.exists():
         raise ParameterError(f"{path}: no such results file")
@@ -66,10 +73,17 @@ def read_rows(path: Path) -> list:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Print the claims table of ``args.results``."""
-    from ..analysis.claims import claims_terminal, judge_run
+    """Print the claims table of ``args.results`` and write it as claims.csv."""
 
+    out = args.out if args.out is not None else args.results.parent / "claims.csv"
+    if out.resolve() == args.results.resolve():
+        raise ParameterError(f"--out {out}: would overwrite the results table it judges")
+    if not out.parent.is_dir():
+        raise ParameterError(f"--out {out}: no such directory {out.parent}")
     rows = read_rows(args.results)
     print(f"{len(rows)} rows of {args.results}")
-    print(claims_terminal(judge_run(rows, seed=args.seed)))
+    results = judge_run(rows, seed=args.seed)
+    print(claims_terminal(results))
+    write_claims_csv(out, results)
+    print(f"wrote {out}")
     return 0

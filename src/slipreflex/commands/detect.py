@@ -19,8 +19,10 @@ from ..chain import ReflexParams, run_chain
 from ..chain.params import PRESETS
 from ..csvfiles import Recording, irregular_steps, read_recording, write_columns
 from ..errors import DataError, ParameterError
-from ..methods import DATH, FIXED
+from ..hardware import FINGER_MAX
+from ..methods import DATH, FIXED, applicable, make
 from ..paths import output_dir
+from ..validation import number, within
 
 NAME = "detect"
 HELP = "run the slip-detection chain over a CSV recording of slip-sensor samples"
@@ -122,7 +124,6 @@ def method_chain(name: str | None) -> tuple[str | None, ReflexParams | None]:
     ...
     slipreflex.errors.ParameterError: --method swt reads tactile frames, which detect's input ... does not supply ...
     """
-    from ..methods import applicable, make
 
     if name is None:
         return None, None
@@ -184,7 +185,6 @@ def _saturation(res, t: np.ndarray, params: ReflexParams) -> str | None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the chain and write the two CSVs; print a summary."""
-    from ..validation import within
 
     if args.fs is not None:
         within("fs_hz", args.fs, "--fs")
@@ -229,10 +229,12 @@ def _prefix(args: argparse.Namespace) -> Path:
 
 def _run_board(args: argparse.Namespace) -> int:
     """``detect --board``: the Python twin of the firmware over a CSV of ADC counts."""
-    from ..board import BoardParams, read_adc_csv, run_board_chain, write_board_outputs
-    from ..hardware import FINGER_MAX
-    from ..methods import applicable
-    from ..validation import number
+    from ..board import (  # deferred: late-bound (tests patch slipreflex.board.run_board_chain)
+        BoardParams,
+        read_adc_csv,
+        run_board_chain,
+        write_board_outputs,
+    )
 
     p0 = number("--p0", 0.0 if args.p0 is None else args.p0, lo=0, hi=FINGER_MAX)
     method = applicable(args.method or DATH, {"slip"}, _INPUT).name

@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ..recording import export_csv
 from .replay import add_recording_arguments, read_checked
 
 NAME = "export"
@@ -29,7 +30,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Export; print the files written (exit 2 for a partial recording without --allow-partial)."""
-    from ..recording import export_csv
 
     rec = read_checked(args)
     for name in export_csv(rec, args.out, all_streams=args.all):

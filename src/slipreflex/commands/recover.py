@@ -21,6 +21,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ..recording import PART_SUFFIX, recover_recording
+
 NAME = "recover"
 HELP = "rewrite a recording cut by a crash as a complete MCAP file that any MCAP reader opens"
 ORDER = 34
@@ -35,7 +37,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Recover; print what was written and what is missing."""
-    from ..recording import recover_recording
 
     out = args.out or default_out(args.recording)
     res = recover_recording(args.recording, out)
@@ -53,7 +54,6 @@ def default_out(recording: Path) -> Path:
     >>> default_out(Path("d/run-1.mcap.part")).as_posix()
     'd/run-1-recovered.mcap'
     """
-    from ..recording import PART_SUFFIX
 
     name = recording.name[:-len(PART_SUFFIX)] if recording.name.endswith(PART_SUFFIX) else recording.name
     stem = name[:-len(".mcap")] if name.endswith(".mcap") else Path(name).stem

@@ -12,7 +12,19 @@ commands: recorded 1249, replayed 1249 - identical
 from __future__ import annotations
 
 import argparse
+import json
+import math
+import sys
+import time
 from pathlib import Path
+
+import numpy as np
+
+from ..errors import DataError, ParameterError
+from ..hardware import SLIP_FINGER
+from ..methods import MethodContext, applicable, make
+from ..recording import METADATA_NAME, TOPICS, read_recording, replay
+from ._live import add_live_arguments, check_live_arguments, close_taps, open_taps
 
 NAME = "replay"
 HELP = "re-run the chain over a recording (MCAP) and compare with the recorded events and commands"
@@ -21,7 +33,6 @@ ORDER = 32
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``slipreflex replay``."""
-    from ._live import add_live_arguments
 
     add_recording_arguments(p, "replay a recording cut by a crash or with damaged chunks up to its first gap")
     add_live_arguments(p)
@@ -38,11 +49,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Replay; exit 0 if identical, 1 if not, 2 for a partial recording without --allow-partial."""
-    import math
 
-    from ..errors import ParameterError
-    from ..recording import replay
-    from ._live import check_live_arguments, close_taps, open_taps
 
     if not (math.isfinite(args.pace) and args.pace >= 0):
         raise ParameterError(f"--pace must be a number >= 0, got {args.pace}")
@@ -67,14 +74,8 @@ def run(args: argparse.Namespace) -> int:
 
 def replay_method(rec, name: str, threshold: float | None = None) -> int:
     """Run a registered method over a recording's input; print its spikes and commands."""
-    import json
 
-    import numpy as np
 
-    from ..errors import DataError
-    from ..hardware import SLIP_FINGER
-    from ..methods import MethodContext, applicable, make
-    from ..recording import METADATA_NAME
 
     supplies = {k for k, topic in (("slip", "/daq/samples"), ("tactile", "/tactile/frames")) if rec.topic(topic)}
     spec = applicable(name, supplies, f"{rec.path} (recorded: {', '.join(sorted(supplies)) or 'nothing'})")
@@ -126,12 +127,9 @@ def play(rec, taps, pace: float = 1.0, *, sleep=None, clock=None) -> int:
     /chain/events {'seq': 1, 't': 0.0} 5
     1
     """
-    import math
-    import time
 
     sleep = sleep or time.sleep
     clock = clock or time.monotonic
-    from ..recording import TOPICS
 
     rank = {t: k for k, t in enumerate(TOPICS)}
     # the loop's own order: by log time, then sample, then topic as it writes them
@@ -160,7 +158,6 @@ def add_recording_arguments(p: argparse.ArgumentParser, partial_help: str) -> No
 
 def read_checked(args: argparse.Namespace):
     """The recording ``args.recording``, partial ones refused unless ``args.allow_partial``."""
-    from ..recording import read_recording
 
     rec = read_recording(args.recording)
     check_partial(rec, args.allow_partial)
@@ -169,9 +166,7 @@ def read_checked(args: argparse.Namespace):
 
 def check_partial(rec, allow: bool) -> None:
     """A recording with gaps is an error naming them, or with ``allow`` a warning on stderr."""
-    import sys
 
-    from ..errors import DataError
 
     gaps = rec.gaps()
     if gaps and not allow:

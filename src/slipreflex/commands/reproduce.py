@@ -1,8 +1,9 @@
 """``slipreflex reproduce``: the paper's drop and pour experiments on the simulated rig.
 
-Runs every trial (by default 10 trials x 3 bottles x 2 experiments x 4
+Runs every trial (by default 20 trials x 3 bottles x 2 experiments x 4
 methods) in parallel, analyses them as the paper does, and writes
-``results.csv``, ``summary.csv``, ``report.md`` and PNG figures to ``--out``.
+``results.csv``, ``summary.csv``, ``report.md``, ``claims.csv`` (the paper's claims, each
+with its verdict class, reason and interval) and PNG figures to ``--out``.
 
 Examples
 --------
@@ -13,10 +14,23 @@ Examples
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import shlex
 import sys
 from pathlib import Path
+
+from .. import experiment_specs, methods
+from ..analysis.outputs import paper_part, scored
+from ..analysis.report import terminal_table
+from ..errors import ParameterError
+from ..experiments import BOTTLE_NAMES, EXPERIMENTS, METHODS, ReproduceConfig, grasp_seeds
+from ..grasping import check_run_grasp
+from ..interrupts import Interrupted, signals_ignored, sigterm_interrupts
+from ..paths import OutputSet
+from ..progress import format_duration
+from ..validation import choices, within
+from ._lists import names_list
 
 NAME = "reproduce"
 HELP = "run the paper's drop and pour experiments on the simulated rig and write a report"
@@ -26,8 +40,6 @@ ORDER = 30
 def _csv_list(kind: str, known, *, any_case: bool = False):
     """An argparse type: a comma-separated list of ``known()`` names (checked when parsed)."""
     def parse(text: str) -> tuple[str, ...]:
-        from ..errors import ParameterError
-        from ..validation import choices
 
         try:
             return choices(kind, list(_names(text)), known(),
@@ -39,7 +51,6 @@ def _csv_list(kind: str, known, *, any_case: bool = False):
 
 def _names(text: str) -> tuple[str, ...]:
     """A comma-separated list of names, checked later against the run's objects."""
-    from ._lists import names_list
 
     return names_list(text)
 
@@ -50,8 +61,7 @@ def own_objects(args: argparse.Namespace) -> dict:
     Every name is checked here, before any work: an unknown one is one line naming the
     option, the file and the names it has.
     """
-    from ..errors import ParameterError
-    from ..sim import load_objects
+    from ..sim import load_objects  # deferred: heavy (numba kernels)
 
     objs = load_objects(args.objects) if args.objects is not None else None
     out: dict = {}
@@ -65,8 +75,8 @@ def own_objects(args: argparse.Namespace) -> dict:
             raise ParameterError(f"{option} {name}: no such {kind[:-1]} ({where})")
         out[f"{option[2:]}_object"] = table[name]
     if objs is not None and objs.bottles:
-        from ..sim import BOTTLES
-        from ..sim.uncertain import Plant
+        from ..sim import BOTTLES  # deferred: heavy (numba kernels)
+        from ..sim.uncertain import Plant  # deferred: heavy (numba kernels)
 
         out["plant"] = Plant(bottles={**BOTTLES, **objs.bottles})
     return out
@@ -74,10 +84,7 @@ def own_objects(args: argparse.Namespace) -> dict:
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``slipreflex reproduce``: every count and load parameter."""
-    import dataclasses
 
-    from .. import experiment_specs, methods
-    from ..experiments import BOTTLE_NAMES, EXPERIMENTS, METHODS, ReproduceConfig
 
     d = {f.name: f.default for f in dataclasses.fields(ReproduceConfig)}
     p.add_argument("--out", type=Path, default=Path("out/reproduce"),
@@ -104,7 +111,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    default=EXPERIMENTS,
                    help=f"comma-separated experiments (default: {','.join(EXPERIMENTS)})")
     p.add_argument("--seed", type=int, default=d["seed"], help=f"master seed (default {d['seed']})")
-    from ..sim import PAPER_DROP, PAPER_POUR
+    from ..sim import PAPER_DROP, PAPER_POUR  # deferred: heavy (numba kernels)
 
     p.add_argument("--drop-mass", type=float, default=None, metavar="KG",
                    help=f"dropped mass in kg (default {PAPER_DROP.mass_kg:g}, the paper's)")
@@ -142,10 +149,11 @@ def run(args: argparse.Namespace) -> int:
     Ctrl-C or SIGTERM stops the run within about two seconds and writes what finished,
     marked partial; exit status 130.
     """
-    from ..experiments import ReproduceConfig, estimate_wall_s, run_reproduce
-    from ..interrupts import Interrupted, signals_ignored, sigterm_interrupts
-    from ..paths import OutputSet
-    from ..progress import format_duration
+    from ..experiments import (  # deferred: late-bound (tests patch slipreflex.experiments.run_reproduce)
+        ReproduceConfig,
+        estimate_wall_s,
+        run_reproduce,
+    )
 
     check_limits(args, _LIMITED)
     config = ReproduceConfig(
@@ -157,13 +165,14 @@ def run(args: argparse.Namespace) -> int:
         independent_seeds=args.independent_seeds, grasp_force_n=args.grasp_force, **own_objects(args))
     outputs = OutputSet(args.out, NAME)             # before the first trial, not after the last
     outputs.check(OUTPUT_NAMES)
-    from ..experiments import grasp_seeds
-    from ..grasping import check_run_grasp
 
     for b in config.bottles:                         # a grasp that cannot hold: one line, before the estimate
         check_run_grasp(config, b, grasp_seeds(config, b))
     jobs = int(args.jobs or os.cpu_count() or 1)
-    from ..warmup import COLD_COMPILE_S, cold_kernels
+    from ..warmup import (  # deferred: late-bound (tests patch slipreflex.warmup.cold_kernels)
+        COLD_COMPILE_S,
+        cold_kernels,
+    )
 
     cold = bool(cold_kernels())
     n, estimate = len(config.cells()), estimate_wall_s(config, jobs, cold=cold)
@@ -201,7 +210,6 @@ _LIMITED = (("--trials", "trials", "trials"), ("--rest", "rest", "rest_s"), ("--
 
 def check_limits(args: argparse.Namespace, limited) -> None:
     """Every bounded option within its plausible range (before any work), named by its option."""
-    from ..validation import within
 
     for option, dest, limit in limited:
         value = getattr(args, dest, None)
@@ -219,10 +227,11 @@ def _write(result, outputs, command: str | None) -> dict | None:
     Ctrl-C while writing leaves the previous outputs untouched: one "interrupted" line,
     and None (the caller exits 130).
     """
-    from ..analysis.claims import claims_terminal, judge_run
-    from ..analysis.outputs import paper_part, scored
-    from ..analysis.report import terminal_table
-    from ..experiments import write_outputs
+    from ..analysis.claims import (  # deferred: late-bound (tests patch slipreflex.analysis.claims.judge_run)
+        claims_terminal,
+        judge_run,
+    )
+    from ..experiments import write_outputs  # deferred: late-bound (tests patch slipreflex.experiments.write_outputs)
 
     staged = outputs.stage()
     try:
@@ -242,8 +251,9 @@ def _write(result, outputs, command: str | None) -> dict | None:
         print(notice)
     print(terminal_table(result.summary))
     if not result.partial_note and paper.rows:
-        print(claims_terminal(judge_run(scored(paper.rows), seed=result.config.seed)))
+        print(claims_terminal(judge_run(scored(paper.rows), seed=result.config.seed, plant=result.config.plant)))
+    claims = "" if result.partial_note or not paper.rows else ", claims.csv"
     print(f"{len(result.rows)} rows from {result.trials_finished} trials in {result.wall_s:.1f} s "
           f"({result.jobs} jobs); wrote {outputs.folder}/"
-          "{results.csv, summary.csv, report.md" + ("" if result.partial_note else ", figures/") + "}")
+          "{results.csv, summary.csv, report.md" + claims + ("" if result.partial_note else ", figures/") + "}")
     return paths

@@ -9,6 +9,7 @@ Examples
 from __future__ import annotations
 
 import argparse
+import contextlib
 import datetime
 import json
 import math
@@ -19,10 +20,18 @@ from pathlib import Path
 from typing import Any
 
 from .. import __version__
+from ..board import BoardParams, BoardSource, CheckedBoardReflex
+from ..chain import ReflexParams, SlipReflex
+from ..chain.params import PRESETS
 from ..errors import ParameterError
+from ..hands import get_hand, hand_names, open_hand
 from ..hardware import DAQ_FS, FINGER_MAX, FINGER_MIN, SLIP_FINGER, TRIPOD, Finger
-from ..methods import DATH, FIXED
-from ..runtime import WATCHDOG_MAX_S, WATCHDOG_MIN_S, WATCHDOG_S
+from ..live import RUN_TOPICS
+from ..methods import DATH, FIXED, MethodContext, applicable, make
+from ..paths import unique_name
+from ..recording import METADATA_NAME, PART_SUFFIX, PLANNED_SAMPLES, Recorder, RecordingError
+from ..runtime import WATCHDOG_MAX_S, WATCHDOG_MIN_S, WATCHDOG_S, start_positions
+from ..validation import within
 from ._live import add_live_arguments, check_live_arguments, close_taps, open_taps
 
 NAME = "run"
@@ -32,7 +41,6 @@ ORDER = 30
 
 def add_chain_arguments(p: argparse.ArgumentParser) -> None:
     """Chain options shared by ``run`` (defaults: the paper's)."""
-    from ..chain import ReflexParams
 
     d = ReflexParams()
     g = p.add_argument_group("reflex chain")
@@ -44,7 +52,6 @@ def add_chain_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument("--tactile-threshold", type=float, default=None,
                    help="a tactile method's threshold, in its unit (N/s for nmsd, N for swt), as "
                         "calibrated at rest")
-    from ..chain.params import PRESETS
 
     g.add_argument("--preset", choices=sorted(PRESETS), default=None,
                    help="a named chain instead of the options below (the presets of 'detect'): "
@@ -78,7 +85,6 @@ def chain_params(args: argparse.Namespace, p0: float):
     ``p0`` is the MPI's bookkeeping only (the hand gets the command's rises as closing time,
     :mod:`slipreflex.grip`), so the command's ceiling is ``p0`` plus one whole finger travel:
     whatever ``p0`` says, the reflex can add the same grip (the hand's end stop ends it)."""
-    from ..chain import ReflexParams
 
     hi = p0 + (FINGER_MAX - FINGER_MIN)
     if getattr(args, "preset", None):
@@ -109,7 +115,6 @@ def parse_p0(text: str) -> dict[Finger, float]:
     ...
     slipreflex.errors.ParameterError: --p0 'thumb=148,thumb=14,index=147,middle=147': finger thumb is given twice
     """
-    from ..runtime import start_positions
 
     items = [x.strip() for x in str(text).split(",") if x.strip()]
     if not items:
@@ -135,8 +140,6 @@ def parse_p0(text: str) -> dict[Finger, float]:
 
 def method_spec(args: argparse.Namespace):
     """``--method`` checked against what ``--daq`` and ``--hand-type`` supply (one-line errors)."""
-    from ..hands import get_hand
-    from ..methods import applicable
 
     hand = get_hand(args.hand_type)
     supplies = {"slip"} if args.daq else set()
@@ -165,15 +168,12 @@ def method_spec(args: argparse.Namespace):
 
 
 def _chain_defaults():
-    from ..chain import ReflexParams
 
     return ReflexParams()
 
 
 def build_reflex(args: argparse.Namespace, p0: dict[Finger, float]) -> tuple[Any, dict[str, str]]:
     """The reflex ``--method`` names and what the recording's metadata says about it."""
-    from ..chain import ReflexParams, SlipReflex
-    from ..methods import MethodContext, make
 
     spec, hand = method_spec(args)
     start = p0[SLIP_FINGER]
@@ -198,7 +198,6 @@ def build_reflex(args: argparse.Namespace, p0: dict[Finger, float]) -> tuple[Any
 
 def check_arguments(args: argparse.Namespace) -> dict[Finger, float]:
     """Check every option of ``run`` (before any port is opened); return the per-finger p0."""
-    from ..validation import within
 
     if args.duration is not None:
         within("duration_s", args.duration, "--duration")
@@ -216,7 +215,6 @@ def check_arguments(args: argparse.Namespace) -> dict[Finger, float]:
 
 def _check_board_arguments(args: argparse.Namespace) -> None:
     """``--board-reflex`` runs the chain the board was built with: only --method may change."""
-    from ..chain import ReflexParams
 
     if args.preset:
         raise ParameterError(f"--preset {args.preset} cannot be used with --board-reflex: the board "
@@ -235,7 +233,6 @@ def _check_board_arguments(args: argparse.Namespace) -> None:
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``slipreflex run``."""
-    from ..hands import hand_names
 
     p.add_argument("--daq", default=None,
                    help="DAQ serial port (e.g. /dev/ttyACM0, or a virtual-rig path); needed by a method "
@@ -280,7 +277,6 @@ def _p0_text(p0: dict[Finger, float]) -> str:
 
 def _open_run_taps(args: argparse.Namespace, reflex: Any, tactile: bool) -> list[Any]:
     """``--live`` / ``--lsl`` for this run: the topics its reflex and source give."""
-    from ..live import RUN_TOPICS
 
     topics = RUN_TOPICS + (("/board/state",) if args.board_reflex else ())
     if tactile:
@@ -291,8 +287,6 @@ def _open_run_taps(args: argparse.Namespace, reflex: Any, tactile: bool) -> list
 
 def _recorder(path: Path | None, meta: dict):
     """A new recording: ``path`` (never an existing file), or a free ``run-YYYYmmdd-HHMMSS[-N].mcap`` here."""
-    from ..paths import unique_name
-    from ..recording import METADATA_NAME, PART_SUFFIX, Recorder, RecordingError
 
     if path is not None:
         return Recorder(path, metadata={METADATA_NAME: meta})
@@ -310,7 +304,6 @@ def _recorder(path: Path | None, meta: dict):
 def _metadata(args: argparse.Namespace, reflex: Any, p0: dict[Finger, float],
               board_meta: dict[str, str]) -> dict[str, str]:
     """The run's facts for the recording's metadata."""
-    from ..recording import PLANNED_SAMPLES
 
     fs = float(getattr(reflex, "fs", DAQ_FS))
     meta = {"version": __version__, "reflex": reflex.name, "hand_type": args.hand_type,
@@ -326,18 +319,20 @@ def _metadata(args: argparse.Namespace, reflex: Any, p0: dict[Finger, float],
 
 def run(args: argparse.Namespace) -> int:
     """Open the devices and the recording, run the loop, print the summary."""
-    import contextlib
 
-    from ..devices.daq import SerialDaq
-    from ..hands import open_hand
-    from ..runtime import drop_capabilities, print_fault, realtime_priority, run_loop
+    from ..devices.daq import SerialDaq  # deferred: late-bound (tests patch slipreflex.devices.daq.SerialDaq)
+    from ..runtime import (  # deferred: late-bound (tests patch slipreflex.runtime.run_loop)
+        drop_capabilities,
+        print_fault,
+        realtime_priority,
+        run_loop,
+    )
 
     p0 = check_arguments(args)  # everything, before a port opens or a byte is sent
     reflex: Any
     reflex, board_meta = build_reflex(args, p0)
     tactile = getattr(reflex, "input_kind", "slip") == "tactile"
     if args.board_reflex:
-        from ..board import BoardParams, CheckedBoardReflex
 
         bparams = BoardParams.firmware(dath=args.method == DATH, p0=args.board_p0)
         reflex = CheckedBoardReflex(bparams)
@@ -373,7 +368,6 @@ def run(args: argparse.Namespace) -> int:
                   + (f", recording {recorder.path}" if recorder else "") + " (Ctrl-C stops)", flush=True)
             source: Any = hand if tactile else daq
             if args.board_reflex:
-                from ..board import BoardSource
 
                 source = BoardSource(daq, reflex)
             # run_loop starts with STOP: the fingers stay where the grasp left them

@@ -19,7 +19,12 @@ from typing import Any
 
 import numpy as np
 
+from ..analysis.paper import PAPER_SCAN_VOLTS
+from ..errors import ParameterError
+from ..hardware import DAQ_FS
 from ..methods import DATH, FIXED
+from ..paths import OutputSet
+from ..validation import number, within
 
 NAME = "scan"
 HELP = "simulate the slip sensor's characterization scan (paper Fig. 4-9): CSV, figure, numbers"
@@ -45,12 +50,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the scan, write the files, print the numbers."""
-    from ..errors import ParameterError
-    from ..hardware import DAQ_FS
-    from ..paths import OutputSet
-    from ..sim import scan
-    from ..sim.scan import PAPER_LAYOUT
-    from ..validation import number, within
+    from ..sim import scan  # deferred: heavy (numba kernels)
+    from ..sim.scan import PAPER_LAYOUT  # deferred: heavy (numba kernels)
 
     within("scan_speed_mm_s", args.speed, "--speed")
     within("scan_distance_mm", args.distance, "--distance")
@@ -113,7 +114,7 @@ OUTPUT_NAMES: tuple[str, ...] = ("scan.csv", "scan.png")
 
 def _layout_names(args: argparse.Namespace) -> dict:
     """The surfaces ``--objects`` adds (its surfaces, and its bottles' surfaces by bottle name)."""
-    from ..sim import load_objects
+    from ..sim import load_objects  # deferred: heavy (numba kernels)
 
     objs = load_objects(args.objects) if args.objects is not None else None
     extra: dict[str, Any] = dict(objs.surfaces) if objs else {}
@@ -124,8 +125,7 @@ def _layout_names(args: argparse.Namespace) -> dict:
 
 def _layout(args: argparse.Namespace) -> list:
     """``--layout`` as (Surface, length_m) pairs; names from the built-ins or ``--objects``."""
-    from ..errors import ParameterError
-    from ..sim.objects import resolve_surface
+    from ..sim.objects import resolve_surface  # deferred: heavy (numba kernels)
 
     extra = _layout_names(args)
     out = []
@@ -151,10 +151,10 @@ def _shown(summary) -> list[str]:
 
 
 def _figure(result, summary, path: Path, threshold: float) -> None:
-    import matplotlib
+    import matplotlib  # deferred: heavy (matplotlib)
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # deferred: heavy (matplotlib)
 
     pos = result.position * 1000.0
     x = result.analysis["filtered"]
@@ -174,7 +174,6 @@ def _figure(result, summary, path: Path, threshold: float) -> None:
         ax.axvline(a * 1000, ls="--", c="grey", lw=0.6)
         ax.text((a + b) * 500, 0.97, name, transform=ax.get_xaxis_transform(), ha="center", va="top",
                 fontsize=8, bbox={"fc": "white", "ec": "0.6", "lw": 0.5, "pad": 1.5})
-    from ..analysis.paper import PAPER_SCAN_VOLTS
 
     banded = False
     for name, a, b in result.regions:         # the paper's level on white and on black, where they lie

@@ -12,10 +12,10 @@ Examples
 --------
 >>> from slipreflex.cli import main
 >>> main(["study", "--plants", "2", "--trials", "1", "--workers", "0", "--out", "/tmp/s"])  # doctest: +SKIP
-claim  holds (95% CI)      not testable  text
-    1     0% (    0-66%)             0%  Scan: white about 0.3-0.5 V, black about 3.32-3.35 V
+claim  verdict           holds (95% CI)     text
+    1  holds              100% (  34-100%)  Scan: white about 0.3-0.5 V, black about 3.32-3.35 V
 ...
-    8   100% (  34-100%)             0%  DATH responds in under 85 ms on every bottle and experiment
+    8  fails-paper          0% (    0-66%)  DATH responds in under 85 ms on every bottle and experiment
 ...
 2 plants (2 computed now, 0 with errors) in 6.2 s on serial; wrote /tmp/s/{results.parquet, ...}
 """
@@ -24,10 +24,20 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import importlib.util
 import shlex
 import sys
 from pathlib import Path
 from typing import Any
+
+from .. import experiment_specs, methods
+from ..errors import SlipreflexError
+from ..experiments import BOTTLE_NAMES, EXPERIMENTS
+from ..experiments import DEFAULT_SEED as seed
+from ..paths import OutputSet
+from ..study import DEFAULT_PLANTS, DEFAULT_TRIALS, DESIGNS, read_parts
+from ..study.analyse import claim_fractions, plant_table, pooled_scan, write_outputs
+from ..validation import within
 
 NAME = "study"
 HELP = "map where the paper's claims hold across plausible plants (Dask; resumable)"
@@ -57,10 +67,6 @@ OUTPUT_NAMES: tuple[str, ...] = ("results.parquet", "results.csv", "plants.csv",
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``slipreflex study``."""
-    from .. import experiment_specs, methods
-    from ..experiments import BOTTLE_NAMES, EXPERIMENTS
-    from ..experiments import DEFAULT_SEED as seed
-    from ..study import DEFAULT_PLANTS, DEFAULT_TRIALS, DESIGNS
     p.add_argument("--plants", type=int, default=DEFAULT_PLANTS,
                    help=f"plants to draw (default {DEFAULT_PLANTS}; saltelli rounds up to B(D+2))")
     p.add_argument("--design", choices=DESIGNS, default="sobol", help="design over the constants (default sobol)")
@@ -105,9 +111,7 @@ def require_study_extra() -> None:
     --------
     >>> require_study_extra()  # doctest: +SKIP
     """
-    import importlib.util
 
-    from ..errors import SlipreflexError
 
     missing = [name for name in STUDY_EXTRA if importlib.util.find_spec(name) is None]
     if missing:
@@ -118,10 +122,7 @@ def require_study_extra() -> None:
 def run(args: argparse.Namespace) -> int:
     """Run the study, write the outputs, print the claims' fractions."""
     require_study_extra()
-    from ..paths import OutputSet
-    from ..study import StudyConfig, run_study
-    from ..study.analyse import claim_fractions, plant_table, write_outputs
-    from ..validation import within
+    from ..study import StudyConfig, run_study  # deferred: late-bound (tests patch slipreflex.study.run_study)
 
     within("trials", args.trials, "--trials")
     within("plants", args.plants, "--plants")
@@ -136,7 +137,6 @@ def run(args: argparse.Namespace) -> int:
         result = run_study(config, args.out, workers=args.workers, scheduler=args.scheduler,
                            progress=not args.no_progress, dashboard=args.dashboard)
     except KeyboardInterrupt:
-        from ..study import read_parts
 
         done = len(read_parts(args.out, config.fingerprint()))
         print(f"slipreflex study: interrupted; {done} finished plant(s) kept in {args.out}/parts, "
@@ -159,12 +159,12 @@ def run(args: argparse.Namespace) -> int:
         raise
     paths = {"study_md": outputs.folder / "study.md"}
     plants = plant_table(result.parts)
-    print("claim  holds (95% CI)      not testable  " + "text")
-    for r in claim_fractions(plants):
-        ci = f"{100 * r['holds_ci_low']:.0f}-{100 * r['holds_ci_high']:.0f}%" if r["plants"] else "-"
-        frac = f"{100 * r['holds_fraction']:.0f}%" if r["plants"] else "-"
-        nt = f"{100 * r['not_testable_fraction']:.0f}%" if r["plants"] else "-"
-        print(f"{r['claim']:>5}  {frac:>5} ({ci:>9})   {nt:>12}  {r['text']}")
+
+    print("claim  verdict           holds (95% CI)     text")
+    for r in claim_fractions(plants, pooled_scan(result.parts)):
+        ci = f"{100 * r['low']:.0f}-{100 * r['high']:.0f}%" if r["plants"] else "-"
+        frac = f"{100 * r['value']:.0f}%" if r["plants"] else "-"
+        print(f"{r['claim']:>5}  {r['verdict']:16}  {frac:>5} ({ci:>9})  {r['text']}")
     errors = sum(1 for p in plants if p.get("error"))
     files = "results.parquet, results.csv, plants.csv, claims.csv, sensitivity.csv, study.md"
     files += "" if args.no_figures else ", figures/"

@@ -28,6 +28,16 @@ import threading
 import time
 from pathlib import Path
 
+from ..devices.virtual import VirtualDevices, parse_schedule
+from ..errors import ParameterError
+from ..hands import get_hand, hand_names
+from ..methods import applicable
+from ..paths import output_dir
+from ..runtime import realtime_priority
+from ..validation import within
+from ._live import add_live_arguments, check_live_arguments, close_taps, open_taps
+from .reproduce import own_objects
+
 NAME = "virtual-rig"
 HELP = "simulated rig behind two pseudo-terminals (DAQ and i-Limb) for 'slipreflex run'"
 ORDER = 31
@@ -53,8 +63,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="also create DIR/daq and DIR/hand symlinks to the ports (stable paths; DIR is created; "
                         "existing DIR/daq or DIR/hand is an error, and only the links made are removed at exit)")
     p.add_argument("--duration", type=float, default=None, help="exit after this many seconds")
-    from ..hands import hand_names
-    from ._live import add_live_arguments
 
     p.add_argument("--hand-type", default="ilimb", choices=hand_names(),
                    help="the hand behind the hand port (default ilimb; ability: the Ability Hand's UART, "
@@ -70,10 +78,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def _objects(args: argparse.Namespace):
     """The bottle and the drop / pour to use, by name, from the paper's or ``--objects``."""
-    from ..errors import ParameterError
-    from ..sim import BOTTLES, load_objects
-    from ..sim.calibration import check_grasp
-    from .reproduce import own_objects
+    from ..sim import BOTTLES, load_objects  # deferred: heavy (numba kernels)
+    from ..sim.calibration import check_grasp  # deferred: heavy (numba kernels)
 
     objs = load_objects(args.objects) if args.objects is not None else None
     table = {**BOTTLES, **(objs.bottles if objs is not None else {})}
@@ -106,7 +112,6 @@ def _announce(dev, grasp, args: argparse.Namespace, hand, method, schedule) -> N
         when = "after 'run' connects" if args.schedule_from == "connect" else "after now"
         print("schedule: " + ", ".join(f"{k} {t:g} s" for k, t in schedule) + f" {when}", flush=True)
     if args.realtime:
-        from ..runtime import realtime_priority
 
         print(f"rig: {realtime_priority()}", flush=True)  # the rig's thread inherits it
 
@@ -144,9 +149,6 @@ def _serve(dev, args: argparse.Namespace, stop: threading.Event, pending: list[s
 
 def _check_arguments(args: argparse.Namespace) -> None:
     """Bounded --duration and --grasp-force; a --link-dir whose daq/hand names are free (before the grasp)."""
-    from ..errors import ParameterError
-    from ..paths import output_dir
-    from ..validation import within
 
     if args.duration is not None:
         within("duration_s", args.duration, "--duration")
@@ -162,11 +164,7 @@ def _check_arguments(args: argparse.Namespace) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Grasp, open the ports, run in real time, print a summary at exit."""
-    from ..devices.simrig import SimRig
-    from ..devices.virtual import VirtualDevices, parse_schedule
-    from ..hands import get_hand
-    from ..methods import applicable
-    from ._live import check_live_arguments, close_taps, open_taps
+    from ..devices.simrig import SimRig  # deferred: late-bound (tests patch slipreflex.devices.simrig.SimRig)
 
     schedule = parse_schedule(args.schedule)
     _check_arguments(args)

@@ -53,7 +53,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import DataError, DeviceError, ParameterError
-from ..hardware import FINGER_MAX, FINGER_MIN, Finger
+from ..hardware import FINGER_MAX, FINGER_MIN, PWM_MAX, Finger, HandCommand
 from ..interfaces import TactileSample
 from .port import ReconnectingPort
 
@@ -494,7 +494,7 @@ class AbilityHand:
         self._next_request = time.perf_counter() + 1 / self.fs
 
     def _write(self, frame: bytes) -> None:
-        import serial
+        import serial  # deferred: heavy (serial)
 
         if self._port.serial is None and not self._port.ensure_open():
             raise DeviceError(f"{self.port_name}: Ability Hand port is not connected")
@@ -504,7 +504,7 @@ class AbilityHand:
             raise self._port.fail(err, "write failed") from None
 
     def _receive(self, timeout: float) -> list[TactileSample]:
-        import serial
+        import serial  # deferred: heavy (serial)
 
         ser = self._port.serial
         if ser is None:
@@ -710,7 +710,6 @@ class VirtualAbilityHand:
     def _velocities(self, deg_s: dict[Finger, float]) -> None:
         """Velocity mode on the rig's hand: a closing finger closes at that speed, a finger at
         0 holds, an opening one goes to 0 (the simulated hand speaks i-Limb commands)."""
-        from ..hardware import PWM_MAX, HandCommand
 
         hand = self.rig.hand
         full = getattr(getattr(hand, "params", None), "speed_units_s", None)

@@ -188,7 +188,7 @@ class SerialDaq:
         (1, 5)
         >>> daq.close(); loop.close()
         """
-        import serial
+        import serial  # deferred: heavy (serial)
 
         ser = self._port.serial
         if ser is None:
@@ -241,7 +241,7 @@ class SerialDaq:
         0
         >>> daq.close(); loop.close()
         """
-        import serial
+        import serial  # deferred: heavy (serial)
 
         ser, dropped = self._port.serial, 0
         try:

@@ -373,7 +373,7 @@ class ILimb:
         return self._port.connected
 
     def _write(self, packet: bytes) -> None:
-        import serial
+        import serial  # deferred: heavy (serial)
 
         if self._port.serial is None:
             if not self._port.ensure_open():

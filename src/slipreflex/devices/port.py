@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import math
 import os
+import select
 import time
 from typing import Any
 
@@ -35,7 +36,7 @@ __all__ = ["ReconnectingPort"]
 
 def _keep_input_class() -> type:
     """A pyserial Serial whose open() keeps the bytes the kernel already holds."""
-    import serial
+    import serial  # deferred: heavy (serial)
 
     class KeepInputSerial(serial.Serial):  # type: ignore[misc, valid-type]
         _opening = False
@@ -104,7 +105,7 @@ class ReconnectingPort:
         self.serial: Any = self._open(first=True) if self.owns else port
 
     def _open(self, first: bool = False) -> Any:
-        import serial
+        import serial  # deferred: heavy (serial)
 
         name = self.port_name
         kw: dict[str, Any] = dict(baudrate=self.baudrate, timeout=0, write_timeout=self.write_timeout)
@@ -200,9 +201,8 @@ class ReconnectingPort:
         >>> p.write(b"hi"); p.serial.read(2)
         b'hi'
         """
-        import select
 
-        import serial
+        import serial  # deferred: heavy (serial)
 
         ser = self.serial
         fd = getattr(ser, "fd", None)

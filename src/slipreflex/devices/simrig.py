@@ -22,7 +22,9 @@ from typing import Any
 
 from .. import experiment_specs
 from ..errors import ParameterError
+from ..hardware import TRIPOD
 from ..interfaces import DaqSample, GraspResult
+from ..recording import FINGER_FIELDS
 
 __all__ = ["SimRig"]
 
@@ -46,7 +48,7 @@ class SimRig:
     """
 
     def __init__(self, bottle: Any = "TR", seed: int = 0, *, drop: Any = None, pour: Any = None) -> None:
-        from ..sim import PAPER_DROP, PAPER_POUR, Rig
+        from ..sim import PAPER_DROP, PAPER_POUR, Rig  # deferred: heavy (numba kernels)
 
         self.rig = Rig(bottle, seed=seed)
         self.drop = drop if drop is not None else PAPER_DROP
@@ -119,8 +121,6 @@ class SimRig:
         >>> m["fallen"], m["middle"] > 0, m["ring"] is None
         (False, True, True)
         """
-        from ..hardware import TRIPOD
-        from ..recording import FINGER_FIELDS
 
         r = self.rig
         pos = r.hand.positions()

@@ -53,6 +53,7 @@ from typing import Any
 
 from .. import experiment_specs
 from ..errors import DeviceError, ParameterError
+from ..hands import get_hand
 from ..hardware import DAQ_PERIOD_S, FINGER_SPEED_UNITS_S, PWM_MAX, Finger, HandCommand
 from . import wire
 from .ilimb import PacketParser, value_range
@@ -348,7 +349,6 @@ class VirtualDevices:
                  schedule: Iterable[tuple[str, float]] = (), period: float = DAQ_PERIOD_S,
                  script: Iterable[tuple[float, Any]] = (), schedule_from: str = "start",
                  on_event: Any = None, on_advance: Any = None, hand_type: str = "ilimb") -> None:
-        from ..hands import get_hand
 
         if schedule_from not in SCHEDULE_FROM:
             raise ParameterError(f"schedule_from must be one of {', '.join(SCHEDULE_FROM)}, got {schedule_from!r}")

@@ -6,7 +6,8 @@ The one open-loop fact of the paper's grasp is the first pour slip: with the
 capacity. The pads' static friction ``mu_s`` is the least known constant of
 that capacity, so it is the one calibrated: :func:`calibrate_bottle` finds
 the ``mu_s`` (``mu_k`` keeps its ratio to ``mu_s``) at which the open-loop
-first slip comes at the target volume, for any variant of the plant (a
+first slip, as the paper's accelerometer recipe and flow sensor observe it
+(:func:`first_slip`), comes at the target volume, for any variant of the plant (a
 different latency, stiffness or friction law recalibrates instead of
 silently moving the volume). Nothing here looks at a closed-loop result.
 
@@ -34,10 +35,14 @@ import numpy as np
 
 from .. import hardware as hw
 from ..errors import ParameterError
+from ..methods import EntryPoint
 from .contacts import static_capacity
 from .objects import PAPER_DROP, PAPER_POUR, WATER_DENSITY, Bottle, Drop, Pour
+from .rig import Rig
 
-__all__ = ["PAPER_FIRST_SLIP_ML", "CALIBRATION_SEEDS", "first_slip_ml", "calibrate_bottle", "Calibration",
+__all__ = ["PAPER_FIRST_SLIP_ML", "CALIBRATION_SEEDS", "LANDING_S", "OBSERVED_ONSET", "FirstSlip", "first_slip",
+           "first_slip_ml",
+           "calibrate_bottle", "Calibration",
            "drop_falls", "drop_fall_capacity", "GraspFailed", "check_grasp", "plant_lines"]
 
 #: The paper's open-loop first pour slip (ml): "the first slip occurred at about 200 ml" (Fig. 15).
@@ -58,7 +63,6 @@ class GraspFailed(ParameterError):
 
 
 def _holds(bottle: Bottle, force: float, rig_kwargs: dict[str, Any] | None, seed: int):
-    from .rig import Rig
 
     rig = Rig(bottle, seed=seed, **(rig_kwargs or {}))
     return rig, rig.grasp(force)
@@ -109,19 +113,127 @@ def check_grasp(bottle: Bottle, force: float = hw.CONTACT_FORCE_N, *, rig_kwargs
 
 
 def _rig(bottle: Bottle, seed: int, rig_kwargs: dict[str, Any] | None, grasp_force: float):
-    from .rig import Rig
 
     rig = Rig(bottle, seed=seed, **(rig_kwargs or {}))
     rig.grasp(grasp_force)
     return rig
 
 
+#: After the poured water lands, its knock is over by this time (s): the analysis of a pour trial
+#: starts looking for slips this long after the jet lands (``slipreflex.experiments.LANDING_S``, the
+#: same value; a test keeps them equal).
+LANDING_S: float = 0.1
+#: After the bottle has fallen out, the open-loop recording goes on this long (s): the fall's
+#: acceleration is in it, so the accelerometer recipe always has the slip it looks for.
+_AFTER_FALL_S = 0.3
+
+
+@dataclass(frozen=True)
+class FirstSlip:
+    """The open-loop first pour slip of one bottle: the simulator's truth and what the paper's instruments see.
+
+    Attributes
+    ----------
+    true_ml : float
+        Water in the bottle (ml, the water that has landed) when every contact first slides
+        (the simulator's true onset, creep included), mean over the seeds.
+    observed_ml : float
+        The flow sensor's volume (ml) at the slip onset that the accelerometer recipe finds
+        (:func:`slipreflex.analysis.onset.detect_onset`'s steps, segmented as a pour trial is:
+        :func:`slipreflex.analysis.events.segment_events`), mean over the seeds: the paper's
+        "first slip at about 200 ml" is this number.
+    delay_s : float
+        Mean time (s) from the true onset to the observed one.
+    per_seed : tuple of (float, float)
+        ``(true_ml, observed_ml)`` of every seed.
+
+    Examples
+    --------
+    >>> FirstSlip(190.0, 200.0, 0.5, ()).observed_ml
+    200.0
+    """
+
+    true_ml: float
+    observed_ml: float
+    delay_s: float
+    per_seed: tuple = ()
+
+
+#: The paper's accelerometer-onset recipe for the first slip of a pour recording, named by entry point:
+#: it sits above the simulator (``slipreflex.analysis``), which must not be imported from here.
+OBSERVED_ONSET = EntryPoint("slipreflex.analysis.events:first_pour_slip")
+
+
+def _observed_onset(rig, t_rec: float, t0: float, pour: Pour) -> tuple[float, float]:
+    """(onset time, flow-sensor ml at it) of the first slip the accelerometer recipe finds (NaN, NaN if none)."""
+    h = rig.daq_history(since=t_rec)
+    lo = t0 + math.sqrt(2.0 * pour.fall_height_m / hw.GRAVITY) + LANDING_S
+    ml = h.flow_pulses / hw.FLOW_PULSES_PER_LITRE * 1000.0
+    return OBSERVED_ONSET(h.t, h.accel, ml, (lo, float(h.t[-1]) if h.t.size else lo))
+
+
+def first_slip(bottle: Bottle, *, rig_kwargs: dict[str, Any] | None = None, seeds=CALIBRATION_SEEDS,
+               pour: Pour = PAPER_POUR, grasp_force: float = hw.CONTACT_FORCE_N) -> FirstSlip:
+    """The open-loop first pour slip, true and as the accelerometer recipe observes it.
+
+    The grasp closes to ``grasp_force``, the rig records from there, the pour
+    starts 0.5 s later and no reflex acts. The run goes on until the bottle
+    has fallen out (and 0.3 s more) or 1 s after the pour. The true onset is
+    the simulator's first gross slip of the contacts; the observed one is
+    what the paper's recipe finds in the recording's accelerometer (the
+    same steps and episode rules that analyse a pour trial), and its volume
+    is the flow sensor's (as in the paper's Fig. 15A). A slow rate-and-state
+    slip creeps before its acceleration shows, so the observed volume is the
+    larger.
+
+    Returns
+    -------
+    FirstSlip
+        ``nan`` volumes if the bottle does not slip during the pour (or the
+        recipe finds no slip), ``0.0`` if the grasp does not hold the empty
+        bottle.
+
+    Examples
+    --------
+    >>> from slipreflex.sim import BOTTLES
+    >>> s = first_slip(BOTTLES["DK"], seeds=(0,))
+    >>> s.observed_ml >= s.true_ml > 100
+    True
+    """
+    trues, obs, delays = [], [], []
+    for seed in seeds:
+        rig = _rig(bottle, seed, rig_kwargs, grasp_force)
+        if rig.fallen or rig.slipping:
+            return FirstSlip(0.0, 0.0, math.nan, ((0.0, 0.0),))
+        t_rec = rig.t
+        t0 = rig.t + _REST_S
+        rig.perturb(pour, at=t0)
+        end = t0 + pour.duration_s + 1.0
+        n0 = rig.onsets.size
+        stop, last = end, -1.0
+        while rig.t < stop and rig.t > last:      # (the rig stops on its own time grid, at or before `stop`)
+            last = rig.t
+            rig.advance_block(min(stop, rig.t + 0.5))
+            fell = rig.fall_time
+            if fell is not None:
+                stop = min(stop, float(fell) + _AFTER_FALL_S)
+        if rig.onsets.size == n0:
+            return FirstSlip(math.nan, math.nan, math.nan, ((math.nan, math.nan),))
+        t_on = float(rig.onsets[n0])
+        trues.append(_water_kg(pour, t0, t_on) / WATER_DENSITY * 1e6)
+        t_obs, ml = _observed_onset(rig, t_rec, t0, pour)
+        obs.append(ml)
+        delays.append(t_obs - t_on)
+    return FirstSlip(float(np.mean(trues)), float(np.mean(obs)), float(np.mean(delays)), tuple(zip(trues, obs)))
+
+
 def first_slip_ml(bottle: Bottle, *, rig_kwargs: dict[str, Any] | None = None, seeds=CALIBRATION_SEEDS,
-                  pour: Pour = PAPER_POUR, grasp_force: float = hw.CONTACT_FORCE_N) -> float:
+                  pour: Pour = PAPER_POUR, grasp_force: float = hw.CONTACT_FORCE_N, observed: bool = True) -> float:
     """Water in the bottle (ml) at the first slip of an open-loop pour, averaged over ``seeds``.
 
-    The grasp closes to ``grasp_force``, the pour starts 0.5 s later and no
-    reflex acts; the first gross slip of the contacts (truth) ends the run.
+    As the paper's instruments see it (``observed=True``, the default: the
+    accelerometer recipe's onset and the flow sensor's volume), or the
+    simulator's true onset (``observed=False``). See :func:`first_slip`.
 
     Returns
     -------
@@ -132,25 +244,11 @@ def first_slip_ml(bottle: Bottle, *, rig_kwargs: dict[str, Any] | None = None, s
     Examples
     --------
     >>> from slipreflex.sim import BOTTLES
-    >>> first_slip_ml(BOTTLES["DK"], seeds=(0,)) > 100
+    >>> first_slip_ml(BOTTLES["DK"], seeds=(0,)) > first_slip_ml(BOTTLES["DK"], seeds=(0,), observed=False)
     True
     """
-    out = []
-    for seed in seeds:
-        rig = _rig(bottle, seed, rig_kwargs, grasp_force)
-        if rig.fallen or rig.slipping:
-            return 0.0
-        t0 = rig.t + _REST_S
-        rig.perturb(pour, at=t0)
-        end = t0 + pour.duration_s + 1.0
-        n0 = rig.onsets.size
-        while rig.t < end and rig.onsets.size == n0:
-            rig.advance_block(min(end, rig.t + 0.5))
-        if rig.onsets.size == n0:
-            return math.nan
-        t_on = float(rig.onsets[n0])
-        out.append(_water_kg(pour, t0, t_on) / WATER_DENSITY * 1e6)
-    return float(np.mean(out))
+    s = first_slip(bottle, rig_kwargs=rig_kwargs, seeds=seeds, pour=pour, grasp_force=grasp_force)
+    return s.observed_ml if observed else s.true_ml
 
 
 def _water_kg(pour: Pour, t0: float, t: float) -> float:
@@ -177,6 +275,9 @@ class Calibration:
     note : str
         ``""``, or why the first slip is not at the target (a jump of the first
         slip over the target: the nearest reachable volume in ``band_ml`` was taken).
+    true_first_slip_ml : float
+        The simulator's true first slip (ml) at the calibrated friction
+        (``first_slip_ml`` is the observed one, the one calibrated).
 
     Examples
     --------
@@ -192,6 +293,7 @@ class Calibration:
     mu_k: float
     capacity_n: float
     note: str = ""
+    true_first_slip_ml: float = math.nan
 
 
 #: Relative width (of ``mu_s``) under which a bracket of the first slip that still straddles the
@@ -244,8 +346,16 @@ def _search(f, lo, hi, target: float, tol: float):
 def calibrate_bottle(bottle: Bottle, target_ml: float = PAPER_FIRST_SLIP_ML, *,
                      rig_kwargs: dict[str, Any] | None = None, seeds=CALIBRATION_SEEDS, pour: Pour = PAPER_POUR,
                      grasp_force: float = hw.CONTACT_FORCE_N, tol_ml: float = 1.0,
-                     band_ml: tuple[float, float] | None = None) -> Calibration:
-    """Calibrate the pads' static friction so that the open-loop first pour slip comes at ``target_ml``.
+                     band_ml: tuple[float, float] | None = None, observed: bool = True) -> Calibration:
+    """Calibrate the pads' static friction so that the observed open-loop first pour slip comes at ``target_ml``.
+
+    The first slip calibrated is the one the paper's instruments saw
+    (:func:`first_slip`: the accelerometer recipe's onset, the flow sensor's
+    volume), not the simulator's earlier true onset (``observed=False``
+    calibrates that one instead: :attr:`Calibration.first_slip_ml` is then the
+    true volume). On a plant whose middle-finger cuff sticks and slips, the
+    accelerometer sees the cuff's first slip: the observed first slip stays
+    there whatever the pads' friction, and no pad friction meets a later target.
 
     The first slip grows with ``mu_s`` (``mu_k / mu_s`` kept), but in steps:
     the bottle slips grossly only when all three contacts slide, and the
@@ -284,8 +394,12 @@ def calibrate_bottle(bottle: Bottle, target_ml: float = PAPER_FIRST_SLIP_ML, *,
     def with_mu(mu: float) -> Bottle:
         return replace(bottle, mu_s=mu, mu_k=mu * ratio)
 
+    seen: dict[float, FirstSlip] = {}
+
     def f(mu: float) -> float:   # a bottle that does not slip during the pour counts as twice its volume
-        v = first_slip_ml(with_mu(mu), rig_kwargs=rig_kwargs, seeds=seeds, pour=pour, grasp_force=grasp_force)
+        s = seen[mu] = first_slip(with_mu(mu), rig_kwargs=rig_kwargs, seeds=seeds, pour=pour,
+                                  grasp_force=grasp_force)
+        v = s.observed_ml if observed else s.true_ml
         return pour.volume_ml * 2 if math.isnan(v) else v
 
     tol = max(tol_ml, 0.02 * target_ml)
@@ -294,7 +408,8 @@ def calibrate_bottle(bottle: Bottle, target_ml: float = PAPER_FIRST_SLIP_ML, *,
     if abs(best[1] - target_ml) > tol:
         best, note = _across_jump(f, lo, hi, target_ml, band_ml, bottle.name)
     b = with_mu(best[0])
-    return Calibration(b, best[1], float(target_ml), b.mu_s, b.mu_k, static_capacity(b, 1.0), note)
+    return Calibration(b, best[1], float(target_ml), b.mu_s, b.mu_k, static_capacity(b, 1.0), note,
+                       seen[best[0]].true_ml)
 
 
 def _across_jump(f, lo, hi, target: float, band_ml, name: str) -> tuple[tuple[float, float], str]:

@@ -18,7 +18,7 @@ Examples
 >>> round(grip_gain(HandParams(), BOTTLES["TR"]), 3)       # N per position unit, per contact
 0.102
 >>> round(static_capacity(BOTTLES["TR"], 1.0), 3)          # N, at 1 N per contact
-2.196
+1.958
 """
 
 from __future__ import annotations

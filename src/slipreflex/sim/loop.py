@@ -59,6 +59,8 @@ from ..errors import ParameterError
 from ..grip import Grip, finger_groups, span
 from ..hardware import Finger, HandCommand
 from ..interfaces import Reflex
+from ..paths import new_file
+from .closed import compilable, run_compiled
 from .objects import Drop, Pour
 from .rig import DaqBlock, Rig, SlipEvent
 
@@ -223,7 +225,6 @@ class SimTrace:
         >>> p.read_text().splitlines()[0].split(",")[:3]
         ['t', 'volts', 'accel_x']
         """
-        from ..paths import new_file
 
         path = Path(path)
         frame = self.to_frame()
@@ -410,7 +411,6 @@ def run_closed_loop(rig: Rig, reflex: Reflex, duration: float, *,
     tac_s = rig.tactile_sampler(float(fs), Finger.INDEX, keep=True) if fs else None
     record: list = []
     try:
-        from .closed import compilable, run_compiled
 
         if compiled and compilable(rig, reflex, fingers):
             reflex_sampler = tac_s if kind == "tactile" else None

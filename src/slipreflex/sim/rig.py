@@ -48,6 +48,7 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.special import j1
 
 from .. import hardware as hw
 from .._slots import slot
@@ -812,7 +813,6 @@ class Rig:
 
     def _water_params(self, P: np.ndarray) -> None:
         """The water's splash and slosh constants (:class:`WaterParams`) and the grasp's sideways stiffness."""
-        from scipy.special import j1
 
         w, r = self.water, self.bottle.diameter_m / 2.0
         P[K.P_SPL_RMS] = w.splash_rms

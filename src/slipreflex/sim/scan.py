@@ -26,19 +26,22 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from dataclasses import replace as _replace
 
 import numpy as np
 
 from .. import hardware as hw
+from ..chain import encode_trace, lowpass
 from ..errors import ParameterError
 from ..methods import DATH, FIXED
 from . import kernel as K
-from .objects import Surface, resolve_surface
+from .objects import SURFACES, Surface, resolve_surface
 from .params import SlipSensorParams
 from .rig import fill_slip_sensor_params, seed_sequence
 from .sensors import Track
 
-__all__ = ["scan", "ScanResult", "PAPER_LAYOUT", "ScanSummary"]
+__all__ = ["scan", "ScanResult", "PAPER_LAYOUT", "ScanSummary", "ScanEnsemble", "scan_ensemble", "ENSEMBLE_SEEDS",
+           "calibrate_surface"]
 
 #: The paper's test surface on its stand: (surface, length in m), top to bottom.
 PAPER_LAYOUT: tuple[tuple[str, float], ...] = (("stand", 0.005), ("white", 0.010), ("black", 0.030),
@@ -107,7 +110,6 @@ class ScanResult:
         >>> s.spikes["dath"] > s.spikes["fixed"]
         True
         """
-        from ..chain import encode_trace, lowpass
 
         x = lowpass(self.volts, fs=self.fs, cutoff=cutoff)
         fixed = encode_trace(x, threshold=threshold, dath=False)
@@ -237,3 +239,145 @@ def scan(seed: int | np.random.SeedSequence | np.random.Generator | None = 0, *,
     regions = [(s.name, float(edges[i]), float(edges[i + 1])) for i, (s, _) in enumerate(surfaces)]
     return ScanResult(t=t, position=pos, volts=volts, regions=regions, speed=speed, fs=fs)
 
+
+
+#: Texture seeds of a scan ensemble (the claims on the scan are judged over their distribution).
+ENSEMBLE_SEEDS: int = 200
+
+
+@dataclass(frozen=True)
+class ScanEnsemble:
+    """The characterization scan's numbers over many texture seeds (one entry per seed).
+
+    Attributes
+    ----------
+    seeds : ndarray of int
+        The texture seeds (``base + 0 .. n - 1``).
+    white_lo, white_hi, black_lo, black_hi : ndarray
+        Filtered level range (V) inside each region (see :class:`ScanSummary`).
+    fixed_gap, dath_gap : ndarray
+        Smallest spike spacing (mm) on white or black of the fixed threshold
+        and of DATH (NaN with fewer than two spikes in both).
+    fixed_spikes, dath_spikes : ndarray of int
+        Spikes over the whole scan.
+    step_mm : float
+        Travel between two samples (mm): the finest spacing a scan can show.
+
+    Examples
+    --------
+    >>> e = scan_ensemble(4)
+    >>> e.white_lo.shape, bool((e.white_lo < e.white_hi).all())
+    ((4,), True)
+    """
+
+    seeds: np.ndarray
+    white_lo: np.ndarray
+    white_hi: np.ndarray
+    black_lo: np.ndarray
+    black_hi: np.ndarray
+    fixed_gap: np.ndarray
+    dath_gap: np.ndarray
+    fixed_spikes: np.ndarray
+    dath_spikes: np.ndarray
+    step_mm: float
+
+    def __len__(self) -> int:
+        return int(self.seeds.size)
+
+    def band(self, name: str, central: float = 0.90) -> tuple[float, float]:
+        """The central ``central`` fraction of one statistic over the seeds (NaN left out).
+
+        Examples
+        --------
+        >>> lo, hi = scan_ensemble(8).band("white_lo")
+        >>> lo <= hi
+        True
+        """
+        x = np.asarray(getattr(self, name), dtype=float)
+        x = x[np.isfinite(x)]
+        if not x.size:
+            return float("nan"), float("nan")
+        q = (1.0 - central) / 2.0
+        return float(np.quantile(x, q)), float(np.quantile(x, 1.0 - q))
+
+
+def _gap(summary: ScanSummary, method: str) -> float:
+    g = [v for (m, region), v in summary.min_spacing_mm.items()
+         if m == method and region in ("white", "black") and v is not None]
+    return float(min(g)) if g else float("nan")
+
+
+def scan_ensemble(n: int = ENSEMBLE_SEEDS, *, base: int = 0, sensor: SlipSensorParams | None = None,
+                  layout: Sequence[tuple[Surface | str, float]] = PAPER_LAYOUT) -> ScanEnsemble:
+    """The characterization scan analysed on ``n`` texture seeds ``base .. base + n - 1`` (about 10 ms each).
+
+    Parameters
+    ----------
+    n : int
+        Seeds (default :data:`ENSEMBLE_SEEDS`).
+    base : int
+        First seed (a study gives each plant its own).
+    sensor : SlipSensorParams, optional
+    layout : sequence of (Surface or name, length_m)
+
+    Returns
+    -------
+    ScanEnsemble
+
+    Examples
+    --------
+    >>> e = scan_ensemble(3, base=10)
+    >>> e.seeds.tolist(), round(e.step_mm, 4)
+    ([10, 11, 12], 0.003)
+    """
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+        raise ParameterError(f"n must be an integer >= 1, got {n!r}")
+    cols: dict[str, list] = {k: [] for k in ("white_lo", "white_hi", "black_lo", "black_hi", "fixed_gap",
+                                              "dath_gap", "fixed_spikes", "dath_spikes")}
+    nan = (float("nan"), float("nan"))
+    for s in range(base, base + n):
+        r = scan(seed=s, sensor=sensor, layout=layout)
+        a = r.analyse()
+        for region in ("white", "black"):
+            lo, hi = a.ranges.get(region, nan)
+            cols[f"{region}_lo"].append(lo)
+            cols[f"{region}_hi"].append(hi)
+        cols["fixed_gap"].append(_gap(a, FIXED))
+        cols["dath_gap"].append(_gap(a, DATH))
+        cols["fixed_spikes"].append(a.spikes[FIXED])
+        cols["dath_spikes"].append(a.spikes[DATH])
+    arrays = {k: np.asarray(v, dtype=np.int64 if k.endswith("spikes") else float) for k, v in cols.items()}
+    return ScanEnsemble(seeds=np.arange(base, base + n), step_mm=1e3 * 1e-3 / hw.DAQ_FS, **arrays)
+
+
+def calibrate_surface(name: str, level_v: tuple[float, float], *, n: int = ENSEMBLE_SEEDS,
+                      sensor: SlipSensorParams | None = None, iterations: int = 6) -> Surface:
+    """A scan surface's reflectance and texture so that the ensemble's median level range is ``level_v``.
+
+    The median over ``n`` texture seeds of the region's filtered range midpoint
+    is brought to the midpoint of ``level_v`` (by the reflectance) and its
+    median width to the width of ``level_v`` (by the texture's rms), by fixed
+    point iteration: the level is nearly linear in the reflectance above the
+    sensor's saturation knee, and the width in the texture. Calibrated on
+    ensemble statistics, not on a few seeds, so that no lucky draw sets a
+    constant. Open loop only (the paper's scan, Fig. 6-9).
+
+    Examples
+    --------
+    >>> s = calibrate_surface("black", (3.32, 3.35), n=8, iterations=1)
+    >>> s.name, 0.2 < s.reflectance < 0.5
+    ('black', True)
+    """
+
+
+    surf = SURFACES[name]
+    sensor = sensor or SlipSensorParams()
+    want_mid, want_w = 0.5 * (level_v[0] + level_v[1]), level_v[1] - level_v[0]
+    layout_of = lambda s: [(s if n_ == name else SURFACES[n_], length) for n_, length in PAPER_LAYOUT]  # noqa: E731
+    for _ in range(iterations):
+        e = scan_ensemble(n, sensor=sensor, layout=layout_of(surf))
+        lo, hi = getattr(e, f"{name}_lo"), getattr(e, f"{name}_hi")
+        mid, w = float(np.median(0.5 * (lo + hi))), float(np.median(hi - lo))
+        refl = float(np.clip(surf.reflectance - (want_mid - mid) / sensor.supply_v, 0.0, 1.0))
+        surf = _replace(surf, reflectance=refl, texture=float(np.clip(surf.texture * want_w / w, 0.0, 0.5)))
+    return surf

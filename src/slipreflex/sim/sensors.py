@@ -2,8 +2,9 @@
 
 * :func:`texture` draws a unit-variance texture along a surface with a
   power-law spectrum (deterministic under a seed);
-* :class:`Track` is what the slip sensor sees along a path: the spot-blurred
-  reflectance of a layout of surfaces, times their texture, sampled every
+* :class:`Track` is what the slip sensor sees along a path: the reflectance
+  of a layout of surfaces with their texture, blurred by the sensor's spot
+  (edges and texture alike: the sensor integrates its whole spot), sampled every
   :data:`TRACK_DX` metres; the physics kernel interpolates it at the
   surface's position under the sensor, so the signal moves when, and only
   when, the surface moves;
@@ -104,6 +105,29 @@ def opr5005_volts(reflectance: np.ndarray | float, params: SlipSensorParams | No
     return p.v_sat + p.knee_v * np.logaddexp(0.0, z)
 
 
+def _spot_blur(x: np.ndarray, sigma: float, dx: float) -> np.ndarray:
+    """``x`` seen through the sensor's Gaussian spot (sd ``sigma``): a diffuse reflective sensor integrates
+    its whole spot, so edges and texture are blurred alike (ends padded with their end values).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> y = _spot_blur(np.r_[np.zeros(400), np.ones(400)], 1e-4, 5e-6)
+    >>> round(float(y[400] + y[399]), 6), round(float(y[0]), 12), round(float(y[-1]), 12)
+    (1.0, 0.0, 1.0)
+    """
+    if sigma <= 0:
+        return x
+    from scipy.signal import fftconvolve  # deferred: heavy (scipy)
+
+    half = int(np.ceil(4 * sigma / dx))
+    xs = np.arange(-half, half + 1) * dx
+    ker = np.exp(-0.5 * (xs / sigma) ** 2)
+    ker /= ker.sum()
+    padded = np.concatenate([np.full(half, x[0]), x, np.full(half, x[-1])])
+    return fftconvolve(padded, ker, mode="valid")
+
+
 @dataclass(frozen=True)
 class Track:
     """What the slip sensor sees along a path over one or more surfaces.
@@ -145,7 +169,8 @@ class Track:
         lead : float
             Margin (m) before position 0 (for negative displacements).
         sensor : SlipSensorParams, optional
-            For the spot size that blurs edges between surfaces.
+            For the spot size that blurs what the sensor sees (edges between
+            surfaces and the texture alike).
         dx : float
             Grid spacing (m).
 
@@ -172,12 +197,5 @@ class Track:
             m = n // 2 + 1
             rng.standard_normal(m)
             rng.standard_normal(m)
-        if len(layout) > 1 and sensor.spot_sigma_m > 0:
-            half = int(np.ceil(4 * sensor.spot_sigma_m / dx))
-            xs = np.arange(-half, half + 1) * dx
-            ker = np.exp(-0.5 * (xs / sensor.spot_sigma_m) ** 2)
-            ker /= ker.sum()
-            padded = np.concatenate([np.full(half, base[0]), base, np.full(half, base[-1])])
-            base = np.convolve(padded, ker, mode="valid")
-        rho = np.clip(base + tex, 0.0, 1.0)
+        rho = np.clip(_spot_blur(base + tex, sensor.spot_sigma_m, dx), 0.0, 1.0)
         return cls(rho=np.ascontiguousarray(rho), dx=dx, origin=lead)

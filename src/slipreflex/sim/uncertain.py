@@ -47,8 +47,10 @@ from types import MappingProxyType
 from typing import Any
 
 from ..errors import ParameterError
+from ..paths import read_toml
 from .objects import BOTTLES, Bottle
 from .params import FlowParams, HandParams, ImuParams, PhysicsParams, SlipSensorParams, TactileParams, WaterParams
+from .rig import Rig
 
 __all__ = ["UncertainConstant", "UNCERTAIN", "Plant", "plant_from_values", "load_ranges", "nominal_values",
            "DISTRIBUTIONS", "markdown_table", "WIDEN_LIMIT", "plausible_limits"]
@@ -157,7 +159,11 @@ UNCERTAIN: Mapping[str, UncertainConstant] = MappingProxyType({c.name: c for c i
        "paper Fig. 15 and III-B: the first pour slip 'at about 200 ml' (read as +-30 ml); the pads' mu_s "
        "is calibrated to it (Plant.calibrated)", "calibration.first_slip_ml"),
     _c("pad_mu_k_ratio", "1", round(_B["TR"].mu_k / _B["TR"].mu_s, 6), 0.6, 1.0, "uniform",
-       "estimate: kinetic friction of rubber on polymers 0-40 % below static", "bottle.mu_k/mu_s"),
+       "estimate: kinetic friction of rubber on polymers 0-40 % below static; the smooth PET bottles (TR, DK: "
+       "one polymer, one finish)", "bottle[TR,DK].mu_k/mu_s"),
+    _c("pad_mu_k_ratio_TX", "1", round(_B["TX"].mu_k / _B["TX"].mu_s, 6), 0.6, 1.0, "uniform",
+       "estimate: kinetic friction of rubber on polymers 0-40 % below static; TX's vinyl tape, drawn apart "
+       "from the smooth bottles", "bottle[TX].mu_k/mu_s"),
     _c("stribeck_velocity", "m/s", _B["TR"].stribeck_velocity_m_s, 1e-4, 1e-2, "loguniform",
        "estimate: soft polymer contacts lose their static friction over 0.1-10 mm/s",
        "bottle.stribeck_velocity_m_s"),
@@ -362,7 +368,10 @@ class Plant:
         >>> p.bottles["TR"].mu_s < Plant().bottles["TR"].mu_s
         True
         """
-        from .calibration import CALIBRATION_SEEDS, calibrate_bottle
+        from .calibration import (  # deferred: late-bound (tests patch slipreflex.sim.calibration.calibrate_bottle)
+            CALIBRATION_SEEDS,
+            calibrate_bottle,
+        )
 
         kw = self.rig_kwargs()
         bottles = {n: calibrate_bottle(b, self.first_slip_ml, rig_kwargs=kw,
@@ -387,7 +396,6 @@ class Plant:
         >>> Plant().rig("DK", seed=3).bottle.name
         'DK'
         """
-        from .rig import Rig
 
         if isinstance(bottle, str):
             if bottle not in self.bottles:
@@ -427,6 +435,9 @@ def plant_from_values(values: Mapping[str, float] | None = None, *,
     Returns
     -------
     Plant
+        ``plant_from_values({})`` is the built-in plant: the paper's bottles as
+        :data:`~slipreflex.sim.BOTTLES` holds them, bit for bit (a ratio
+        constant at a bottle's own ratio keeps that bottle's field).
 
     Raises
     ------
@@ -463,7 +474,10 @@ def plant_from_values(values: Mapping[str, float] | None = None, *,
             else:
                 raise ParameterError(f"{name}: unknown target {target!r}")
     for b, fld, val, ratio_of in ratios:
+        own = getattr(BOTTLES[b], fld) / getattr(BOTTLES[b], ratio_of)
         base = bottle_set[b][ratio_of] if ratio_of in bottle_set[b] else getattr(BOTTLES[b], ratio_of)
+        if base == getattr(BOTTLES[b], ratio_of) and round(own, 6) == val:
+            continue    # the bottle's own ratio on its own base: keep its own field, bit for bit
         bottle_set[b][fld] = val * base
     defaults = {"hand": HandParams, "slip_sensor": SlipSensorParams, "imu": ImuParams,
                 "tactile": TactileParams, "flow": FlowParams, "physics": PhysicsParams, "water": WaterParams}
@@ -522,7 +536,6 @@ def load_ranges(path: str | Path, table: Mapping[str, UncertainConstant] | None 
     (True, 0.02)
     """
     table = UNCERTAIN if table is None else table
-    from ..paths import read_toml
 
     path = Path(path)
     doc = read_toml(path, "")

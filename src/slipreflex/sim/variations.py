@@ -45,6 +45,7 @@ import numpy as np
 from ..errors import ParameterError
 from .objects import BOTTLES, Bottle
 from .params import HandParams
+from .rig import Rig
 
 __all__ = ["TrialVariation", "VariationSpread", "draw_variation", "apply_variation", "trial_rig", "grasped_rig"]
 
@@ -166,7 +167,6 @@ def trial_rig(bottle: str | Bottle, seed: int, *, spread: VariationSpread | None
     >>> trial_rig("DK", 3, spread=VariationSpread.none()).bottle == BOTTLES["DK"]
     True
     """
-    from .rig import Rig
 
     table = bottles if bottles is not None else BOTTLES
     if isinstance(bottle, str):

@@ -2,16 +2,20 @@
 
 * :func:`plant_table` - one record per plant: its constants, its error and
   each claim's verdict.
-* :func:`claim_fractions` - per claim, the fraction of plants where it
-  holds with a 95 % Wilson score interval, and the fraction where it is not
-  testable (denominator: the plants that ran without error).
+* :func:`claim_fractions` - per claim, the study's verdict (one of the six
+  classes of :mod:`slipreflex.analysis.claims`) with its reason, the
+  fraction of plants where it holds with a 95 % Wilson score interval
+  (``scipy.stats.binomtest``) and the count of every class (denominator: the
+  plants that ran without error and were not rejected for an observed first
+  slip outside the paper's band). Claims 1-2 are judged on every plant's
+  scans pooled.
 * :func:`sensitivity` - which constants decide each claim. For every design:
   Spearman's rank correlation between each constant and the claim holding
   (1) or failing (0), over the plants where it was testable, with its
   p-value; it needs no particular design and any N, and a rank measure fits a
   yes/no outcome of constants with log-uniform ranges. For the ``saltelli``
   design, also SALib's first-order and total Sobol' indices of the same
-  indicator (not testable and errors count as 0).
+  indicator (every other verdict and errors count as 0).
 * :func:`write_outputs` - results.parquet / results.csv, plants.csv,
   claims.csv, sensitivity.csv, figures and study.md from a
   :class:`~slipreflex.study.StudyRun`.
@@ -26,30 +30,47 @@ from __future__ import annotations
 
 import csv
 import math
+import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ..analysis.claims import CLAIMS, FAILS, HOLDS, NOT_TESTABLE
+from ..analysis.claims import (
+    CLAIMS,
+    CLAIMS_CSV_COLUMNS,
+    FAILING,
+    FAILS_PLANT,
+    HOLDS,
+    NOT_DECIDABLE,
+    UNRESOLVED,
+    VERDICTS,
+    ClaimInput,
+    proportion_interval,
+)
+from ..paths import new_file
 from .design import varying
+from .runner import _arrow_table
 
-__all__ = ["wilson", "plant_table", "claim_fractions", "sensitivity", "top_constants", "write_outputs",
+__all__ = ["wilson", "plant_table", "pooled_scan", "claim_fractions", "sensitivity", "top_constants", "write_outputs",
            "study_markdown", "CLAIMS_COLUMNS", "SENSITIVITY_COLUMNS", "Z95"]
 
 #: Normal quantile of the 95 % intervals.
 Z95: float = 1.959963984540054
-#: Columns of claims.csv.
-CLAIMS_COLUMNS: tuple[str, ...] = ("claim", "text", "plants", "errors", "holds", "fails", "not_testable",
-                                   "holds_fraction", "holds_ci_low", "holds_ci_high", "not_testable_fraction")
+#: Columns of claims.csv: the claims table's (value: the fraction of plants where the claim holds, low/high
+#: its Wilson interval), then the plants and the count of each verdict.
+CLAIMS_COLUMNS: tuple[str, ...] = (*CLAIMS_CSV_COLUMNS[:-1], "plants", "errors", "rejected",
+                                   *(v.replace("-", "_") for v in VERDICTS))
 #: Columns of sensitivity.csv.
 SENSITIVITY_COLUMNS: tuple[str, ...] = ("claim", "constant", "n", "spearman_rho", "spearman_p",
                                         "sobol_s1", "sobol_s1_conf", "sobol_st", "sobol_st_conf", "rank")
 
 
-def wilson(k: int, n: int, z: float = Z95) -> tuple[float, float]:
-    """Wilson score interval of a binomial proportion ``k / n`` (NaN, NaN for ``n == 0``).
+def wilson(k: int, n: int) -> tuple[float, float]:
+    """Wilson score interval (95 %) of a binomial proportion ``k / n`` (NaN, NaN for ``n == 0``).
+
+    ``scipy.stats.binomtest(k, n).proportion_ci(method="wilson")``.
 
     Examples
     --------
@@ -57,57 +78,106 @@ def wilson(k: int, n: int, z: float = Z95) -> tuple[float, float]:
     >>> lo, round(hi, 3)
     (0.0, 0.161)
     """
-    if n == 0:
-        return float("nan"), float("nan")
-    p = k / n
-    den = 1 + z * z / n
-    mid = (p + z * z / (2 * n)) / den
-    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / den
-    return (0.0 if k == 0 else max(0.0, mid - half)), (1.0 if k == n else min(1.0, mid + half))
+    return proportion_interval(k, n)[1:]
 
 
 def plant_table(parts: Mapping[int, tuple[dict, list]]) -> list[dict[str, Any]]:
-    """One record per plant: ``plant``, its constants, ``error``, ``claim_1`` .. ``claim_10``.
+    """One record per plant: ``plant``, its constants, calibration, ``error``, ``claim_N`` and ``reason_N``.
 
     Examples
     --------
-    >>> plant_table({0: ({"values": {"a": 1.0}, "error": "", "claims": [[1, "holds", ""]]}, [])})
-    [{'plant': 0, 'a': 1.0, 'error': '', 'claim_1': 'holds'}]
+    >>> plant_table({0: ({"values": {"a": 1.0}, "error": "", "claims": [[1, "holds", "r"]]}, [])})
+    [{'plant': 0, 'a': 1.0, 'error': '', 'claim_1': 'holds', 'reason_1': 'r'}]
     """
     out = []
     for i in sorted(parts):
         meta = parts[i][0]
         rec = {"plant": i, **meta["values"], **meta.get("calibration", {}), "error": meta["error"]}
-        rec.update({f"claim_{n}": v for n, v, _ in meta["claims"]})
+        for n, v, why in meta["claims"]:
+            rec.update({f"claim_{n}": v, f"reason_{n}": why})
         out.append(rec)
     return out
 
 
-def claim_fractions(plants: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
-    """Per claim: plants where it holds (fraction, 95 % Wilson interval), fails, is not testable.
+def pooled_scan(parts: Mapping[int, tuple[dict, list]]):
+    """Every plant's scans as one :class:`~slipreflex.sim.scan.ScanEnsemble` (None without scans).
 
     Examples
     --------
-    >>> rows = claim_fractions([{"error": "", "claim_3": "holds"}, {"error": "", "claim_3": "fails"}])
-    >>> rows[2]["holds"], rows[2]["holds_fraction"]
-    (1, 0.5)
+    >>> pooled_scan({0: ({"scan": {}}, [])}) is None
+    True
     """
-    ok = [p for p in plants if not p.get("error")]
+    from ..sim.scan import ScanEnsemble  # deferred: heavy (llvmlite, numba, scipy)
+
+    scans = [parts[i][0].get("scan") or {} for i in sorted(parts)]
+    scans = [x for x in scans if x]
+    if not scans:
+        return None
+    cols = {k: np.concatenate([np.asarray(x[k]) for x in scans]) for k in scans[0]}
+    return ScanEnsemble(step_mm=1.0 / 333.3333333333333, **cols)
+
+
+def _study_verdict(claim: Any, verdicts: list[str], reasons: list[str]) -> tuple[str, str]:
+    """The study's verdict on a claim from its plants' verdicts (and the reason)."""
+    if not verdicts:
+        return NOT_DECIDABLE, "no plant ran"
+    top = max(VERDICTS, key=verdicts.count)
+    k, n = verdicts.count(HOLDS), len(verdicts)
+    share = f"{verdicts.count(top)} of {n} plants"
+    if top in FAILING[:2] or top == NOT_DECIDABLE:   # the same on every plant: the equations or the paper
+        why = max(set(r for v, r in zip(verdicts, reasons) if v == top), key=reasons.count)
+        return top, f"{share}: {why}"
+    f, lo, hi = proportion_interval(k, n)
+    text = f"holds on {k} of {n} plants ({100 * f:.0f} %, {100 * lo:.0f}-{100 * hi:.0f} %)"
+    if top == UNRESOLVED:   # most plants' own trials could not decide it: the study cannot either
+        return UNRESOLVED, (f"{share} unresolved: their trials' intervals straddle the criterion (one trial per "
+                            f"cell gives none); {text}; more --trials decide it")
+    if lo > 0.5:
+        return HOLDS, text
+    if hi < 0.5:
+        return FAILS_PLANT, text + " (what decides it: sensitivity.csv)"
+    return UNRESOLVED, text + ": it depends on the plant (see its figure)"
+
+
+def claim_fractions(plants: Sequence[Mapping[str, Any]], scan: Any = None) -> list[dict[str, Any]]:
+    """Per claim: the study's verdict and reason, the fraction of plants where it holds (Wilson), class counts.
+
+    Plants with an error, or rejected for an observed first slip outside the paper's band,
+    are counted apart. ``scan``: the pooled scans (:func:`pooled_scan`) judge claims 1-2.
+
+    Examples
+    --------
+    >>> rows = claim_fractions([{"error": "", "claim_3": "holds"}, {"error": "", "claim_3": "fails-plant"}])
+    >>> rows[2]["holds"], rows[2]["value"], rows[2]["verdict"]
+    (1, 0.5, 'unresolved')
+    """
+
+    ok = [p for p in plants if not p.get("error") and not p.get("rejected")]
     out = []
     for c in CLAIMS:
-        v = [p.get(f"claim_{c.number}", NOT_TESTABLE) for p in ok]
-        k, f, nt = v.count(HOLDS), v.count(FAILS), v.count(NOT_TESTABLE)
-        lo, hi = wilson(k, len(v))
-        out.append({"claim": c.number, "text": c.text, "plants": len(v), "errors": len(plants) - len(ok),
-                    "holds": k, "fails": f, "not_testable": nt,
-                    "holds_fraction": k / len(v) if v else float("nan"), "holds_ci_low": lo, "holds_ci_high": hi,
-                    "not_testable_fraction": nt / len(v) if v else float("nan")})
+        v = [p.get(f"claim_{c.number}", NOT_DECIDABLE) for p in ok]
+        why = [str(p.get(f"reason_{c.number}", "")) for p in ok]
+        k = v.count(HOLDS)
+        frac, lo, hi = proportion_interval(k, len(v))
+        verdict, reason = _study_verdict(c, v, why)
+        criterion = "holds on most plants (Wilson interval above 50 %)"
+        if c.number in (1, 2) and scan is not None:
+            judged = [p for p in c.judge(ClaimInput([], scan)) ]
+            order = {x: i for i, x in enumerate(VERDICTS)}
+            d = min(judged, key=lambda p: order[p.verdict])
+            verdict, reason, criterion = d.verdict, f"{len(scan)} scans pooled over the plants: {d.reason}", \
+                d.criterion
+        out.append({"claim": c.number, "text": c.text, "verdict": verdict, "reason": reason,
+                    "value": frac if v else float("nan"), "criterion": criterion, "low": lo, "high": hi,
+                    "plants": len(v), "errors": sum(bool(p.get("error")) for p in plants),
+                    "rejected": sum(bool(p.get("rejected")) and not p.get("error") for p in plants),
+                    **{x.replace("-", "_"): v.count(x) for x in VERDICTS}})
     return out
 
 
 def _sobol(plants: Sequence[Mapping[str, Any]], names: list[str], table: Mapping, claim: int,
            seed: int) -> dict[str, tuple[float, float, float, float]]:
-    from SALib.analyze import sobol
+    from SALib.analyze import sobol  # deferred: optional extra (study: SALib)
 
     d = len(names)
     if not names or len(plants) % (d + 2):
@@ -116,7 +186,6 @@ def _sobol(plants: Sequence[Mapping[str, Any]], names: list[str], table: Mapping
     if y.std() == 0:
         return {}
     problem = {"num_vars": d, "names": names, "bounds": [[0.0, 1.0]] * d}
-    import warnings
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
@@ -132,19 +201,19 @@ def sensitivity(plants: Sequence[Mapping[str, Any]], table: Mapping, *, design: 
     Examples
     --------
     >>> from slipreflex.sim.uncertain import UNCERTAIN
-    >>> ps = [{"error": "", "hand_latency": x, "claim_8": "holds" if x < 0.02 else "fails"}
+    >>> ps = [{"error": "", "hand_latency": x, "claim_8": "holds" if x < 0.02 else "fails-plant"}
     ...       for x in np.linspace(0.005, 0.03, 12)]
     >>> top = [r for r in sensitivity(ps, UNCERTAIN) if r["claim"] == 8 and r["rank"] == 1][0]
     >>> top["constant"], top["spearman_rho"] < -0.8
     ('hand_latency', True)
     """
-    from scipy.stats import spearmanr
+    from scipy.stats import spearmanr  # deferred: heavy (scipy.stats)
 
     names = [k for k in varying(table) if all(k in p for p in plants)]
-    ok = [p for p in plants if not p.get("error")]
+    ok = [p for p in plants if not p.get("error") and not p.get("rejected")]
     out = []
     for c in CLAIMS:
-        testable = [p for p in ok if p.get(f"claim_{c.number}") in (HOLDS, FAILS)]
+        testable = [p for p in ok if p.get(f"claim_{c.number}") in (HOLDS, FAILS_PLANT, UNRESOLVED)]
         y = np.array([p[f"claim_{c.number}"] == HOLDS for p in testable], dtype=float)
         sob = _sobol(plants, names, table, c.number, seed) if design == "saltelli" and len(ok) == len(plants) \
             else {}
@@ -189,7 +258,6 @@ def _cell(v: Any) -> str:
 
 
 def _write_csv(path: Path, rows: Sequence[Mapping[str, Any]], columns: Sequence[str]) -> Path:
-    from ..paths import new_file
 
     with new_file(path, "w", replace=True) as fh:
         w = csv.writer(fh, lineterminator="\n")
@@ -210,14 +278,15 @@ def _columns(rows: Sequence[Mapping[str, Any]]) -> list[str]:
     return cols
 
 
-_COLORS = {HOLDS: "#2ca02c", FAILS: "#d62728", NOT_TESTABLE: "0.75", "error": "black"}
+_COLORS = {HOLDS: "#2ca02c", "fails-definition": "#7f0000", "fails-paper": "#ff7f0e", FAILS_PLANT: "#d62728",
+           UNRESOLVED: "#1f77b4", NOT_DECIDABLE: "0.75", "error": "black"}
 
 
 def _plot_claim(plants, claim: Any, xy: list[str], table: Mapping, path: Path) -> Path:
-    import matplotlib
+    import matplotlib  # deferred: heavy (matplotlib)
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # deferred: heavy (matplotlib)
 
     fig, ax = plt.subplots(figsize=(5.5, 4.2), constrained_layout=True)
     for verdict, color in _COLORS.items():
@@ -231,7 +300,7 @@ def _plot_claim(plants, claim: Any, xy: list[str], table: Mapping, path: Path) -
         c = table[name]
         getattr(ax, f"set_{axis}label")(f"{name} ({c.unit})")
         if c.distribution == "loguniform":
-            from matplotlib import ticker
+            from matplotlib import ticker  # deferred: heavy (matplotlib)
 
             getattr(ax, f"set_{axis}scale")("log")
             a = getattr(ax, f"{axis}axis")
@@ -246,25 +315,24 @@ def _plot_claim(plants, claim: Any, xy: list[str], table: Mapping, path: Path) -
 
 
 def _plot_fractions(fractions: Sequence[Mapping[str, Any]], path: Path) -> Path:
-    import matplotlib
+    import matplotlib  # deferred: heavy (matplotlib)
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    import matplotlib.pyplot as plt  # deferred: heavy (matplotlib)
 
     fig, ax = plt.subplots(figsize=(8.5, 4.2), constrained_layout=True)
     n = [r["claim"] for r in fractions]
-    f = np.array([r["holds_fraction"] for r in fractions], dtype=float) * 100
-    lo = np.array([r["holds_ci_low"] for r in fractions], dtype=float) * 100
-    hi = np.array([r["holds_ci_high"] for r in fractions], dtype=float) * 100
-    nt = np.array([r["not_testable_fraction"] for r in fractions], dtype=float) * 100
-    fails = np.array([r["fails"] / r["plants"] if r["plants"] else np.nan for r in fractions]) * 100
-    ax.bar(n, f, color=_COLORS[HOLDS], label="holds")
-    ax.bar(n, fails, bottom=f, color=_COLORS[FAILS], alpha=0.35, label="fails")
-    ax.bar(n, nt, bottom=100 - nt, color=_COLORS[NOT_TESTABLE], label="not testable")
-    ax.errorbar(n, f, yerr=[np.maximum(np.nan_to_num(f - lo), 0), np.maximum(np.nan_to_num(hi - f), 0)],
-                fmt="none", ecolor="black",
-                capsize=3, label="95 % Wilson interval")
-    ax.set(xticks=n, xlabel="claim (docs/method.md section 4.1)", ylabel="% of plants", ylim=(0, 100),
+    bottom = np.zeros(len(n))
+    for v in VERDICTS:
+        share = np.array([r[v.replace("-", "_")] / r["plants"] if r["plants"] else np.nan for r in fractions]) * 100
+        ax.bar(n, share, bottom=bottom, color=_COLORS[v], label=v)
+        bottom += np.nan_to_num(share)
+    f = np.array([r["value"] for r in fractions], dtype=float) * 100
+    lo = np.array([r["low"] for r in fractions], dtype=float) * 100
+    hi = np.array([r["high"] for r in fractions], dtype=float) * 100
+    ax.errorbar(n, f, yerr=[np.maximum(np.nan_to_num(f - lo), 0), np.maximum(np.nan_to_num(hi - f), 0)], fmt="none",
+                ecolor="black", capsize=3, label="holds: 95 % Wilson interval")
+    ax.set(xticks=n, xlabel="claim", ylabel="% of plants", ylim=(0, 100),
            title="Where the paper's claims hold across plausible plants")
     ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.0, 1.0))
     fig.savefig(path, dpi=100)
@@ -291,9 +359,8 @@ def write_outputs(run: Any, *, figures: bool = True, command: str | None = None)
     >>> sorted(paths)
     ['claims', 'plants', 'results_csv', 'results_parquet', 'sensitivity', 'study_md']
     """
-    import pyarrow.parquet as pq
+    import pyarrow.parquet as pq  # deferred: optional extra (study: pyarrow)
 
-    from .runner import _arrow_table
 
     out = Path(run.out)
     rows = [r for i in sorted(run.parts) for r in run.parts[i][1]]
@@ -303,7 +370,7 @@ def write_outputs(run: Any, *, figures: bool = True, command: str | None = None)
     paths["results_csv"] = _write_csv(out / "results.csv", rows, _columns(rows))
     plants = plant_table(run.parts)
     paths["plants"] = _write_csv(out / "plants.csv", plants, _columns(plants))
-    fractions = claim_fractions(plants)
+    fractions = claim_fractions(plants, pooled_scan(run.parts))
     paths["claims"] = _write_csv(out / "claims.csv", fractions, CLAIMS_COLUMNS)
     table = run.config.table
     sens = sensitivity(plants, table, design=run.config.design, seed=run.config.seed)
@@ -351,25 +418,30 @@ def study_markdown(run: Any, plants: Sequence[Mapping[str, Any]], fractions: Seq
               f"constants; on each: {cfg.trials} trial(s) x bottles {', '.join(cfg.bottles)} x experiments "
               f"{', '.join(cfg.experiments)} x methods {', '.join(cfg.methods)} = {cfg.trials_per_plant} "
               "closed-loop trials, the same trial seeds on every plant; pads calibrated to the paper's "
-              f"open-loop first slip: {'yes' if cfg.calibrate else 'no'}; scan: {'yes' if cfg.scan else 'no'}. "
-              f"{len(errors)} plant(s) raised an error (in plants.csv).", ""]
+              f"open-loop first slip as the accelerometer observes it: {'yes' if cfg.calibrate else 'no'}; scans: "
+              + (f"{cfg.scan_seeds} texture seeds of its own per plant" if cfg.scan else "none") + ". "
+              f"{len(errors)} plant(s) raised an error (in plants.csv); "
+              f"{sum(bool(p.get('rejected')) for p in plants)} rejected: their calibrated observed first slip "
+              "left the paper's band (counted apart).", ""]
     lines += _calibration_lines(plants, cfg.table) if cfg.calibrate else []
     lines += ["## Claims", "",
-              "Holds: % of the plants that ran where the claim holds, with its 95 % Wilson interval. "
-              "Decided by: the constants that matter most (sensitivity.csv; Spearman's rho between the "
-              "constant and the claim holding, over the plants where it was testable"
+              "Verdict: the study's class (fails-definition, fails-paper and not-decidable when most plants say "
+              "so, for the same reason; otherwise holds / fails-plant / unresolved as the 95 % Wilson interval "
+              "of the holding fraction lies above, below or across one half; claims 1-2 on every plant's scans "
+              "pooled). Holds: % of the plants that ran (and were not rejected) where the claim holds. Decided "
+              "by: the constants that matter most (sensitivity.csv; Spearman's rho between the constant and the "
+              "claim holding, over the plants where the plant decides it"
               + (", ranked by SALib's total Sobol' index" if cfg.design == "saltelli" else "") + ").", "",
-              "| # | claim | holds | 95 % interval | fails | not testable | decided by |",
+              "| # | claim | verdict | holds | 95 % interval | plants by verdict | decided by |",
               "|---|---|---|---|---|---|---|"]
     for r in fractions:
         top = [s for s in sens if s["claim"] == r["claim"] and 0 < s["rank"] <= 2]
         top.sort(key=lambda s: s["rank"])
         dec = ", ".join(f"{s['constant']} (rho {s['spearman_rho']:+.2f}, p {s['spearman_p']:.2g})"
                         for s in top) or "-"
-        n = r["plants"] or 1
-        lines.append(f"| {r['claim']} | {r['text']} | {_pct(r['holds_fraction'])} | "
-                     f"{_pct(r['holds_ci_low'])}-{_pct(r['holds_ci_high'])} | {_pct(r['fails'] / n)} | "
-                     f"{_pct(r['not_testable_fraction'])} | {dec} |")
+        by = ", ".join(f"{r[v.replace('-', '_')]} {v}" for v in VERDICTS if r[v.replace("-", "_")])
+        lines.append(f"| {r['claim']} | {r['text']} | **{r['verdict']}** | {_pct(r['value'])} | "
+                     f"{_pct(r['low'])}-{_pct(r['high'])} | {by or '-'} | {dec} |")
     lines += ["", "## What the map says", ""] + [f"- {s}" for s in _verdict_lines(fractions)] + [""]
     lines += ["## Uncertain constants", "", "| constant | unit | range | distribution |", "|---|---|---|---|"]
     for k, c in cfg.table.items():
@@ -417,20 +489,4 @@ def _calibration_lines(plants: Sequence[Mapping[str, Any]], table: Mapping) -> l
 
 
 def _verdict_lines(fractions: Sequence[Mapping[str, Any]]) -> list[str]:
-    out = []
-    for r in fractions:
-        lo, hi, nt = r["holds_ci_low"], r["holds_ci_high"], r["not_testable_fraction"]
-        if r["plants"] == 0:
-            out.append(f"Claim {r['claim']}: no plant ran.")
-        elif nt == 1.0:
-            out.append(f"Claim {r['claim']} ({r['text']}): not testable on any plant of this study.")
-        elif hi < 0.5:
-            out.append(f"Claim {r['claim']} ({r['text']}) fails on most plausible plants: it holds on "
-                       f"{_pct(r['holds_fraction'])} ({_pct(lo)}-{_pct(hi)}).")
-        elif lo > 0.5:
-            out.append(f"Claim {r['claim']} ({r['text']}) holds on most plausible plants: "
-                       f"{_pct(r['holds_fraction'])} ({_pct(lo)}-{_pct(hi)}).")
-        else:
-            out.append(f"Claim {r['claim']} ({r['text']}) depends on the plant: it holds on "
-                       f"{_pct(r['holds_fraction'])} ({_pct(lo)}-{_pct(hi)}); see its figure for where.")
-    return out
+    return [f"Claim {r['claim']} ({r['text']}): **{r['verdict']}**: {r['reason']}." for r in fractions]

@@ -82,7 +82,7 @@ def unit_design(kind: str, n: int, d: int, seed: int) -> np.ndarray:
         raise ParameterError(f"plants must be an integer >= 1, got {n!r}")
     if d == 0:
         return np.zeros((design_size(kind, n, d), 0))
-    from scipy.stats import qmc
+    from scipy.stats import qmc  # deferred: heavy (scipy.stats)
 
     rng = np.random.default_rng(np.random.SeedSequence(seed))
     if kind == "lhs":
@@ -91,7 +91,7 @@ def unit_design(kind: str, n: int, d: int, seed: int) -> np.ndarray:
         with warnings.catch_warnings():   # balance is lost unless n is a power of two: documented
             warnings.simplefilter("ignore", UserWarning)
             return qmc.Sobol(d, scramble=True, rng=rng).random(n)
-    from SALib.sample import sobol as saltelli
+    from SALib.sample import sobol as saltelli  # deferred: optional extra (study: SALib)
 
     problem = {"num_vars": d, "names": [f"x{i}" for i in range(d)], "bounds": [[0.0, 1.0]] * d}
     base = design_size(kind, n, d) // (d + 2)

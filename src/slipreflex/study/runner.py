@@ -2,13 +2,15 @@
 
 One *plant* is one draw of the uncertain constants. :func:`run_plant`
 builds it (:func:`slipreflex.sim.uncertain.plant_from_values`), calibrates
-its pads so the open-loop first pour slip comes at the paper's 200 ml
+its pads so the open-loop first pour slip, as the accelerometer recipe observes it, comes at
+its drawn volume (the paper's "about 200 ml")
 (:func:`slipreflex.sim.calibration.calibrate_bottle`, per bottle), runs the
 reproduce grid on it (same master seed for every plant: every plant faces
 the same trials, so plants differ by physics only) and the characterization
-scan with its slip sensor, and judges the paper's claims
-(:func:`slipreflex.analysis.claims.judge`). It never raises: an error is
-recorded with the plant.
+scans with its slip sensor (its own texture seeds), and judges the paper's
+claims (:func:`slipreflex.analysis.claims.judge`). A plant whose calibrated
+observed first slip leaves the paper's band is rejected (counted apart, no
+trials). It never raises: an error is recorded with the plant.
 
 :func:`run_study` sends the plants to a ``dask.distributed`` cluster (a
 ``LocalCluster`` of single-threaded worker processes by default, or the
@@ -35,20 +37,36 @@ import contextlib
 import dataclasses
 import hashlib
 import json
+import logging
 import os
+import signal
+import socket
+import struct
 import sys
+import threading
 import time
 import traceback
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
+from types import MappingProxyType
 from typing import Any
 
+import numpy as np
+
+from .. import __version__, methods
+from ..analysis.claims import judge
 from ..errors import ParameterError
+from ..experiments import BOTTLE_NAMES, DEFAULT_SEED, EXPERIMENTS, ReproduceConfig
+from ..interrupts import signals_ignored
+from ..paths import new_file
+from ..progress import Progress
+from ..thresholds import calibrate
+from ..validation import within
 from .design import DESIGNS, draw_design
 
-__all__ = ["StudyConfig", "PlantOutcome", "run_plant", "run_study", "StudyRun", "PARTS_DIR",
-           "read_parts", "part_path", "DEFAULT_PLANTS", "DEFAULT_TRIALS", "probe_scheduler",
+__all__ = ["StudyConfig", "PlantOutcome", "run_plant", "run_study", "StudyRun", "PARTS_DIR", "STUDY_SCAN_BASE",
+           "scan_seed_base", "read_parts", "part_path", "DEFAULT_PLANTS", "DEFAULT_TRIALS", "probe_scheduler",
            "SCHEDULER_TIMEOUT_S"]
 
 #: Plants of the default study (a power of two keeps the Sobol' design balanced; see docs/study.md).
@@ -66,8 +84,6 @@ CALIBRATION_SEEDS: tuple[int, ...] = (0,)
 
 def _grid_defaults() -> tuple:
     """The reproduce defaults: every bottle, the paper's methods, both experiments, the master seed."""
-    from .. import methods
-    from ..experiments import BOTTLE_NAMES, DEFAULT_SEED, EXPERIMENTS
 
     return BOTTLE_NAMES, methods.names(paper=True), EXPERIMENTS, DEFAULT_SEED
 
@@ -93,7 +109,10 @@ class StudyConfig:
     calibrate : bool
         Calibrate each plant's pad friction to the paper's open-loop first slip (200 ml).
     scan : bool
-        Run each plant's characterization scan (claims 1-2).
+        Run each plant's characterization scans (claims 1-2).
+    scan_seeds : int
+        Texture seeds of each plant's scans (its own seeds: :func:`scan_seed_base`); the
+        study judges claims 1-2 on all plants' scans pooled (``plants x scan_seeds`` draws).
 
     Examples
     --------
@@ -113,16 +132,18 @@ class StudyConfig:
     ranges: str | None = None
     calibrate: bool = True
     scan: bool = True
+    scan_seeds: int = 4
     _table: Any = field(default=None, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
-        from ..sim.uncertain import UNCERTAIN, load_ranges
+        from ..sim.uncertain import UNCERTAIN, load_ranges  # deferred: heavy (numba kernels)
 
         if self.design not in DESIGNS:
             raise ParameterError(f"design: unknown {self.design!r} (known: {', '.join(DESIGNS)})")
-        from ..validation import within
 
         object.__setattr__(self, "plants", within("plants", self.plants))
+        if isinstance(self.scan_seeds, bool) or not isinstance(self.scan_seeds, int) or self.scan_seeds < 1:
+            raise ParameterError(f"scan_seeds must be an integer >= 1, got {self.scan_seeds!r}")
         if self.ranges is not None:
             object.__setattr__(self, "ranges", str(self.ranges))
         table = UNCERTAIN if self.ranges is None else load_ranges(self.ranges)
@@ -148,7 +169,6 @@ class StudyConfig:
         >>> StudyConfig(plants=1, trials=2).reproduce_config().trials
         2
         """
-        from ..experiments import ReproduceConfig
 
         return ReproduceConfig(trials=self.trials, bottles=tuple(self.bottles), methods=tuple(self.methods),
                                experiments=tuple(self.experiments), seed=self.seed, plant=plant)
@@ -182,11 +202,10 @@ class StudyConfig:
         >>> StudyConfig(plants=2).fingerprint() != StudyConfig(plants=3).fingerprint()
         True
         """
-        from .. import __version__
 
         rc = self.reproduce_config()
         doc = {"version": __version__, "plants": self.plants, "design": self.design, "seed": self.seed,
-               "calibrate": self.calibrate, "scan": self.scan,
+               "calibrate": self.calibrate, "scan": self.scan, "scan_seeds": self.scan_seeds,
                "grid": {f.name: repr(getattr(rc, f.name)) for f in dataclasses.fields(rc) if f.name != "plant"},
                "table": {k: [c.low, c.high, c.nominal, c.distribution] for k, c in self.table.items()}}
         return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()[:20]
@@ -216,14 +235,18 @@ class PlantOutcome:
     rows : list of dict
         One per trial and slip (constants and calibration as columns); empty on error.
     claims : list of (int, str, str)
-        (claim number, verdict, numbers); empty on error.
+        (claim number, verdict, reason); empty on error or when the plant was rejected.
     error : str
         ``""``, or the exception (type and message) that stopped the plant.
     trials : int
         Closed-loop trials it ran.
     calibration : dict
-        What its calibration found (calibrated ``mu_s`` and first slip per
-        bottle, the calibration's note); empty without calibration.
+        What its calibration found (calibrated ``mu_s``, observed and true first
+        slip per bottle, the calibration's note, ``rejected``: why its observed
+        first slip leaves the paper's band, or ``""``); empty without calibration.
+    scan : dict
+        Its scan ensemble's numbers (:class:`~slipreflex.sim.scan.ScanEnsemble` fields as
+        lists); empty without scans.
 
     Examples
     --------
@@ -238,6 +261,23 @@ class PlantOutcome:
     error: str
     trials: int
     calibration: dict = field(default_factory=dict)
+    scan: dict = field(default_factory=dict)
+
+
+#: First texture seed of the study's scans; plant ``i`` scans seeds ``base + i * scan_seeds`` onwards.
+STUDY_SCAN_BASE: int = 1_000_000_000
+
+
+def scan_seed_base(index: int, config: StudyConfig) -> int:
+    """First texture seed of plant ``index``'s scans: every plant gets its own.
+
+    Examples
+    --------
+    >>> cfg = StudyConfig(plants=2)
+    >>> scan_seed_base(1, cfg) - scan_seed_base(0, cfg) == cfg.scan_seeds
+    True
+    """
+    return STUDY_SCAN_BASE + int(index) * config.scan_seeds
 
 
 def _calibrated(plant: Any, table: Mapping) -> tuple[Any, dict[str, Any]]:
@@ -251,11 +291,9 @@ def _calibrated(plant: Any, table: Mapping) -> tuple[Any, dict[str, Any]]:
     ``calibrated_mu_s_<bottle>``, ``calibrated_first_slip_ml_<bottle>`` and
     ``calibration_note`` (``""``, or the jumps the calibration fell back on).
     """
-    from dataclasses import replace
-    from types import MappingProxyType
 
-    from ..sim.calibration import CALIBRATION_SEEDS as DEFAULT_SEEDS
-    from ..sim.calibration import calibrate_bottle
+    from ..sim.calibration import CALIBRATION_SEEDS as DEFAULT_SEEDS  # deferred: heavy (numba kernels)
+    from ..sim.calibration import calibrate_bottle  # deferred: heavy (numba kernels)
 
     c = table["first_slip_ml"]
     kw = plant.rig_kwargs()
@@ -264,12 +302,19 @@ def _calibrated(plant: Any, table: Mapping) -> tuple[Any, dict[str, Any]]:
         try:
             cals[name] = calibrate_bottle(bottle, plant.first_slip_ml, rig_kwargs=kw, seeds=CALIBRATION_SEEDS)
         except ParameterError:
-            cals[name] = calibrate_bottle(bottle, plant.first_slip_ml, rig_kwargs=kw, seeds=DEFAULT_SEEDS,
-                                          band_ml=(c.low, c.high))
+            try:
+                cals[name] = calibrate_bottle(bottle, plant.first_slip_ml, rig_kwargs=kw, seeds=DEFAULT_SEEDS,
+                                              band_ml=(c.low, c.high))
+            except ParameterError as err:   # no friction meets the paper's observed fact: counted apart
+                return plant, {"calibration_note": "", "rejected": f"{err}"}
     plant = replace(plant, bottles=MappingProxyType({n: k.bottle for n, k in cals.items()}))
     extra: dict[str, Any] = {f"calibrated_mu_s_{n}": float(k.mu_s) for n, k in cals.items()}
     extra.update({f"calibrated_first_slip_ml_{n}": float(k.first_slip_ml) for n, k in cals.items()})
+    extra.update({f"true_first_slip_ml_{n}": float(k.true_first_slip_ml) for n, k in cals.items()})
     extra["calibration_note"] = "; ".join(k.note for k in cals.values() if k.note)
+    out = [f"{n} {k.first_slip_ml:.0f} ml" for n, k in cals.items() if not c.low <= k.first_slip_ml <= c.high]
+    extra["rejected"] = (f"observed first slip outside the paper's {c.low:g}-{c.high:g} ml: " + ", ".join(out)
+                         if out else "")
     return plant, extra
 
 
@@ -282,12 +327,12 @@ def run_plant(index: int, values: Mapping[str, float], config: StudyConfig) -> P
     ...                   calibrate=False, scan=False)
     >>> out = run_plant(0, cfg.plant_values()[0], cfg)
     >>> out.error, len(out.rows), out.claims[2][1]
-    ('', 1, 'not testable here')
+    ('', 1, 'not-decidable')
     """
-    from ..analysis.claims import judge, judge_run
-    from ..experiments import run_trial
-    from ..sim.uncertain import plant_from_values
-    from ..thresholds import calibrate
+
+    from ..experiments import run_trial  # deferred: late-bound (tests patch slipreflex.experiments.run_trial)
+    from ..sim.scan import scan_ensemble  # deferred: heavy (llvmlite, numba, scipy)
+    from ..sim.uncertain import plant_from_values  # deferred: heavy (numba kernels)
 
     values = {k: float(v) for k, v in values.items()}
     try:
@@ -295,21 +340,30 @@ def run_plant(index: int, values: Mapping[str, float], config: StudyConfig) -> P
         extra: dict[str, Any] = {}
         if config.calibrate:
             plant, extra = _calibrated(plant, config.table)
+            if extra["rejected"]:    # counted apart: it contradicts the paper's open-loop fact
+                return PlantOutcome(index, values, [{"plant": index, **values, **extra, "error": ""}], [], "", 0,
+                                    extra)
         rc = config.reproduce_config(plant)
-        from .. import methods
 
         thresholds = calibrate(rc) if set(rc.methods) & set(methods.calibrated()) else {}
         rows = []
         for cell in rc.cells():
             rows += run_trial(cell, rc, thresholds)[0]
-        judged = judge_run(rows, seed=config.seed, plant=plant) if config.scan else judge(rows)
-        verdicts = [(r.number, r.verdict, r.numbers) for r in judged]
+        ens = scan_ensemble(config.scan_seeds, base=scan_seed_base(index, config),
+                            sensor=plant.slip_sensor) if config.scan else None
+        judged = judge(rows, ens, plant)
+        verdicts = [(r.number, r.verdict, r.reason) for r in judged]
         out_rows = [{"plant": index, **values, **extra, "error": "", **dict(r)} for r in rows]
-        return PlantOutcome(index, values, out_rows, verdicts, "", len(rc.cells()), extra)
+        scan = {} if ens is None else {k: np.asarray(getattr(ens, k)).tolist() for k in _SCAN_FIELDS}
+        return PlantOutcome(index, values, out_rows, verdicts, "", len(rc.cells()), extra, scan)
     except Exception as err:   # a plant that raises is recorded, the study goes on
         last = traceback.extract_tb(err.__traceback__)[-1]
         msg = f"{type(err).__name__}: {err} ({Path(last.filename).name}:{last.lineno})"
         return PlantOutcome(index, values, [{"plant": index, **values, "error": msg}], [], msg, 0)
+
+
+_SCAN_FIELDS = ("seeds", "white_lo", "white_hi", "black_lo", "black_hi", "fixed_gap", "dath_gap", "fixed_spikes",
+                "dath_spikes")
 
 
 def part_path(out: Path, index: int) -> Path:
@@ -324,7 +378,7 @@ def part_path(out: Path, index: int) -> Path:
 
 
 def _arrow_table(rows: Sequence[Mapping[str, Any]]):
-    import pyarrow as pa
+    import pyarrow as pa  # deferred: optional extra (study: pyarrow)
 
     cols: list[str] = []
     for r in rows:
@@ -334,12 +388,12 @@ def _arrow_table(rows: Sequence[Mapping[str, Any]]):
 
 def write_part(out: Path, outcome: PlantOutcome, fingerprint: str) -> Path:
     """Write one plant's rows and verdicts as a Parquet part (temporary name, then rename)."""
-    import pyarrow.parquet as pq
+    import pyarrow.parquet as pq  # deferred: optional extra (study: pyarrow)
 
     table = _arrow_table(outcome.rows)
     meta = {"fingerprint": fingerprint, "plant": outcome.plant, "error": outcome.error,
             "claims": outcome.claims, "trials": outcome.trials, "values": outcome.values,
-            "calibration": outcome.calibration}
+            "calibration": outcome.calibration, "scan": outcome.scan}
     table = table.replace_schema_metadata({_META_KEY: json.dumps(meta).encode()})
     path = part_path(out, outcome.plant)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -357,7 +411,7 @@ def read_parts(out: Path, fingerprint: str | None = None) -> dict[int, tuple[dic
     >>> read_parts(Path("/nonexistent"))
     {}
     """
-    import pyarrow.parquet as pq
+    import pyarrow.parquet as pq  # deferred: optional extra (study: pyarrow)
 
     found = {}
     for p in sorted((Path(out) / PARTS_DIR).glob("plant-*.parquet")):
@@ -416,7 +470,6 @@ class _Progress:
     """Plants and trials done: two bars on a terminal, a line per tenth of the plants in a log."""
 
     def __init__(self, plants: int, trials: int, done: int, enabled: bool):
-        from ..progress import Progress
 
         self.trials = trials
         self.plants = Progress(plants, desc="plants", unit="plant", enabled=enabled)
@@ -443,7 +496,6 @@ _OPTIONS = {"plants": "--plants", "design": "--design", "trials": "--trials", "b
 
 def _differences(old: Mapping[str, Any], config: StudyConfig) -> list[str]:
     """What differs between the study recorded in study.json and ``config``, as options."""
-    from .. import __version__
 
     new = config.to_dict()
     was = old.get("config", {}) if isinstance(old.get("config"), dict) else {}
@@ -463,7 +515,6 @@ def _differences(old: Mapping[str, Any], config: StudyConfig) -> list[str]:
 def _check_out(out: Path, config: StudyConfig) -> bool:
     """Refuse an --out that holds another study (before any work), naming the arguments that
     differ; record this one. True if this call created study.json (a failed start removes it)."""
-    from .. import __version__
 
     meta = out / "study.json"
     fp = config.fingerprint()
@@ -481,7 +532,6 @@ def _check_out(out: Path, config: StudyConfig) -> bool:
         return False
     try:
         out.mkdir(parents=True, exist_ok=True)
-        from ..paths import new_file
 
         with new_file(meta, replace=True) as fh:
             fh.write(json.dumps({"fingerprint": fp, "version": __version__, "config": config.to_dict()},
@@ -519,8 +569,6 @@ def probe_scheduler(address: str, timeout: float | None = None) -> None:
     ...
     slipreflex.errors.ParameterError: --scheduler tcp://127.0.0.1:1: cannot connect (...)
     """
-    import socket
-    import struct
 
     timeout = SCHEDULER_TIMEOUT_S if timeout is None else timeout
     where = f"--scheduler {address}"
@@ -565,10 +613,8 @@ def probe_scheduler(address: str, timeout: float | None = None) -> None:
 
 
 def _client(workers: int | None, scheduler: str | None, dashboard: str | None = None):
-    import logging
-    import signal
 
-    from dask.distributed import Client, LocalCluster
+    from dask.distributed import Client, LocalCluster  # deferred: optional extra (study: dask)
 
     if scheduler:
         probe_scheduler(scheduler)
@@ -597,7 +643,6 @@ def _client(workers: int | None, scheduler: str | None, dashboard: str | None = 
 
 
 def _main_thread() -> bool:
-    import threading
 
     return threading.current_thread() is threading.main_thread()
 
@@ -642,7 +687,6 @@ def run_study(config: StudyConfig, out: str | Path, *, workers: int | None = Non
     if workers is not None and workers < 0:
         raise ParameterError(f"--workers must be >= 0, got {workers}")
     if workers is not None:
-        from ..validation import within
 
         if workers != 0:
             within("jobs", workers, "--workers")
@@ -692,12 +736,9 @@ _STOP_CLOSE_S: float = 3.0
 def _run_dask(todo: list[int], plants: list[dict], config: StudyConfig, workers: int | None,
               scheduler: str | None, finished: Callable[[PlantOutcome], None], fp: str,
               dashboard: str | None = None) -> str:
-    import logging
-    import signal
 
-    from dask.distributed import as_completed
+    from dask.distributed import as_completed  # deferred: optional extra (study: dask)
 
-    from ..interrupts import signals_ignored
 
     client, cluster, where = _client(workers, scheduler, dashboard)
     futures = []
@@ -737,6 +778,7 @@ def _run_dask(todo: list[int], plants: list[dict], config: StudyConfig, workers:
                 client.close(timeout=_STOP_CLOSE_S if stopped else None)
                 if cluster is not None:
                     cluster.close(timeout=_STOP_CLOSE_S if stopped else None)
-        for q, lv in zip(quiet, levels):
-            q.setLevel(lv)
+        if not stopped:  # after a stop the event loop may still report closed streams: stay hushed
+            for q, lv in zip(quiet, levels):
+                q.setLevel(lv)
     return where
