@@ -123,11 +123,20 @@ def _virtual_run(tmp_path, p0, what, duration="1.0"):
             dev.rig.perturb(what)
 
     script = [(k * 0.005, look) for k in range(int(60 / 0.005))]
+    sent = []
     with VirtualDevices(sim, script=script) as dev:
+        apply = dev._apply_packet
+
+        def note(cmds):   # every command that reached the hand, as the hand received it
+            sent.extend(c.command for c in cmds)
+            apply(cmds)
+
+        dev._apply_packet = note
         code = main(["run", "--daq", dev.daq_path, "--hand", dev.hand_path, "--p0", str(p0),
                      "--duration", duration, "--no-record"])
         packets = dev.hand_packets
     assert len(started) == 2, "the perturbation never started"
+    assert sent and set(sent) <= {HandCommand.CLOSE, HandCommand.STOP}, sorted(set(sent))  # no OPEN, no position
     return code, grasp, track, sim, packets
 
 
@@ -142,9 +151,8 @@ def test_run_on_the_virtual_rig_with_any_p0_never_opens_and_answers_the_drop(tmp
         assert all(b >= a for a, b in zip(track[f], track[f][1:])), (f, track[f][:20])
     assert "grip added: thumb" in out  # the drop was answered with grip, whatever p0 said
     assert max(track[Finger.MIDDLE]) > grasp.positions[Finger.MIDDLE]
-    # DATH may now drive its command to the ceiling: each closing dents the wall under the cuff, which opens
-    # the slip sensor's gap and moves the fingertip over the surface, and DATH reads that as slip
-    # (docs/study.md, "Claims 4, 5 and 7"); the bounded grip keeps the force at the digits' stall force
+    assert "fully closed" not in out and "ceiling" not in out
+    # and the bounded grip keeps the force at or under the digits' stall force
     assert sim.rig.normal_force <= sim.rig.hand_params.stall_force_n + 1.0
 
 

@@ -18,7 +18,7 @@ Examples
 >>> round(grip_gain(HandParams(), BOTTLES["TR"]), 3)       # N per position unit, per contact
 0.102
 >>> round(static_capacity(BOTTLES["TR"], 1.0), 3)          # N, at 1 N per contact
-1.958
+1.937
 """
 
 from __future__ import annotations

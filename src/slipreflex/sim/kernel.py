@@ -189,9 +189,9 @@ DAQ_ROW = Layout("a DAQ output row", """
 O_SIZE = DAQ_ROW.size
 
 # ---- tactile snapshot rows --------------------------------------------------
-TACTILE_ROW = Layout("a tactile snapshot row", "ID IDX T NC FT S FALLEN W", prefix="T_")
-T_ID, T_IDX, T_T, T_NC, T_FT, T_S, T_FALLEN, T_W = TACTILE_ROW.slots
-T_SIZE = TACTILE_ROW.size  # T_FT, T_S, T_W: the sampler's own contact
+TACTILE_ROW = Layout("a tactile snapshot row", "ID IDX T NC FT S FALLEN W MS", prefix="T_")
+T_ID, T_IDX, T_T, T_NC, T_FT, T_S, T_FALLEN, T_W, T_MS = TACTILE_ROW.slots
+T_SIZE = TACTILE_ROW.size  # T_FT, T_S, T_W, T_MS (its micro-slip events so far): the sampler's own contact
 
 # ---- events -----------------------------------------------------------------
 E_ONSET, E_STICK, E_FALLEN, E_LANDED = 1.0, 2.0, 3.0, 4.0
@@ -938,6 +938,7 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
                 tac_out[ntac, T_S] = S[bc + SC_S]
                 tac_out[ntac, T_FALLEN] = S[S_FALLEN]
                 tac_out[ntac, T_W] = S[bc + SC_W] if S[bc + SC_STUCK] == 0.0 else 0.0
+                tac_out[ntac, T_MS] = C[C_MS0 + tac_contact[si]] if tac_contact[si] < 2 else 0.0
                 ntac += 1
                 tac_next[si] += 1
         n += 1
