@@ -93,7 +93,9 @@ __all__: list[str] = []
 # axial load and the water's sideways force on the bottle (truth).
 # The pads' slip vibration (thumb, index): the sensed shear's resonator, displacement VY (N) and its rate
 # VV (N/s). The digits' motor vibration (thumb, index, middle): each motor's phase MPH (rad, set by the rig
-# from the seed) and its force FM on the contact (N).
+# from the seed) and its force FM on the contact (N). The bottle's tilt in the grasp: TH (rad, about the
+# horizontal axis through the grasp's centre and the middle finger's contact; positive turns the thumb's
+# side down) and its rate OM (rad/s).
 CONTACT = Layout("a contact's block of the rig's state S", "S=0 W=0 STUCK=1 DIR=1 PHI=1 FT=0 Z=0", prefix="SC_")
 SC_S, SC_W, SC_STUCK, SC_DIR, SC_PHI, SC_FT, SC_Z = CONTACT.slots
 SC_SIZE = CONTACT.size
@@ -102,12 +104,12 @@ STATE = Layout("the rig's state S", f"""
     NC=0 FT=0 AF=0 SUPPORTED=1 FALLEN=0 TFALL=nan AX=0 AY=0 AZ=0 AFRESH=0 MASS A=0
     C0:{3 * SC_SIZE}
     YB=0 VB=0 Y1=0 V1=0 ALAT=0 AFL=0 SPL0 SPL1 KTH=0 M1=0 C1=0 BETA=0 LOAD=0 FWAT=0
-    VY0=0 VV0=0 VY1=0 VV1=0 MPH0:3 FM0:3=0""", prefix="S_")
+    VY0=0 VV0=0 VY1=0 VV1=0 MPH0:3 FM0:3=0 TH=0 OM=0""", prefix="S_")
 (S_X, S_V, S_S, S_W, S_STUCK, S_DIR, S_Q0, S_TGT0, S_SPD0,
  S_NC, S_FT, S_AF, S_SUPPORTED, S_FALLEN, S_TFALL, S_AX, S_AY, S_AZ, S_AFRESH, S_MASS, S_A,
  S_C0,
  S_YB, S_VB, S_Y1, S_V1, S_ALAT, S_AFL, S_SPL0, S_SPL1, S_KTH, S_M1, S_C1, S_BETA, S_LOAD, S_FWAT,
- S_VY0, S_VV0, S_VY1, S_VV1, S_MPH0, S_FM0) = STATE.slots
+ S_VY0, S_VV0, S_VY1, S_VV1, S_MPH0, S_FM0, S_TH, S_OM) = STATE.slots
 S_L0 = S_YB
 S_SIZE = STATE.size
 
@@ -134,6 +136,11 @@ C_SIZE = COUNTERS.size
 # centre's shift. The digits' motor vibration (HandParams): force amplitude and angular frequency at full
 # speed, 1 / full speed. The bottle's shoulder (Bottle.shoulder_slope): radius lost per metre the bottle
 # slides past grip_travel (0: the contacts are lost at once there), and the sine of its half-angle.
+# The tilt (Bottle.grasp_height_m, Bottle.drop_eccentricity_m): each contact's lever about the tilt axis
+# (m; its point moves down by LEVER th), the axis' height above the bottom, the empty bottle's moment of
+# inertia about the axis and its mass times the depth of its centre of mass below the axis, and the
+# horizontal distance from the axis at which a dropped mass lands on the bottom, and the mean over the contacts
+# of lever^2 / R (the tilted body's elliptic section presses the fingertips by that times 1 / cos(th) - 1).
 FRICTION = Layout("a contact's friction block of the rig's parameters P", """
     LAW MUS MUK VS A V0 DC HEAL KT CT DECAY HEAL_DECAY""", prefix="PC_")
 (PC_LAW, PC_MUS, PC_MUK, PC_VS, PC_A, PC_V0, PC_DC, PC_HEAL, PC_KT, PC_CT, PC_DECAY,
@@ -150,7 +157,8 @@ PARAMS = Layout("the rig's parameters P", f"""
     WALL_KW_INV WALL_KW2_INV WALL_DLIN WALL_DCOL CUFF_INV DENT_FRAC
     MS_ETA MS_PER_M MS_W2 MS_2ZW MS_W INCIPIENT
     MV_F MV_W MV_INV_SPEED
-    TAPER TAPER_SIN""", prefix="P_")
+    TAPER TAPER_SIN
+    LEVER0:3 ZG IB MBD DROP_E TILT_PEN""", prefix="P_")
 (P_DT, P_G, P_MB, P_KN, P_LAM, P_QC, P_KSERVO, P_STALL, P_GRIP,
  P_DAQ_T, P_ACC_T, P_ACC_ALPHA, P_ACC_NOISE, P_ACC_LSB, P_ACC_RANGE, P_TILT_X, P_TILT_Z, P_TILT_Y,
  P_VCC, P_VSAT, P_KNEE, P_VNOISE, P_GAP, P_ADC_LSB, P_ADC_MAX, P_TRACK_DX, P_TRACK_OFF,
@@ -162,12 +170,14 @@ PARAMS = Layout("the rig's parameters P", f"""
  P_WALL_KW_INV, P_WALL_KW2_INV, P_WALL_DLIN, P_WALL_DCOL, P_CUFF_INV, P_DENT_FRAC,
  P_MS_ETA, P_MS_PER_M, P_MS_W2, P_MS_2ZW, P_MS_W, P_INCIPIENT,
  P_MV_F, P_MV_W, P_MV_INV_SPEED,
- P_TAPER, P_TAPER_SIN) = PARAMS.slots
+ P_TAPER, P_TAPER_SIN,
+ P_LEVER0, P_ZG, P_IB, P_MBD, P_DROP_E, P_TILT_PEN) = PARAMS.slots
 P_L0 = P_SPL_RMS
 P_SIZE = PARAMS.size
 #: Friction laws (PC_LAW): Coulomb with a Stribeck curve; slip weakening + healing + log rate.
 LAW_COULOMB, LAW_RATE_STATE = 0.0, 1.0
 _NEWTON_MAX = 60
+_COS30 = 0.8660254037844386
 #: First zero of J1' (``params.SLOSH_ROOT``): the first antisymmetric slosh mode's k R.
 _XI = 1.8411837813406593
 
@@ -332,6 +342,30 @@ def _sensed_shear(ft, nc, phi, P, i, inc):
         q = 1.0
     m = 1.5 * mu * nc * (1.0 - (1.0 - q) ** (2.0 / 3.0))
     return (1.0 - inc) * ft + inc * (m if ft >= 0.0 else -m)
+
+
+@njit(cache=CACHE, inline="always")
+def _shoulder(x, th, l0, l1, l2, grip):
+    """The contacts past ``grip`` with the bottle slid ``x`` and tilted ``th``: the mean distance they have
+    gone onto the shoulder (each contact at ``x + lever th``) and the furthest contact's position."""
+    x0 = x + l0 * th
+    x1 = x + l1 * th
+    x2 = x + l2 * th
+    past = (max(x0 - grip, 0.0) + max(x1 - grip, 0.0) + max(x2 - grip, 0.0)) / 3.0
+    return past, max(x0, max(x1, x2))
+
+
+@njit(cache=CACHE, inline="always")
+def tilt_inertia(mw, P):
+    """The bottle's moment of inertia (kg m^2) about the tilt axis with ``mw`` kg of water, and its mass times
+    the depth of its centre of mass below the axis (kg m): the empty bottle's (``P_IB``, ``P_MBD``) and the
+    water as a rigid cylinder of its fill height ``h``, ``mw (R^2 / 4 + h^2 / 12 + (z_g - h / 2)^2)``. A
+    dropped mass is a body of its own: it acts only through its contact force on the bottom."""
+    r = P[P_SLOSH_R]
+    zg = P[P_ZG]
+    h = mw / (P[P_RHO_W] * np.pi * r * r)
+    dw = zg - 0.5 * h
+    return P[P_IB] + mw * (0.25 * r * r + h * h / 12.0 + dw * dw), P[P_MBD] + mw * dw
 
 
 @njit(cache=CACHE, inline="always")
@@ -561,6 +595,7 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
     ringing = True   # a pad's resonator may hold a value from the last call: look once
     mv_f, mv_w, mv_inv_dt = P[P_MV_F], P[P_MV_W], P[P_MV_INV_SPEED] / P[P_DT]
     taper, taper_sin, grip = P[P_TAPER], P[P_TAPER_SIN], P[P_GRIP]
+    lev0, lev1, lev2, zg, drop_e = P[P_LEVER0], P[P_LEVER0 + 1], P[P_LEVER0 + 2], P[P_ZG], P[P_DROP_E]
     # loop invariants and the states every step reads, kept in locals (numba cannot tell that the
     # output arrays do not alias S and P, so it would reload them from memory every step)
     kservo = P[P_KSERVO]
@@ -582,6 +617,8 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
     vb = S[S_VB]
     y1 = S[S_Y1]
     v1 = S[S_V1]
+    th = S[S_TH]
+    om = S[S_OM]
     while n < n_end:
         if nev + 3 + D.shape[0] > cap_ev or nd + 2 > cap_daq:
             break
@@ -625,9 +662,21 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
         qbar = (S[S_Q0] + S[S_Q0 + 1] + S[S_Q0 + 2]) / 3.0
         pen = (qbar - qc) * lam
         pen_full = pen
-        # past grip_travel the fingertips are on the shoulder, whose radius shrinks as the bottle slides
-        if taper > 0.0 and x > grip:
-            pen -= taper * (x - grip)
+        # past grip_travel the fingertips are on the shoulder, whose radius shrinks as the bottle slides; tilted,
+        # each contact is at its own height, and the three equal normal forces (the bottle shifts sideways
+        # until they balance) follow the mean of their gaps
+        tilted = th != 0.0 or om != 0.0
+        xmax = x
+        if tilted:
+            shl, xmax = _shoulder(x, th, lev0, lev1, lev2, grip)
+        else:
+            shl = x - grip if x > grip else 0.0
+        if taper > 0.0 and shl > 0.0:
+            pen -= taper * shl
+        if tilted:
+            # the tilted body's section in the grasp's plane is an ellipse, R / cos(th) across the axis: it
+            # presses the fingertips off the axis further in (second order in the tilt)
+            pen += P[P_TILT_PEN] * (1.0 / np.cos(th) - 1.0)
         fallen = S[S_FALLEN] > 0.0
         nc = _grip_force(pen, kn, pen1, pen2, n1w, n2w, k2w, k3w) if not fallen else 0.0
         S[S_NC] = nc
@@ -664,6 +713,7 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
                 S[S_BETA] = beta
         x_old = x
         fdrop = 0.0
+        mdrop = 0.0
         mland = 0.0
         for d in range(D.shape[0]):
             if t1 <= D[d, D_REL]:
@@ -672,10 +722,12 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
                 D[d, D_ACT] = 1.0
                 D[d, D_Z] = x - D[d, D_H0]
                 D[d, D_VZ] = 0.0
-            pd = D[d, D_Z] - x
+            # the mass lands on the bottom off the tilt axis, where the bottom moves with the tilt
+            xbot = x + drop_e * th if tilted else x
+            pd = D[d, D_Z] - xbot
             f = 0.0
             if pd > 0.0:
-                f = D[d, D_KC] * pd + D[d, D_CC] * (D[d, D_VZ] - v)
+                f = D[d, D_KC] * pd + D[d, D_CC] * (D[d, D_VZ] - (v + drop_e * om if tilted else v))
                 if f < 0.0:
                     f = 0.0
                 if D[d, D_LANDED] == 0.0:
@@ -689,11 +741,15 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
             D[d, D_VZ] += (g - f / D[d, D_M]) * dt
             D[d, D_Z] += D[d, D_VZ] * dt
             fdrop += f
+            if f != 0.0 and drop_e != 0.0:
+                # its force on the bottom, at the eccentricity; the bottom point z_g below the axis moves
+                # sideways with the tilt, shortening the lever
+                mdrop += f * (drop_e - zg * th)
         m = mb + mw
         S[S_MASS] = m + mland
         wload = m * g + fjet + fspl + fdrop
         # on the shoulder the three normal forces lean along the axis and push the bottle out of the grasp
-        if taper > 0.0 and x > grip and not fallen:
+        if taper > 0.0 and shl > 0.0 and not fallen:
             wload += 3.0 * nc * taper_sin
         S[S_LOAD] = wload
         # ---- the slosh (sideways): slosh mass m1 on the spring m1 k tanh(k h) (g - a) and damper c1,
@@ -744,19 +800,29 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
         else:
             # thumb and index pads with the same constants see the same x, v and N, so they
             # evolve identically: compute the thumb's and copy it (P_PADS_SAME)
-            same = P[P_PADS_SAME] > 0.0
+            # the tilt: each contact's point moves down by its lever times the tilt (the tilt moves only
+            # when tilted or pushed: a bottle that never tilts runs the same arithmetic as without it)
+            tilt_now = tilted or mdrop != 0.0
+            same = P[P_PADS_SAME] > 0.0 and not tilt_now
             ftot = 0.0
+            mom = 0.0
             for i in range(3):
                 bs = S_C0 + i * SC_SIZE
                 if i == 1 and same:
                     ftot += S[S_C0 + SC_FT]
                     continue
                 bp = P_C0 + i * PC_SIZE
+                xi = x
+                vi = v
+                if tilt_now:
+                    lv = P[P_LEVER0 + i]
+                    xi = x + lv * th
+                    vi = v + lv * om
                 if P[bp + PC_LAW] == LAW_RATE_STATE:
                     F, s_new, w, z, d, phi, it, ok = _rs_contact(
                         P[bp + PC_KT], P[bp + PC_CT], S[bs + SC_S], P[bp + PC_MUS], P[bp + PC_MUK], S[bs + SC_PHI],
                         S[bs + SC_Z], S[bs + SC_W], P[bp + PC_A], P[bp + PC_V0], P[bp + PC_DC], P[bp + PC_HEAL],
-                        P[bp + PC_HEAL_DECAY], x, v, nc, dt)
+                        P[bp + PC_HEAL_DECAY], xi, vi, nc, dt)
                     S[bs + SC_S] = s_new
                     S[bs + SC_Z] = z
                     if d != 0.0:
@@ -771,15 +837,25 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
                 else:
                     F, stk, d, w = _coulomb_contact(P[bp + PC_KT], P[bp + PC_CT], S[bs + SC_S], P[bp + PC_MUS],
                                                     P[bp + PC_MUK], P[bp + PC_VS], S[bs + SC_STUCK],
-                                                    S[bs + SC_DIR], S[bs + SC_W], x, v, nc)
+                                                    S[bs + SC_DIR], S[bs + SC_W], xi, vi, nc)
                     S[bs + SC_STUCK] = stk
                     S[bs + SC_DIR] = d
                     S[bs + SC_W] = w
                 S[bs + SC_FT] = F
                 ftot += F
+                if tilt_now:
+                    mom -= F * P[P_LEVER0 + i]
             a = (wload - ftot) / m
             v += a * dt
             x += v * dt
+            th_old = th
+            if tilt_now:
+                # the contacts' tangential forces at their levers (each bounded by its friction: together
+                # the friction couple), the drop's eccentric force and gravity on the centre of mass below
+                # the axis (restoring) turn the bottle about the axis
+                inertia, mgd = tilt_inertia(mw, P)
+                om += (mom + mdrop - g * mgd * th) / inertia * dt
+                th += om * dt
             sliding = True
             s_mean = 0.0
             w_min = np.inf
@@ -790,8 +866,9 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
                 bs = S_C0 + i * SC_SIZE
                 bp = P_C0 + i * PC_SIZE
                 if not (i == 1 and same) and P[bp + PC_LAW] != LAW_RATE_STATE and S[bs + SC_STUCK] == 0.0:
+                    lv = P[P_LEVER0 + i] if tilt_now else 0.0
                     s_new, stk, w = _coulomb_post(S[bs + SC_FT], P[bp + PC_KT], P[bp + PC_DECAY], S[bs + SC_S],
-                                                  S[bs + SC_DIR], x_old, x, dt)
+                                                  S[bs + SC_DIR], x_old + lv * th_old, x + lv * th, dt)
                     S[bs + SC_S] = s_new
                     S[bs + SC_STUCK] = stk
                     S[bs + SC_W] = w
@@ -838,7 +915,14 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
             S[S_S] = s_mean
             S[S_W] = w_min if sliding else 0.0
             S[S_FT] = ftot
-            if (x > grip + pen_full / taper) if taper > 0.0 else (x > grip):
+            # the contacts are lost where the shoulder has taken up the fingertips' travel (a contact past
+            # grip_travel without a shoulder); tilted, by the contacts' own positions
+            if tilt_now:
+                shl, xmax = _shoulder(x, th, lev0, lev1, lev2, grip)
+                lost = taper * shl > pen_full if taper > 0.0 else xmax > grip
+            else:
+                lost = (x > grip + pen_full / taper) if taper > 0.0 else (x > grip)
+            if lost:
                 S[S_FALLEN] = 1.0
                 S[S_TFALL] = t1
                 S[S_STUCK] = 0.0
@@ -852,12 +936,16 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
         S[S_X] = x
         S[S_V] = v
         S[S_A] = a
+        S[S_TH] = th
+        S[S_OM] = om
         a_prev = a
         # the IMU's DLPF states; flushed to zero below 1e-200 m/s^2 (they decay toward an exact zero at rest
         # and would otherwise sit in the subnormal range, where every step's arithmetic is slow)
         af = S[S_AF] + (a - S[S_AF]) * acc_alpha
         S[S_AF] = af if abs(af) > 1e-200 else 0.0
-        afl = S[S_AFL] + (S[S_ALAT] - S[S_AFL]) * acc_alpha
+        # the accelerometer's x axis (radial at the thumb, 30 degrees off the normal of the tilt axis) also
+        # reads gravity tilted with the bottle
+        afl = S[S_AFL] + (S[S_ALAT] + (_COS30 * g * th if th != 0.0 and not fallen else 0.0) - S[S_AFL]) * acc_alpha
         S[S_AFL] = afl if abs(afl) > 1e-200 else 0.0
         # ---- accelerometer ticks (own ODR)
         while C[C_ACC] * P[P_ACC_T] <= t1 + 1e-12:

@@ -298,6 +298,20 @@ class Bottle:
         Estimate: the inextensible section folds into three lobes that meet
         near the axis; 0.8 of the radius (26 mm) leaves the wall's and the
         pads' thickness and the folds' bend radius.
+    grasp_height_m : float
+        Height (m) of the grasp's plane above the bottom: the axis the
+        bottle tilts about in the grasp. Estimate for the paper's 16 cm
+        bottles: the fingertips hold the body ``grip_travel_m`` (3 cm) below
+        the shoulder, which starts about 6 cm below the top (a ~2 cm
+        finish and a ~4 cm shoulder, see ``shoulder_slope``): 7 cm.
+    drop_eccentricity_m : float
+        Horizontal distance (m) from the tilt axis at which a dropped mass
+        lands on the bottom: its impact rocks the bottle. Estimate: 1 cm. A
+        mass released over the opening falls inside the neck (a 28 mm
+        finish has a ~21.7 mm bore: within 11 mm of the axis) and lands on a
+        petaloid base whose dome moves it outward; the axis' direction to
+        the landing point is random, so the lever is up to that distance.
+        0: the impact on the axis, no tilt (the earlier model).
 
     Examples
     --------
@@ -320,6 +334,8 @@ class Bottle:
     wall_linear_range_m: float = 3e-3
     wall_softening: float = 0.3
     wall_collapse_m: float = 0.026
+    grasp_height_m: float = 0.07
+    drop_eccentricity_m: float = 0.01
     friction_law: str = "rate-state"
     rate_a: float = 0.04
     rate_v0_m_s: float = 1e-6
@@ -353,6 +369,8 @@ class Bottle:
         if self.wall_collapse_m < self.wall_linear_range_m:
             raise ParameterError(f"Bottle.wall_collapse_m must be >= wall_linear_range_m, got "
                                  f"{self.wall_collapse_m!r} < {self.wall_linear_range_m!r}")
+        _check("Bottle", "grasp_height_m", self.grasp_height_m, lo=0.0, lo_open=True, hi=self.height_m)
+        _check("Bottle", "drop_eccentricity_m", self.drop_eccentricity_m, lo=0.0, hi=self.diameter_m / 2.0)
         for f in ("friction_law", "cuff_friction_law"):
             if getattr(self, f) not in FRICTION_LAWS:
                 raise ParameterError(f"Bottle.{f} must be one of {', '.join(FRICTION_LAWS)}, got {getattr(self, f)!r}")

@@ -795,6 +795,16 @@ class Rig:
         P[K.P_TAPER] = b.shoulder_slope
         P[K.P_TAPER_SIN] = b.shoulder_slope / math.sqrt(1.0 + b.shoulder_slope ** 2)
         P[K.P_GRIP] = b.grip_travel_m
+        # the tilt about the horizontal axis through the grasp's centre and the middle finger's contact (the
+        # stiff cuff on the axis: the softest of the tripod's tilts); thumb and index 120 degrees either side
+        r, zg, hb = b.diameter_m / 2.0, b.grasp_height_m, b.height_m
+        P[K.P_LEVER0:K.P_LEVER0 + 3] = (r * math.sqrt(3.0) / 2.0, -r * math.sqrt(3.0) / 2.0, 0.0)
+        P[K.P_ZG] = zg
+        # the empty bottle as a thin-walled cylinder: about its centre m (R^2 / 2 + H^2 / 12), moved to the axis
+        P[K.P_IB] = b.mass_kg * (r * r / 2.0 + hb * hb / 12.0 + (zg - hb / 2.0) ** 2)
+        P[K.P_MBD] = b.mass_kg * (zg - hb / 2.0)
+        P[K.P_DROP_E] = b.drop_eccentricity_m
+        P[K.P_TILT_PEN] = float(sum(P[K.P_LEVER0 + i] ** 2 for i in range(3))) / (3.0 * r)
         P[K.P_DAQ_T] = hw.DAQ_PERIOD_S
         P[K.P_ACC_T] = 1.0 / imu.fs
         P[K.P_ACC_ALPHA] = 1.0 - math.exp(-2.0 * math.pi * imu.dlpf_hz * ph.dt)

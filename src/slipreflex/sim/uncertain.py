@@ -195,6 +195,15 @@ UNCERTAIN: Mapping[str, UncertainConstant] = MappingProxyType({c.name: c for c i
     _c("shoulder_slope", "1", _B["TR"].shoulder_slope, 0.0, 1.0, "uniform",
        "absent (0: the contacts are lost at once at grip_travel) to 1; a 500 ml bottle's shoulder narrows from the "
        "32.5 mm body to a ~13 mm neck over 20-60 mm (0.3-1), estimate", "bottle.shoulder_slope"),
+    _c("drop_eccentricity", "m", _B["TR"].drop_eccentricity_m, 0.0, 0.02, "uniform",
+       "absent (0: the dropped mass lands on the tilt axis and does not rock the bottle) to 2 cm; a mass released "
+       "over the opening falls inside a 28 mm finish's ~21.7 mm bore (within 11 mm of the axis) onto a petaloid "
+       "base whose dome moves it outward, and the axis' direction to its landing point is random (estimate)",
+       "bottle.drop_eccentricity_m"),
+    _c("grasp_height", "m", _B["TR"].grasp_height_m, 0.05, 0.10, "uniform",
+       "estimate: the fingertips hold the 16 cm body 3 cm below a shoulder that starts ~6 cm below the top (7 cm), "
+       "2 cm either way; the tilt's axis (no 'absent' value: the bottle always has a height)",
+       "bottle.grasp_height_m"),
     _c("wall_softening", "1", _B["TR"].wall_softening, 0.0, 0.67, "uniform",
        "absent (0: the linear law) to 0.67; beyond its linear range the section ovalizes into three lobes with the "
        "ring's bending stiffness E t^3 b / (12 x 0.0159 R^3): 200-1000 N/m for 0.2-0.3 mm PET (E 2-4 GPa) over a "
