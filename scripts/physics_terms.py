@@ -8,15 +8,17 @@ nominal value, then with all of them. Per run it prints, from the perturbation t
 * NMSD: the largest ``|s_k|`` over its threshold (``baselines.rest_threshold``, 5 sd of the same rig's statistic
   at rest, 260 Hz frames of the index finger) and how many detections it makes;
 * SWT-SD: the largest ``|c_k|`` over its threshold (380 Hz) and how many samples its ON signal is on;
-* IMU: the largest deviation of the accelerometer's y axis (along the bottle) from its rest mean, in sd of its
-  rest noise (5 is the noise-floor rule the tactile thresholds use), from the perturbation to 0.1 s after the
-  first slip (so that the run-away and fall-out do not dominate);
+* IMU: the largest deviation of the accelerometer's y axis (along the bottle), and of its x axis (sideways: the
+  slosh, the motors and the tilt), from its rest mean, in sd of its rest noise (5 is the noise-floor rule the
+  tactile thresholds use), from the perturbation to 0.1 s after the first slip (so that the run-away and
+  fall-out do not dominate);
 * when the bottle first slips and whether it falls.
 
 Terms: ``grip`` (the bounded grip: wall softening and the motor's torque-speed line), ``roll`` (the fingertip's
 roll and the gap's opening), ``events`` (the pads' micro-slip events), ``incipient`` (the Cattaneo-Mindlin
 redistribution of incipient slip), ``motor`` (the digits' motor vibration; in an open loop the digits move only
-in the grasp, before the rest recording), ``shoulder`` (the bottle's shoulder taper). A figure
+in the grasp, before the rest recording), ``shoulder`` (the bottle's shoulder taper), ``tilt`` (the bottle's tilt
+in the grasp, rocked by a drop landing off the axis; nothing tilts it in a pour). A figure
 (``--figure PATH``) shows the index array's NMSD and SWT-SD ratios
 over time for the base and each term, pour and drop on TR.
 
@@ -43,7 +45,7 @@ REST_S = 4.0
 def plants() -> dict[str, dict]:
     """Keyword sets for Rig: the base (every term absent), each term alone, all terms."""
     absent_hand = {"motor_droop": 0.0, "spot_travel_per_unit_m": 0.0, "motor_vibration_n": 0.0}
-    absent_bottle = {"wall_softening": 0.0, "shoulder_slope": 0.0}
+    absent_bottle = {"wall_softening": 0.0, "shoulder_slope": 0.0, "drop_eccentricity_m": 0.0}
     absent_sensor = {"gap_dent_fraction": 0.0}
     absent_tac = {"slip_events": 0.0, "incipient_slip": 0.0}
     terms = {
@@ -56,6 +58,7 @@ def plants() -> dict[str, dict]:
         "incipient": {"tactile": {"incipient_slip": TactileParams().incipient_slip}},
         "motor": {"hand": {"motor_vibration_n": HandParams().motor_vibration_n}},
         "shoulder": {"bottle": {"shoulder_slope": BOTTLES["TR"].shoulder_slope}},
+        "tilt": {"bottle": {"drop_eccentricity_m": BOTTLES["TR"].drop_eccentricity_m}},
     }
     out = {}
     for name, on in terms.items():
@@ -102,6 +105,9 @@ def run(bottle: str, what: str, kw: dict, seed: int = 0) -> dict:
     act = (h.t >= t_pert) & (h.t < stop)
     sd = float(np.std(ay[rest]))
     out["imu_sd"] = float(np.max(np.abs(ay[act] - ay[rest].mean())) / sd) if sd > 0 else np.inf
+    ax = h.accel[:, 0]
+    sdx = float(np.std(ax[rest]))
+    out["imu_x_sd"] = float(np.max(np.abs(ax[act] - ax[rest].mean())) / sdx) if sdx > 0 else np.inf
     out["t_pert"] = t_pert
     out["t_end"] = end
     return out
@@ -116,14 +122,14 @@ def main() -> None:
     ps = plants()
     traces = {}
     print(f"{'bottle':6} {'run':5} {'term':10} {'onset s':>8} {'fallen':>6} {'NMSD/thr':>9} {'NMSD det':>8} "
-          f"{'SWT/thr':>8} {'SWT on':>7} {'IMU sd':>7}")
+          f"{'SWT/thr':>8} {'SWT on':>7} {'IMU sd':>7} {'IMU x sd':>8}")
     for b in args.bottles.split(","):
         for what in ("pour", "drop"):
             for name, kw in ps.items():
                 r = run(b, what, kw, args.seed)
                 traces[(b, what, name)] = r
                 print(f"{b:6} {what:5} {name:10} {r['onset']:8.3f} {str(r['fallen']):>6} {r['nmsd_ratio']:9.2f} "
-                      f"{r['nmsd_n']:8d} {r['swt_ratio']:8.2f} {r['swt_on']:7d} {r['imu_sd']:7.1f}", flush=True)
+                      f"{r['nmsd_n']:8d} {r['swt_ratio']:8.2f} {r['swt_on']:7d} {r['imu_sd']:7.1f} {r['imu_x_sd']:8.1f}", flush=True)
     if args.figure:
         import matplotlib
         matplotlib.use("Agg")

@@ -1,16 +1,17 @@
 """Which physics term moved which claim: the default reproduction with each term switched off in turn.
 
-Runs the default reproduction grid (same master seed, 10 trials per cell) on the nominal plant and on the plant
-with one term at its "absent" value (the uncertain table's lower bound), judges the paper's claims on each
-(:func:`slipreflex.analysis.claims.judge_run`) and prints the verdicts side by side, with the numbers of the
-claims whose verdict or numbers a term changes.
+Runs the default reproduction grid (same master seed and trials per cell as ``slipreflex reproduce``) on the
+nominal plant and on the plant with one term at its "absent" value (the uncertain table's lower bound), its pads
+calibrated again to the observed open-loop first slip (:meth:`slipreflex.sim.uncertain.Plant.calibrated`, as the
+ablation does: a term that moves the grasp's capacity must not move the first slip), judges the paper's claims on
+each (:func:`slipreflex.analysis.claims.judge_run`) and prints the verdict classes side by side, with the numbers
+of the claims whose verdict or numbers a term changes.
 
 Run: ``python scripts/term_claims.py [--jobs 2] [--terms grip,roll,...]``.
 
 ``python scripts/term_claims.py --study DIR`` instead reads a finished study's ``plants.csv`` and prints, for
-claims 4, 5 and 7, on how many plants each was testable and held, and the constants whose values go with the claim
-being testable (Spearman's rho between the constant and testable = 1, p < 0.05): where the claim becomes
-decidable.
+claims 4, 5 and 7, on how many plants each was decidable (a verdict other than not-decidable) and held, and the
+constants whose values go with the claim being decidable (Spearman's rho, p < 0.05).
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ TERMS: dict[str, dict[str, float]] = {
     "incipient": {"incipient_slip": 0.0},
     "motor": {"motor_vibration": 0.0},
     "shoulder": {"shoulder_slope": 0.0},
+    "tilt": {"drop_eccentricity": 0.0},
 }
 
 
@@ -40,12 +42,16 @@ def decidable(folder: str, claims: tuple[int, ...] = (4, 5, 7)) -> None:
 
     from slipreflex.sim.uncertain import UNCERTAIN
 
-    rows = [r for r in csv.DictReader((Path(folder) / "plants.csv").open()) if not r.get("error")]
+    from slipreflex.analysis.claims import HOLDS, NOT_DECIDABLE
+
+    rows = [r for r in csv.DictReader((Path(folder) / "plants.csv").open())
+            if not r.get("error") and r.get("rejected", "") in ("", "False", "0")]
     for n in claims:
-        v = [r[f"claim_{n}"] for r in rows]
-        testable = np.array([x not in ("", "not testable here") for x in v], dtype=float)
-        holds = sum(x == "holds" for x in v)
-        print(f"claim {n}: testable on {int(testable.sum())} of {len(rows)} plants, holds on {holds}")
+        v = [r.get(f"claim_{n}", "") for r in rows]
+        testable = np.array([x not in ("", NOT_DECIDABLE) for x in v], dtype=float)
+        holds = sum(x == HOLDS for x in v)
+        kinds = ", ".join(f"{k} {v.count(k)}" for k in sorted(set(v)))
+        print(f"claim {n}: decidable on {int(testable.sum())} of {len(rows)} plants, holds on {holds} ({kinds})")
         if 0 < testable.sum() < len(rows):
             found = []
             for name in UNCERTAIN:
@@ -62,7 +68,7 @@ def decidable(folder: str, claims: tuple[int, ...] = (4, 5, 7)) -> None:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--jobs", type=int, default=2)
-    ap.add_argument("--terms", default="grip,roll,events,incipient,motor,shoulder",
+    ap.add_argument("--terms", default="grip,roll,events,incipient,motor,shoulder,tilt",
                     help=f"comma-separated, of: {', '.join(TERMS)} (spot and gap: the two halves of roll)")
     ap.add_argument("--study", default=None, help="a study's output folder: where claims 4, 5, 7 become testable")
     args = ap.parse_args()
@@ -77,7 +83,12 @@ def main() -> None:
     runs = {}
     for label in ("all", *args.terms.split(",")):
         values = {} if label == "all" else TERMS[label]
-        cfg = ReproduceConfig(plant=plant_from_values(values))
+        plant = plant_from_values(values)
+        if values:
+            plant = plant.calibrated()
+            print(f"without {label}: pads recalibrated, mu_s " + ", ".join(f"{b} {x.mu_s:.4f}"
+                                                                              for b, x in plant.bottles.items()))
+        cfg = ReproduceConfig(plant=plant)
         rows = run_reproduce(cfg, jobs=args.jobs, progress=False, plots=False).rows
         runs[label] = {c.number: c for c in judge_run(rows, plant=cfg.plant)}
         print(f"ran: {'every term on' if label == 'all' else 'without ' + label}", flush=True)

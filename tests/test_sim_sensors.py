@@ -181,7 +181,7 @@ def test_the_gap_opens_with_the_wall_dent_under_the_cuff():
     from slipreflex.sim.objects import Surface
 
     flat = Bottle("FLAT", surface=Surface("flat", reflectance=0.3, texture=0.0))
-    sensor = SlipSensorParams(noise_v=0.0, gap_dent_fraction=0.09)
+    sensor = SlipSensorParams(noise_v=0.0)              # the default gap fraction
     rig = Rig(flat, seed=0, hand=HandParams(spot_travel_per_unit_m=0.0), slip_sensor=sensor)
     rig.grasp()
     b = rig.bottle

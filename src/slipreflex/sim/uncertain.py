@@ -248,9 +248,10 @@ UNCERTAIN: Mapping[str, UncertainConstant] = MappingProxyType({c.name: c for c i
        "distal segment turns 0.0063 rad per unit of the tip's advance into the wall: 19 um if the cuff's ~3 mm "
        "rounded face rolls, more if it slides (estimate from the finger's geometry)",
        "hand.spot_travel_per_unit_m"),
-    _c("gap_dent_fraction", "1", _S.gap_dent_fraction, 0.0, 0.3, "uniform",
-       "absent (0: the spot over the cuff's contact) to 0.3; the spot ~3 mm (1-6 mm) beside the contact, the dent "
-       "~10 mm wide (Gaussian): the gap opens by 1 - exp(-(e / l)^2) of the dent, estimate",
+    _c("gap_dent_fraction", "1", _S.gap_dent_fraction, 0.0, 0.15, "uniform",
+       "absent (0: the spot over the cuff's contact) to 0.15; the spot ~3 mm (1-6 mm) beside the contact; the dent "
+       "is mostly the ring's three-lobe ovalization plus a ~5 % local indentation decaying over sqrt(R t) ~ 2.9 mm: "
+       "0.03 (spot along the axis) to 0.07 (round the circumference), twice that for a spot 6 mm off, estimate",
        "slip_sensor.gap_dent_fraction"),
     _c("pad_shear_stiffness", "N/m", _H.pad_shear_stiffness_n_m, 1000.0, 4000.0, "loguniform",
        "estimate: G A / h with G 0.1-0.4 MPa, 20 mm^2, 2 mm", "hand.pad_shear_stiffness_n_m"),
