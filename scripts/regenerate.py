@@ -16,7 +16,10 @@ docs quote in one commit. Steps:
 2. ``scripts/readme_results.py SUMMARY --write``: README's results and claims tables;
 3. ``scripts/splice_report.py REPORT``: the run's report in docs/reproduce.md;
 4. ``scripts/benchmark_table.py --write``: the real-data benchmark tables of README.md and
-   docs/benchmark.md.
+   docs/benchmark.md;
+5. ``scripts/limits_table.py --write``: the plausible ranges in docs/runtime.md;
+6. ``scripts/claims_seeds.py --write``: the claims' classes on five master seeds in
+   docs/reproduce.md (about five default grids, plus their replicates).
 """
 
 from __future__ import annotations
@@ -41,6 +44,8 @@ STEPS: list[tuple[str, tuple[str, ...], list[str]]] = [
                           "k sensitivity", "why"),
      [sys.executable, str(SCRIPTS / "benchmark_table.py"), "--write"]),
     ("limits table", ("limits table",), [sys.executable, str(SCRIPTS / "limits_table.py"), "--write"]),
+    ("claims over five master seeds", ("claims seeds table",),
+     [sys.executable, str(SCRIPTS / "claims_seeds.py"), "--jobs", "{jobs}", "--write"]),
 ]
 
 
