@@ -11,8 +11,9 @@ each marker pair is written by exactly one step below; ``tests/test_regenerate.p
 a marker in README.md or docs/*.md has no step, so a physics change updates every table the
 docs quote in one commit. Steps:
 
-1. ``slipreflex reproduce --jobs 2 --out /tmp/repro --no-progress`` (the default run; the
-   command docs/reproduce.md records, so a rerun changes only what the code changes);
+1. ``slipreflex reproduce --jobs 2 --out TMP/repro --no-progress`` into a fresh temporary
+   folder (the default run; the command docs/reproduce.md records, so a rerun changes only
+   what the code changes);
 2. ``scripts/readme_results.py SUMMARY --write``: README's results and claims tables;
 3. ``scripts/splice_report.py REPORT``: the run's report in docs/reproduce.md;
 4. ``scripts/benchmark_table.py --write``: the real-data benchmark tables of README.md and
@@ -52,7 +53,7 @@ STEPS: list[tuple[str, tuple[str, ...], list[str]]] = [
 def main(argv: list[str]) -> int:
     dry = "--dry-run" in argv
     jobs = argv[argv.index("--jobs") + 1] if "--jobs" in argv else "2"
-    out = str(Path(tempfile.gettempdir()) / "repro")
+    out = str(Path(tempfile.mkdtemp(prefix="slipreflex-regenerate-")) / "repro")
     for name, markers, command in STEPS:
         cmd = [c.replace("{out}", out).replace("{jobs}", jobs) for c in command]
         print(f"regenerate: {name}: {' '.join(cmd)}" + (f"  (writes: {', '.join(markers)})" if markers else ""),

@@ -5,6 +5,7 @@ import dataclasses
 import pytest
 
 from slipreflex import experiments as E
+from slipreflex import replication as R
 from slipreflex.analysis import claims as C
 from slipreflex.analysis.outputs import ReproduceResult, judged_claims, replicates_note, write_outputs
 from slipreflex.analysis.trial import TrialRow
@@ -68,7 +69,7 @@ def test_a_close_comparison_is_replicated_until_pooled_rows_decide_it(monkeypatc
     monkeypatch.setattr(E, "run_reproduce", grid)
     first = _result(_rows(7, ("dath",), [30.0, 90.0, 20.0], [60.0, 70.0, 40.0]))
     assert {r.number: r.verdict for r in judged_claims(first)}[10] == C.UNRESOLVED
-    out = E.replicate_undecided(first, jobs=1)
+    out = R.replicate_undecided(first, jobs=1)
     assert out is first and 1 <= len(out.replicate_seeds) < C.REPLICATES_MAX
     assert [s for s, _ in calls] == [C.replicate_seed(7, k) for k in range(1, len(calls) + 1)]
     assert all(m == ("dath",) for _, m in calls)                    # only what claim 10 reads
@@ -85,7 +86,7 @@ def test_replication_stops_at_its_cap_and_says_the_claim_stays_unresolved(monkey
         return _result(_rows(config.seed, config.methods, [30.0, 90.0, 20.0], [60.0, 70.0, 40.0]), config.seed)
 
     monkeypatch.setattr(E, "run_reproduce", grid)
-    out = E.replicate_undecided(_result(_rows(7, ("dath",), [30.0, 90.0, 20.0], [60.0, 70.0, 40.0], trials=3)),
+    out = R.replicate_undecided(_result(_rows(7, ("dath",), [30.0, 90.0, 20.0], [60.0, 70.0, 40.0], trials=3)),
                                 max_replicates=2)
     assert len(calls) == 2 and len(out.replicate_seeds) == 2
 
@@ -93,9 +94,9 @@ def test_replication_stops_at_its_cap_and_says_the_claim_stays_unresolved(monkey
 def test_a_decided_run_and_a_partial_run_are_not_replicated(monkeypatch):
     monkeypatch.setattr(E, "run_reproduce", lambda *a, **k: pytest.fail("no replicate was needed"))
     decided = _result(_rows(7, ("dath",), [20.0, 21.0, 22.0], [80.0, 81.0, 82.0]))
-    assert E.replicate_undecided(decided).replicate_seeds == ()
+    assert R.replicate_undecided(decided).replicate_seeds == ()
     partial = dataclasses.replace(_result(_rows(7, ("dath",), [30.0, 90.0], [60.0, 40.0])), trials_finished=3)
-    assert E.replicate_undecided(partial).replicate_seeds == ()
+    assert R.replicate_undecided(partial).replicate_seeds == ()
 
 
 def test_ctrl_c_in_a_replicate_keeps_the_run_and_the_finished_replicates(monkeypatch):
@@ -110,7 +111,7 @@ def test_ctrl_c_in_a_replicate_keeps_the_run_and_the_finished_replicates(monkeyp
     monkeypatch.setattr(E, "run_reproduce", grid)
     first = _result(_rows(7, ("dath",), [30.0, 90.0, 20.0], [60.0, 70.0, 40.0], trials=3))
     with pytest.raises(Interrupted) as stop:
-        E.replicate_undecided(first)
+        R.replicate_undecided(first)
     assert stop.value.partial is first and len(first.replicate_seeds) == 1 and not first.partial_note
 
 

@@ -44,10 +44,9 @@ from typing import Any
 import numpy as np
 
 from . import experiment_specs, methods
-from .analysis.claims import REPLICATES_MAX, replicate_seed, undecided_methods
 from .analysis.metrics import grip_without_slip
 from .analysis.onset import OnsetParams
-from .analysis.outputs import ReproduceResult, judged_claims, trial_plot, write_outputs
+from .analysis.outputs import ReproduceResult, trial_plot, write_outputs
 from .analysis.paper import BOTTLE_ORDER, bottle_key
 from .analysis.paper import EXPERIMENTS as PAPER_EXPERIMENTS
 from .analysis.trial import RESULT_COLUMNS, TrialStreams, analyse_trial
@@ -69,7 +68,7 @@ __all__ = [
     "trial_seed", "calibration_seed", "estimate_wall_s", "TRIAL_SIM_SPEED", "grasp_seeds", "closing_speed", "calibrate",
     "run_trial",
     "ReproduceResult", "run_reproduce", "write_outputs", "method_context",
-    "RESULTS_CSV_COLUMNS", "LANDING_S", "replicate_undecided",
+    "RESULTS_CSV_COLUMNS", "LANDING_S",
 ]
 
 #: The paper's methods, in the one method order of :mod:`slipreflex.methods` (run by default;
@@ -483,61 +482,6 @@ def run_reproduce(config: ReproduceConfig | None = None, *, jobs: int | None = N
             partial = grid_result(config, cells, _by_cell(done), thresholds, t0, jobs, t_cal)
             raise Interrupted(partial, partial.partial_note) from None
     return grid_result(config, cells, _by_cell(done), thresholds, t0, jobs, t_cal)
-
-
-def replicate_undecided(result: ReproduceResult, *, jobs: int | None = None, progress: bool = False,
-                        max_replicates: int = REPLICATES_MAX,
-                        on_replicate: Callable[[int, int, tuple[str, ...]], None] | None = None) -> ReproduceResult:
-    """Replicate the grid on derived master seeds while one run's trials leave a claim unresolved.
-
-    After each grid the claims are judged on the pooled rows
-    (:func:`slipreflex.analysis.outputs.judged_claims`); while one is ``unresolved``, the
-    grid runs again on master seed :func:`~slipreflex.analysis.claims.replicate_seed`
-    ``(seed, k)``, only for the methods those claims read
-    (:func:`~slipreflex.analysis.claims.undecided_methods`), at most ``max_replicates``
-    times. A partial run, or one without the paper's cells, is returned unchanged.
-
-    Parameters
-    ----------
-    result : ReproduceResult
-        The run (its ``replicates`` and ``replicate_seeds`` are extended in place).
-    jobs, progress
-        As for :func:`run_reproduce`.
-    max_replicates : int
-        Most replicate grids (0: judge on the run alone).
-    on_replicate : callable, optional
-        Called as ``on_replicate(k, seed, methods)`` before replicate ``k`` runs.
-
-    Returns
-    -------
-    ReproduceResult
-        ``result``. Ctrl-C during a replicate keeps the finished replicates and raises
-        :class:`~slipreflex.interrupts.Interrupted` carrying ``result``.
-
-    Examples
-    --------
-    A run without rows leaves nothing to judge, so nothing to replicate:
-
-    >>> replicate_undecided(ReproduceResult(ReproduceConfig(), [], [], {}, {}, 0.0, 1)).replicate_seeds
-    ()
-    """
-    if result.partial_note or max_replicates < 0:
-        return result
-    for k in range(len(result.replicate_seeds) + 1, max_replicates + 1):
-        wanted = tuple(m for m in undecided_methods(judged_claims(result)) if m in result.config.methods)
-        if not wanted:
-            break
-        seed = replicate_seed(result.config.seed, k)
-        if on_replicate is not None:
-            on_replicate(k, seed, wanted)
-        config = dataclasses.replace(result.config, seed=seed, methods=wanted)
-        try:
-            rep = run_reproduce(config, jobs=jobs, progress=progress, plots=False)
-        except Interrupted:
-            raise Interrupted(result, "interrupted during a replicate grid") from None
-        result.replicates.extend(rep.rows)
-        result.replicate_seeds += (seed,)
-    return result
 
 
 def _by_cell(done: dict[tuple, dict]) -> dict[Cell, tuple]:

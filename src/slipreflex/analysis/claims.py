@@ -47,7 +47,7 @@ its criterion on one run's trials is not left to that run's draws: ``slipreflex
 reproduce`` runs the grid again on derived master seeds (:func:`replicate_seed`),
 only for the methods the undecided claims read (:attr:`Claim.methods`), and
 judges every claim on the pooled rows, until no claim is unresolved or
-:data:`REPLICATES_MAX` replicates ran (``slipreflex.experiments.replicate_undecided``).
+:data:`REPLICATES_MAX` replicates ran (``slipreflex.replication.replicate_undecided``).
 The pooled rows are written as ``replicates.csv``; ``slipreflex claims`` reads
 it beside the results it judges.
 

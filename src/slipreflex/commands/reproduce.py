@@ -30,6 +30,7 @@ from ..grasping import check_run_grasp
 from ..interrupts import Interrupted, signals_ignored, sigterm_interrupts
 from ..paths import OutputSet
 from ..progress import format_duration
+from ..replication import replicate_undecided
 from ..validation import choices, within
 from ._lists import names_list
 
@@ -153,7 +154,6 @@ def run(args: argparse.Namespace) -> int:
     from ..experiments import (  # deferred: late-bound (tests patch slipreflex.experiments.run_reproduce)
         ReproduceConfig,
         estimate_wall_s,
-        replicate_undecided,
         run_reproduce,
     )
 
