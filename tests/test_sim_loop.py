@@ -31,14 +31,17 @@ def test_slip_reflex_catches_the_slow_pour(dath):
     assert isinstance(reflex, Reflex)
     tr = run_closed_loop(rig, reflex, SLOW_POUR.duration_s + 2.0)
     assert not tr.fallen
-    assert tr.slip_events, "the pour must make the bottle slip at least once"
-    first = tr.slip_events[0]
-    # the controller answered that slip by closing the fingers within its first 2 mm (a slowly
-    # loaded rate-state contact creeps for a while before it runs, so time from onset is not the test)
-    up = tr.cmd_t[(tr.cmd_t >= first.onset) & (tr.cmd_value > g.positions[hw.SLIP_FINGER])]
-    assert up.size
     x = tr.daq.displacement
-    assert x[np.searchsorted(tr.t, up[0])] - x[np.searchsorted(tr.t, first.onset)] < 2e-3
+    # the bottle moves: a gross slip, or (the reflex closing first) the pads creeping 20 um and more while the
+    # cuff still holds
+    moved = tr.t[np.argmax(x - x[0] > 20e-6)] if (x - x[0] > 20e-6).any() else np.nan
+    onset = tr.slip_events[0].onset if tr.slip_events else moved
+    assert np.isfinite(onset), "the pour must move the bottle"
+    # the controller answered that motion by closing the fingers within its first 2 mm (a slowly
+    # loaded rate-state contact creeps for a while before it runs, so time from onset is not the test)
+    up = tr.cmd_t[(tr.cmd_t >= onset) & (tr.cmd_value > g.positions[hw.SLIP_FINGER])]
+    assert up.size and not (tr.cmd_value[tr.cmd_t < onset] > g.positions[hw.SLIP_FINGER]).any()
+    assert x[np.searchsorted(tr.t, up[0])] - x[np.searchsorted(tr.t, onset)] < 2e-3
     assert np.all(np.diff(tr.cmd_value) >= 0)              # MPI: monotonic
     assert tr.daq.fingers[-1, 2] > g.positions[hw.SLIP_FINGER]
     assert tr.daq.load_mass[-1] == pytest.approx(rig.bottle.mass_kg + 0.3)
