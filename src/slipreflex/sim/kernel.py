@@ -45,9 +45,19 @@ Model (one physics step of ``dt``, semi-implicit Euler):
   holds sideways; driven by the jet landing off the axis and by the bottle's
   own motion (its axial acceleration scales the mode's gravity). The
   accelerometer's x axis reads the bottle's sideways acceleration.
+* **Tilt** (the second degree of freedom): the bottle turns by ``th`` about
+  the horizontal axis through the grasp's centre and the middle finger's
+  cuff; each contact's friction law sees its own slide ``x + lever th``, so
+  the contacts' tangential forces carry the weight and the tilt together,
+  each bounded by its friction (the friction couple); gravity acts on the
+  centre of mass below the axis, and the tilted section's ellipse presses
+  the off-axis fingertips in (second order). A dropped mass lands on the
+  bottom ``P_DROP_E`` off the axis and rocks the bottle
+  (:func:`tilt_inertia`). Nothing else tilts it: a bottle that is never
+  pushed off the axis runs the one-degree-of-freedom arithmetic.
 * **Fallen out**: once the bottle has moved ``grip_travel`` below the
-  fingertips the contacts reach the shoulder and are lost; the bottle then
-  falls freely.
+  fingertips the contacts reach the shoulder (each contact at its own
+  height when tilted) and are lost; the bottle then falls freely.
 * **Sensors** sampled inside the loop on their own clocks: the OPR5005 slip
   sensor (track interpolation at the surface position under the sensor,
   which moves with the bottle and with the middle fingertip's own rolling as
