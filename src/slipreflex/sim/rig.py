@@ -696,8 +696,8 @@ class Rig:
     >>> rig = Rig("DK", seed=5)
     >>> rig.t, rig.fallen, rig.slipping
     (0.0, False, False)
-    >>> rig.displacement, rig.slip, rig.velocity, rig.normal_force, Rig("TR").load_mass
-    (0.0, 0.0, 0.0, 0.0, 0.04)
+    >>> rig.displacement, rig.slip, rig.velocity, rig.normal_force, Rig("TR").load_mass, rig.tilt
+    (0.0, 0.0, 0.0, 0.0, 0.04, 0.0)
     """
 
     def __init__(self, bottle: Bottle | str = "TR", seed: int | np.random.SeedSequence | np.random.Generator
@@ -1155,7 +1155,10 @@ class Rig:
         S = self._S
         c = K.S_C0 + hw.TRIPOD.index(Finger(finger)) * K.SC_SIZE
         w = S[c + K.SC_W] if S[c + K.SC_STUCK] == 0.0 else 0.0
-        snap = np.array([[0, self._oneoff, self.t, S[K.S_NC], S[c + K.SC_FT], S[c + K.SC_S], S[K.S_FALLEN], w]])
+        i = hw.TRIPOD.index(Finger(finger))
+        events = float(self._C[K.C_MS0 + i]) if i < 2 else 0.0
+        snap = np.array([[0, self._oneoff, self.t, S[K.S_NC], S[c + K.SC_FT], S[c + K.SC_S], S[K.S_FALLEN], w,
+                          events]])
         self._oneoff += 1
         tp = self.tactile_params
         out = np.empty((1,) + hw.TACTILE_SHAPE)
@@ -1304,6 +1307,8 @@ class Rig:
     load_mass = slot(K.S_MASS, float, "Bottle + water + landed masses (kg).")
     slipping = slot(K.S_STUCK, operator.not_, "True while the contacts slide (or the bottle has fallen).")
     fallen = slot(K.S_FALLEN, bool, "Whether the bottle has slid out of the grasp (see the module notes).")
+    tilt = slot(K.S_TH, float, "The bottle's tilt in the grasp (rad; about the axis through the grasp's centre "
+                               "and the middle finger's cuff, the thumb's side down positive).")
 
     @property
     def fall_time(self) -> float | None:
