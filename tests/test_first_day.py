@@ -178,8 +178,8 @@ def test_an_empty_numba_cache_is_seen_as_cold(tmp_path):
 
 
 def test_the_estimate_counts_the_compilation_of_a_cold_cache(tmp_path, capsys, monkeypatch):
+    import slipreflex.commands.reproduce as command
     import slipreflex.experiments as ex
-    import slipreflex.warmup as wu
 
     class Stop(Exception):
         pass
@@ -187,10 +187,10 @@ def test_the_estimate_counts_the_compilation_of_a_cold_cache(tmp_path, capsys, m
     def stop(*a, **k):
         raise Stop
 
-    monkeypatch.setattr(ex, "run_reproduce", stop)
+    monkeypatch.setattr(command, "run_reproduce", stop)     # patched where the command calls it
     said = {}
     for cold in ([], ["closed._closed_slip"]):
-        monkeypatch.setattr(wu, "cold_kernels", lambda cold=cold: cold)
+        monkeypatch.setattr(command, "cold_kernels", lambda cold=cold: cold)
         with pytest.raises(Stop):
             main(["reproduce", "--trials", "1", "--bottles", "TR", "--experiments", "drop", "--jobs", "2",
                   "--out", str(tmp_path / "r")])
