@@ -67,6 +67,7 @@ def main(argv: list[str]) -> int:
         return 2
     jobs = argv[argv.index("--jobs") + 1] if "--jobs" in argv else "2"
     out = str(Path(tempfile.gettempdir()) / "repro")
+    timed_here = False
     for name, markers, command in STEPS:
         cmd = [c.replace("{out}", out).replace("{jobs}", jobs) for c in command]
         flag = OPT_IN.get(name)
@@ -74,6 +75,8 @@ def main(argv: list[str]) -> int:
               + (f"  (only with {flag})" if flag else ""), flush=True)
         if dry or (flag and flag not in argv and only != name) or (only and only != name):
             continue
+        if "--reproduce-timing" in cmd and not timed_here:   # only this run's timing, never an older file's
+            cmd = cmd[:cmd.index("--reproduce-timing")] + cmd[cmd.index("--reproduce-timing") + 2:]
         if name == "reproduce":      # timed: the speed table's row of the default run
             sys.path.insert(0, str(SCRIPTS))
             from speed_table import Missing, timed
@@ -83,6 +86,7 @@ def main(argv: list[str]) -> int:
                 print(f"regenerate: step '{name}' failed: {err}; later steps not run", file=sys.stderr)
                 return 1
             Path(out, "timing.json").write_text(json.dumps(timing))
+            timed_here = True
             continue
         done = subprocess.run(cmd, cwd=ROOT)
         if done.returncode != 0:

@@ -127,7 +127,8 @@ def interrupt(out: str) -> str:
 def runtime(out: str) -> str:
     p50, p99, top = find(r"^RESULT latency_p50_ms=([\d.]+) latency_p99_ms=([\d.]+) latency_max_ms=([\d.]+)", out,
                          "bench_runtime")
-    return f"{p50} / {p99} / {top} ms"
+    n = find(r"^latency sample read->command: .*\(n=(\d+)\)", out, "bench_runtime")[0]
+    return f"{p50} / {p99} / {top} ms over {n} commands"
 
 
 def runtime_live(out: str) -> str:
@@ -158,11 +159,16 @@ def hand_latency(out: str) -> str:
     return f"{cycles} cycles = {ms} ms (the worst packet)"
 
 
-def study(out: str) -> str:
-    hours, minutes = find(r"^default study \(.*?\): ([\d.]+) core-hours, ([\d.]+) min on 2 cores", out,
-                          "bench_study")
-    plants = find(r"; (\d+) plants x \d+ trials$", out, "bench_study")[0]
-    return f"about {minutes} min on 2 free cores ({hours} core-hours; scaled from {plants} plants' CPU time)"
+def _duration(s: float) -> str:
+    return f"{s:.0f} s" if s < 120 else f"{int(s // 60)} min {s % 60:.0f} s"
+
+
+def whole_run(what: str, timing: dict[str, float]) -> str:
+    """A whole command's cost: wall at the load it met, CPU (user + system), the least wall on 2 free cores."""
+    cpu = timing["user_s"] + timing["sys_s"]
+    return (f"{what}: {_duration(timing['wall_s'])} wall at load average {timing['load']:.1f}, {cpu:.0f} CPU s "
+            f"({timing['user_s']:.0f} user + {timing['sys_s']:.0f} system), so at least {_duration(cpu / 2)} on "
+            "2 free cores")
 
 
 #: (what, target, the command as the table shows it, the benchmark's arguments, reader). Rows that share a
@@ -180,18 +186,16 @@ ROWS: list[tuple[str, str, str, list[str], Callable[[str], str]]] = [
      closed_loop),
     ("`slipreflex reproduce` stopping after Ctrl-C / SIGTERM, signal to exit with the finished trials written",
      "<= 2 s", "bench_interrupt.py", [], interrupt),
-    ("real-time loop over virtual devices, 333 Hz, 20 s: p50 / p99 / max", "p99 <= 1 ms", "bench_runtime.py",
-     ["--duration", "20"], runtime),
-    ("the loop with the live view (`--live`), 20 s", "p99 <= 1 ms", "bench_runtime.py",
-     ["--duration", "20", "--live"], runtime_live),
+    ("real-time loop over virtual devices, 333 Hz, 60 s: p50 / p99 / max", "p99 <= 1 ms", "bench_runtime.py",
+     [], runtime),
+    ("the loop with the live view (`--live`), 30 s", "p99 <= 1 ms", "bench_runtime.py",
+     ["--duration", "30", "--live"], runtime_live),
     ("firmware CPU: DAQ / DAQ + reflex / ATmega2560 standalone", "<= 5 % / <= 15 %", "firmware_budget.py",
      ["--seconds", "10"], firmware_cpu),
     ("firmware size, flash / static RAM: DAQ, DAQ + reflex, ATmega2560", "", "firmware_budget.py",
      ["--seconds", "10"], firmware_size),
     ("board hand-packet latency (window-completing ADC sample to first UART1 byte)", "< 1 ms",
      "firmware_budget.py", ["--seconds", "10"], hand_latency),
-    ("`slipreflex study`, default (64 plants), 2 cores", "<= 5 min on 2 cores", "bench_study.py",
-     ["--workers", ""], study),
 ]
 
 
@@ -199,15 +203,23 @@ def reproduce_row(timing: dict[str, float]) -> tuple[str, str, str, str]:
     """The default reproduction's row, from its timing."""
     from slipreflex.experiments import ReproduceConfig
 
-    cpu = timing["user_s"] + timing["sys_s"]
     return ("`slipreflex reproduce`, the default grid, 2 cores",
-            f"{len(ReproduceConfig().cells())} trials, start-up to report: {timing['wall_s']:.0f} s wall at load "
-            f"average {timing['load']:.1f}, {cpu:.0f} CPU s ({timing['user_s']:.0f} user + {timing['sys_s']:.0f} "
-            f"system), so at least {cpu / 2:.0f} s on 2 free cores", "<= 30 s",
+            whole_run(f"{len(ReproduceConfig().cells())} trials, start-up to report", timing), "<= 30 s",
             "`time slipreflex reproduce --jobs 2 --out /tmp/r --no-progress`")
 
 
+def study_row(timing: dict[str, float]) -> tuple[str, str, str, str]:
+    """The default study's row, from its timing (the study extra must be installed)."""
+    from slipreflex.study import DEFAULT_PLANTS, DEFAULT_TRIALS, StudyConfig
+
+    per_plant = StudyConfig(plants=DEFAULT_PLANTS, trials=DEFAULT_TRIALS).trials_per_plant
+    return ("`slipreflex study`, default, 2 cores",
+            whole_run(f"{DEFAULT_PLANTS} plants x {per_plant} trials, calibration and scans included", timing),
+            "<= 5 min on 2 cores", "`time slipreflex study --out /tmp/s` (a fresh directory)")
+
+
 REPRODUCE = [sys.executable, "-m", "slipreflex", "reproduce", "--jobs", "2", "--no-progress", "--out"]
+STUDY = [sys.executable, "-m", "slipreflex", "study", "--out"]
 
 
 def measure(timing: dict[str, float] | None, log=print) -> list[tuple[str, str, str, str]]:
@@ -230,6 +242,9 @@ def measure(timing: dict[str, float] | None, log=print) -> list[tuple[str, str, 
             log("speed_table: timing the default reproduction")
             timing = timed([*REPRODUCE, out])
     rows.insert(7, reproduce_row(timing))
+    with tempfile.TemporaryDirectory() as out:
+        log("speed_table: timing the default study")
+        rows.append(study_row(timed([*STUDY, str(Path(out) / "study")])))
     rows.append(("set-up and every test on a fresh Debian 12 (debootstrap, python3 only), network included",
                  "not measured here: it needs root and debootstrap", "", "`sudo bash scripts/fresh_debian_check.sh`"))
     return rows
@@ -253,10 +268,7 @@ def main(argv: list[str]) -> int:
     timing = None
     if "--reproduce-timing" in argv:
         path = Path(argv[argv.index("--reproduce-timing") + 1])
-        if path.is_file():
-            timing = json.loads(path.read_text())
-        else:
-            print(f"speed_table: no {path} (the reproduction was not run by regenerate): timing one here")
+        timing = json.loads(path.read_text())
     machine = describe()
     try:
         table = markdown(measure(timing), machine)
