@@ -121,3 +121,15 @@ def assert_same_commands():
         np.testing.assert_array_equal(np.isnan(a), np.isnan(b))
         np.testing.assert_array_equal(a[~np.isnan(a)], b[~np.isnan(b)])
     return check
+
+
+def reap_child(proc: subprocess.Popen, killer=None) -> None:
+    """After a test's child process: stop its time-out timer, kill it if it still runs, reap it, close its pipes."""
+    if killer is not None:
+        killer.cancel()
+    if proc.poll() is None:
+        proc.kill()
+        proc.wait(timeout=10)
+    for pipe in (proc.stdin, proc.stdout, proc.stderr):
+        if pipe is not None:
+            pipe.close()
