@@ -4,44 +4,79 @@ Usage::
 
     python scripts/claims_seeds.py                       # the default grid on seeds 20191215, 1, 2, 3, 4
     python scripts/claims_seeds.py --seeds 5,6,7 --trials 10 --jobs 2
+    python scripts/claims_seeds.py --write               # and put the table into docs/reproduce.md
 
-Runs ``slipreflex reproduce``'s grid (in process, no figures) once per master seed, judges
-the claims of each run (:func:`slipreflex.analysis.claims.judge_run`, the scan ensemble from
-that seed) and prints one line per claim with its verdict on every seed, then whether the
-classes agree on all of them. This is how docs/reproduce.md states that the default run's
-classes do not depend on the master seed.
+Runs ``slipreflex reproduce``'s grid (in process, no figures) once per master seed, with the
+replicate grids ``reproduce`` adds where one run's trials leave a claim unresolved
+(:func:`slipreflex.replication.replicate_undecided`), judges the claims of each run
+(:func:`slipreflex.analysis.outputs.judged_claims`, the scan ensemble from that seed) and
+prints one row per claim with its verdict on every seed, then whether the classes agree on
+all of them. This is how docs/reproduce.md states that the default run's classes do not
+depend on the master seed.
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
 import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+DOCS = ROOT / "docs" / "reproduce.md"
+BEGIN, END = "<!-- claims seeds table begins -->", "<!-- claims seeds table ends -->"
 
 
-def main() -> None:
-    from slipreflex.analysis.claims import CLAIMS, judge_run
+def main(argv: list[str] | None = None) -> int:
+    from slipreflex.analysis.claims import CLAIMS
+    from slipreflex.analysis.outputs import judged_claims
     from slipreflex.experiments import DEFAULT_SEED, ReproduceConfig, run_reproduce
+    from slipreflex.replication import replicate_undecided
 
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     ap.add_argument("--seeds", default=f"{DEFAULT_SEED},1,2,3,4")
     ap.add_argument("--trials", type=int, default=None, help="trials per cell (default: reproduce's)")
     ap.add_argument("--jobs", type=int, default=2)
-    args = ap.parse_args()
+    ap.add_argument("--replicates", type=int, default=None,
+                    help="most replicate grids per seed (default: reproduce's; 0: none)")
+    ap.add_argument("--write", action="store_true", help=f"write the table between the markers of {DOCS.name}")
+    args = ap.parse_args(argv)
     seeds = [int(s) for s in args.seeds.split(",")]
     table: dict[int, list[str]] = {c.number: [] for c in CLAIMS}
+    cost: list[str] = []
     for s in seeds:
         t0 = time.perf_counter()
         kw = {} if args.trials is None else {"trials": args.trials}
         res = run_reproduce(ReproduceConfig(seed=s, **kw), jobs=args.jobs, progress=False, plots=False)
-        for r in judge_run(res.rows, seed=s):
+        more = {} if args.replicates is None else {"max_replicates": args.replicates}
+        replicate_undecided(res, jobs=args.jobs, **more)
+        for r in judged_claims(res):
             table[r.number].append(r.verdict)
-        print(f"seed {s}: {len(res.rows)} rows in {time.perf_counter() - t0:.0f} s", flush=True)
-    print("claim  " + "  ".join(f"{s:>16}" for s in seeds))
-    for n, v in table.items():
-        print(f"{n:>5}  " + "  ".join(f"{x:>16}" for x in v) + ("" if len(set(v)) == 1 else "   <- differs"))
+        cost.append(f"{len(res.replicate_seeds)}")
+        print(f"seed {s}: {len(res.rows)} rows and {len(res.replicate_seeds)} replicate grid(s) "
+              f"({len(res.replicates)} rows) in {time.perf_counter() - t0:.0f} s", flush=True)
     same = sum(len(set(v)) == 1 for v in table.values())
-    print(f"{same} of {len(table)} claims have the same class on all {len(seeds)} seeds")
+    lines = ["| claim | " + " | ".join(f"seed {s}" for s in seeds) + " |",
+             "|---|" + "---|" * len(seeds)]
+    lines += [f"| {n} | " + " | ".join(v) + " |" + ("" if len(set(v)) == 1 else " (differs)")
+              for n, v in table.items()]
+    lines += ["| replicate grids | " + " | ".join(cost) + " |", "",
+              f"{same} of {len(table)} claims have the same class on all {len(seeds)} seeds "
+              f"(`python scripts/claims_seeds.py --seeds {args.seeds}`"
+              + (f" --trials {args.trials}" if args.trials is not None else "") + ")."]
+    body = "\n".join(lines)
+    print(body)
+    if args.write:
+        sys.path.insert(0, str(ROOT / "scripts"))
+        from splice_report import replace_marked
+
+        err = replace_marked(DOCS, BEGIN, END, body)
+        if err:
+            print(f"claims_seeds: {err}", file=sys.stderr)
+            return 2
+        print(f"wrote {DOCS}")
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

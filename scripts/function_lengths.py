@@ -33,10 +33,10 @@ def function_lengths(root: Path, *, docstrings: bool = False) -> list[tuple[int,
             if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
                 n = node.end_lineno - node.lineno + 1
                 body = node.body
-                if not docstrings and body and isinstance(body[0], ast.Expr) and isinstance(getattr(body[0], "value", None),
-                                                                        ast.Constant) \
-                        and isinstance(body[0].value.value, str):
-                    n -= body[0].end_lineno - body[0].lineno + 1
+                head = body[0] if body else None
+                if (not docstrings and isinstance(head, ast.Expr) and isinstance(head.value, ast.Constant)
+                        and isinstance(head.value.value, str)):
+                    n -= head.end_lineno - head.lineno + 1
                 rel = path.relative_to(root.parent)
                 out.append((n, f"{rel}:{node.lineno} {node.name}", _is_kernel(node)))
     return sorted(out, reverse=True)

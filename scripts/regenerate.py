@@ -13,16 +13,19 @@ each marker pair is written by exactly one step below; ``tests/test_regenerate.p
 a marker in README.md or docs/*.md has no step, so a physics change updates every table the
 docs quote in one commit. Steps:
 
-1. ``slipreflex reproduce --jobs 2 --out /tmp/repro --no-progress`` (the default run; the
-   command docs/reproduce.md records, so a rerun changes only what the code changes);
+1. ``slipreflex reproduce --jobs 2 --out TMP/repro --no-progress`` into a fresh temporary
+   folder (the default run; the command docs/reproduce.md records, so a rerun changes only
+   what the code changes);
 2. ``scripts/readme_results.py SUMMARY --write``: README's results and claims tables;
 3. ``scripts/splice_report.py REPORT``: the run's report in docs/reproduce.md;
 4. ``scripts/benchmark_table.py --write``: the real-data benchmark tables of README.md and
    docs/benchmark.md;
-5. ``scripts/limits_table.py --write``: docs/runtime.md's table of plausible ranges;
-6. ``scripts/speed_table.py --write``: docs/speed.md's table, every benchmark run now, the
+5. ``scripts/limits_table.py --write``: the plausible ranges in docs/runtime.md;
+6. ``scripts/claims_seeds.py --write``: the claims' classes on five master seeds in
+   docs/reproduce.md (about five default grids, plus their replicates);
+7. ``scripts/speed_table.py --write``: docs/speed.md's table, every benchmark run now, the
    reproduction's row from step 1's timing (its wall and CPU time, written to ``timing.json``);
-7. only with ``--with-tiers``: ``scripts/tier_times.py --write``, docs/development.md's test
+8. only with ``--with-tiers``: ``scripts/tier_times.py --write``, docs/development.md's test
    tiers (it runs the fast tier and then the whole suite).
 """
 
@@ -49,6 +52,8 @@ STEPS: list[tuple[str, tuple[str, ...], list[str]]] = [
                           "k sensitivity", "why"),
      [sys.executable, str(SCRIPTS / "benchmark_table.py"), "--write"]),
     ("limits table", ("limits table",), [sys.executable, str(SCRIPTS / "limits_table.py"), "--write"]),
+    ("claims over five master seeds", ("claims seeds table",),
+     [sys.executable, str(SCRIPTS / "claims_seeds.py"), "--jobs", "{jobs}", "--write"]),
     ("speed table", ("speed table",), [sys.executable, str(SCRIPTS / "speed_table.py"), "--write",
                                        "--reproduce-timing", "{out}/timing.json"]),
     ("test tiers", ("test tiers",), [sys.executable, str(SCRIPTS / "tier_times.py"), "--write"]),
@@ -66,7 +71,7 @@ def main(argv: list[str]) -> int:
               file=sys.stderr)
         return 2
     jobs = argv[argv.index("--jobs") + 1] if "--jobs" in argv else "2"
-    out = str(Path(tempfile.gettempdir()) / "repro")
+    out = str(Path(tempfile.mkdtemp(prefix="slipreflex-regenerate-")) / "repro")
     timed_here = False
     for name, markers, command in STEPS:
         cmd = [c.replace("{out}", out).replace("{jobs}", jobs) for c in command]

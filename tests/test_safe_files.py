@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import json
 import os
-from types import SimpleNamespace
 
 import pytest
 
@@ -139,10 +138,10 @@ def test_output_set_refuses_a_users_file_and_replaces_its_own_set_whole(tmp_path
 
 
 def _fake_result():
+    from slipreflex.analysis.outputs import ReproduceResult
     from slipreflex.experiments import ReproduceConfig
 
-    return SimpleNamespace(config=ReproduceConfig(trials=1), summary=[], rows=[], partial_note="",
-                           trials_finished=1, wall_s=0.0, jobs=1)
+    return ReproduceResult(ReproduceConfig(trials=1), [], [], {}, {}, 0.0, 1, 0.0, 1, 1)
 
 
 def test_reproduce_interrupted_while_writing_leaves_the_previous_set(tmp_path, monkeypatch, capsys):

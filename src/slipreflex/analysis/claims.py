@@ -42,6 +42,15 @@ of the distance between them); "most" more than half. The scan claims ask
 whether the paper's value lies inside the model's central 90 % over the
 ensemble's texture seeds.
 
+**Replication where one run cannot decide.** A claim whose interval straddles
+its criterion on one run's trials is not left to that run's draws: ``slipreflex
+reproduce`` runs the grid again on derived master seeds (:func:`replicate_seed`),
+only for the methods the undecided claims read (:attr:`Claim.methods`), and
+judges every claim on the pooled rows, until no claim is unresolved or
+:data:`REPLICATES_MAX` replicates ran (``slipreflex.replication.replicate_undecided``).
+The pooled rows are written as ``replicates.csv``; ``slipreflex claims`` reads
+it beside the results it judges.
+
 Claim 4 rests on :func:`drop_bounds`: the largest grasp capacity at which the
 10 g drop (falling its release height plus the bottle's depth) can end in
 complete slippage, by energy and by momentum, with the assumptions named.
@@ -86,7 +95,8 @@ __all__ = [
     "claims_terminal", "mean_interval", "difference_interval", "ratio_interval", "proportion_interval",
     "median_interval", "DropBounds", "drop_bounds", "Contradiction", "contradictions",
     "contradictions_markdown", "window_phase_sd_ms", "drop_slipout_capacity_n", "drop_momentum_capacity_n",
-    "first_slip_capacity_n", "STATIC_OVER_KINETIC_MAX",
+    "first_slip_capacity_n", "STATIC_OVER_KINETIC_MAX", "REPLICATES_MAX", "replicate_seed",
+    "undecided_methods",
 ]
 
 HOLDS = "holds"
@@ -120,6 +130,8 @@ ABOUT_RATIO_FACTOR: float = 1.5
 NEAR_ML: float = 50.0
 #: "most": more than this fraction.
 MOST: float = 0.5
+#: At most this many replicate grids (on derived master seeds) for claims one run leaves unresolved.
+REPLICATES_MAX: int = 10
 #: The 85 ms of claim 8.
 UNDER_MS: float = 85.0
 
@@ -459,6 +471,9 @@ class Claim:
         How those words were made numbers.
     judge : callable
         ``judge(ClaimInput) -> list of Part``.
+    methods : tuple of str
+        The methods whose trials decide it: what a replicate grid runs when one run
+        leaves it unresolved (empty: the trials do not decide it, as for the scan).
 
     Examples
     --------
@@ -470,6 +485,7 @@ class Claim:
     text: str
     tolerance: str
     judge: Callable[[ClaimInput], list[Part]]
+    methods: tuple[str, ...] = ()
 
 
 def _get(row: Any, key: str) -> Any:
@@ -975,23 +991,57 @@ CLAIMS: tuple[Claim, ...] = (
           f"{TOLERANCES['a voltage']}; central {100 * CENTRAL:g} % over texture seeds", _scan_levels),
     Claim(2, "Scan: spikes at least about 0.09 mm apart; DATH gives more spikes than fixed",
           f"{TOLERANCES['a length']}; central {100 * CENTRAL:g} % over texture seeds", _scan_spikes),
-    Claim(3, "Drop: DATH responds faster than the fixed threshold on TR, DK and TX", _PAIRED, _drop_faster),
+    Claim(3, "Drop: DATH responds faster than the fixed threshold on TR, DK and TX", _PAIRED, _drop_faster,
+          (DATH, FIXED)),
     Claim(4, "Drop: DATH succeeds in about 80 % of trials, the fixed threshold in under 50 %",
-          TOLERANCES["about a rate"] + "; Wilson intervals; slip-out bounds with named assumptions", _drop_success),
+          TOLERANCES["about a rate"] + "; Wilson intervals; slip-out bounds with named assumptions", _drop_success,
+          (DATH, FIXED)),
     Claim(5, "Drop: NMSD's total time is about twice DATH's", TOLERANCES["about twice"] + "; bootstrap of the "
-          "ratio of means over every bottle", _nmsd_twice),
+          "ratio of means over every bottle", _nmsd_twice, (DATH, NMSD)),
     Claim(6, "Pour: DATH succeeds in every trial; most pours show two slips, near 200 and 400 ml",
           "every: all of DATH's pours; most: " + TOLERANCES["most"] + "; near: " + TOLERANCES["near a volume"]
-          + " (bootstrap of the median)", _pour_dath),
+          + " (bootstrap of the median)", _pour_dath, (DATH,)),
     Claim(7, "Pour: DATH and SWT-SD respond faster than NMSD and the fixed threshold",
-          _PAIRED + "; first slip of each pour, every bottle", _pour_faster),
+          _PAIRED + "; first slip of each pour, every bottle", _pour_faster, (DATH, SWT, NMSD, FIXED)),
     Claim(8, "DATH responds in under 85 ms on every bottle and experiment",
-          TOLERANCES["a response time"] + "; bootstrap of each cell's mean", _under_85),
+          TOLERANCES["a response time"] + "; bootstrap of each cell's mean", _under_85, (DATH,)),
     Claim(9, "DK is DATH's slowest bottle", "two-sample bootstrap of the differences of means, in every "
-          "experiment run", _dk_slowest),
+          "experiment run", _dk_slowest, (DATH,)),
     Claim(10, "TX is DATH's best bottle", "fastest mean response (two-sample bootstrap) and highest success "
-          "(Wilson; ties count), in every experiment run", _tx_best),
+          "(Wilson; ties count), in every experiment run", _tx_best, (DATH,)),
 )
+
+
+def undecided_methods(results: Sequence[ClaimResult]) -> tuple[str, ...]:
+    """The methods whose trials decide the claims ``results`` leaves unresolved (what to replicate).
+
+    Examples
+    --------
+    >>> r = ClaimResult(10, "TX is DATH's best bottle", UNRESOLVED, "", 0.0, -1.0, 1.0, "", "", "")
+    >>> undecided_methods([r])
+    ('dath',)
+    >>> undecided_methods([])
+    ()
+    """
+    by_number = {c.number: c for c in CLAIMS}
+    wanted = {m for r in results if r.verdict == UNRESOLVED for m in by_number[r.number].methods}
+    return tuple(m for m in (DATH, FIXED, NMSD, SWT) if m in wanted)
+
+
+def replicate_seed(master: int, k: int) -> int:
+    """Master seed of replicate ``k`` (1, 2, ...) of a run with master seed ``master``.
+
+    Derived with ``numpy.random.SeedSequence`` so that replicates of nearby master seeds
+    never share trials; the same ``(master, k)`` gives the same seed on every machine.
+
+    Examples
+    --------
+    >>> replicate_seed(20191215, 1) == replicate_seed(20191215, 1) != replicate_seed(20191215, 2)
+    True
+    """
+    if k < 1:
+        raise ValueError(f"replicate k: {k} (replicates count from 1; 0 is the run itself)")
+    return int(np.random.SeedSequence([int(master), int(k)]).generate_state(1, np.uint32)[0])
 
 
 def judge(rows: Sequence[Any], scan: Any = None, plant: Any = None) -> list[ClaimResult]:

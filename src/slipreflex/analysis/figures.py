@@ -31,9 +31,10 @@ import numpy as np
 
 from .. import experiment_specs
 from .. import methods as _registry
+from ..errors import ParameterError
 from .paper import BOTTLE_ORDER, PAPER_SUCCESS, paper_value
 
-__all__ = ["TrialPlot", "plot_trial", "bar_chart", "success_chart", "grip_chart"]
+__all__ = ["TrialPlot", "plot_trial", "bar_chart", "success_chart", "grip_chart", "check_figure_path"]
 
 
 def _color(m: str) -> str:
@@ -87,6 +88,27 @@ class TrialPlot:
     xlim: tuple[float, float] | None = None
     notes: dict = field(default_factory=dict)
     outcome: str = ""
+
+
+def check_figure_path(path: str | Path, option: str) -> None:
+    """Refuse, before any work, a figure path whose suffix matplotlib cannot write.
+
+    Raises :class:`~slipreflex.errors.ParameterError` naming the option and the formats.
+
+    Examples
+    --------
+    >>> check_figure_path("out/cal.png", "--figure")
+    >>> check_figure_path("out/cal.toml", "--figure")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    slipreflex.errors.ParameterError: --figure out/cal.toml: matplotlib cannot write '.toml' (one of: ..., .png, ...)
+    """
+    kinds = sorted(_plt().figure().canvas.get_supported_filetypes())
+    _plt().close("all")
+    suffix = Path(path).suffix.lower().lstrip(".")
+    if suffix not in kinds:
+        shown = ", ".join("." + k for k in kinds)
+        raise ParameterError(f"{option} {path}: matplotlib cannot write '.{suffix}' (one of: {shown})")
 
 
 def _save(plt, fig, path: str | Path, layout: bool = True) -> Path:

@@ -22,7 +22,7 @@ import dataclasses
 import functools
 from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -51,7 +51,7 @@ from .report import (
 from .trial import RESULT_COLUMNS, TrialRow
 
 __all__ = ["ReproduceResult", "write_outputs", "trial_plot", "paper_part", "not_the_papers", "trial_outcome",
-           "scored", "zoom_window"]
+           "scored", "zoom_window", "judged_claims", "replicates_note"]
 
 
 @dataclass
@@ -79,6 +79,11 @@ class ReproduceResult:
     trials_planned, trials_finished : int
         Trials in the grid and trials finished: fewer when Ctrl-C or SIGTERM
         stopped the run (:class:`~slipreflex.interrupts.Interrupted` carries it).
+    replicates : list of TrialRow
+        Rows of the replicate grids run on derived master seeds for claims this run's
+        trials left unresolved (``replicates.csv``; empty: none was needed).
+    replicate_seeds : tuple of int
+        Their master seeds, in order.
 
     Examples
     --------
@@ -97,6 +102,8 @@ class ReproduceResult:
     calibration_wall_s: float = 0.0
     trials_planned: int = 0
     trials_finished: int = 0
+    replicates: list[TrialRow] = field(default_factory=list)
+    replicate_seeds: tuple[int, ...] = ()
 
     @property
     def partial_note(self) -> str:
@@ -157,9 +164,12 @@ def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str 
                "and no figures were drawn nor claims judged."] if partial else []
     paper, others, notice = paper_part(result)
     notices += [notice] if notice else []
+    notices += [replicates_note(result).capitalize() + "."] if result.replicate_seeds else []
 
-    claims = () if partial or not paper.rows else judge_run(scored(paper.rows), seed=result.config.seed,
-                                                            plant=result.config.plant)
+    if result.replicates:
+        paths["replicates"] = write_csv(out / "replicates.csv", result.replicates, RESULT_COLUMNS,
+                                        notes=[replicates_note(result)])
+    claims = judged_claims(result)
     if claims:
         paths["claims"] = write_claims_csv(out / "claims.csv", claims)
     md = report_markdown(summary=paper.summary, rows=paper.rows, figures=figs,
@@ -172,6 +182,41 @@ def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str 
     paths["report"] = out / "report.md"
     paths["report"].write_text(md)
     return paths
+
+
+def judged_claims(result: ReproduceResult) -> list:
+    """The paper's claims judged on a run: its scored paper rows, pooled with its replicates' rows.
+
+    Empty for a partial run or one without any of the paper's cells.
+
+    Examples
+    --------
+    >>> from slipreflex.experiments import ReproduceConfig
+    >>> judged_claims(ReproduceResult(ReproduceConfig(), [], [], {}, {}, 0.0, 1))
+    []
+    """
+    paper = paper_part(result)[0]
+    if result.partial_note or not paper.rows:
+        return []
+    pooled = scored(paper.rows) + scored(result.replicates)
+    return judge_run(pooled, seed=result.config.seed, plant=result.config.plant)
+
+
+def replicates_note(result: ReproduceResult) -> str:
+    """One line on the replicate grids behind a run's claims ("" when none ran).
+
+    Examples
+    --------
+    >>> from slipreflex.experiments import ReproduceConfig
+    >>> replicates_note(ReproduceResult(ReproduceConfig(), [], [], {}, {}, 0.0, 1))
+    ''
+    """
+    if not result.replicate_seeds:
+        return ""
+    methods = sorted({str(getattr(r, "method", "")) for r in result.replicates})
+    return (f"claims judged on this run pooled with {len(result.replicate_seeds)} replicate grid(s) of "
+            f"{', '.join(methods)} on master seeds {', '.join(map(str, result.replicate_seeds))} "
+            f"({len(result.replicates)} rows, replicates.csv): one run's trials left a claim unresolved")
 
 
 def scored(rows: Sequence[Any]) -> list[Any]:

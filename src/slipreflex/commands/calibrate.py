@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import hardware as hw
-from ..analysis.figures import _plt, _save
+from ..analysis.figures import _plt, _save, check_figure_path
 from ..errors import ParameterError
 from ..paths import output_dir
 from ._lists import names_list
@@ -74,8 +74,8 @@ def run(args: argparse.Namespace) -> int:
     if target is not None and not 0 < target < 500:
         raise ParameterError(f"--first-slip-ml must be in (0, 500) ml, got {target!r}")
     if args.figure is not None:
-
         output_dir(args.figure.parent, "--figure")      # before the work: a bad folder costs one line
+        check_figure_path(args.figure, "--figure")
     hand = HandParams()
     drawn: dict = {}
     print(f"open-loop calibration: {hw.CONTACT_FORCE_N} N grasp, 500 ml at 1 L/min, no reflex "

@@ -6,7 +6,9 @@ or by your own analysis with the same columns: see
 ``reproduce`` prints (each of the paper's claims with its verdict class: holds,
 fails-definition, fails-paper, fails-plant, unresolved or not-decidable, its reason and
 the interval behind it) and writes it as ``claims.csv`` beside the results (or to
-``--out``). Claims 1-2 are judged on the characterization scan of the simulated slip
+``--out``). A ``replicates.csv`` beside the results (the replicate grids ``reproduce``
+ran where one run's trials left a claim unresolved) is pooled with them, so the
+table is the one ``reproduce`` wrote. Claims 1-2 are judged on the characterization scan of the simulated slip
 sensor over texture seeds from ``--seed``.
 
 Examples (shell)::
@@ -22,6 +24,7 @@ import csv
 from pathlib import Path
 
 from ..analysis.claims import claims_terminal, judge_run, write_claims_csv
+from ..analysis.outputs import scored
 from ..analysis.trial import TrialRow
 from ..errors import ParameterError
 from ..experiments import ReproduceConfig
@@ -42,6 +45,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=int, default=ReproduceConfig().seed,
                         help="first texture seed of the slip-sensor scans behind claims 1-2 (default: reproduce's "
                              "master seed)")
+    parser.add_argument("--no-replicates", action="store_true",
+                        help="judge RESULTS.csv alone, without a replicates.csv beside it")
     parser.add_argument("--out", type=Path, default=None, metavar="CLAIMS.csv",
                         help="where to write the claims table (default: claims.csv beside RESULTS.csv)")
 
@@ -82,6 +87,12 @@ def run(args: argparse.Namespace) -> int:
         raise ParameterError(f"--out {out}: no such directory {out.parent}")
     rows = read_rows(args.results)
     print(f"{len(rows)} rows of {args.results}")
+    replicates = args.results.parent / "replicates.csv"
+    if replicates.is_file() and not args.no_replicates:
+        more = read_rows(replicates)
+        print(f"pooled with {len(more)} rows of {replicates} (replicate grids; --no-replicates: without)")
+        rows += more
+    rows = scored(rows)
     results = judge_run(rows, seed=args.seed)
     print(claims_terminal(results))
     write_claims_csv(out, results)

@@ -21,8 +21,8 @@ import sys
 from pathlib import Path
 
 from .. import experiment_specs, methods
-from ..analysis.claims import claims_terminal, judge_run
-from ..analysis.outputs import paper_part, scored, write_outputs
+from ..analysis.claims import claims_terminal
+from ..analysis.outputs import judged_claims, paper_part, replicates_note, write_outputs
 from ..analysis.report import terminal_table
 from ..errors import ParameterError
 from ..experiments import (
@@ -37,6 +37,7 @@ from ..grasping import check_run_grasp
 from ..interrupts import Interrupted, signals_ignored, sigterm_interrupts
 from ..paths import OutputSet
 from ..progress import format_duration
+from ..replication import replicate_undecided
 from ..validation import choices, within
 from ..warmup import COLD_COMPILE_S, cold_kernels, estimate_wall_s
 from ._lists import names_list
@@ -184,13 +185,16 @@ def run(args: argparse.Namespace) -> int:
         with sigterm_interrupts():
             result = run_reproduce(config, jobs=jobs, progress=not args.no_progress,
                                    plots=not args.no_figures)
+            replicate_undecided(result, jobs=jobs, progress=not args.no_progress, on_replicate=_announce)
     except Interrupted as stop:
         with signals_ignored():
             paths = _write(stop.partial, outputs, command)
         if paths is None:
             return 130
-        print(f"slipreflex reproduce: {stop.partial.partial_note}; wrote the finished trials to "
-              f"{outputs.folder}/ (results.csv, summary.csv, report.md marked partial)",
+        what = stop.partial.partial_note or str(stop)
+        print(f"slipreflex reproduce: {what}; wrote the finished trials to {outputs.folder}/ "
+              + ("(results.csv, summary.csv, report.md marked partial)" if stop.partial.partial_note else
+                 "(the whole grid; claims judged with the replicates that finished)"),
               file=sys.stderr)
         return 130
     return 0 if _write(result, outputs, command) is not None else 130
@@ -213,6 +217,11 @@ def check_limits(args: argparse.Namespace, limited) -> None:
         value = getattr(args, dest, None)
         if value is not None:
             within(limit, value, option)
+
+
+def _announce(k: int, seed: int, methods: tuple[str, ...]) -> None:
+    print(f"replicate {k}: one run's trials leave a claim unresolved; the grid of {', '.join(methods)} again on "
+          f"master seed {seed}", file=sys.stderr, flush=True)
 
 
 #: A run estimated longer than this (s) says how to shorten it before it starts.
@@ -243,8 +252,11 @@ def _write(result, outputs, command: str | None) -> dict | None:
         print(notice)
     print(terminal_table(result.summary))
     if not result.partial_note and paper.rows:
-        print(claims_terminal(judge_run(scored(paper.rows), seed=result.config.seed, plant=result.config.plant)))
+        if result.replicate_seeds:
+            print(replicates_note(result))
+        print(claims_terminal(judged_claims(result)))
     claims = "" if result.partial_note or not paper.rows else ", claims.csv"
+    claims += ", replicates.csv" if result.replicates else ""
     print(f"{len(result.rows)} rows from {result.trials_finished} trials in {result.wall_s:.1f} s "
           f"({result.jobs} jobs); wrote {outputs.folder}/"
           "{results.csv, summary.csv, report.md" + claims + ("" if result.partial_note else ", figures/") + "}")
