@@ -224,3 +224,20 @@ def test_the_fast_tier_check_sees_a_module_no_fast_test_reaches(tmp_path):
     lonely.write_text("def f():\n    return 1\n")
     modules = {"slipreflex.errors": ROOT / "src" / "slipreflex" / "errors.py", "slipreflex.lonely": lonely}
     assert _fast_tier_reaches(modules) == {"slipreflex.errors"}
+
+
+@pytest.mark.slow
+def test_a_simulation_at_collection_time_stops_the_run(tmp_path):
+    """conftest counts the rigs built while collecting: a module-level simulation is a one-line error."""
+    import shutil
+    import subprocess
+
+    probe = tmp_path / "tests"
+    probe.mkdir()
+    shutil.copy(ROOT / "tests" / "conftest.py", probe / "conftest.py")
+    (probe / "test_probe.py").write_text('from slipreflex.sim import Rig\nRIG = Rig("TR")\n\n\n'
+                                         "def test_nothing():\n    pass\n")
+    res = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(probe)],
+                         capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    assert res.returncode != 0
+    assert "1 simulated rig(s) built while collecting the tests (Rig('TR',))" in res.stdout + res.stderr
