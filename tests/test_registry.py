@@ -81,3 +81,20 @@ def test_the_registry_sits_at_the_bottom_of_the_import_graph():
     tree = ast.parse(Path(mod.__file__).read_text())
     imported = {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) and n.level}
     assert imported <= {"errors", "validation"}, imported
+
+
+def test_a_hand_registered_from_outside_the_package_opens_by_name():
+    import serial
+
+    def open_twin(port, **options):
+        from slipreflex.devices.ilimb import ILimb
+        return ILimb(port, **options)
+
+    hands.register_hand(hands.HandSpec("ilimb-twin", "i-Limb twin", open_twin))
+    try:
+        hand = hands.open_hand("ILIMB-twin", serial.serial_for_url("loop://"))
+        assert hand.positions() == {} and "ilimb-twin" in hands.hand_names()
+        hand.close()
+    finally:
+        hands.HANDS.unregister("ilimb-twin")
+    assert "ilimb-twin" not in hands.hand_names()
