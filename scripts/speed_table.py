@@ -263,7 +263,7 @@ def main(argv: list[str]) -> int:
     sys.path.insert(0, str(ROOT / "benchmarks"))
     sys.path.insert(0, str(ROOT / "scripts"))
     from machine import describe
-    from splice_report import replace_marked
+    from splice_report import write_marked
 
     timing = None
     if "--reproduce-timing" in argv:
@@ -276,13 +276,7 @@ def main(argv: list[str]) -> int:
         print(f"speed_table: {err}", file=sys.stderr)
         return 2
     print(table)
-    if "--write" in argv:
-        error = replace_marked(DOC, BEGIN, END, table)
-        if error:
-            print(f"speed_table: {error}", file=sys.stderr)
-            return 2
-        print(f"speed_table: wrote {DOC.relative_to(ROOT)}")
-    return 0
+    return write_marked("speed_table", DOC, BEGIN, END, table) if "--write" in argv else 0
 
 
 if __name__ == "__main__":

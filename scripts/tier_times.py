@@ -77,7 +77,7 @@ def main(argv: list[str]) -> int:
     sys.path.insert(0, str(ROOT / "benchmarks"))
     sys.path.insert(0, str(ROOT / "scripts"))
     from machine import describe
-    from splice_report import replace_marked
+    from splice_report import write_marked
 
     rows = []
     for tier, command, args, what in TIERS:
@@ -85,13 +85,7 @@ def main(argv: list[str]) -> int:
         rows.append(row(tier, command, what, run_tier(args)))
     text = table(rows, describe())
     print(text)
-    if "--write" in argv:
-        error = replace_marked(DOC, BEGIN, END, text)
-        if error:
-            print(f"tier_times: {error}", file=sys.stderr)
-            return 2
-        print(f"tier_times: wrote {DOC.relative_to(ROOT)}")
-    return 0
+    return write_marked("tier_times", DOC, BEGIN, END, text) if "--write" in argv else 0
 
 
 if __name__ == "__main__":

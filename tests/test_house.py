@@ -105,19 +105,9 @@ def _marked_slow(node) -> bool:
 
 def test_every_test_module_keeps_a_fast_test_and_the_tier_markers_are_registered():
     """The fast tier (`pytest -m "not slow"`, docs/development.md) covers every test module."""
-    import ast
     import tomllib
 
-    without = []
-    for path in sorted((ROOT / "tests").glob("test_*.py")):
-        tree = ast.parse(path.read_text())
-        if any(isinstance(n, ast.Assign) and any(getattr(t, "id", "") == "pytestmark" for t in n.targets)
-               and "slow" in ast.unparse(n.value) for n in tree.body):
-            without.append(path.name)
-            continue
-        tests = [n for n in tree.body if isinstance(n, ast.FunctionDef) and n.name.startswith("test_")]
-        if tests and all(_marked_slow(n) for n in tests):
-            without.append(path.name)
+    without = [path.name for path, _, tests, fast in _test_files() if tests and not fast]
     assert not without, f"test modules with no test in the fast tier: {without}"
     markers = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["pytest"]["ini_options"]["markers"]
     assert {m.split(":")[0].split("(")[0] for m in markers} >= {"slow", "needs_tools"}
@@ -145,21 +135,23 @@ def test_the_readme_is_a_five_minute_read():
 
 
 @functools.cache
-def _fast_test_files():
-    """(path, syntax tree, its fast tests) of every test module that keeps a test in the fast tier."""
+def _test_files():
+    """(path, syntax tree, its tests, its fast tests) of every test module (a module-wide slow mark: none fast)."""
     import ast
 
     out = []
     for path in sorted((ROOT / "tests").glob("test_*.py")):
         tree = ast.parse(path.read_text())
-        if any(isinstance(n, ast.Assign) and any(getattr(t, "id", "") == "pytestmark" for t in n.targets)
-               and "slow" in ast.unparse(n.value) for n in tree.body):
-            continue
-        fast = [n for n in tree.body if isinstance(n, ast.FunctionDef) and n.name.startswith("test_")
-                and not _marked_slow(n)]
-        if fast:
-            out.append((path, tree, fast))
+        tests = [n for n in tree.body if isinstance(n, ast.FunctionDef) and n.name.startswith("test_")]
+        all_slow = any(isinstance(n, ast.Assign) and any(getattr(t, "id", "") == "pytestmark" for t in n.targets)
+                       and "slow" in ast.unparse(n.value) for n in tree.body)
+        out.append((path, tree, tests, [] if all_slow else [n for n in tests if not _marked_slow(n)]))
     return out
+
+
+def _fast_test_files():
+    """(path, syntax tree, its fast tests) of every test module that keeps a test in the fast tier."""
+    return [(path, tree, fast) for path, tree, _, fast in _test_files() if fast]
 
 
 def _fast_tier_reaches(modules: dict[str, Path]) -> set[str]:
