@@ -122,13 +122,42 @@ def test_not_decidable_names_what_is_missing():
     assert res[7].verdict == C.NOT_DECIDABLE and "SWT-SD" in res[7].reason
 
 
-def test_claim_4_is_not_decidable_when_no_drop_can_knock_the_bottle_out():
+class _Shaped:
+    """A paper bottle with the tilt's and the shoulder's constants set (or cleared)."""
+
+    def __init__(self, bottle, eccentricity, slope):
+        self._b, self.drop_eccentricity_m, self.shoulder_slope = bottle, eccentricity, slope
+
+    def __getattr__(self, name):
+        return getattr(self._b, name)
+
+
+def _plant(eccentricity, slope):
+    from types import SimpleNamespace
+
+    from slipreflex.sim import BOTTLES
+
+    return SimpleNamespace(bottles={n: _Shaped(b, eccentricity, slope) for n, b in BOTTLES.items()})
+
+
+def test_claim_4_is_not_decidable_when_no_drop_can_knock_a_sliding_bottle_out():
     rows = _replace(paper_like(), lambda r: r["experiment"] == "drop", success=True)
-    r4 = {r.number: r for r in C.judge(rows)}[4]
+    r4 = {r.number: r for r in C.judge(rows, plant=_plant(0.0, 0.49))}[4]     # no tilt: one degree of freedom
     assert r4.verdict == C.NOT_DECIDABLE
     for words in ("fall 18 cm", "2.16 N (energy", "0.81-1.22 N (momentum", "2.38 N", "one degree of freedom",
                   "constant normal force", "grip travel", "tilt"):
         assert words in r4.reason
+
+
+def test_claim_4_fails_on_a_plant_with_tilt_and_taper_that_holds_every_drop():
+    rows = _replace(paper_like(), lambda r: r["experiment"] == "drop", success=True)
+    r4 = {r.number: r for r in C.judge(rows, plant=_plant(0.01, 0.49))}[4]
+    assert r4.verdict == C.FAILS_PLANT
+    for words in ("no drop knocks the bottle out", "2.16 N (energy", "1 cm off the axis", "shoulder taper of 0.49"):
+        assert words in r4.reason, words
+    assert C.tilt_and_taper(_plant(0.01, 0.0)) == C.tilt_and_taper(_plant(0.0, 0.49)) == ""   # both, or 1 DOF
+    # paper-like drops (DATH 80 %, fixed 40 %) hold whatever the plant models
+    assert {r.number: r for r in C.judge(paper_like(), plant=_plant(0.01, 0.49))}[4].verdict == C.HOLDS
 
 
 def test_drop_bounds_use_the_fall_height_of_the_rig():

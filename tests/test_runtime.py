@@ -206,7 +206,10 @@ def test_daq_port_that_disappears_and_comes_back(tmp_path):
         res = _run_recorded(tmp_path, daq, hand, reflex, 1.4)
         history = list(dev.rig.hand.history)
     kinds = [f.kind for f in res.faults]
-    assert kinds[:2] == ["daq-port", "watchdog"] and "watchdog-clear" in kinds
+    # the port's loss and the watchdog both fire; which the loop notices first depends on the
+    # machine's load (a busy machine can starve the loop into a stale gap before the unplug)
+    assert {"daq-port", "watchdog", "watchdog-clear"} <= set(kinds)
+    assert kinds.index("watchdog") < kinds.index("watchdog-clear")
     assert res.daq_stats["disconnects"] == 1 and res.daq_stats["reconnects"] == 1
     assert res.daq_stats["seq_gaps"] == 1  # the samples sent while unplugged are lost, and counted
     assert all(v >= P0 for h in history for v in h.values())

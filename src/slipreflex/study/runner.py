@@ -46,6 +46,7 @@ import sys
 import threading
 import time
 import traceback
+import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -631,9 +632,13 @@ def _client(workers: int | None, scheduler: str | None, dashboard: str | None = 
         signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
         old = signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:
-        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                               dashboard_address=dashboard,   # type: ignore[arg-type]  # None: no dashboard
-                               silence_logs=logging.ERROR)    # the workers' warnings are Dask's business
+        with warnings.catch_warnings():
+            # Without a dashboard the scheduler still serves its health page, on 8787 if free and
+            # on another port (with this warning) when another cluster holds it: not the user's concern.
+            warnings.filterwarnings("ignore", message="Port 8787 is already in use")
+            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                   dashboard_address=dashboard,  # type: ignore[arg-type]  # None: no dashboard
+                                   silence_logs=logging.ERROR)   # the workers' warnings are Dask's business
     finally:
         if main:
             signal.signal(signal.SIGINT, old)
