@@ -3,7 +3,7 @@
 The graph is read from the source (the AST of every module under src/slipreflex), so an
 import inside a function counts as much as one at the top; imports under ``if TYPE_CHECKING:``
 do not run and do not count. A registry names what sits above it by entry point
-(``slipreflex.methods.EntryPoint``), which is not an import.
+(``slipreflex.registry.EntryPoint``), which is not an import.
 """
 
 from __future__ import annotations
