@@ -41,13 +41,15 @@ def run_tier(args: list[str]) -> dict[str, object]:
     load = os.getloadavg()[0]
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
-    done = subprocess.run([sys.executable, "-m", "pytest", *args, "-q", "-p", "no:cacheprovider"], cwd=ROOT,
+    done = subprocess.run([sys.executable, "-m", "pytest", *args, "-q", "-rfE", "-p", "no:cacheprovider"], cwd=ROOT,
                           capture_output=True, text=True)
     wall = time.perf_counter() - t0
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     last = done.stdout.strip().splitlines()[-1] if done.stdout.strip() else ""
     if done.returncode != 0:
-        raise SystemExit(f"tier_times: pytest {' '.join(args)} failed (exit {done.returncode}): {last}")
+        failed = [ln for ln in done.stdout.splitlines() if ln.startswith(("FAILED ", "ERROR "))]
+        raise SystemExit(f"tier_times: pytest {' '.join(args)} failed (exit {done.returncode}): {last}\n"
+                         + "\n".join(failed))
     counts = dict((k, int(n)) for n, k in re.findall(r"(\d+) (passed|skipped|deselected)", last))
     return {"passed": counts.get("passed", 0), "skipped": counts.get("skipped", 0), "wall_s": wall,
             "cpu_s": (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime), "load": load}
