@@ -71,7 +71,7 @@ def table(rows: list[str], machine: str) -> str:
         *rows, "",
         f"Measured on {datetime.date.today().isoformat()} by `python scripts/regenerate.py --with-tiers` "
         f"(`scripts/tier_times.py`) on {machine}, with numba's cache warm (a first run on a fresh checkout "
-        "also compiles the kernels, about half a minute more). The CPU time (user + system) is what a run "
+        "also compiles the kernels and takes longer). The CPU time (user + system) is what a run "
         "costs; the wall time depends on what else the 2 cores run."])
 
 
