@@ -68,13 +68,9 @@ def main(argv: list[str] | None = None) -> int:
     print(body)
     if args.write:
         sys.path.insert(0, str(ROOT / "scripts"))
-        from splice_report import replace_marked
+        from splice_report import write_marked
 
-        err = replace_marked(DOCS, BEGIN, END, body)
-        if err:
-            print(f"claims_seeds: {err}", file=sys.stderr)
-            return 2
-        print(f"wrote {DOCS}")
+        return write_marked("claims_seeds", DOCS, BEGIN, END, body)
     return 0
 
 

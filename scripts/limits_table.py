@@ -20,19 +20,13 @@ BEGIN, END = "<!-- limits table begins -->", "<!-- limits table ends -->"
 
 def main(argv: list[str]) -> int:
     sys.path.insert(0, str(ROOT / "scripts"))
-    from splice_report import replace_marked
+    from splice_report import write_marked
 
     from slipreflex.validation import limits_markdown
 
     table = limits_markdown()
     print(table)
-    if "--write" in argv:
-        err = replace_marked(DOCS, BEGIN, END, table)
-        if err:
-            print(f"limits_table: {err}", file=sys.stderr)
-            return 2
-        print(f"wrote {DOCS}")
-    return 0
+    return write_marked("limits_table", DOCS, BEGIN, END, table) if "--write" in argv else 0
 
 
 if __name__ == "__main__":

@@ -96,16 +96,12 @@ def main(argv: list[str]) -> int:
         print(text + ("\n\n" + claims if claims else ""))
         return 0
     sys.path.insert(0, str(Path(__file__).resolve().parent))
-    from splice_report import replace_marked
+    from splice_report import write_marked
 
-    error = replace_marked(README, BEGIN, END, text)
-    if not error and claims:
-        error = replace_marked(README, CLAIMS_BEGIN, CLAIMS_END, claims)
-    if error:
-        print(f"readme_results: {error}", file=sys.stderr)
-        return 2
-    print(f"readme_results: README.md's table now comes from {args[0]}")
-    return 0
+    status = write_marked("readme_results", README, BEGIN, END, text)
+    if not status and claims:
+        status = write_marked("readme_results", README, CLAIMS_BEGIN, CLAIMS_END, claims)
+    return status
 
 
 if __name__ == "__main__":

@@ -2,8 +2,10 @@
 
 Usage::
 
-    python scripts/regenerate.py              # run every step (a default reproduction first)
+    python scripts/regenerate.py              # run every default step (a default reproduction first)
+    python scripts/regenerate.py --with-tiers # ... and time both test tiers (the whole suite: minutes)
     python scripts/regenerate.py --dry-run    # list the steps and the markers each one writes
+    python scripts/regenerate.py --only "speed table"   # one step (by its name in the list)
     python scripts/regenerate.py --jobs 4     # worker processes of the reproduction (default 2)
 
 Each table sits between two markers, ``<!-- NAME begins -->`` and ``<!-- NAME ends -->``, and
@@ -20,11 +22,16 @@ docs quote in one commit. Steps:
    docs/benchmark.md;
 5. ``scripts/limits_table.py --write``: the plausible ranges in docs/runtime.md;
 6. ``scripts/claims_seeds.py --write``: the claims' classes on five master seeds in
-   docs/reproduce.md (about five default grids, plus their replicates).
+   docs/reproduce.md (about five default grids, plus their replicates);
+7. ``scripts/speed_table.py --write``: docs/speed.md's table, every benchmark run now, the
+   reproduction's row from step 1's timing (its wall and CPU time, written to ``timing.json``);
+8. only with ``--with-tiers``: ``scripts/tier_times.py --write``, docs/development.md's test
+   tiers (it runs the fast tier and then the whole suite).
 """
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 import tempfile
@@ -47,18 +54,44 @@ STEPS: list[tuple[str, tuple[str, ...], list[str]]] = [
     ("limits table", ("limits table",), [sys.executable, str(SCRIPTS / "limits_table.py"), "--write"]),
     ("claims over five master seeds", ("claims seeds table",),
      [sys.executable, str(SCRIPTS / "claims_seeds.py"), "--jobs", "{jobs}", "--write"]),
+    ("speed table", ("speed table",), [sys.executable, str(SCRIPTS / "speed_table.py"), "--write",
+                                       "--reproduce-timing", "{out}/timing.json"]),
+    ("test tiers", ("test tiers",), [sys.executable, str(SCRIPTS / "tier_times.py"), "--write"]),
 ]
+
+#: Steps run only when their flag is given (too slow for the default).
+OPT_IN: dict[str, str] = {"test tiers": "--with-tiers"}
 
 
 def main(argv: list[str]) -> int:
     dry = "--dry-run" in argv
+    only = argv[argv.index("--only") + 1] if "--only" in argv else None
+    if only is not None and only not in [name for name, _, _ in STEPS]:
+        print(f"regenerate: --only {only!r}: no such step (steps: {', '.join(n for n, _, _ in STEPS)})",
+              file=sys.stderr)
+        return 2
     jobs = argv[argv.index("--jobs") + 1] if "--jobs" in argv else "2"
     out = str(Path(tempfile.mkdtemp(prefix="slipreflex-regenerate-")) / "repro")
+    timed_here = False
     for name, markers, command in STEPS:
         cmd = [c.replace("{out}", out).replace("{jobs}", jobs) for c in command]
-        print(f"regenerate: {name}: {' '.join(cmd)}" + (f"  (writes: {', '.join(markers)})" if markers else ""),
-              flush=True)
-        if dry:
+        flag = OPT_IN.get(name)
+        print(f"regenerate: {name}: {' '.join(cmd)}" + (f"  (writes: {', '.join(markers)})" if markers else "")
+              + (f"  (only with {flag})" if flag else ""), flush=True)
+        if dry or (flag and flag not in argv and only != name) or (only and only != name):
+            continue
+        if "--reproduce-timing" in cmd and not timed_here:   # only this run's timing, never an older file's
+            cmd = cmd[:cmd.index("--reproduce-timing")] + cmd[cmd.index("--reproduce-timing") + 2:]
+        if name == "reproduce":      # timed: the speed table's row of the default run
+            sys.path.insert(0, str(SCRIPTS))
+            from speed_table import Missing, timed
+            try:
+                timing = timed(cmd)
+            except Missing as err:
+                print(f"regenerate: step '{name}' failed: {err}; later steps not run", file=sys.stderr)
+                return 1
+            Path(out, "timing.json").write_text(json.dumps(timing))
+            timed_here = True
             continue
         done = subprocess.run(cmd, cwd=ROOT)
         if done.returncode != 0:

@@ -64,5 +64,18 @@ def replace_marked(path: Path, begin: str, end: str, body: str) -> str:
     return ""
 
 
+def write_marked(tool: str, path: Path, begin: str, end: str, body: str) -> int:
+    """What every table script does with ``--write``: splice ``body`` in, say so; the exit status.
+
+    A missing or repeated marker is one line on stderr, prefixed with ``tool``, and status 2.
+    """
+    error = replace_marked(path, begin, end, body)
+    if error:
+        print(f"{tool}: {error}", file=sys.stderr)
+        return 2
+    print(f"{tool}: wrote {path}")
+    return 0
+
+
 if __name__ == "__main__":
     sys.exit(main(sys.argv[1:]))

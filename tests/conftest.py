@@ -121,3 +121,45 @@ def assert_same_commands():
         np.testing.assert_array_equal(np.isnan(a), np.isnan(b))
         np.testing.assert_array_equal(a[~np.isnan(a)], b[~np.isnan(b)])
     return check
+
+
+def reap_child(proc: subprocess.Popen, killer=None) -> None:
+    """After a test's child process: stop its time-out timer, kill it if it still runs, reap it, close its pipes."""
+    if killer is not None:
+        killer.cancel()
+    if proc.poll() is None:
+        proc.kill()
+        proc.wait(timeout=10)
+    for pipe in (proc.stdin, proc.stdout, proc.stderr):
+        if pipe is not None:
+            pipe.close()
+
+
+#: Simulated rigs built while the tests were being collected (by ``pytest_collection`` below); a
+#: calibration or simulation a module needs belongs in a fixture or a cached function, not in a
+#: module-level constant, so the count stays 0 and a one-line change pays only for its tests.
+COLLECTION_RIGS: list[str] = []
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_collection(session):
+    """Count the simulated rigs built during collection (pytest_collection_finish refuses a nonzero count)."""
+    from slipreflex.sim.rig import Rig
+
+    real = Rig.__init__
+
+    def counting(self, *args, **kwargs):
+        COLLECTION_RIGS.append(f"Rig{args[:1]!r}")
+        real(self, *args, **kwargs)
+
+    Rig.__init__ = counting
+    try:
+        yield
+    finally:
+        Rig.__init__ = real
+
+
+def pytest_collection_finish(session):
+    if COLLECTION_RIGS:
+        raise pytest.UsageError(f"{len(COLLECTION_RIGS)} simulated rig(s) built while collecting the tests "
+                                f"({', '.join(COLLECTION_RIGS[:3])}): move the simulation into a fixture")

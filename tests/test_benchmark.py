@@ -292,6 +292,7 @@ def test_benchmark_table_script_markers_and_compact_table():
 @pytest.mark.slow
 def test_ctrl_c_keeps_the_finished_trials(tmp_path, monkeypatch, capsys):
     import slipreflex.benchmark.run as run_mod
+    import slipreflex.commands.benchmark as command
 
     folder = tmp_path / "set"
     folder.mkdir()
@@ -304,7 +305,7 @@ def test_ctrl_c_keeps_the_finished_trials(tmp_path, monkeypatch, capsys):
             raise KeyboardInterrupt
         return real(trial, *args, **kwargs)
 
-    monkeypatch.setattr(run_mod, "run_trial", stop_at_b)
+    monkeypatch.setattr(command, "run_trial", stop_at_b)       # where the command calls it
     out = tmp_path / "out"
     assert main(["benchmark", str(folder), "--methods", "fixed", "--rates", "data", "--out", str(out)]) == 130
     with open(out / "benchmark.csv", newline="") as fh:

@@ -214,6 +214,7 @@ def test_bootstrap_without_root_or_sudo_names_the_apt_command(standin, tmp_path)
     assert not log.exists() and not (proj / ".venv").exists()
 
 
+@pytest.mark.slow          # a venv and a pip install (4 s); the fast tier keeps the bad-input checks
 @requires_system_python
 def test_bootstrap_shows_the_install_as_it_happens(standin):
     """The pip step announces itself and lets pip print its progress (it was silent for a minute)."""

@@ -71,7 +71,7 @@ def test_a_spec_is_validated_and_the_registry_names_what_it_knows():
         experiment_specs.ExperimentSpec(name="x", title="x", perturbation=len, describe=str, slip_events="many")
     with pytest.raises(ParameterError, match="name"):
         experiment_specs.ExperimentSpec(name="Bad Name", title="x", perturbation=len, describe=str)
-    with pytest.raises(ParameterError, match="unknown experiment 'shake' \\(known: drop, pour"):
+    with pytest.raises(ParameterError, match="experiment: unknown 'shake' \\(known: drop, pour"):
         experiment_specs.get("shake")
     with pytest.raises(ParameterError, match="cannot be unregistered"):
         experiment_specs.unregister("pour")

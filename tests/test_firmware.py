@@ -241,6 +241,7 @@ def test_imu_plugged_in_later_is_configured_and_read(build, tmp_path):
     assert all(int(c) > hardware.F_CPU for _, c, _, _ in writes)
 
 
+@pytest.mark.slow          # five AVR builds; the fast tier keeps the firmware's other checks
 def test_reflex_settings_are_dependencies_of_the_firmware(tmp_path):
     """`make REFLEX_P0=125` after a normal build rebuilds the reflex firmware; back to 0 rebuilds again."""
     out = tmp_path / "build"

@@ -179,8 +179,8 @@ def test_an_empty_numba_cache_is_seen_as_cold(tmp_path):
 
 
 def test_the_estimate_counts_the_compilation_of_a_cold_cache(tmp_path, capsys, monkeypatch):
+    import slipreflex.commands.reproduce as command
     import slipreflex.experiments as ex
-    import slipreflex.warmup as wu
 
     class Stop(Exception):
         pass
@@ -188,10 +188,10 @@ def test_the_estimate_counts_the_compilation_of_a_cold_cache(tmp_path, capsys, m
     def stop(*a, **k):
         raise Stop
 
-    monkeypatch.setattr(ex, "run_reproduce", stop)
+    monkeypatch.setattr(command, "run_reproduce", stop)     # patched where the command calls it
     said = {}
     for cold in ([], ["closed._closed_slip"]):
-        monkeypatch.setattr(wu, "cold_kernels", lambda cold=cold: cold)
+        monkeypatch.setattr(command, "cold_kernels", lambda cold=cold: cold)
         with pytest.raises(Stop):
             main(["reproduce", "--trials", "1", "--bottles", "TR", "--experiments", "drop", "--jobs", "2",
                   "--out", str(tmp_path / "r")])
@@ -201,6 +201,7 @@ def test_the_estimate_counts_the_compilation_of_a_cold_cache(tmp_path, capsys, m
     assert ex.estimate_wall_s(small, 2, cold=True) >= ex.estimate_wall_s(small, 2) + 15
 
 
+@pytest.mark.slow          # a fresh interpreter loads every kernel; warmup's doctests stay fast
 def test_the_kernels_are_compiled_before_the_workers_start():
     """Workers are forked after the parent compiled the closed loops: one compilation, not one per worker."""
     code = """
@@ -312,17 +313,17 @@ def test_the_suggested_grasp_force_was_simulated_on_the_runs_trials_before_it_is
     from slipreflex.experiments import trial_seed
     from slipreflex.grasping import GRASP_MARGIN, grasp_holds
 
-    config, path = _jar_config(trials=10, methods=("dath",))
-    assert main(["reproduce", "--objects", str(path), "--bottles", "JAR", "--methods", "dath", "--trials", "10",
+    config, path = _jar_config(trials=3, methods=("dath",))
+    assert main(["reproduce", "--objects", str(path), "--bottles", "JAR", "--methods", "dath", "--trials", "3",
                  "--out", str(tmp_path / "r"), "--no-progress"]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "cannot hold it" in err
-    m = re.search(r"use --grasp-force ([0-9.]+) \(simulated before this message: .* in 20 of 20 of this run's "
+    m = re.search(r"use --grasp-force ([0-9.]+) \(simulated before this message: .* in 6 of 6 of this run's "
                   r"trial grasps, variations included; ([0-9.]+) N was the weakest", err)
     assert m, err
     force, weakest = float(m.group(1)), float(m.group(2))
     assert force >= weakest * GRASP_MARGIN - 1e-9
-    seeds = [trial_seed(config.seed, e, "JAR", k) for e in ("drop", "pour") for k in range(10)]
+    seeds = [trial_seed(config.seed, e, "JAR", k) for e in ("drop", "pour") for k in range(3)]
     assert all(grasp_holds(config, "JAR", force, seeds))
     assert not all(grasp_holds(config, "JAR", weakest / 1.1, seeds))     # the weakest is the edge
 

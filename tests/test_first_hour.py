@@ -244,13 +244,14 @@ def test_seeds_are_derived_in_time_linear_in_the_trials(monkeypatch):
 
 @pytest.mark.slow
 def test_reproduce_estimates_its_run_time_before_starting(tmp_path, capsys, monkeypatch):
+    import slipreflex.commands.reproduce as command
     import slipreflex.experiments as ex
     from slipreflex.cli import main
     from slipreflex.errors import ParameterError
 
     def stop(*a, **k):
         raise ParameterError("stopped by the test")
-    monkeypatch.setattr(ex, "run_reproduce", stop)
+    monkeypatch.setattr(command, "run_reproduce", stop)
     assert main(["reproduce", "--out", str(tmp_path), "--trials", "3000", "--jobs", "2"]) == 2
     err = capsys.readouterr().err.splitlines()
     from slipreflex.commands.reproduce import LONG_RUN_S

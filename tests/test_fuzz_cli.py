@@ -33,12 +33,13 @@ def _stop(*a, **k):
     raise Reached
 
 
-#: Where each command's work starts: replaced by _stop.
-WORK = [("slipreflex.experiments", "run_reproduce"), ("slipreflex.study", "run_study"),
-        ("slipreflex.sim", "scan"), ("slipreflex.devices.simrig", "SimRig"),
-        ("slipreflex.devices.daq", "SerialDaq"), ("slipreflex.commands.detect", "run_chain"),
-        ("slipreflex.board", "run_board_chain"), ("slipreflex.sim.calibration", "first_slip_ml"),
-        ("slipreflex.sim.calibration", "calibrate_bottle"), ("slipreflex.analysis.claims", "judge_run")]
+#: Where each command's work starts, named where it is called: replaced by _stop.
+WORK = [("slipreflex.commands.reproduce", "run_reproduce"), ("slipreflex.commands.study", "run_study"),
+        ("slipreflex.sim", "scan"), ("slipreflex.commands.virtual_rig", "SimRig"),
+        ("slipreflex.commands.run", "SerialDaq"), ("slipreflex.commands.detect", "run_chain"),
+        ("slipreflex.commands.detect", "run_board_chain"), ("slipreflex.sim.calibration", "first_slip_ml"),
+        ("slipreflex.sim.calibration", "calibrate_bottle"), ("slipreflex.sim.uncertain", "calibrate_bottle"),
+        ("slipreflex.commands.claims", "judge_run")]
 
 NUMBERS = ["nan", "inf", "-inf", "-1", "0", "1", "0.5", "1e300", "1e9", "-1e-300", "3", "100000000",
            "9" * 400, "1e8", "0x10", ""]

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import enum
+import functools
 import importlib
 import inspect
 import re
@@ -104,19 +105,9 @@ def _marked_slow(node) -> bool:
 
 def test_every_test_module_keeps_a_fast_test_and_the_tier_markers_are_registered():
     """The fast tier (`pytest -m "not slow"`, docs/development.md) covers every test module."""
-    import ast
     import tomllib
 
-    without = []
-    for path in sorted((ROOT / "tests").glob("test_*.py")):
-        tree = ast.parse(path.read_text())
-        if any(isinstance(n, ast.Assign) and any(getattr(t, "id", "") == "pytestmark" for t in n.targets)
-               and "slow" in ast.unparse(n.value) for n in tree.body):
-            without.append(path.name)
-            continue
-        tests = [n for n in tree.body if isinstance(n, ast.FunctionDef) and n.name.startswith("test_")]
-        if tests and all(_marked_slow(n) for n in tests):
-            without.append(path.name)
+    without = [path.name for path, _, tests, fast in _test_files() if tests and not fast]
     assert not without, f"test modules with no test in the fast tier: {without}"
     markers = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["pytest"]["ini_options"]["markers"]
     assert {m.split(":")[0].split("(")[0] for m in markers} >= {"slow", "needs_tools"}
@@ -141,3 +132,104 @@ def test_the_readme_is_a_five_minute_read():
     assert size <= 10 * 1024, f"README.md is {size} bytes; move the long parts to docs/"
     for link in re.findall(r"\]\((docs/[^)#]+)", readme.read_text(encoding="utf-8")):
         assert (readme.parent / link).is_file(), f"README links to {link}, which does not exist"
+
+
+@functools.cache
+def _test_files():
+    """(path, syntax tree, its tests, its fast tests) of every test module (a module-wide slow mark: none fast)."""
+    import ast
+
+    out = []
+    for path in sorted((ROOT / "tests").glob("test_*.py")):
+        tree = ast.parse(path.read_text())
+        tests = [n for n in tree.body if isinstance(n, ast.FunctionDef) and n.name.startswith("test_")]
+        all_slow = any(isinstance(n, ast.Assign) and any(getattr(t, "id", "") == "pytestmark" for t in n.targets)
+                       and "slow" in ast.unparse(n.value) for n in tree.body)
+        out.append((path, tree, tests, [] if all_slow else [n for n in tests if not _marked_slow(n)]))
+    return out
+
+
+def _fast_test_files():
+    """(path, syntax tree, its fast tests) of every test module that keeps a test in the fast tier."""
+    return [(path, tree, fast) for path, tree, _, fast in _test_files() if fast]
+
+
+def _fast_tier_reaches(modules: dict[str, Path]) -> set[str]:
+    """The modules the fast tier exercises, read from the tests' source.
+
+    A module counts when a test module that keeps a fast test imports it; when its doctests run
+    (test_package runs every public module's examples in the fast tier); when it is a command
+    that a fast test runs by name (``main(["reproduce", ...])``, ``python -m slipreflex scan``);
+    or when it is a private module or a package that a counted module imports at its top.
+    """
+    import ast
+
+    named, commands = set(), set()
+    for path, tree, fast in _fast_test_files():
+        for n in ast.walk(tree):
+            if isinstance(n, ast.Import):
+                named.update(a.name for a in n.names)
+            elif isinstance(n, ast.ImportFrom) and n.module:
+                named.add(n.module)
+                named.update(f"{n.module}.{a.name}" for a in n.names)
+        for test in fast:
+            for n in ast.walk(test):
+                if isinstance(n, ast.List) and n.elts and isinstance(n.elts[0], ast.Constant):
+                    commands.add(str(n.elts[0].value))
+        commands.update(re.findall(r'"slipreflex", "([a-z-]+)"', path.read_text()))
+    reached = set()
+    for name, path in modules.items():
+        last = name.rpartition(".")[2]
+        if (name in named or (name in MODULES and ">>>" in path.read_text())
+                or (name.startswith("slipreflex.commands.") and last.replace("_", "-") in commands)):
+            reached.add(name)
+    todo = sorted(reached)
+    while todo:                  # private helpers and packages, through the counted modules' top-level imports
+        name = todo.pop()
+        package = name if modules[name].name == "__init__.py" else name.rpartition(".")[0]
+        for n in ast.parse(modules[name].read_text()).body:
+            if isinstance(n, ast.ImportFrom) and n.level:
+                base = ".".join(package.split(".")[:len(package.split(".")) - n.level + 1])
+                first = f"{base}.{n.module}" if n.module else base
+                for t in [first, *(f"{first}.{a.name}" for a in n.names)]:
+                    if t in modules and t not in reached and (t.rpartition(".")[2].startswith("_")
+                                                              or modules[t].name == "__init__.py"):
+                        reached.add(t)
+                        todo.append(t)
+    return reached
+
+
+def test_every_module_in_src_is_exercised_by_the_fast_tier():
+    """`pytest -m "not slow"` reaches every module of the package (so a fast run checks each)."""
+    src = ROOT / "src"
+    modules = {}
+    for path in (src / "slipreflex").rglob("*.py"):
+        parts = list(path.relative_to(src).with_suffix("").parts)
+        if parts[-1] != "__main__":
+            modules[".".join(parts[:-1] if parts[-1] == "__init__" else parts)] = path
+    missing = sorted(set(modules) - _fast_tier_reaches(modules))
+    assert not missing, f"modules no fast test exercises (import one in a fast test, or give it doctests): {missing}"
+
+
+def test_the_fast_tier_check_sees_a_module_no_fast_test_reaches(tmp_path):
+    lonely = tmp_path / "lonely.py"
+    lonely.write_text("def f():\n    return 1\n")
+    modules = {"slipreflex.errors": ROOT / "src" / "slipreflex" / "errors.py", "slipreflex.lonely": lonely}
+    assert _fast_tier_reaches(modules) == {"slipreflex.errors"}
+
+
+@pytest.mark.slow
+def test_a_simulation_at_collection_time_stops_the_run(tmp_path):
+    """conftest counts the rigs built while collecting: a module-level simulation is a one-line error."""
+    import shutil
+    import subprocess
+
+    probe = tmp_path / "tests"
+    probe.mkdir()
+    shutil.copy(ROOT / "tests" / "conftest.py", probe / "conftest.py")
+    (probe / "test_probe.py").write_text('from slipreflex.sim import Rig\nRIG = Rig("TR")\n\n\n'
+                                         "def test_nothing():\n    pass\n")
+    res = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(probe)],
+                         capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    assert res.returncode != 0
+    assert "1 simulated rig(s) built while collecting the tests (Rig('TR',))" in res.stdout + res.stderr

@@ -3,7 +3,7 @@
 The graph is read from the source (the AST of every module under src/slipreflex), so an
 import inside a function counts as much as one at the top; imports under ``if TYPE_CHECKING:``
 do not run and do not count. A registry names what sits above it by entry point
-(``slipreflex.methods.EntryPoint``), which is not an import.
+(``slipreflex.registry.EntryPoint``), which is not an import.
 """
 
 from __future__ import annotations
@@ -105,9 +105,10 @@ def _cycle(edges: dict[str, dict[str, str]]) -> list[str] | None:
 
 
 # Why an import may sit inside a function, as a trailing comment on the statement: it keeps a heavy or
-# optional dependency out of `import slipreflex`; or tests patch the name at its source module (to
-# fix later: patch where it is used); or moving it up would close a cycle (to fix later).
-DEFERRED = re.compile(r"#\s*deferred: (heavy|optional extra|late-bound|would close a cycle) \(?\S")
+# optional dependency out of `import slipreflex`; or moving it up would close a cycle (to fix later).
+# A test that replaces a name patches it where it is used (the importing module), never at its source,
+# so no import has to stay late for a test's sake.
+DEFERRED = re.compile(r"#\s*deferred: (heavy|optional extra|would close a cycle) \(?\S")
 
 
 def _unmarked_function_imports(source: str, where: str) -> list[str]:
@@ -147,8 +148,10 @@ def test_the_marker_check_finds_an_unmarked_import():
         "    g = lambda: __import__('x')\n"
         "    class C:\n"
         "        def m(self):\n"
-        "            from . import hardware  # just because\n")
-    assert _unmarked_function_imports(source, "m.py") == ["m.py:6: import csv", "m.py:10: from . import hardware"]
+        "            from . import hardware  # just because\n"
+        "    from .runtime import run_loop  # deferred: late-bound (tests patch it)\n")
+    assert _unmarked_function_imports(source, "m.py") == ["m.py:6: import csv", "m.py:10: from . import hardware",
+                                                          "m.py:11: from .runtime import run_loop"]
 
 
 def test_the_graph_is_read_from_every_module():

@@ -15,6 +15,7 @@ import time
 
 import pytest
 
+from conftest import reap_child
 from slipreflex.recording import (
     METADATA_NAME,
     TOPICS,
@@ -88,11 +89,7 @@ def test_sigkill_leaves_a_file_readable_up_to_about_a_second_before(tmp_path):
         proc.kill()
         proc.wait(timeout=10)
     finally:
-        killer.cancel()
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait(timeout=10)
-        proc.stdout.close()
+        reap_child(proc, killer)
     # a run killed mid-way leaves its recording under NAME.part (named NAME only when closed)
     assert not path.exists()
     r = read_recording(f"{path}.part")
@@ -184,11 +181,7 @@ def test_sigkilled_run_leaves_a_recording_that_replays(tmp_path):
             proc.kill()
             proc.wait(timeout=10)
         finally:
-            killer.cancel()
-            if proc.poll() is None:
-                proc.kill()
-                proc.wait()
-            proc.stdout.close()
+            reap_child(proc, killer)
     assert not target.exists()
     rec = read_recording(path)
     assert not rec.complete and len(rec.topic("/daq/samples")) >= n

@@ -15,6 +15,7 @@ import threading
 import pytest
 from mcap.reader import NonSeekingReader, make_reader
 
+from conftest import reap_child
 from slipreflex.chain import ReflexParams, SlipReflex
 from slipreflex.cli import main
 from slipreflex.errors import DataError
@@ -79,11 +80,7 @@ def test_a_sigkilled_recording_opens_with_make_reader_after_recover(tmp_path, ca
         proc.kill()
         proc.wait(timeout=10)
     finally:
-        killer.cancel()
-        if proc.poll() is None:
-            proc.kill()
-            proc.wait()
-        proc.stdout.close()
+        reap_child(proc, killer)
     path = tmp_path / "killed.mcap.part"   # a killed run leaves NAME.part
     with open(path, "rb") as fh, pytest.raises(Exception):  # noqa: B017 - any failure: no footer
         sum(1 for _ in make_reader(fh).iter_messages())  # why `recover` exists

@@ -145,7 +145,7 @@ def _fake_result():
 
 
 def test_reproduce_interrupted_while_writing_leaves_the_previous_set(tmp_path, monkeypatch, capsys):
-    import slipreflex.experiments as ex
+    import slipreflex.commands.reproduce as ex  # the command's names, patched where it calls them
 
     out = tmp_path / "out"
     argv = ["reproduce", "--trials", "1", "--bottles", "TX", "--methods", "dath", "--experiments", "drop",
@@ -185,7 +185,7 @@ def test_reproduce_interrupted_while_writing_leaves_the_previous_set(tmp_path, m
 
 
 def test_reproduce_refuses_an_out_holding_a_users_results_before_any_work(tmp_path, monkeypatch, capsys):
-    import slipreflex.experiments as ex
+    import slipreflex.commands.reproduce as ex
 
     (tmp_path / "results.csv").write_text("mine")
     monkeypatch.setattr(ex, "run_reproduce", lambda *a, **k: pytest.fail("work started"))

@@ -190,7 +190,7 @@ def _readline(proc, want, deadline_s=120.0):
 @pytest.mark.realtime
 @pytest.mark.slow
 def test_virtual_rig_command_keys_signals_schedule_and_run(tmp_path, capsys, monkeypatch):
-    import slipreflex.runtime as runtime
+    import slipreflex.commands.run as run_command
 
     SlipReflex(dath=True, p0=148.0).step(0.4)  # the chain compiled: run's loop does not stall on it
 
@@ -203,8 +203,8 @@ def test_virtual_rig_command_keys_signals_schedule_and_run(tmp_path, capsys, mon
             proc.stdin.flush()
         return run_loop(_From(source, 0, drop), *args, **kw)
 
-    run_loop = runtime.run_loop
-    monkeypatch.setattr(runtime, "run_loop", drop_when_running)
+    run_loop = run_command.run_loop
+    monkeypatch.setattr(run_command, "run_loop", drop_when_running)   # where `run` calls it
     # the textured bottle: its drop slip fires spikes under the rate-state contacts; the schedule's
     # pour at 0.2 s only starts the water (its first slip comes seconds later)
     proc = subprocess.Popen([sys.executable, "-m", "slipreflex", "virtual-rig", "--link-dir", str(tmp_path),

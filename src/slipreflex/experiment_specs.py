@@ -37,10 +37,10 @@ from dataclasses import dataclass, field
 from typing import Any, Literal
 
 from .errors import ParameterError
-from .methods import EntryPoint
+from .registry import EntryPoint, Registry
 from .validation import choice
 
-__all__ = ["ExperimentSpec", "register", "unregister", "get", "names", "seed_branch", "EntryPoint",
+__all__ = ["ExperimentSpec", "EXPERIMENTS", "register", "unregister", "get", "names", "seed_branch", "EntryPoint",
            "SLIP_EVENTS", "CALIBRATION_BRANCH"]
 
 #: How a trial's slip events are found: one onset after the perturbation ("single"), or
@@ -130,7 +130,10 @@ class ExperimentSpec:
         object.__setattr__(self, "paper_figures", dict(self.paper_figures))
 
 
-_REGISTRY: dict[str, ExperimentSpec] = {}
+#: The paper's experiments, which cannot be unregistered.
+_PAPER = ("drop", "pour")
+#: The experiment registry (registration order is the seed-branch order); the functions below read it.
+EXPERIMENTS: Registry[ExperimentSpec] = Registry("experiment", ExperimentSpec, protected=_PAPER)
 
 
 def register(spec: ExperimentSpec, *, replace: bool = False) -> None:
@@ -141,13 +144,9 @@ def register(spec: ExperimentSpec, *, replace: bool = False) -> None:
     >>> register(get("drop"))
     Traceback (most recent call last):
     ...
-    slipreflex.errors.ParameterError: experiment 'drop' is already registered (replace=True to replace it)
+    slipreflex.errors.ParameterError: experiment 'drop' is already registered (pass replace=True)
     """
-    if not isinstance(spec, ExperimentSpec):
-        raise ParameterError(f"register takes an ExperimentSpec, got {type(spec).__name__}")
-    if spec.name in _REGISTRY and not replace:
-        raise ParameterError(f"experiment {spec.name!r} is already registered (replace=True to replace it)")
-    _REGISTRY[spec.name] = spec
+    EXPERIMENTS.register(spec, replace=replace)
 
 
 def unregister(name: str) -> None:
@@ -158,11 +157,9 @@ def unregister(name: str) -> None:
     >>> unregister("drop")
     Traceback (most recent call last):
     ...
-    slipreflex.errors.ParameterError: the paper's experiment 'drop' cannot be unregistered
+    slipreflex.errors.ParameterError: experiment 'drop' is built in and cannot be unregistered
     """
-    if name in _PAPER:
-        raise ParameterError(f"the paper's experiment {name!r} cannot be unregistered")
-    _REGISTRY.pop(name, None)
+    EXPERIMENTS.unregister(name)
 
 
 def get(name: str) -> ExperimentSpec:
@@ -173,12 +170,9 @@ def get(name: str) -> ExperimentSpec:
     >>> get("shake")
     Traceback (most recent call last):
     ...
-    slipreflex.errors.ParameterError: unknown experiment 'shake' (known: drop, pour)
+    slipreflex.errors.ParameterError: experiment: unknown 'shake' (known: drop, pour)
     """
-    try:
-        return _REGISTRY[name]
-    except (KeyError, TypeError):
-        raise ParameterError(f"unknown experiment {name!r} (known: {', '.join(_REGISTRY)})") from None
+    return EXPERIMENTS.get(name)
 
 
 def names() -> tuple[str, ...]:
@@ -189,7 +183,7 @@ def names() -> tuple[str, ...]:
     >>> names()
     ('drop', 'pour')
     """
-    return tuple(_REGISTRY)
+    return EXPERIMENTS.names()
 
 
 def seed_branch(name: str) -> int:
@@ -204,7 +198,7 @@ def seed_branch(name: str) -> int:
     >>> seed_branch("drop"), seed_branch("pour")
     (0, 1)
     """
-    i = list(_REGISTRY).index(get(name).name)
+    i = EXPERIMENTS.names().index(get(name).name)
     return i if i < CALIBRATION_BRANCH else i + 1
 
 
@@ -221,4 +215,3 @@ register(ExperimentSpec(
     settle_s=EntryPoint("slipreflex.paper_experiments:pour_settle_s"), slip_events="segmented", records_load=True,
     paper=EntryPoint("slipreflex.paper_experiments:paper_pour"),
     paper_figures={"trial": "Fig. 15", "response": "Fig. 16", "total": "Fig. 17"}))
-_PAPER = ("drop", "pour")

@@ -31,10 +31,10 @@ from dataclasses import dataclass
 from typing import Any
 
 from .errors import ParameterError
-from .methods import EntryPoint
-from .validation import choice, flag, text
+from .registry import EntryPoint, Registry
+from .validation import flag, text
 
-__all__ = ["HandSpec", "register_hand", "get_hand", "hand_names", "open_hand", "ILIMB", "ABILITY"]
+__all__ = ["HandSpec", "HANDS", "register_hand", "get_hand", "hand_names", "open_hand", "ILIMB", "ABILITY"]
 
 ILIMB, ABILITY = "ilimb", "ability"
 
@@ -82,7 +82,15 @@ class HandSpec:
             raise ParameterError(f"HandSpec {self.name}: open and virtual must be callable")
 
 
-_HANDS: dict[str, HandSpec] = {}
+def _check_hand(spec: HandSpec) -> None:
+    """A tactile hand says the shape of its frames; a hand without touch sensors has none."""
+    if bool(spec.tactile_shape) != spec.tactile:
+        raise ParameterError(f"HandSpec {spec.name}: tactile={spec.tactile} but tactile_shape={spec.tactile_shape!r} "
+                             "(a tactile hand gives its frames' shape, another gives ())")
+
+
+#: The hand registry (``--hand-type`` names one); the functions below read it.
+HANDS: Registry[HandSpec] = Registry("hand", HandSpec, any_case=True, label="--hand-type", check=_check_hand)
 
 
 def register_hand(spec: HandSpec, *, replace: bool = False) -> None:
@@ -95,11 +103,7 @@ def register_hand(spec: HandSpec, *, replace: bool = False) -> None:
     ...
     slipreflex.errors.ParameterError: hand 'ilimb' is already registered (pass replace=True)
     """
-    if not isinstance(spec, HandSpec):
-        raise ParameterError(f"register_hand() takes a HandSpec, got {type(spec).__name__}")
-    if spec.name in _HANDS and not replace:
-        raise ParameterError(f"hand {spec.name!r} is already registered (pass replace=True)")
-    _HANDS[spec.name] = spec
+    HANDS.register(spec, replace=replace)
 
 
 def get_hand(name: str) -> HandSpec:
@@ -112,7 +116,7 @@ def get_hand(name: str) -> HandSpec:
     ...
     slipreflex.errors.ParameterError: --hand-type: unknown 'shadow' (known: ilimb, ability)
     """
-    return _HANDS[choice("--hand-type", name.strip() if isinstance(name, str) else name, _HANDS, any_case=True)]
+    return HANDS.get(name)
 
 
 def hand_names() -> tuple[str, ...]:
@@ -123,7 +127,7 @@ def hand_names() -> tuple[str, ...]:
     >>> "ability" in hand_names()
     True
     """
-    return tuple(_HANDS)
+    return HANDS.names()
 
 
 def open_hand(name: str, port: Any, **options: Any) -> Any:

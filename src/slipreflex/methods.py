@@ -62,7 +62,6 @@ Examples
 from __future__ import annotations
 
 import dataclasses
-import importlib
 import re
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -73,11 +72,12 @@ import numpy as np
 from . import hardware as hw
 from .errors import ParameterError
 from .interfaces import InputKind, Reflex
+from .registry import EntryPoint, Registry
 from .validation import choice, flag, positive, text
 
 __all__ = ["MethodSpec", "MethodContext", "Detections", "register", "unregister", "get", "names",
            "make", "label", "canonical", "chain_method", "applicable", "INPUT_NAMES", "calibrated",
-           "load_plugins", "ENTRY_POINT_GROUP", "EntryPoint",
+           "load_plugins", "ENTRY_POINT_GROUP", "EntryPoint", "METHODS",
            "FIXED", "DATH", "NMSD", "SWT", "AUTHORS_GUI", "AUTHORS_CHAIN", "DATH_EVENT",
            "DATH_FLOOR", "DATH_LEAK"]
 
@@ -243,7 +243,9 @@ class MethodSpec:
         flag("MethodSpec.paper", self.paper)
 
 
-_REGISTRY: dict[str, MethodSpec] = {}
+#: The method registry (the order is the one method order everywhere); the functions below read it.
+METHODS: Registry[MethodSpec] = Registry("method", MethodSpec, any_case=True,
+                                         before_read=lambda: load_plugins())
 
 #: Entry-point group through which installed packages add methods (see :func:`load_plugins`).
 ENTRY_POINT_GROUP: str = "slipreflex.methods"
@@ -297,15 +299,9 @@ def load_plugins() -> tuple[str, ...]:
             if not isinstance(spec, MethodSpec):
                 raise ParameterError(f"method plugin {ep.name!r} ({ep.value}): gave {spec!r}, "
                                      "not a MethodSpec")
-            if spec.name not in _REGISTRY:
-                _REGISTRY[spec.name] = spec
+            if METHODS.add_new(spec):
                 added.append(spec.name)
     return tuple(added)
-
-
-def _registry() -> dict[str, MethodSpec]:
-    load_plugins()
-    return _REGISTRY
 
 
 def register(spec: MethodSpec, *, replace: bool = False) -> None:
@@ -324,11 +320,7 @@ def register(spec: MethodSpec, *, replace: bool = False) -> None:
     ...
     slipreflex.errors.ParameterError: method 'dath' is already registered (pass replace=True)
     """
-    if not isinstance(spec, MethodSpec):
-        raise ParameterError(f"register() takes a MethodSpec, got {type(spec).__name__}")
-    if spec.name in _REGISTRY and not replace:
-        raise ParameterError(f"method {spec.name!r} is already registered (pass replace=True)")
-    _REGISTRY[spec.name] = spec
+    METHODS.register(spec, replace=replace)
 
 
 def unregister(name: str) -> None:
@@ -339,7 +331,7 @@ def unregister(name: str) -> None:
     >>> register(chain_method("tmp", "tmp")); unregister("TMP"); "tmp" in names()
     False
     """
-    _REGISTRY.pop(canonical(name))
+    METHODS.unregister(name)
 
 
 def canonical(name: str) -> str:
@@ -355,7 +347,7 @@ def canonical(name: str) -> str:
     >>> canonical("SWT")
     'swt'
     """
-    return choice("method", name.strip() if isinstance(name, str) else name, _registry(), any_case=True)
+    return METHODS.canonical(name)
 
 
 def get(name: str) -> MethodSpec:
@@ -366,7 +358,7 @@ def get(name: str) -> MethodSpec:
     >>> get("Nmsd").fs
     260.0
     """
-    return _registry()[canonical(name)]
+    return METHODS.get(name)
 
 
 def names(*, paper: bool = False) -> tuple[str, ...]:
@@ -377,7 +369,7 @@ def names(*, paper: bool = False) -> tuple[str, ...]:
     >>> names(paper=True)
     ('dath', 'fixed', 'nmsd', 'swt')
     """
-    return tuple(n for n, s in _registry().items() if s.paper or not paper)
+    return tuple(s.name for s in METHODS.specs() if s.paper or not paper)
 
 
 def calibrated() -> tuple[str, ...]:
@@ -388,7 +380,7 @@ def calibrated() -> tuple[str, ...]:
     >>> calibrated()[:2]
     ('nmsd', 'swt')
     """
-    return tuple(n for n, s in _registry().items() if s.rest_statistic is not None)
+    return tuple(s.name for s in METHODS.specs() if s.rest_statistic is not None)
 
 
 def label(name: str) -> str:
@@ -399,7 +391,7 @@ def label(name: str) -> str:
     >>> label("swt"), label("not-a-method")
     ('SWT-SD', 'not-a-method')
     """
-    spec = _registry().get(name.casefold()) if isinstance(name, str) else None
+    spec = METHODS.find(name)
     return spec.label if spec else str(name)
 
 
@@ -463,7 +455,7 @@ def applicable(name: str, supplies: tuple[str, ...] | frozenset[str] | set[str],
     """
     spec = get(name)
     if spec.input_kind not in supplies:
-        fits = [n for n, s in _registry().items() if s.input_kind in supplies]
+        fits = [s.name for s in METHODS.specs() if s.input_kind in supplies]
         raise ParameterError(f"--method {spec.name} reads {INPUT_NAMES[spec.input_kind]}, which {where} does "
                              f"not supply (methods that apply: {', '.join(fits) or 'none'})")
     return spec
@@ -473,40 +465,6 @@ def applicable(name: str, supplies: tuple[str, ...] | frozenset[str] | set[str],
 # The registry sits below the implementations it lists: a built-in's builder, detection drawing
 # and rest statistic are named by entry point ("module:function", :class:`EntryPoint`) and
 # imported when first called, so this module imports none of chain, baselines, board or sim.
-
-
-@dataclass(frozen=True)
-class EntryPoint:
-    """A function named ``"module:function"``, imported when first called (with bound arguments).
-
-    Like Gymnasium's ``entry_point`` strings: a registry lists implementations that
-    sit above it without importing them. Picklable, so a spec runs in worker processes.
-
-    Parameters
-    ----------
-    target : str
-        ``"package.module:function"``.
-    args : tuple
-        Positional arguments put before the caller's (like :func:`functools.partial`).
-
-    Examples
-    --------
-    >>> EntryPoint("math:hypot", (3.0,))(4.0)
-    5.0
-    """
-
-    target: str
-    args: tuple = ()
-
-    def __post_init__(self) -> None:
-        module, _, name = self.target.partition(":")
-        if not module or not name.isidentifier():
-            raise ParameterError(f"EntryPoint target must be 'module:function', got {self.target!r}")
-
-    def __call__(self, *args: Any, **kwargs: Any) -> Any:
-
-        module, _, name = self.target.partition(":")
-        return getattr(importlib.import_module(module), name)(*self.args, *args, **kwargs)
 
 
 def chain_method(name: str, label: str, *, color: str = "0.5", paper: bool = False,

@@ -48,7 +48,9 @@ from . import experiment_specs, methods
 from . import hardware as hw
 from .baselines import REST_K, rest_statistic
 from .errors import DataError
+from .experiments import Cell, ReproduceConfig, run_trial, trial_seed
 from .interfaces import Reflex
+from .thresholds import calibrate
 
 __all__ = ["ContractError", "CheckReport", "check_reflex", "check_method", "synthetic_input",
            "reflex_for_check", "check_experiment"]
@@ -416,13 +418,6 @@ def check_experiment(name: str, config: Any = None, *, method: str = "fixed") ->
     >>> [r.experiment for r in check_experiment("drop")]
     ['drop']
     """
-    from .experiments import (  # deferred: late-bound (tests patch slipreflex.experiments.run_trial)
-        Cell,
-        ReproduceConfig,
-        calibrate,
-        run_trial,
-        trial_seed,
-    )
     from .sim import Rig  # deferred: heavy (numba kernels)
 
     spec = experiment_specs.get(name)

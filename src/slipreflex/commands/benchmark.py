@@ -17,7 +17,7 @@ import numpy as np
 from ..baselines.calibration import REST_K
 from ..benchmark import BenchmarkConfig, read_folder, shipped_dataset
 from ..benchmark.report import format_table, plot_trial_runs, summarize, write_runs, write_summary
-from ..benchmark.run import RATES, REDUCTIONS
+from ..benchmark.run import RATES, REDUCTIONS, plan, run_trial
 from ..benchmark.vs_sim import compare, format_comparison, plot_comparison, write_comparison
 from ..paths import output_dir
 
@@ -53,8 +53,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Read and check every trial, run the methods, write and print the results."""
-    from ..benchmark.run import plan, run_trial  # deferred: late-bound (tests patch slipreflex.benchmark.run.run_trial)
-
     names = [m for item in args.methods or () for m in item.split(",") if m.strip()]
     cfg = BenchmarkConfig(methods=tuple(names) if names else None,
                           calibration_s=args.calibration_s, rest_k=args.rest_k,

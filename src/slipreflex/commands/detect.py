@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..board import BoardParams, read_adc_csv, run_board_chain, write_board_outputs
 from ..chain import ReflexParams, run_chain
 from ..chain.params import PRESETS
 from ..csvfiles import Recording, irregular_steps, read_recording, write_columns
@@ -229,13 +230,6 @@ def _prefix(args: argparse.Namespace) -> Path:
 
 def _run_board(args: argparse.Namespace) -> int:
     """``detect --board``: the Python twin of the firmware over a CSV of ADC counts."""
-    from ..board import (  # deferred: late-bound (tests patch slipreflex.board.run_board_chain)
-        BoardParams,
-        read_adc_csv,
-        run_board_chain,
-        write_board_outputs,
-    )
-
     p0 = number("--p0", 0.0 if args.p0 is None else args.p0, lo=0, hi=FINGER_MAX)
     method = applicable(args.method or DATH, {"slip"}, _INPUT).name
     method = {"dath-board": DATH, "fixed-board": FIXED}.get(method, method)

@@ -22,16 +22,24 @@ from pathlib import Path
 
 from .. import experiment_specs, methods
 from ..analysis.claims import claims_terminal
-from ..analysis.outputs import judged_claims, paper_part, replicates_note
+from ..analysis.outputs import judged_claims, paper_part, replicates_note, write_outputs
 from ..analysis.report import terminal_table
 from ..errors import ParameterError
-from ..experiments import BOTTLE_NAMES, EXPERIMENTS, METHODS, ReproduceConfig, grasp_seeds
+from ..experiments import (
+    BOTTLE_NAMES,
+    EXPERIMENTS,
+    METHODS,
+    ReproduceConfig,
+    grasp_seeds,
+    run_reproduce,
+)
 from ..grasping import check_run_grasp
 from ..interrupts import Interrupted, signals_ignored, sigterm_interrupts
 from ..paths import OutputSet
 from ..progress import format_duration
 from ..replication import replicate_undecided
 from ..validation import choices, within
+from ..warmup import COLD_COMPILE_S, cold_kernels, estimate_wall_s
 from ._lists import names_list
 
 NAME = "reproduce"
@@ -151,12 +159,6 @@ def run(args: argparse.Namespace) -> int:
     Ctrl-C or SIGTERM stops the run within about two seconds and writes what finished,
     marked partial; exit status 130.
     """
-    from ..experiments import (  # deferred: late-bound (tests patch slipreflex.experiments.run_reproduce)
-        ReproduceConfig,
-        estimate_wall_s,
-        run_reproduce,
-    )
-
     check_limits(args, _LIMITED)
     config = ReproduceConfig(
         trials=args.trials, bottles=tuple(args.bottles), methods=tuple(args.methods),
@@ -171,11 +173,6 @@ def run(args: argparse.Namespace) -> int:
     for b in config.bottles:                         # a grasp that cannot hold: one line, before the estimate
         check_run_grasp(config, b, grasp_seeds(config, b))
     jobs = int(args.jobs or os.cpu_count() or 1)
-    from ..warmup import (  # deferred: late-bound (tests patch slipreflex.warmup.cold_kernels)
-        COLD_COMPILE_S,
-        cold_kernels,
-    )
-
     cold = bool(cold_kernels())
     n, estimate = len(config.cells()), estimate_wall_s(config, jobs, cold=cold)
     print(f"{n} trials on {jobs} worker(s): about {format_duration(estimate)}"
@@ -237,8 +234,6 @@ def _write(result, outputs, command: str | None) -> dict | None:
     Ctrl-C while writing leaves the previous outputs untouched: one "interrupted" line,
     and None (the caller exits 130).
     """
-    from ..experiments import write_outputs  # deferred: late-bound (tests patch slipreflex.experiments.write_outputs)
-
     staged = outputs.stage()
     try:
         write_outputs(result, staged, command=command)

@@ -23,6 +23,7 @@ from .. import __version__
 from ..board import BoardParams, BoardSource, CheckedBoardReflex
 from ..chain import ReflexParams, SlipReflex
 from ..chain.params import PRESETS
+from ..devices.daq import SerialDaq
 from ..errors import ParameterError
 from ..hands import get_hand, hand_names, open_hand
 from ..hardware import DAQ_FS, FINGER_MAX, FINGER_MIN, SLIP_FINGER, TRIPOD, Finger
@@ -30,7 +31,16 @@ from ..live import RUN_TOPICS
 from ..methods import DATH, FIXED, MethodContext, applicable, make
 from ..paths import unique_name
 from ..recording import METADATA_NAME, PART_SUFFIX, PLANNED_SAMPLES, Recorder, RecordingError
-from ..runtime import WATCHDOG_MAX_S, WATCHDOG_MIN_S, WATCHDOG_S, start_positions
+from ..runtime import (
+    WATCHDOG_MAX_S,
+    WATCHDOG_MIN_S,
+    WATCHDOG_S,
+    drop_capabilities,
+    print_fault,
+    realtime_priority,
+    run_loop,
+    start_positions,
+)
 from ..validation import within
 from ._live import add_live_arguments, check_live_arguments, close_taps, open_taps
 
@@ -319,15 +329,6 @@ def _metadata(args: argparse.Namespace, reflex: Any, p0: dict[Finger, float],
 
 def run(args: argparse.Namespace) -> int:
     """Open the devices and the recording, run the loop, print the summary."""
-
-    from ..devices.daq import SerialDaq  # deferred: late-bound (tests patch slipreflex.devices.daq.SerialDaq)
-    from ..runtime import (  # deferred: late-bound (tests patch slipreflex.runtime.run_loop)
-        drop_capabilities,
-        print_fault,
-        realtime_priority,
-        run_loop,
-    )
-
     p0 = check_arguments(args)  # everything, before a port opens or a byte is sent
     reflex: Any
     reflex, board_meta = build_reflex(args, p0)

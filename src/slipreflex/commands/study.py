@@ -35,7 +35,7 @@ from ..errors import SlipreflexError
 from ..experiments import BOTTLE_NAMES, EXPERIMENTS
 from ..experiments import DEFAULT_SEED as seed
 from ..paths import OutputSet
-from ..study import DEFAULT_PLANTS, DEFAULT_TRIALS, DESIGNS, read_parts
+from ..study import DEFAULT_PLANTS, DEFAULT_TRIALS, DESIGNS, StudyConfig, read_parts, run_study
 from ..study.analyse import claim_fractions, plant_table, pooled_scan, write_outputs
 from ..validation import within
 
@@ -122,7 +122,6 @@ def require_study_extra() -> None:
 def run(args: argparse.Namespace) -> int:
     """Run the study, write the outputs, print the claims' fractions."""
     require_study_extra()
-    from ..study import StudyConfig, run_study  # deferred: late-bound (tests patch slipreflex.study.run_study)
 
     within("trials", args.trials, "--trials")
     within("plants", args.plants, "--plants")

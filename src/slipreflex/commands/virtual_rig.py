@@ -28,6 +28,7 @@ import threading
 import time
 from pathlib import Path
 
+from ..devices.simrig import SimRig
 from ..devices.virtual import VirtualDevices, parse_schedule
 from ..errors import ParameterError
 from ..hands import get_hand, hand_names
@@ -164,8 +165,6 @@ def _check_arguments(args: argparse.Namespace) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Grasp, open the ports, run in real time, print a summary at exit."""
-    from ..devices.simrig import SimRig  # deferred: late-bound (tests patch slipreflex.devices.simrig.SimRig)
-
     schedule = parse_schedule(args.schedule)
     _check_arguments(args)
     check_live_arguments(args)

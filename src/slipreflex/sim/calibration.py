@@ -35,7 +35,7 @@ import numpy as np
 
 from .. import hardware as hw
 from ..errors import ParameterError
-from ..methods import EntryPoint
+from ..registry import EntryPoint
 from .contacts import static_capacity
 from .objects import PAPER_DROP, PAPER_POUR, WATER_DENSITY, Bottle, Drop, Pour
 from .rig import Rig

@@ -48,6 +48,7 @@ from typing import Any
 
 from ..errors import ParameterError
 from ..paths import read_toml
+from .calibration import CALIBRATION_SEEDS, calibrate_bottle
 from .objects import BOTTLES, Bottle
 from .params import FlowParams, HandParams, ImuParams, PhysicsParams, SlipSensorParams, TactileParams, WaterParams
 from .rig import Rig
@@ -378,11 +379,6 @@ class Plant:
         >>> p.bottles["TR"].mu_s < Plant().bottles["TR"].mu_s
         True
         """
-        from .calibration import (  # deferred: late-bound (tests patch slipreflex.sim.calibration.calibrate_bottle)
-            CALIBRATION_SEEDS,
-            calibrate_bottle,
-        )
-
         kw = self.rig_kwargs()
         bottles = {n: calibrate_bottle(b, self.first_slip_ml, rig_kwargs=kw,
                                        seeds=seeds or CALIBRATION_SEEDS).bottle for n, b in self.bottles.items()}

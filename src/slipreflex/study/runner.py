@@ -58,7 +58,7 @@ import numpy as np
 from .. import __version__, methods
 from ..analysis.claims import judge
 from ..errors import ParameterError
-from ..experiments import BOTTLE_NAMES, DEFAULT_SEED, EXPERIMENTS, ReproduceConfig
+from ..experiments import BOTTLE_NAMES, DEFAULT_SEED, EXPERIMENTS, ReproduceConfig, run_trial
 from ..interrupts import signals_ignored
 from ..paths import new_file
 from ..progress import Progress
@@ -331,7 +331,6 @@ def run_plant(index: int, values: Mapping[str, float], config: StudyConfig) -> P
     ('', 1, 'not-decidable')
     """
 
-    from ..experiments import run_trial  # deferred: late-bound (tests patch slipreflex.experiments.run_trial)
     from ..sim.scan import scan_ensemble  # deferred: heavy (llvmlite, numba, scipy)
     from ..sim.uncertain import plant_from_values  # deferred: heavy (numba kernels)
 

@@ -1,0 +1,94 @@
+"""docs/development.md's table of the two test tiers, measured now (both tiers run: minutes).
+
+Usage::
+
+    python scripts/tier_times.py            # run the fast tier, then the whole suite; print the table
+    python scripts/tier_times.py --write    # ... and put it between docs/development.md's markers
+
+``python scripts/regenerate.py --with-tiers`` runs it with ``--write`` (not by default: the full suite
+takes minutes). Each row says the tests that passed, the CPU time (user + system, the run's cost
+whatever else the machine does) and the wall time with the load average when it started.
+"""
+
+from __future__ import annotations
+
+import datetime
+import os
+import re
+import resource
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+DOC = ROOT / "docs" / "development.md"
+BEGIN, END = "<!-- test tiers begins -->", "<!-- test tiers ends -->"
+
+#: (tier, the command as the table shows it, its arguments after ``python -m pytest``, what it holds).
+TIERS = [
+    ("fast", 'python -m pytest -m "not slow" -q', ["-m", "not slow"],
+     "every test module keeps at least one test here, every module's doctests run here, and every module of "
+     "`src/` is reached (`tests/test_house.py` checks both)"),
+    ("full", "python -m pytest -q", [],
+     "adds the slow tier: whole reproduce runs, the firmware under simavr, the bootstrap script, the "
+     "real-time loop against the wall clock, the Dask study"),
+]
+
+
+def run_tier(args: list[str]) -> dict[str, object]:
+    """Run pytest with ``args``; its counts, wall and CPU seconds (children included), load before."""
+    load = os.getloadavg()[0]
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    done = subprocess.run([sys.executable, "-m", "pytest", *args, "-q", "-rfE", "-p", "no:cacheprovider"], cwd=ROOT,
+                          capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    last = done.stdout.strip().splitlines()[-1] if done.stdout.strip() else ""
+    if done.returncode != 0:
+        failed = [ln for ln in done.stdout.splitlines() if ln.startswith(("FAILED ", "ERROR "))]
+        raise SystemExit(f"tier_times: pytest {' '.join(args)} failed (exit {done.returncode}): {last}\n"
+                         + "\n".join(failed))
+    counts = dict((k, int(n)) for n, k in re.findall(r"(\d+) (passed|skipped|deselected)", last))
+    return {"passed": counts.get("passed", 0), "skipped": counts.get("skipped", 0), "wall_s": wall,
+            "cpu_s": (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime), "load": load}
+
+
+def _duration(s: float) -> str:
+    return f"{s:.0f} s" if s < 120 else f"{int(s // 60)} min {s % 60:.0f} s"
+
+
+def row(tier: str, command: str, what: str, got: dict) -> str:
+    skipped = f", {got['skipped']} skipped" if got["skipped"] else ""
+    return (f"| {tier} | `{command}` | {what} | {got['passed']} passed{skipped} | {_duration(got['cpu_s'])} | "
+            f"{_duration(got['wall_s'])} at load average {got['load']:.1f} |")
+
+
+def table(rows: list[str], machine: str) -> str:
+    return "\n".join([
+        "| tier | command | what | tests | CPU time | wall time, 2 shared cores |", "|---|---|---|---|---|---|",
+        *rows, "",
+        f"Measured on {datetime.date.today().isoformat()} by `python scripts/regenerate.py --with-tiers` "
+        f"(`scripts/tier_times.py`) on {machine}, with numba's cache warm (a first run on a fresh checkout "
+        "also compiles the kernels and takes longer). The CPU time (user + system) is what a run "
+        "costs; the wall time depends on what else the 2 cores run."])
+
+
+def main(argv: list[str]) -> int:
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    sys.path.insert(0, str(ROOT / "scripts"))
+    from machine import describe
+    from splice_report import write_marked
+
+    rows = []
+    for tier, command, args, what in TIERS:
+        print(f"tier_times: {command}", flush=True)
+        rows.append(row(tier, command, what, run_tier(args)))
+    text = table(rows, describe())
+    print(text)
+    return write_marked("tier_times", DOC, BEGIN, END, text) if "--write" in argv else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
