@@ -55,13 +55,22 @@ def table(summary: list[dict]) -> str:
 
 
 def main(argv: list[str]) -> int:
+    write = "--write" in argv
+    argv = [a for a in argv if a != "--write"]
     if len(argv) != 1 or not Path(argv[0]).is_file():
-        print("usage: python scripts/method_table.py OUT/summary.csv", file=sys.stderr)
+        print("usage: python scripts/method_table.py OUT/summary.csv [--write]", file=sys.stderr)
         return 2
     from slipreflex.analysis.report import read_csv
 
-    print(table(read_csv(argv[0])))
-    return 0
+    body = table(read_csv(argv[0]))
+    print(body)
+    if not write:
+        return 0
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from splice_report import write_marked
+
+    return write_marked("method_table", Path(__file__).resolve().parent.parent / "docs" / "method.md",
+                        "<!-- method variants table begins -->", "<!-- method variants table ends -->", body)
 
 
 if __name__ == "__main__":

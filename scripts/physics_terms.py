@@ -113,23 +113,27 @@ def run(bottle: str, what: str, kw: dict, seed: int = 0) -> dict:
     return out
 
 
-def main() -> None:
+def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--figure", default=None, help="write the figure here (PNG)")
     ap.add_argument("--bottles", default="TR,TX")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--write", action="store_true", help="put the table between docs/simulator.md's markers")
     args = ap.parse_args()
     ps = plants()
     traces = {}
-    print(f"{'bottle':6} {'run':5} {'term':10} {'onset s':>8} {'fallen':>6} {'NMSD/thr':>9} {'NMSD det':>8} "
-          f"{'SWT/thr':>8} {'SWT on':>7} {'IMU sd':>7} {'IMU x sd':>8}")
+    lines = [f"{'bottle':6} {'run':5} {'term':10} {'onset s':>8} {'fallen':>6} {'NMSD/thr':>9} {'NMSD det':>8} "
+             f"{'SWT/thr':>8} {'SWT on':>7} {'IMU sd':>7} {'IMU x sd':>8}"]
+    print(lines[0])
     for b in args.bottles.split(","):
         for what in ("pour", "drop"):
             for name, kw in ps.items():
                 r = run(b, what, kw, args.seed)
                 traces[(b, what, name)] = r
-                print(f"{b:6} {what:5} {name:10} {r['onset']:8.3f} {str(r['fallen']):>6} {r['nmsd_ratio']:9.2f} "
-                      f"{r['nmsd_n']:8d} {r['swt_ratio']:8.2f} {r['swt_on']:7d} {r['imu_sd']:7.1f} {r['imu_x_sd']:8.1f}", flush=True)
+                lines.append(f"{b:6} {what:5} {name:10} {r['onset']:8.3f} {str(r['fallen']):>6} "
+                             f"{r['nmsd_ratio']:9.2f} {r['nmsd_n']:8d} {r['swt_ratio']:8.2f} {r['swt_on']:7d} "
+                             f"{r['imu_sd']:7.1f} {r['imu_x_sd']:8.1f}")
+                print(lines[-1], flush=True)
     if args.figure:
         import matplotlib
         matplotlib.use("Agg")
@@ -157,7 +161,18 @@ def main() -> None:
         fig.tight_layout()
         fig.savefig(args.figure, dpi=110)
         print(f"figure: {args.figure}")
+    if args.write:
+        import sys
+        from pathlib import Path
+
+        sys.path.insert(0, str(Path(__file__).resolve().parent))
+        from splice_report import write_marked
+
+        doc = Path(__file__).resolve().parent.parent / "docs" / "simulator.md"
+        return write_marked("physics_terms", doc, "<!-- physics terms table begins -->",
+                            "<!-- physics terms table ends -->", "\n".join("    " + x for x in lines))
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())

@@ -23,9 +23,19 @@ docs quote in one commit. Steps:
 5. ``scripts/limits_table.py --write``: the plausible ranges in docs/runtime.md;
 6. ``scripts/claims_seeds.py --write``: the claims' classes on five master seeds in
    docs/reproduce.md (about five default grids, plus their replicates);
-7. ``scripts/speed_table.py --write``: docs/speed.md's table, every benchmark run now, the
+7. ``scripts/open_loop_table.py --write`` and ``scripts/physics_terms.py --write``: docs/simulator.md's
+   open-loop table and the physics terms one by one (and their figure);
+8. ``scripts/term_claims.py --write``: the claims with each physics term switched off in turn
+   (docs/study.md; one default grid per term, each plant recalibrated: the longest step);
+9. ``slipreflex study`` into a temporary folder, then ``scripts/study_table.py`` and
+   ``scripts/term_claims.py --study``: the default study's claims and where claims 4, 5 and 7
+   become decidable (docs/study.md);
+10. ``scripts/threshold_sensitivity.py --write``: the tactile methods' thresholds (docs/reproduce.md);
+11. ``slipreflex reproduce`` of the chain's variants (3 trials) and ``scripts/method_table.py``:
+    docs/method.md's table;
+12. ``scripts/speed_table.py --write``: docs/speed.md's table, every benchmark run now, the
    reproduction's row from step 1's timing (its wall and CPU time, written to ``timing.json``);
-8. only with ``--with-tiers``: ``scripts/tier_times.py --write``, docs/development.md's test
+13. only with ``--with-tiers``: ``scripts/tier_times.py --write``, docs/development.md's test
    tiers (it runs the fast tier and then the whole suite).
 """
 
@@ -39,6 +49,10 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 SCRIPTS = ROOT / "scripts"
+
+#: The methods of docs/method.md's table of the chain's variants (three trials each).
+METHOD_VARIANTS = ("fixed", "dath", "nmsd", "swt", "authors-gui", "authors-chain", "dath-event", "dath-floor",
+                   "dath-leak")
 
 #: (step name, markers it writes, command; "{out}" is the reproduction's directory).
 STEPS: list[tuple[str, tuple[str, ...], list[str]]] = [
@@ -54,6 +68,24 @@ STEPS: list[tuple[str, tuple[str, ...], list[str]]] = [
     ("limits table", ("limits table",), [sys.executable, str(SCRIPTS / "limits_table.py"), "--write"]),
     ("claims over five master seeds", ("claims seeds table",),
      [sys.executable, str(SCRIPTS / "claims_seeds.py"), "--jobs", "{jobs}", "--write"]),
+    ("open-loop table", ("open-loop table",), [sys.executable, str(SCRIPTS / "open_loop_table.py"), "--write"]),
+    ("physics terms table", ("physics terms table",),
+     [sys.executable, str(SCRIPTS / "physics_terms.py"), "--figure", str(ROOT / "docs" / "physics_terms.png"),
+      "--write"]),
+    ("term claims table", ("term claims table",),
+     [sys.executable, str(SCRIPTS / "term_claims.py"), "--jobs", "{jobs}", "--write"]),
+    ("study", (), [sys.executable, "-m", "slipreflex", "study", "--out", "{out}-study", "--no-progress"]),
+    ("study claims table", ("study claims table",),
+     [sys.executable, str(SCRIPTS / "study_table.py"), "{out}-study", "--write"]),
+    ("study decidable", ("study decidable",),
+     [sys.executable, str(SCRIPTS / "term_claims.py"), "--study", "{out}-study", "--write"]),
+    ("threshold sensitivity table", ("threshold sensitivity table",),
+     [sys.executable, str(SCRIPTS / "threshold_sensitivity.py"), "--jobs", "{jobs}", "--write"]),
+    ("method variants", (), [sys.executable, "-m", "slipreflex", "reproduce", "--methods", ",".join(METHOD_VARIANTS),
+                             "--trials", "3", "--jobs", "{jobs}", "--no-figures", "--no-progress",
+                             "--out", "{out}-methods"]),
+    ("method variants table", ("method variants table",),
+     [sys.executable, str(SCRIPTS / "method_table.py"), "{out}-methods/summary.csv", "--write"]),
     ("speed table", ("speed table",), [sys.executable, str(SCRIPTS / "speed_table.py"), "--write",
                                        "--reproduce-timing", "{out}/timing.json"]),
     ("test tiers", ("test tiers",), [sys.executable, str(SCRIPTS / "tier_times.py"), "--write"]),

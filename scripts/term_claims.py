@@ -32,7 +32,7 @@ TERMS: dict[str, dict[str, float]] = {
 }
 
 
-def decidable(folder: str, claims: tuple[int, ...] = (4, 5, 7)) -> None:
+def decidable(folder: str, claims: tuple[int, ...] = (4, 5, 7)) -> list[str]:
     """Per claim: plants testable and holding, and the constants that go with it being testable."""
     import csv
     from pathlib import Path
@@ -40,10 +40,10 @@ def decidable(folder: str, claims: tuple[int, ...] = (4, 5, 7)) -> None:
     import numpy as np
     from scipy.stats import spearmanr
 
+    from slipreflex.analysis.claims import HOLDS, NOT_DECIDABLE
     from slipreflex.sim.uncertain import UNCERTAIN
 
-    from slipreflex.analysis.claims import HOLDS, NOT_DECIDABLE
-
+    out: list[str] = []
     rows = [r for r in csv.DictReader((Path(folder) / "plants.csv").open())
             if not r.get("error") and r.get("rejected", "") in ("", "False", "0")]
     for n in claims:
@@ -51,7 +51,8 @@ def decidable(folder: str, claims: tuple[int, ...] = (4, 5, 7)) -> None:
         testable = np.array([x not in ("", NOT_DECIDABLE) for x in v], dtype=float)
         holds = sum(x == HOLDS for x in v)
         kinds = ", ".join(f"{k} {v.count(k)}" for k in sorted(set(v)))
-        print(f"claim {n}: decidable on {int(testable.sum())} of {len(rows)} plants, holds on {holds} ({kinds})")
+        out.append(f"claim {n}: decidable on {int(testable.sum())} of {len(rows)} plants, holds on {holds} ({kinds})")
+        print(out[-1])
         if 0 < testable.sum() < len(rows):
             found = []
             for name in UNCERTAIN:
@@ -62,19 +63,34 @@ def decidable(folder: str, claims: tuple[int, ...] = (4, 5, 7)) -> None:
                 if p < 0.05:
                     found.append((abs(rho), name, rho, p))
             for _, name, rho, p in sorted(found, reverse=True):
-                print(f"  testable with {name}: rho {rho:+.2f} (p {p:.2g})")
+                out.append(f"  testable with {name}: rho {rho:+.2f} (p {p:.2g})")
+                print(out[-1])
+    return out
 
 
-def main() -> None:
+def _write(marker: str, lines: list[str]) -> int:
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from splice_report import write_marked
+
+    doc = Path(__file__).resolve().parent.parent / "docs" / "study.md"
+    return write_marked("term_claims", doc, f"<!-- {marker} begins -->", f"<!-- {marker} ends -->",
+                        "\n".join("    " + x for x in lines))
+
+
+def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--terms", default="grip,roll,events,incipient,motor,shoulder,tilt",
                     help=f"comma-separated, of: {', '.join(TERMS)} (spot and gap: the two halves of roll)")
     ap.add_argument("--study", default=None, help="a study's output folder: where claims 4, 5, 7 become testable")
+    ap.add_argument("--write", action="store_true", help="put the table between docs/study.md's markers")
     args = ap.parse_args()
     if args.study:
-        decidable(args.study)
-        return
+        found = decidable(args.study)
+        return _write("study decidable", found) if args.write else 0
 
     from slipreflex.analysis.claims import judge_run
     from slipreflex.experiments import ReproduceConfig, run_reproduce
@@ -93,16 +109,17 @@ def main() -> None:
         runs[label] = {c.number: c for c in judge_run(rows, plant=cfg.plant)}
         print(f"ran: {'every term on' if label == 'all' else 'without ' + label}", flush=True)
     labels = list(runs)
-    print("claim  " + "  ".join(f"{('-' + x) if x != 'all' else 'all':>12s}" for x in labels))
-    for n in sorted(runs["all"]):
-        print(f"{n:5d}  " + "  ".join(f"{runs[x][n].verdict[:12]:>12s}" for x in labels))
+    table = ["claim  " + "  ".join(f"{('-' + x) if x != 'all' else 'all':>12s}" for x in labels)]
+    table += [f"{n:5d}  " + "  ".join(f"{runs[x][n].verdict[:12]:>12s}" for x in labels) for n in sorted(runs["all"])]
+    print("\n".join(table))
     for n in sorted(runs["all"]):
         nums = {x: runs[x][n].numbers for x in labels}
         if len(set(nums.values())) > 1:
             print(f"\nclaim {n}:")
             for x in labels:
                 print(f"  {('without ' + x) if x != 'all' else 'all terms':18s} {runs[x][n].verdict}: {nums[x]}")
+    return _write("term claims table", table) if args.write else 0
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())

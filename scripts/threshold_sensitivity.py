@@ -41,23 +41,40 @@ def row(label: str, method: str, rows) -> str:
             f"{_median(r.total_ms for r in rows)} | {found}/{len(pour_trials)} |")
 
 
-def main() -> None:
+def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--trials", type=int, default=10)
     ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--write", action="store_true", help="put the table between docs/reproduce.md's markers")
     args = ap.parse_args()
     from slipreflex.experiments import ReproduceConfig, run_reproduce
 
-    print("| setting | method | drop: slips answered | drop: median response ms | pour: success | "
-          "pour: median response ms | median total (closing) ms | slips the accelerometer found in pours |")
-    print("|---|---|---|---|---|---|---|---|")
+    lines = ["| setting | method | drop: slips answered | drop: median response ms | pour: success | "
+             "pour: median response ms | median total (closing) ms | slips the accelerometer found in pours |",
+             "|---|---|---|---|---|---|---|---|"]
+    print("\n".join(lines))
     for label, change in SETTINGS:
         ms = (methods.SWT,) if "swt_persist" in change else (methods.NMSD, methods.SWT)
         res = run_reproduce(ReproduceConfig(trials=args.trials, methods=ms, **change), jobs=args.jobs,
                             progress=False, plots=False)
         for m in ms:
-            print(row(label, m, [r for r in res.rows if r.method == m]), flush=True)
+            lines.append(row(label, m, [r for r in res.rows if r.method == m]))
+            print(lines[-1], flush=True)
+    return _write_doc("threshold_sensitivity", "reproduce.md", "threshold sensitivity table",
+                      "\n".join(lines)) if args.write else 0
+
+
+def _write_doc(tool: str, doc: str, marker: str, body: str) -> int:
+    import sys
+    from pathlib import Path
+
+    here = Path(__file__).resolve().parent
+    sys.path.insert(0, str(here))
+    from splice_report import write_marked
+
+    return write_marked(tool, here.parent / "docs" / doc, f"<!-- {marker} begins -->", f"<!-- {marker} ends -->",
+                        body)
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())
