@@ -1,7 +1,7 @@
 """Print the longest functions of the package (lines from ``def`` to the last line, docstring excluded).
 
 Numba kernels (functions decorated with ``njit`` / ``jit``) are listed apart: they are
-written as flat loops on purpose. Used for the issue-12 measure "no function outside the
+written as flat loops on purpose. Used for the house measure "no function outside the
 numba kernels longer than about 80 lines"; ``tests/test_house.py`` checks the limit.
 
 Usage: python scripts/function_lengths.py [N] [--root src/slipreflex] [--with-docstrings]

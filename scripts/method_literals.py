@@ -2,7 +2,7 @@
 
 A literal counts when the whole string is exactly the name of a method the package registers
 (``slipreflex.methods.names()`` at import), outside docstrings. The names' one home,
-``slipreflex/methods.py``, is listed apart. Used to report the issue-12 count
+``slipreflex/methods.py``, is listed apart. Used to report the count
 "method names stop being string literals scattered over the package".
 
 Usage: python scripts/method_literals.py [--root src/slipreflex] [--list]

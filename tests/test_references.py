@@ -8,7 +8,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 # Documents that live outside the repository, and tracker numbers a reader cannot follow.
-OUTSIDE = re.compile(r"\bSPEC\b|\bARCHITECTURE\b|shared/|\bissue [0-9]+")
+OUTSIDE = re.compile(r"\bSPEC\b|\bARCHITECTURE\b|shared/|\bissues?[- ]?[0-9]+")
 
 
 def _tracked_text_files() -> list[Path]:
@@ -31,6 +31,12 @@ def test_no_reference_leads_outside_the_repository():
             if OUTSIDE.search(line) and path.name != "test_references.py":
                 hits.append(f"{path.relative_to(ROOT)}:{number}: {line.strip()[:100]}")
     assert not hits, "references that lead outside the repository:\n" + "\n".join(hits)
+
+
+def test_the_pattern_catches_the_ways_a_tracker_number_is_written():
+    for text in ("see issue 12", "the issue-12 count", "issues 19"):
+        assert OUTSIDE.search(text), text
+    assert not OUTSIDE.search("pyserial issue #281 (a public tracker)")
 
 
 def test_the_specification_sections_cited_exist():
