@@ -587,8 +587,11 @@ def tilt_and_taper(plant: Any = None) -> str:
     slope = [float(getattr(bottles[n], "shoulder_slope", 0.0)) for n in BOTTLE_ORDER]
     if min(ecc) <= 0.0 or min(slope) <= 0.0:
         return ""
-    return (f"the bottle's tilt in the grasp, rocked by the mass landing {100 * min(ecc):g}-{100 * max(ecc):g} cm "
-            f"off the axis, and a shoulder taper of {min(slope):g}-{max(slope):g} (radius lost per length slid)")
+    def span(lo: float, hi: float) -> str:
+        return f"{lo:g}" if lo == hi else f"{lo:g}-{hi:g}"
+
+    return (f"the bottle's tilt in the grasp, rocked by the mass landing {span(100 * min(ecc), 100 * max(ecc))} cm "
+            f"off the axis, and a shoulder taper of {span(min(slope), max(slope))} (radius lost per length slid)")
 
 
 # --- the judges ------------------------------------------------------------------------------
