@@ -66,11 +66,9 @@ def main(argv: list[str]) -> int:
     print(body)
     if not write:
         return 0
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
-    from splice_report import write_marked
+    from splice_report import write_section
 
-    return write_marked("method_table", Path(__file__).resolve().parent.parent / "docs" / "method.md",
-                        "<!-- method variants table begins -->", "<!-- method variants table ends -->", body)
+    return write_section("method_table", "docs/method.md", "method variants table", body)
 
 
 if __name__ == "__main__":

@@ -12,7 +12,6 @@ Run: ``python scripts/open_loop_table.py [--write]`` (``--write``: into docs/sim
 from __future__ import annotations
 
 import sys
-from pathlib import Path
 
 from slipreflex.sim import BOTTLES, PAPER_DROP, PAPER_POUR, Rig, simulate_open_loop
 from slipreflex.sim.calibration import drop_fall_capacity, first_slip_ml
@@ -51,13 +50,9 @@ def main(argv: list[str]) -> int:
     print(body)
     if "--write" not in argv:
         return 0
-    here = Path(__file__).resolve().parent
-    sys.path.insert(0, str(here))
-    from splice_report import write_marked
+    from splice_report import write_section
 
-    return write_marked("open_loop_table", here.parent / "docs" / "simulator.md",
-                        "<!-- open-loop table begins -->", "<!-- open-loop table ends -->", body)
-
+    return write_section("open_loop_table", "docs/simulator.md", "open-loop table", body)
 
 if __name__ == "__main__":
     sys.exit(main(sys.argv[1:]))

@@ -162,15 +162,10 @@ def main() -> int:
         fig.savefig(args.figure, dpi=110)
         print(f"figure: {args.figure}")
     if args.write:
-        import sys
-        from pathlib import Path
+        from splice_report import write_section
 
-        sys.path.insert(0, str(Path(__file__).resolve().parent))
-        from splice_report import write_marked
-
-        doc = Path(__file__).resolve().parent.parent / "docs" / "simulator.md"
-        return write_marked("physics_terms", doc, "<!-- physics terms table begins -->",
-                            "<!-- physics terms table ends -->", "\n".join("    " + x for x in lines))
+        return write_section("physics_terms", "docs/simulator.md", "physics terms table",
+                             "\n".join("    " + x for x in lines))
     return 0
 
 

@@ -77,5 +77,15 @@ def write_marked(tool: str, path: Path, begin: str, end: str, body: str) -> int:
     return 0
 
 
+def write_section(tool: str, doc: str, name: str, body: str) -> int:
+    """:func:`write_marked` for the table called ``name`` in ``doc`` (a path from the repository's top,
+    e.g. ``"docs/simulator.md"``), between ``<!-- NAME begins -->`` and ``<!-- NAME ends -->``.
+
+    A table script run as ``python scripts/X.py`` has this folder on ``sys.path`` and imports it directly.
+    """
+    root = Path(__file__).resolve().parent.parent
+    return write_marked(tool, root / doc, f"<!-- {name} begins -->", f"<!-- {name} ends -->", body)
+
+
 if __name__ == "__main__":
     sys.exit(main(sys.argv[1:]))

@@ -16,10 +16,6 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
-DOC = ROOT / "docs" / "study.md"
-BEGIN, END = "<!-- study claims table begins -->", "<!-- study claims table ends -->"
-
 
 def claims_table(report: str) -> str:
     """The markdown table under the report's "## Claims" heading."""
@@ -42,10 +38,9 @@ def main(argv: list[str]) -> int:
     print(body)
     if "--write" not in argv:
         return 0
-    sys.path.insert(0, str(ROOT / "scripts"))
-    from splice_report import write_marked
+    from splice_report import write_section
 
-    return write_marked("study_table", DOC, BEGIN, END, body)
+    return write_section("study_table", "docs/study.md", "study claims table", body)
 
 
 if __name__ == "__main__":

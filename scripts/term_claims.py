@@ -69,15 +69,9 @@ def decidable(folder: str, claims: tuple[int, ...] = (4, 5, 7)) -> list[str]:
 
 
 def _write(marker: str, lines: list[str]) -> int:
-    import sys
-    from pathlib import Path
+    from splice_report import write_section
 
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
-    from splice_report import write_marked
-
-    doc = Path(__file__).resolve().parent.parent / "docs" / "study.md"
-    return write_marked("term_claims", doc, f"<!-- {marker} begins -->", f"<!-- {marker} ends -->",
-                        "\n".join("    " + x for x in lines))
+    return write_section("term_claims", "docs/study.md", marker, "\n".join("    " + x for x in lines))
 
 
 def main() -> int:

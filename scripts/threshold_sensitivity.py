@@ -60,20 +60,12 @@ def main() -> int:
         for m in ms:
             lines.append(row(label, m, [r for r in res.rows if r.method == m]))
             print(lines[-1], flush=True)
-    return _write_doc("threshold_sensitivity", "reproduce.md", "threshold sensitivity table",
-                      "\n".join(lines)) if args.write else 0
+    if not args.write:
+        return 0
+    from splice_report import write_section
 
-
-def _write_doc(tool: str, doc: str, marker: str, body: str) -> int:
-    import sys
-    from pathlib import Path
-
-    here = Path(__file__).resolve().parent
-    sys.path.insert(0, str(here))
-    from splice_report import write_marked
-
-    return write_marked(tool, here.parent / "docs" / doc, f"<!-- {marker} begins -->", f"<!-- {marker} ends -->",
-                        body)
+    return write_section("threshold_sensitivity", "docs/reproduce.md", "threshold sensitivity table",
+                         "\n".join(lines))
 
 
 if __name__ == "__main__":

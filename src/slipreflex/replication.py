@@ -17,7 +17,6 @@ from collections.abc import Callable
 from . import experiments
 from .analysis.claims import REPLICATES_MAX, replicate_seed, undecided_methods
 from .analysis.outputs import ReproduceResult, judged_claims
-from .experiments import ReproduceConfig  # noqa: F401  (the example's)
 from .interrupts import Interrupted
 
 __all__ = ["replicate_undecided"]
@@ -56,6 +55,7 @@ def replicate_undecided(result: ReproduceResult, *, jobs: int | None = None, pro
     --------
     A run without rows leaves nothing to judge, so nothing to replicate:
 
+    >>> from slipreflex.experiments import ReproduceConfig
     >>> replicate_undecided(ReproduceResult(ReproduceConfig(), [], [], {}, {}, 0.0, 1)).replicate_seeds
     ()
     """

@@ -84,6 +84,7 @@ from .. import hardware as hw
 from ..csvfiles import cell_bool, cell_float
 from ..methods import DATH, FIXED, NMSD, SWT
 from ..methods import label as _label
+from ..methods import names as method_names
 from .paper import BOTTLE_ORDER, EXPERIMENTS, PAPER
 
 __all__ = [
@@ -1060,7 +1061,7 @@ def undecided_methods(results: Sequence[ClaimResult]) -> tuple[str, ...]:
     """
     by_number = {c.number: c for c in CLAIMS}
     wanted = {m for r in results if r.verdict == UNRESOLVED for m in by_number[r.number].methods}
-    return tuple(m for m in (DATH, FIXED, NMSD, SWT) if m in wanted)
+    return tuple(m for m in method_names(paper=True) if m in wanted)
 
 
 def replicate_seed(master: int, k: int) -> int:

@@ -103,8 +103,9 @@ def check_figure_path(path: str | Path, option: str) -> None:
     ...
     slipreflex.errors.ParameterError: --figure out/cal.toml: matplotlib cannot write '.toml' (one of: ..., .png, ...)
     """
-    kinds = sorted(_plt().figure().canvas.get_supported_filetypes())
-    _plt().close("all")
+    from matplotlib.backend_bases import FigureCanvasBase  # deferred: heavy (matplotlib)
+
+    kinds = sorted(FigureCanvasBase.get_supported_filetypes())   # a class method: no figure made or closed
     suffix = Path(path).suffix.lower().lstrip(".")
     if suffix not in kinds:
         shown = ", ".join("." + k for k in kinds)
