@@ -27,14 +27,15 @@ docs quote in one commit. Steps:
    open-loop table and the physics terms one by one (and their figure);
 8. ``scripts/term_claims.py --write``: the claims with each physics term switched off in turn
    (docs/study.md; one default grid per term, each plant recalibrated: the longest step);
-9. ``slipreflex study`` into a temporary folder, then ``scripts/study_table.py`` and
+9. ``slipreflex study`` into a temporary folder (timed, for the speed table's row), then ``scripts/study_table.py`` and
    ``scripts/term_claims.py --study``: the default study's claims and where claims 4, 5 and 7
    become decidable (docs/study.md);
 10. ``scripts/threshold_sensitivity.py --write``: the tactile methods' thresholds (docs/reproduce.md);
 11. ``slipreflex reproduce`` of the chain's variants (3 trials) and ``scripts/method_table.py``:
     docs/method.md's table;
 12. ``scripts/speed_table.py --write``: docs/speed.md's table, every benchmark run now, the
-   reproduction's row from step 1's timing (its wall and CPU time, written to ``timing.json``);
+   reproduction's and the study's rows from steps 1 and 9's timings (their wall and CPU time,
+   written to ``timing.json`` in each one's folder);
 13. only with ``--with-tiers``: ``scripts/tier_times.py --write``, docs/development.md's test
    tiers (it runs the fast tier and then the whole suite).
 """
@@ -87,9 +88,13 @@ STEPS: list[tuple[str, tuple[str, ...], list[str]]] = [
     ("method variants table", ("method variants table",),
      [sys.executable, str(SCRIPTS / "method_table.py"), "{out}-methods/summary.csv", "--write"]),
     ("speed table", ("speed table",), [sys.executable, str(SCRIPTS / "speed_table.py"), "--write",
-                                       "--reproduce-timing", "{out}/timing.json"]),
+                                       "--reproduce-timing", "{out}/timing.json",
+                                       "--study-timing", "{out}-study/timing.json"]),
     ("test tiers", ("test tiers",), [sys.executable, str(SCRIPTS / "tier_times.py"), "--write"]),
 ]
+
+#: Steps timed as they run, the speed table's rows of the default jobs: step -> its timing option there.
+TIMED: dict[str, str] = {"reproduce": "--reproduce-timing", "study": "--study-timing"}
 
 #: Steps run only when their flag is given (too slow for the default).
 OPT_IN: dict[str, str] = {"test tiers": "--with-tiers"}
@@ -104,7 +109,7 @@ def main(argv: list[str]) -> int:
         return 2
     jobs = argv[argv.index("--jobs") + 1] if "--jobs" in argv else "2"
     out = str(Path(tempfile.mkdtemp(prefix="slipreflex-regenerate-")) / "repro")
-    timed_here = False
+    timed_here: set[str] = set()
     for name, markers, command in STEPS:
         cmd = [c.replace("{out}", out).replace("{jobs}", jobs) for c in command]
         flag = OPT_IN.get(name)
@@ -112,9 +117,10 @@ def main(argv: list[str]) -> int:
               + (f"  (only with {flag})" if flag else ""), flush=True)
         if dry or (flag and flag not in argv and only != name) or (only and only != name):
             continue
-        if "--reproduce-timing" in cmd and not timed_here:   # only this run's timing, never an older file's
-            cmd = cmd[:cmd.index("--reproduce-timing")] + cmd[cmd.index("--reproduce-timing") + 2:]
-        if name == "reproduce":      # timed: the speed table's row of the default run
+        for step, option in TIMED.items():     # only this run's timings, never an older file's
+            if option in cmd and step not in timed_here:
+                cmd = cmd[:cmd.index(option)] + cmd[cmd.index(option) + 2:]
+        if name in TIMED:      # timed: the speed table's row of this default job (not run twice)
             sys.path.insert(0, str(SCRIPTS))
             from speed_table import Missing, timed
             try:
@@ -122,8 +128,8 @@ def main(argv: list[str]) -> int:
             except Missing as err:
                 print(f"regenerate: step '{name}' failed: {err}; later steps not run", file=sys.stderr)
                 return 1
-            Path(out, "timing.json").write_text(json.dumps(timing))
-            timed_here = True
+            Path(cmd[cmd.index("--out") + 1], "timing.json").write_text(json.dumps(timing))
+            timed_here.add(name)
             continue
         done = subprocess.run(cmd, cwd=ROOT)
         if done.returncode != 0:

@@ -4,10 +4,11 @@ Usage::
 
     python scripts/speed_table.py                 # run every benchmark, print the table
     python scripts/speed_table.py --write         # ... and put it between docs/speed.md's markers
-    python scripts/speed_table.py --write --reproduce-timing /tmp/repro/timing.json
+    python scripts/speed_table.py --write --reproduce-timing /tmp/repro/timing.json --study-timing /tmp/s/timing.json
 
 ``python scripts/regenerate.py`` runs it with ``--write`` after its default reproduction and hands
-it that run's timing (``--reproduce-timing``); alone, it times its own default reproduction. A
+it the timings of its default reproduction and study (``--reproduce-timing``, ``--study-timing``);
+alone, it times its own. A
 benchmark whose output no longer has the line a row reads is an error naming the benchmark and
 the line, so the table never keeps an old number.
 """
@@ -222,8 +223,9 @@ REPRODUCE = [sys.executable, "-m", "slipreflex", "reproduce", "--jobs", "2", "--
 STUDY = [sys.executable, "-m", "slipreflex", "study", "--out"]
 
 
-def measure(timing: dict[str, float] | None, log=print) -> list[tuple[str, str, str, str]]:
-    """Every row, measured now (the reproduction timed here unless ``timing`` is given)."""
+def measure(timing: dict[str, float] | None, log=print,
+            study_timing: dict[str, float] | None = None) -> list[tuple[str, str, str, str]]:
+    """Every row, measured now (the reproduction and the study timed here unless their timings are given)."""
     outputs: dict[tuple[str, ...], str] = {}
     rows = []
     for what, target, script, args, read in ROWS:
@@ -242,9 +244,11 @@ def measure(timing: dict[str, float] | None, log=print) -> list[tuple[str, str, 
             log("speed_table: timing the default reproduction")
             timing = timed([*REPRODUCE, out])
     rows.insert(7, reproduce_row(timing))
-    with tempfile.TemporaryDirectory() as out:
-        log("speed_table: timing the default study")
-        rows.append(study_row(timed([*STUDY, str(Path(out) / "study")])))
+    if study_timing is None:
+        with tempfile.TemporaryDirectory() as out:
+            log("speed_table: timing the default study")
+            study_timing = timed([*STUDY, str(Path(out) / "study")])
+    rows.append(study_row(study_timing))
     rows.append(("set-up and every test on a fresh Debian 12 (debootstrap, python3 only), network included",
                  "not measured here: it needs root and debootstrap", "", "`sudo bash scripts/fresh_debian_check.sh`"))
     return rows
@@ -265,13 +269,11 @@ def main(argv: list[str]) -> int:
     from machine import describe
     from splice_report import write_marked
 
-    timing = None
-    if "--reproduce-timing" in argv:
-        path = Path(argv[argv.index("--reproduce-timing") + 1])
-        timing = json.loads(path.read_text())
+    timing, study_timing = (json.loads(Path(argv[argv.index(o) + 1]).read_text()) if o in argv else None
+                            for o in ("--reproduce-timing", "--study-timing"))
     machine = describe()
     try:
-        table = markdown(measure(timing), machine)
+        table = markdown(measure(timing, study_timing=study_timing), machine)
     except Missing as err:
         print(f"speed_table: {err}", file=sys.stderr)
         return 2
