@@ -164,7 +164,8 @@ def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str 
                "and no figures were drawn nor claims judged."] if partial else []
     paper, others, notice = paper_part(result)
     notices += [notice] if notice else []
-    notices += [replicates_note(result).capitalize() + "."] if result.replicate_seeds else []
+    note = replicates_note(result)
+    notices += [note[:1].upper() + note[1:] + "."] if note else []
 
     if result.replicates:
         paths["replicates"] = write_csv(out / "replicates.csv", result.replicates, RESULT_COLUMNS,
