@@ -10,6 +10,9 @@ One CSV file per trial, one folder per data set (docs/benchmark.md, "Bring your 
   last dimension fastest); ``# components: x,y,z`` names the components (default
   ``c1..cV``) and ``# normal: z`` the one that is the normal force (default the last).
   Without a layout every channel is its own.
+* ``# trial-label: slip`` or ``no-slip`` (instead of a ``slip`` column): the trial slips or
+  not, with no onset (a data set of slip and touch trials); such a set is scored as
+  classification. Files without the line keep the per-sample ``slip`` column.
 
 Examples
 --------
@@ -25,8 +28,11 @@ Examples
 from __future__ import annotations
 
 import csv
+import itertools
 import os
 import re
+import stat
+from array import array
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -34,11 +40,15 @@ import numpy as np
 
 from ..csvfiles import finite_cell, read_preamble
 from ..errors import DataError
+from ..validation import LIMITS
 
 __all__ = ["Layout", "RecordedTrial", "read_trial", "read_folder", "TIME_COLUMN", "SLIP_COLUMN",
-           "MIN_SAMPLES"]
+           "MIN_SAMPLES", "TRIAL_LABEL", "TRIAL_LABELS"]
 
 TIME_COLUMN, SLIP_COLUMN = "t", "slip"
+#: The preamble key of a trial-level label (a trial that slips or does not, no onset), and its values.
+TRIAL_LABEL: str = "trial-label"
+TRIAL_LABELS: dict[str, bool] = {"slip": True, "no-slip": False}
 #: Fewest samples a trial may have (a threshold needs a stretch before the onset).
 MIN_SAMPLES: int = 8
 
@@ -144,6 +154,8 @@ class RecordedTrial:
         The arrays the channels form, or None (every channel its own).
     preamble : dict of str to str
         The ``# key: value`` lines.
+    trial_label : bool or None
+        The ``# trial-label`` (True: slips), or None for a per-sample label.
 
     Examples
     --------
@@ -161,6 +173,7 @@ class RecordedTrial:
     slip: np.ndarray
     layout: Layout | None
     preamble: dict[str, str] = field(default_factory=dict)
+    trial_label: bool | None = None
 
     @property
     def fs(self) -> float:
@@ -176,6 +189,11 @@ class RecordedTrial:
     def slips(self) -> bool:
         """The trial has a labelled slip."""
         return bool(self.slip.any())
+
+    @property
+    def positive(self) -> bool:
+        """The trial slips: its trial label, or a labelled slip sample."""
+        return self.slips if self.trial_label is None else self.trial_label
 
     @property
     def onset_t(self) -> float | None:
@@ -224,13 +242,19 @@ class RecordedTrial:
 def read_trial(path: str | os.PathLike) -> RecordedTrial:
     """Read and check one trial file (see the module docstring for the format).
 
+    The file is read as a stream under the limits of every CSV input (``LIMITS`` in
+    :mod:`slipreflex.validation`, docs/runtime.md "Limits"): at most ``csv_samples`` rows,
+    lines of at most ``csv_line_bytes``, a file of at most ``text_file_bytes``; a FIFO, a
+    device or a folder named like a trial is refused before it is opened.
+
     Raises
     ------
     DataError
         One line naming the file (and line) for: a missing ``t`` or ``slip`` column, no
         channel column, a repeated column name, a cell that is not a finite number, a
         ``slip`` value other than 0/1, a time that does not increase, fewer than
-        :data:`MIN_SAMPLES` samples, a layout that does not match the columns.
+        :data:`MIN_SAMPLES` samples, a layout that does not match the columns, a
+        ``# trial-label`` other than slip/no-slip or beside a ``slip`` column, a file over a limit.
 
     Examples
     --------
@@ -243,51 +267,105 @@ def read_trial(path: str | os.PathLike) -> RecordedTrial:
     slipreflex.errors.DataError: ...bad.csv: no 't' column (time in seconds); the columns are time, x, slip
     """
     path = Path(path)
+    _check_regular(path)
     pre = read_preamble(path)
-    try:
-        with path.open(newline="") as fh:
-            lines = [(i, row) for i, row in enumerate(csv.reader(fh), 1)
-                     if row and not row[0].lstrip().startswith("#")]
-    except (OSError, UnicodeDecodeError) as err:
-        raise DataError(f"{path}: cannot read: {getattr(err, 'strerror', None) or err}") from None
-    if not lines:
-        raise DataError(f"{path}: no header row")
-    head_line, head = lines[0]
-    head = [h.strip() for h in head]
+    trial_label = _trial_label(path, pre)
+    head_line, head, cells, row_lines = _read_rows(path)
     if len(set(head)) != len(head):
         dup = sorted({h for h in head if head.count(h) > 1})
         raise DataError(f"{path}, line {head_line}: column {dup[0]!r} appears more than once")
-    for col, what in ((TIME_COLUMN, "time in seconds"), (SLIP_COLUMN, "0/1 ground truth per sample")):
+    needed = ((TIME_COLUMN, "time in seconds"),) + (() if trial_label is not None else
+                                                    ((SLIP_COLUMN, "0/1 ground truth per sample"),))
+    for col, what in needed:
         if col not in head:
             raise DataError(f"{path}: no '{col}' column ({what}); the columns are {', '.join(head)}")
+    if trial_label is not None and SLIP_COLUMN in head:
+        raise DataError(f"{path}: both a '# {TRIAL_LABEL}' line and a '{SLIP_COLUMN}' column; give one")
     names = tuple(h for h in head if h not in (TIME_COLUMN, SLIP_COLUMN))
     if not names:
         raise DataError(f"{path}: no channel column besides 't' and 'slip'")
-    body = lines[1:]
-    if len(body) < MIN_SAMPLES:
-        raise DataError(f"{path}: {len(body)} samples; a trial needs at least {MIN_SAMPLES}")
-    data = np.empty((len(body), len(head)))
-    for r, (line, row) in enumerate(body):
-        if len(row) != len(head):
-            raise DataError(f"{path}, line {line}: {len(row)} cells, the header has {len(head)}")
-        for c, text in enumerate(row):
-            data[r, c] = finite_cell(path, line, head[c], text)
+    if len(row_lines) < MIN_SAMPLES:
+        raise DataError(f"{path}: {len(row_lines)} samples; a trial needs at least {MIN_SAMPLES}")
+    data = np.frombuffer(cells, dtype=float).reshape(len(row_lines), len(head)).copy()
     t = data[:, head.index(TIME_COLUMN)]
     bad = np.flatnonzero(np.diff(t) <= 0)
     if bad.size:
         k = int(bad[0]) + 1
-        raise DataError(f"{path}, line {body[k][0]}: time does not increase (t = {t[k]:g} s after {t[k - 1]:g} s)")
-    slip = data[:, head.index(SLIP_COLUMN)]
+        raise DataError(f"{path}, line {row_lines[k]}: time does not increase (t = {t[k]:g} s after {t[k - 1]:g} s)")
+    slip = data[:, head.index(SLIP_COLUMN)] if trial_label is None else np.zeros(len(t))
     odd = np.flatnonzero((slip != 0) & (slip != 1))
     if odd.size:
         k = int(odd[0])
-        raise DataError(f"{path}, line {body[k][0]}: slip must be 0 or 1, got {slip[k]:g}")
+        raise DataError(f"{path}, line {row_lines[k]}: slip must be 0 or 1, got {slip[k]:g}")
     idx = [head.index(n) for n in names]
     layout = None
     if "layout" in pre:
         layout = Layout.parse(pre["layout"], components=pre.get("components"), normal=pre.get("normal"),
                               channels=len(names), where=str(path))
-    return RecordedTrial(path.stem, path, t, data[:, idx], names, slip.astype(np.int8), layout, pre)
+    return RecordedTrial(path.stem, path, t, data[:, idx], names, slip.astype(np.int8), layout, pre, trial_label)
+
+
+def _check_regular(path: Path) -> None:
+    """Refuse what is not a regular file of at most ``text_file_bytes``, before opening it (a FIFO would block)."""
+    try:
+        st = path.stat()
+    except FileNotFoundError:
+        raise DataError(f"{path}: no such file") from None
+    except OSError as err:
+        raise DataError(f"{path}: cannot read: {err.strerror or err}") from None
+    if not stat.S_ISREG(st.st_mode):
+        raise DataError(f"{path}: not a regular file (a trial is a CSV file)")
+    cap = int(LIMITS["text_file_bytes"].hi)
+    if st.st_size > cap:
+        raise DataError(f"{path}: {st.st_size} bytes, more than the {cap} a trial file may have "
+                        "(docs/runtime.md, Limits)")
+
+
+def _trial_label(path: Path, pre: dict[str, str]) -> bool | None:
+    if TRIAL_LABEL not in pre:
+        return None
+    value = pre[TRIAL_LABEL].strip().lower()
+    if value not in TRIAL_LABELS:
+        raise DataError(f"{path}: '# {TRIAL_LABEL}: {pre[TRIAL_LABEL]}' must be one of {', '.join(TRIAL_LABELS)}")
+    return TRIAL_LABELS[value]
+
+
+def _read_rows(path: Path) -> tuple[int, list[str], array, list[int]]:
+    """The header and every row's numbers, streamed under the CSV limits: (header line, header, cells, lines)."""
+    cap_rows, cap_line = int(LIMITS["csv_samples"].hi), int(LIMITS["csv_line_bytes"].hi)
+    head: list[str] | None = None
+    head_line = 0
+    cells: array = array("d")
+    lines: list[int] = []
+    try:
+        with path.open(newline="", encoding="utf-8") as fh:
+            for line_no in itertools.count(1):
+                text = fh.readline(cap_line + 1)
+                if not text:
+                    break
+                if len(text) > cap_line:
+                    raise DataError(f"{path}, line {line_no}: longer than {cap_line} characters (docs/runtime.md, "
+                                    "Limits)")
+                row = next(csv.reader([text]), [])
+                if not row or row[0].lstrip().startswith("#"):
+                    continue
+                if head is None:
+                    head, head_line = [h.strip() for h in row], line_no
+                    continue
+                if len(row) != len(head):
+                    raise DataError(f"{path}, line {line_no}: {len(row)} cells, the header has {len(head)}")
+                if len(lines) >= cap_rows:
+                    raise DataError(f"{path}: more than {cap_rows} samples, the most a trial may have "
+                                    "(docs/runtime.md, Limits)")
+                cells.extend(finite_cell(path, line_no, head[c], text) for c, text in enumerate(row))
+                lines.append(line_no)
+    except UnicodeDecodeError:
+        raise DataError(f"{path}: not UTF-8 text") from None
+    except OSError as err:
+        raise DataError(f"{path}: cannot read: {getattr(err, 'strerror', None) or err}") from None
+    if head is None:
+        raise DataError(f"{path}: no header row")
+    return head_line, head, cells, lines
 
 
 def read_folder(folder: str | os.PathLike) -> list[RecordedTrial]:
@@ -296,7 +374,8 @@ def read_folder(folder: str | os.PathLike) -> list[RecordedTrial]:
     Raises
     ------
     DataError
-        When the folder does not exist or holds no CSV file, or any trial is malformed.
+        When the folder does not exist or holds no CSV file, more trials than ``LIMITS["trials"]``,
+        any trial is malformed, or trial-level and per-sample labels are mixed.
 
     Examples
     --------
@@ -311,4 +390,14 @@ def read_folder(folder: str | os.PathLike) -> list[RecordedTrial]:
     files = sorted(p for p in folder.glob("*.csv") if not p.name.startswith("."))
     if not files:
         raise DataError(f"{folder}: no *.csv trial files")
-    return [read_trial(p) for p in files]
+    cap = int(LIMITS["trials"].hi)
+    if len(files) > cap:
+        raise DataError(f"{folder}: {len(files)} trial files, more than the {cap} a data set may have "
+                        "(docs/runtime.md, Limits)")
+    trials = [read_trial(p) for p in files]
+    kinds = {tr.trial_label is None for tr in trials}
+    if len(kinds) > 1:
+        odd = next(tr for tr in trials if tr.trial_label is not None)
+        raise DataError(f"{odd.path}: a '# {TRIAL_LABEL}' trial in a folder of per-sample 'slip' labels; "
+                        "a data set uses one kind of label")
+    return trials
