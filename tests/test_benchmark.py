@@ -22,6 +22,8 @@ from slipreflex.benchmark.trials import Layout
 from slipreflex.cli import main
 from slipreflex.errors import DataError, ParameterError
 
+REST_K = ("--protocol", "rest-k")     # the earlier per-trial rule
+
 
 def _write(path, header, rows, preamble=()):
     lines = [f"# {k}: {v}" for k, v in preamble] + [",".join(header)]
@@ -78,7 +80,7 @@ def test_calibration_span_past_the_onset_is_an_error(tmp_path, capsys):
     folder = tmp_path / "set"
     folder.mkdir()
     _write(folder / "early.csv", ["t", "a", "b", "c", "d", "slip"], _trial_rows(onset=25), (("layout", "2x2"),))
-    assert main(["benchmark", str(folder), "--out", str(tmp_path / "o")]) == 2
+    assert main(["benchmark", str(folder), *REST_K, "--out", str(tmp_path / "o")]) == 2
     assert "reaches past the labelled slip onset at 0.5 s" in capsys.readouterr().err
 
 
@@ -88,10 +90,10 @@ def test_data_too_slow_for_the_chains_low_pass_is_an_error_before_work(tmp_path,
     folder.mkdir()
     _write(folder / "slow.csv", ["t", "x", "slip"], [[r[0], r[1], r[-1]] for r in _trial_rows(fs=20.0, onset=30)])
     out = tmp_path / "o"
-    assert main(["benchmark", str(folder), "--methods", "dath", "--out", str(out)]) == 2
+    assert main(["benchmark", str(folder), *REST_K, "--methods", "dath", "--out", str(out)]) == 2
     assert "dath cannot run at the data's 20 Hz (cutoff must be below fs/2" in capsys.readouterr().err
     assert not out.exists() or not any(out.iterdir())
-    assert main(["benchmark", str(folder), "--methods", "dath", "--rates", "method", "--out", str(out)]) == 0
+    assert main(["benchmark", str(folder), *REST_K, "--methods", "dath", "--rates", "method", "--out", str(out)]) == 0
 
 
 def test_a_method_that_does_not_apply_is_an_error_when_asked_for(tmp_path, capsys):
@@ -170,7 +172,7 @@ def test_the_hand_trial_through_the_command(tmp_path, capsys):
     folder.mkdir()
     _hand_trial(folder / "hand.csv")
     out = tmp_path / "out"
-    assert main(["benchmark", str(folder), "--methods", "nmsd", "--rates", "data", "--calibration-s", "2",
+    assert main(["benchmark", str(folder), *REST_K, "--methods", "nmsd", "--rates", "data", "--calibration-s", "2",
                  "--out", str(out)]) == 0
     with open(out / "benchmark.csv", newline="") as fh:
         (row,) = list(csv.DictReader(fh))
@@ -191,7 +193,7 @@ def test_a_users_folder_without_layout_runs_the_chain_methods_only(tmp_path, cap
         rows = _trial_rows(onset=onset)
         _write(folder / f"{name}.csv", ["t", "x", "slip"], [[r[0], r[1], r[-1]] for r in rows])
     out = tmp_path / "out"
-    assert main(["benchmark", str(folder), "--methods", "fixed,DATH", "--no-figures", "--out", str(out)]) == 0
+    assert main(["benchmark", str(folder), *REST_K, "--methods", "fixed,DATH", "--no-figures", "--out", str(out)]) == 0
     with open(out / "benchmark.csv", newline="") as fh:
         rows = list(csv.DictReader(fh))
     assert len(rows) == 2 * 2 * 2                                   # trials x methods x rates
@@ -236,7 +238,8 @@ def test_board_methods_do_not_apply_and_are_listed(tmp_path, capsys):
     folder = tmp_path / "one"
     folder.mkdir()
     _write(folder / "x.csv", ["t", "x", "slip"], [[r[0], r[1], r[-1]] for r in _trial_rows()])
-    assert main(["benchmark", str(folder), "--rates", "data", "--no-figures", "--out", str(tmp_path / "o")]) == 0
+    out = tmp_path / "o"
+    assert main(["benchmark", str(folder), *REST_K, "--rates", "data", "--no-figures", "--out", str(out)]) == 0
     out = capsys.readouterr().out
     assert "not run: dath-board" in out and "not run: nmsd: needs a tactile array" in out
 
@@ -307,7 +310,7 @@ def test_ctrl_c_keeps_the_finished_trials(tmp_path, monkeypatch, capsys):
 
     monkeypatch.setattr(command, "run_trial", stop_at_b)       # where the command calls it
     out = tmp_path / "out"
-    assert main(["benchmark", str(folder), "--methods", "fixed", "--rates", "data", "--out", str(out)]) == 130
+    assert main(["benchmark", str(folder), *REST_K, "--methods", "fixed", "--rates", "data", "--out", str(out)]) == 130
     with open(out / "benchmark.csv", newline="") as fh:
         assert [r["trial"] for r in csv.DictReader(fh)] == ["a"]
     assert (out / "a.png").is_file() and not (out / "b.png").exists()

@@ -27,9 +27,20 @@ from ..chain import run_chain
 from ..errors import DataError, ParameterError
 from . import learned
 from .protocol import OperatingPoint, ProtocolConfig, folds, operating_point
-from .run import Skipped, _scaled, _trial_reflex, applicable
-from .sweep import (AGGREGATIONS, BASELINES, ENERGY, LEARNED, Sweep, channel_inputs, energy_statistic, grid,
-                    prepare, statistic_detector, sweeps_of)
+from .run import Skipped, _check_data_rate, _scaled, _trial_reflex, applicable
+from .sweep import (
+    AGGREGATIONS,
+    BASELINES,
+    ENERGY,
+    LEARNED,
+    Sweep,
+    channel_inputs,
+    energy_statistic,
+    grid,
+    prepare,
+    statistic_detector,
+    sweeps_of,
+)
 from .trials import RecordedTrial
 
 __all__ = ["Evaluation", "evaluate", "method_names", "rest_thresholds", "channel_note", "select_channels"]
@@ -100,8 +111,9 @@ def select_channels(trials: Sequence[RecordedTrial], names: Sequence[str] | None
     for tr in trials:
         missing = [n for n in names if n not in tr.channel_names]
         if missing:
+            more = ", ..." if len(tr.channel_names) > 8 else ""
             raise ParameterError(f"--channels: {missing[0]!r} is not a channel of {tr.path} "
-                                 f"(its channels: {', '.join(tr.channel_names[:8])}{', ...' if len(tr.channel_names) > 8 else ''})")
+                                 f"(its channels: {', '.join(tr.channel_names[:8])}{more})")
         idx = [tr.channel_names.index(n) for n in names]
         out.append(dataclasses.replace(tr, channels=tr.channels[:, idx], channel_names=tuple(names), layout=None))
     return out
@@ -223,7 +235,7 @@ def _same(a: Sequence[Sweep], b: Sequence[Sweep]) -> bool:
 
 def evaluate(trials: Sequence[RecordedTrial], *, methods: Sequence[str] | None = None,
              rates: Sequence[str] = ("data",), reduction: str = "z-sum", aggregate: str = "any",
-             protocol: ProtocolConfig = ProtocolConfig(), thresholds: Mapping[str, float] | None = None,
+             protocol: ProtocolConfig | None = None, thresholds: Mapping[str, float] | None = None,
              channels_chosen: bool = False,
              on_method: Callable[[str], None] | None = None) -> Evaluation:
     """Every method (``methods``, or every one that applies) at every rate, by the protocol.
@@ -241,6 +253,7 @@ def evaluate(trials: Sequence[RecordedTrial], *, methods: Sequence[str] | None =
     >>> ev.points[0].detected, ev.points[0].false_alarms, ev.fixed
     (0, 0, {'fixed': 1000000000.0})
     """
+    protocol = protocol or ProtocolConfig()
     if aggregate not in AGGREGATIONS:
         raise ParameterError(f"--aggregate: unknown {aggregate!r} (known: {', '.join(AGGREGATIONS)})")
     names, skipped = method_names(trials, methods)
@@ -248,6 +261,8 @@ def evaluate(trials: Sequence[RecordedTrial], *, methods: Sequence[str] | None =
     for m in fixed:
         if m not in names:
             raise ParameterError(f"--threshold: {m} is not among the methods run ({', '.join(names)})")
+    if "data" in rates:
+        _check_data_rate([n for n in names if n not in BASELINES], trials)
     kind = "trial" if trials[0].trial_label is not None else "onset"
     splits = folds([tr.name for tr in trials], protocol.test)
     held = [i for _, h in splits for i in h]

@@ -301,7 +301,8 @@ def curve(sweeps: Sequence[Sweep], kind: str) -> tuple[np.ndarray, np.ndarray]:
     pos = [s.hit for s in sweeps if s.positive]
     neg = [s.hit for s in sweeps if not s.positive]
     n = len(sweeps[0].hit) if sweeps else 0
-    return (np.mean(neg, axis=0) if neg else np.full(n, math.nan)), (np.mean(pos, axis=0) if pos else np.full(n, math.nan))
+    nan = np.full(n, math.nan)
+    return (np.mean(neg, axis=0) if neg else nan), (np.mean(pos, axis=0) if pos else nan)
 
 
 def area(sweeps: Sequence[Sweep], kind: str, cfg: ProtocolConfig) -> tuple[float, tuple[float, float]]:

@@ -67,7 +67,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--threshold", nargs="+", default=None, metavar="METHOD=VALUE",
                    help="a method's threshold in the data's units, used in every fold (the paper's 8 mV: fixed=0.008)")
     p.add_argument("--rest", type=Path, default=None,
-                   help="a separate rest recording (same format): thresholds of --rest-k sd of each method's statistic on it")
+                   help="a separate rest recording (same format): thresholds of --rest-k sd of each method's "
+                        "statistic on it")
     p.add_argument("--channels", nargs="+", default=None,
                    help="channel columns to read (the layout is then ignored; default: every channel)")
     p.add_argument("--aggregate", choices=AGGREGATIONS, default="any",
@@ -87,7 +88,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-figures", action="store_true", help="write the tables only")
     p.add_argument("--vs-sim", action="store_true",
                    help="also hold the simulated tactile array against the data (vs_sim.csv, vs_sim.png)")
-    p.add_argument("--seed", type=int, default=1, help="seed of the bootstrap, the learned baseline and --vs-sim (default 1)")
+    p.add_argument("--seed", type=int, default=1,
+                   help="seed of the bootstrap, the learned baseline and --vs-sim (default 1)")
     p.add_argument("--out", type=Path, default=Path("out/benchmark"), help="output folder (default out/benchmark)")
 
 
