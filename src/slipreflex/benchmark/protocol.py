@@ -70,7 +70,7 @@ class ProtocolConfig:
     >>> ProtocolConfig(fa_per_min=-1)
     Traceback (most recent call last):
     ...
-    slipreflex.errors.ParameterError: fa_per_min must be a finite number >= 0, got -1
+    slipreflex.errors.ParameterError: fa_per_min must be a finite number >= 0 and <= 1e+06, got -1
     """
 
     fa_per_min: float = 10.0

@@ -15,7 +15,15 @@ The same measures on both, at the data's rate, from the normal component of ever
 * **tails**: excess kurtosis of NMSD's statistic over the calibration span (0 for Gaussian);
 * **slip**: over the first 0.25 s after the onset, the largest change of the total normal
   force over its noise, and the largest NMSD and SWT-SD statistic over their thresholds
-  (``rest_k`` sd of the statistic in the calibration span).
+  (``rest_k`` sd of the statistic in the calibration span);
+* **non-slip motion**: the same three, as the largest over every 0.25 s window between the
+  calibration span and the onset (to the end for a control): what the same statistics reach
+  without slip while the arm moves (or the bottle fills), so the slip is held against motion,
+  not against rest; and the slip's force change over the controls' (or, simulated, over the
+  trial's own) largest motion.
+
+An empty cell says why (:func:`empty_reason`); the header gives the rate everything was
+measured at, the data's own (the median of its trials' rates).
 
 The simulated side: the built-in bottle TR grasped with the paper's 0.8 N, at rest for
 ``calibration_s`` (the calibration span), then either poured into until it first slips (the
@@ -46,7 +54,7 @@ from ..methods import NMSD, SWT
 from .report import _plt
 
 __all__ = ["Comparison", "compare", "write_comparison", "format_comparison", "plot_comparison",
-           "MEASURES", "SLIP_WINDOW_S"]
+           "MEASURES", "SLIP_WINDOW_S", "empty_reason"]
 
 #: Span after the onset over which the slip measures are taken (s): 15 samples at 60 Hz, and
 #: inside the shortest labelled slip of the shipped set (0.3 s).
@@ -64,6 +72,10 @@ MEASURES: tuple[tuple[str, str], ...] = (
     ("slip_force_ratio", "slip: largest change of total normal force in 0.25 s / its noise"),
     ("slip_nmsd_ratio", "slip: largest NMSD statistic in 0.25 s / NMSD threshold"),
     ("slip_swt_ratio", "slip: largest SWT-SD statistic in 0.25 s / SWT-SD threshold"),
+    ("motion_force_ratio", "non-slip motion: largest change of total normal force in any 0.25 s / its noise"),
+    ("motion_nmsd_ratio", "non-slip motion: largest NMSD statistic in any 0.25 s / NMSD threshold"),
+    ("motion_swt_ratio", "non-slip motion: largest SWT-SD statistic in any 0.25 s / SWT-SD threshold"),
+    ("slip_over_motion", "slip's force change / the largest non-slip motion's (controls'; simulated: its own)"),
 )
 
 
@@ -127,7 +139,9 @@ def _measures_of(frames: np.ndarray, fs: float, onset_index: int | None, calibra
         "load_noise_ratio": _load_noise_ratio(f, len(cal), onset_index, noise),
         "nmsd_kurtosis": float(kurtosis(s_cal)),
         "slip_force_ratio": float("nan"), "slip_nmsd_ratio": float("nan"), "slip_swt_ratio": float("nan"),
+        "slip_over_motion": float("nan"),
     }
+    out.update(_motion(f, fs, len(cal), onset_index, total_noise, cal, rest_k))
     if onset_index is not None:
         w = slice(onset_index, min(len(f), onset_index + max(2, int(round(SLIP_WINDOW_S * fs)))))
         tot = f.sum(axis=1)
@@ -137,6 +151,45 @@ def _measures_of(frames: np.ndarray, fs: float, onset_index: int | None, calibra
         c = np.abs(swt_statistic(f)).max(axis=1)
         out["slip_swt_ratio"] = float(c[w].max() / rest_threshold(cal, SWT, fs, k=rest_k))
     return out
+
+
+def _motion(f: np.ndarray, fs: float, n_cal: int, onset_index: int | None, total_noise: float,
+            cal: np.ndarray, rest_k: float) -> dict[str, float]:
+    """The slip measures' largest values over every 0.25 s window of non-slip time after the calibration span."""
+    nan = float("nan")
+    out = {"motion_force_ratio": nan, "motion_nmsd_ratio": nan, "motion_swt_ratio": nan}
+    w = max(2, int(round(SLIP_WINDOW_S * fs)))
+    stop = len(f) if onset_index is None else onset_index
+    if stop - n_cal < w or not total_noise > 0:
+        return out
+    tot = f.sum(axis=1)
+    span = tot[n_cal:stop]
+    out["motion_force_ratio"] = float(max(np.abs(span[k:k + w] - span[k]).max()
+                                          for k in range(len(span) - w + 1)) / total_noise)
+    s = np.abs(nmsd_statistic(f, fs)).max(axis=1)[n_cal:stop]
+    out["motion_nmsd_ratio"] = float(s.max() / rest_threshold(cal, NMSD, fs, k=rest_k))
+    c = np.abs(swt_statistic(f)).max(axis=1)[n_cal:stop]
+    out["motion_swt_ratio"] = float(c.max() / rest_threshold(cal, SWT, fs, k=rest_k))
+    return out
+
+
+def empty_reason(source: str, measure: str) -> str:
+    """Why a cell of the comparison is empty.
+
+    Examples
+    --------
+    >>> empty_reason("real, controls", "slip_force_ratio")
+    'a control has no slip'
+    """
+    if measure.startswith("slip") and source == "real, controls":
+        return "a control has no slip"
+    if measure.startswith("slip") and source.startswith("simulated"):
+        return "the simulated trial did not slip"
+    if measure.startswith("motion") or measure == "load_noise_ratio":
+        return "less than 0.25 s (or 8 samples) of non-slip time after the calibration span"
+    if source.startswith("real"):
+        return "no trial of this kind with a tactile layout"
+    return "the signal does not vary (no noise to divide by)"
 
 
 def _load_noise_ratio(f: np.ndarray, n_cal: int, onset_index: int | None, noise: float) -> float:
@@ -191,8 +244,8 @@ def compare(trials: Sequence, *, calibration_s: float = 1.0, rest_k: float = RES
     >>> c.sources                                                # doctest: +SKIP
     ('real, controls', 'real, slip trials', 'simulated pour', 'simulated drop')
     """
-    arrays = [tr for tr in trials if tr.layout is not None]
-    fs = float(np.median([tr.fs for tr in arrays])) if arrays else 60.0
+    arrays = [tr for tr in trials if tr.layout is not None and tr.trial_label is None]
+    fs = float(np.median([tr.fs for tr in (arrays or trials)]))
     groups = {"real, controls": [tr for tr in arrays if not tr.slips],
               "real, slip trials": [tr for tr in arrays if tr.slips]}
     rows: dict[str, dict[str, float]] = {}
@@ -212,10 +265,13 @@ def compare(trials: Sequence, *, calibration_s: float = 1.0, rest_k: float = RES
                 curves[name]["onset"].append((tr.t - tr.t[on], (tot - tot[on]) / scale))
         rows[name] = {k: float(np.nanmedian([p[k] for p in per])) if per and not all(
             math.isnan(p[k]) for p in per) else float("nan") for k, _ in MEASURES}
+    controls_motion = rows["real, controls"]["motion_force_ratio"]
+    rows["real, slip trials"]["slip_over_motion"] = rows["real, slip trials"]["slip_force_ratio"] / controls_motion
     for kind in ("pour", "drop"):
         name = f"simulated {kind}"
         frames, t, on = _simulated(fs, calibration_s, seed, kind)
         m = _measures_of(frames, fs, on, calibration_s, rest_k)
+        m["slip_over_motion"] = m["slip_force_ratio"] / m["motion_force_ratio"]
         rows[name] = m
         curves[name] = {"onset": [], "spectrum": [_spectrum(frames[: int(calibration_s * fs)], fs)]}
         if on is not None and t is not None:
@@ -242,10 +298,6 @@ def write_comparison(c: Comparison, path: str | Path) -> Path:
     return path
 
 
-def _cell(v: float) -> str:
-    return "-" if not math.isfinite(v) else f"{v:.3g}"
-
-
 def format_comparison(c: Comparison, *, markdown: bool = False) -> str:
     """The comparison as a text (or Markdown) table.
 
@@ -255,15 +307,27 @@ def format_comparison(c: Comparison, *, markdown: bool = False) -> str:
     >>> format_comparison(c, markdown=True).splitlines()[2].startswith("| taxel noise")
     True
     """
-    head = [f"measure (at {c.fs:.0f} Hz)", *c.sources]
-    rows = [[d, *(_cell(c.rows[s][k]) for s in c.sources)] for k, d in MEASURES]
+    head = [f"measure (all at {c.fs:.1f} Hz, the data's rate)", *c.sources]
+    reasons: list[str] = []
+
+    def cell(s: str, k: str) -> str:
+        v = c.rows[s].get(k, float("nan"))
+        if math.isfinite(v):
+            return f"{v:.3g}"
+        why = empty_reason(s, k)
+        if why not in reasons:
+            reasons.append(why)
+        return f"- ({reasons.index(why) + 1})"
+
+    rows = [[d, *(cell(s, k) for s in c.sources)] for k, d in MEASURES]
+    notes = [f"({i + 1}) {why}" for i, why in enumerate(reasons)]
     if markdown:
         out = ["| " + " | ".join(head) + " |", "|" + "|".join("---" for _ in head) + "|"]
-        return "\n".join(out + ["| " + " | ".join(r) + " |" for r in rows])
+        return "\n".join(out + ["| " + " | ".join(r) + " |" for r in rows] + [""] + [f"- {n}" for n in notes])
     w = [max(len(r[i]) for r in [head, *rows]) for i in range(len(head))]
     lines = ["  ".join(x.ljust(w[i]) for i, x in enumerate(r)).rstrip() for r in [head, *rows]]
     lines.insert(1, "  ".join("-" * x for x in w))
-    return "\n".join(lines)
+    return "\n".join(lines + notes)
 
 
 def plot_comparison(c: Comparison, path: str | Path) -> Path:
