@@ -170,6 +170,20 @@ def ranking(summary, ev) -> str:
             f"per minute, scored held out, leave-one-trial-out): {after}.")
 
 
+def readme_points(ev) -> str:
+    """README's short form of the operating-point table (docs/benchmark.md has the whole)."""
+    from slipreflex.benchmark.optable import label
+
+    rows = ["| method | slips [95% CI] | latency ms | false alarms/min | chance | curve area |",
+            "|---|---|---|---|---|---|"]
+    for p in ev.points:
+        lo, hi = p.detected_ci
+        rows.append(f"| {label(p.method)} | {p.detected}/{p.slip_trials} [{lo:.2f}, {hi:.2g}] "
+                    f"| {_cell(p.median_latency_ms)} | {_cell(p.fa_per_min, 1)} | {_cell(p.chance_detected, 1)} "
+                    f"| {p.area:.2f} |")
+    return "\n".join(rows)
+
+
 def operating(trials, figure=None):
     """The operating-point evaluation of the shipped set with the command's defaults."""
     from slipreflex.benchmark.evaluate import evaluate
@@ -193,7 +207,7 @@ def main(argv: list[str]) -> int:
     summary = summarize(runs)
     ev = operating(trials, CURVES if "--write" in argv else None)
     notes = "\n".join(f"- {line}" for line in format_points(ev).splitlines()[:-(len(ev.points) + 2)])
-    blocks = {"readme": markdown_points(ev), "operating": notes + "\n\n" + markdown_points(ev),
+    blocks = {"readme": readme_points(ev), "operating": notes + "\n\n" + markdown_points(ev),
               "ranking": ranking(summary, ev), "full": markdown_table(summary), "chain_rule": chain_rule_line(),
               "k_sensitivity": k_sensitivity(trials), "why": why(trials),
               "vs_sim": format_comparison(compare(trials, calibration_s=cfg.calibration_s, seed=1), markdown=True)}

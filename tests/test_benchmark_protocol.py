@@ -13,8 +13,7 @@ import pytest
 
 from slipreflex.benchmark import read_folder, read_trial, shipped_dataset
 from slipreflex.benchmark.evaluate import evaluate
-from slipreflex.benchmark.protocol import (ProtocolConfig, chance, choose_index, folds, poisson_rate_ci,
-                                           roc_auc, wilson)
+from slipreflex.benchmark.protocol import ProtocolConfig, chance, choose_index, folds, poisson_rate_ci, roc_auc, wilson
 from slipreflex.benchmark.sweep import Sweep, alarm_time, episode_starts, score_at
 from slipreflex.cli import main
 from slipreflex.errors import DataError, ParameterError

@@ -16,6 +16,7 @@ Examples
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
@@ -105,8 +106,6 @@ def select_channels(trials: Sequence[RecordedTrial], names: Sequence[str] | None
     """
     if not names:
         return list(trials)
-    import dataclasses
-
     out = []
     for tr in trials:
         missing = [n for n in names if n not in tr.channel_names]
@@ -201,8 +200,6 @@ def rest_thresholds(rest: RecordedTrial, names: Sequence[str], rate: str, k: flo
             for _, x in channel_inputs(rest, reduction, aggregate):
                 det = prepare(name, rest, rate, reduction=reduction, aggregate=aggregate)
                 over = {"fs": det.fs, **(_scaled(base, spec.fs, det.fs) if rate == "data" else {})}
-                import dataclasses
-
                 sds.append(float(np.std(run_chain(x, dataclasses.replace(base.params, **over)).filtered)))
             out[name] = k * max(sds)
         else:

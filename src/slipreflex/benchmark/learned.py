@@ -25,6 +25,7 @@ Examples
 
 from __future__ import annotations
 
+import importlib.util
 from collections.abc import Sequence
 from typing import Any
 
@@ -51,8 +52,6 @@ def available() -> str | None:
     >>> available() is None or "learn" in available()
     True
     """
-    import importlib.util
-
     if importlib.util.find_spec("sklearn") is None:
         return "needs scikit-learn (pip install 'slipreflex[learn]')"
     return None

@@ -25,6 +25,7 @@ Examples
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -372,18 +373,17 @@ def operating_point(method: str, rate: str, kind: str, fold_sweeps: Sequence[Seq
     alarm = sum(float(s.alarm_s[g]) for s, _ in test)
     minutes = neg_s / 60.0
     a, ci = area(held_out, kind, cfg)
-    common = dict(method=method, rate=rate, kind=kind, thresholds=tuple(chosen), slip_trials=len(slips),
-                  detected=detected, detected_ci=wilson(detected, len(slips), cfg.confidence),
-                  false_alarms=fa, negative_min=minutes, area=a, area_ci=ci, curve=curve(held_out, kind))
+    base = OperatingPoint(method, rate, kind, tuple(chosen), slip_trials=len(slips), detected=detected,
+                          detected_ci=wilson(detected, len(slips), cfg.confidence), false_alarms=fa,
+                          negative_min=minutes, fa_ci=poisson_rate_ci(fa, minutes, cfg.confidence),
+                          trials=len(test), area=a, area_ci=ci, curve=curve(held_out, kind))
     if kind == "trial":
         correct = sum(bool(s.hit[g]) == s.positive for s, g in test)
-        return OperatingPoint(**common, fa_ci=poisson_rate_ci(fa, minutes, cfg.confidence), trials=len(test),
-                              negatives_alarmed=sum(bool(s.hit[g]) for s, g in test if not s.positive),
-                              correct=correct, accuracy_ci=wilson(correct, len(test), cfg.confidence))
+        return dataclasses.replace(base, negatives_alarmed=sum(bool(s.hit[g]) for s, g in test if not s.positive),
+                                   correct=correct, accuracy_ci=wilson(correct, len(test), cfg.confidence))
     rate_s = fa / neg_s if neg_s > 0 else math.nan
     ch_det, ch_lat = chance(rate_s, [s.window_s for s, _ in slips], cfg.tolerance_s)
-    return OperatingPoint(**common, median_latency_ms=float(np.median(lat)) if lat else math.nan,
-                          fa_ci=poisson_rate_ci(fa, minutes, cfg.confidence),
-                          alarm_fraction=alarm / neg_s if neg_s > 0 else math.nan,
-                          chance_detected=ch_det, chance_latency_ms=ch_lat, trials=len(test))
+    return dataclasses.replace(base, median_latency_ms=float(np.median(lat)) if lat else math.nan,
+                               alarm_fraction=alarm / neg_s if neg_s > 0 else math.nan,
+                               chance_detected=ch_det, chance_latency_ms=ch_lat)
 

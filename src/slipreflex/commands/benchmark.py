@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import methods as registry
 from ..baselines.calibration import REST_K
 from ..benchmark import BenchmarkConfig, read_folder, read_trial, shipped_dataset
 from ..benchmark.evaluate import evaluate, method_names, rest_thresholds, select_channels
@@ -94,8 +95,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _thresholds(items) -> dict[str, float]:
-    from .. import methods as registry
-
     out = {}
     for item in items or ():
         name, sep, value = item.partition("=")
@@ -126,8 +125,6 @@ def run(args: argparse.Namespace) -> int:
                               bootstrap=args.bootstrap, seed=args.seed)
     fixed = _thresholds(args.threshold)
     names = _split(args.methods)
-    from .. import methods as registry
-
     names = [n.lower() if n.lower() in ("energy", "learned") else registry.canonical(n) for n in names]
     trials = select_channels(read_folder(folder), args.channels)
     run_names, _ = method_names(trials, names or None)
