@@ -364,3 +364,43 @@ def test_long_work_is_estimated_before_it_starts(tmp_path, capsys, monkeypatch):
                  "--out", str(tmp_path / "o")]) == 0
     err = capsys.readouterr().err
     assert "3 trial(s), 1998 samples, 1 method(s): about" in err
+
+
+# --- what the tables say ----------------------------------------------------------------------------------
+
+
+def test_every_empty_vs_sim_cell_says_why_and_the_header_gives_the_datas_rate():
+    from slipreflex.benchmark.vs_sim import MEASURES, Comparison, format_comparison
+
+    full = {k: 1.0 for k, _ in MEASURES}
+    rows = {"real, controls": {**full, "slip_force_ratio": math.nan, "slip_over_motion": math.nan},
+            "simulated drop": {**full, "motion_force_ratio": math.nan}}
+    text = format_comparison(Comparison(tuple(rows), rows, 36.0, {}))
+    assert text.splitlines()[0].startswith("measure (all at 36.0 Hz, the data's rate)")
+    cells = [c for line in text.splitlines()[2:len(MEASURES) + 2] for c in line.split("  ") if c.strip()]
+    assert "-" not in cells                                     # no bare dash
+    assert "(1) a control has no slip" in text
+    assert "(2) less than 0.25 s (or 8 samples) of non-slip time after the calibration span" in text
+
+
+def test_a_detector_in_alarm_most_of_the_time_is_flagged():
+    from slipreflex.benchmark.evaluate import Evaluation
+    from slipreflex.benchmark.optable import format_points
+    from slipreflex.benchmark.protocol import OperatingPoint
+
+    busy = OperatingPoint("energy", "data", "onset", (1.0,), slip_trials=3, detected=3, false_alarms=50,
+                          negative_min=1.0, alarm_fraction=0.9, chance_detected=2.9, chance_latency_ms=10.0)
+    quiet = dataclasses.replace(busy, method="fixed", alarm_fraction=0.1)
+    table = format_points(Evaluation("onset", [busy, quiet], [], {}, {}, ProtocolConfig(), "loto", "x"))
+    lines = {line.split()[0]: line for line in table.splitlines()[-2:]}
+    assert "90 % (!)" in lines["energy"] and "(!)" not in lines["fixed"]
+    assert "2.9, 10" in lines["energy"]                         # the chance line beside it
+
+
+@pytest.mark.parametrize("given", ["fixed", "fixed=-1", "fixed=abc", "nmsd=0.1"])
+def test_a_bad_threshold_is_one_line(tmp_path, capsys, given):
+    folder = _optical_set(tmp_path)
+    assert main(["benchmark", str(folder), "--methods", "fixed", "--threshold", given,
+                 "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "--threshold" in err
