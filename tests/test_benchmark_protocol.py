@@ -250,7 +250,11 @@ def test_the_shipped_set_prints_the_operating_point_table(tmp_path, capsys):
     assert "DATH, event MPI (data): the same scores as DATH" in text
     with open(out / "operating_points.csv", newline="") as fh:
         rows = {r["method"]: r for r in csv.DictReader(fh)}
-    assert {"dath", "fixed", "nmsd", "swt", "authors-gui", "dath-leak", "energy", "learned"} <= set(rows)
+    from slipreflex.benchmark import learned
+
+    assert {"dath", "fixed", "nmsd", "swt", "authors-gui", "dath-leak", "energy"} <= set(rows)
+    assert ("learned" in rows) == (learned.available() is None)
+    assert ("not run: learned: needs scikit-learn" in text) == (learned.available() is not None)
     for r in rows.values():
         assert len(r) and float(r["false_alarms_per_min"]) <= 30          # the target holds roughly held out
         assert float(r["chance_detected"]) < int(r["detected"])            # every method beats chance

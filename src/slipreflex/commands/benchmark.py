@@ -144,6 +144,9 @@ def run(args: argparse.Namespace) -> int:
                       protocol=protocol, thresholds=fixed, channels_chosen=bool(args.channels))
         print(f"benchmark: {len(trials)} trial(s) in {folder} ({ev.positives} slip), "
               f"{ev.rates_hz[0]:.1f}-{ev.rates_hz[1]:.1f} Hz")
+        if args.rest is not None:
+            print(f"thresholds given below: {args.rest_k:g} sd of each method's statistic on the rest recording "
+                  f"{args.rest}, except those given by --threshold")
         print(format_points(ev))
         write_points(ev, staged / "operating_points.csv")
         if not args.no_figures:
