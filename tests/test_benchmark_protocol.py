@@ -359,15 +359,28 @@ def test_inputs_are_under_the_limits_table(tmp_path, capsys, monkeypatch, limit,
     assert not (tmp_path / "o").exists()
 
 
-def test_long_work_is_estimated_before_it_starts(tmp_path, capsys, monkeypatch):
+@pytest.mark.parametrize("protocol", ["operating", "rest-k"])
+def test_long_work_is_estimated_before_it_starts(tmp_path, capsys, monkeypatch, protocol):
     import slipreflex.commands.benchmark as command
 
     monkeypatch.setattr(command, "_SAY_ESTIMATE_S", 0.0)
+    started = []
+    monkeypatch.setattr(command, "evaluate", lambda *a, **k: started.append(capsys.readouterr().err) or 1 / 0)
+    monkeypatch.setattr(command, "run_trial", lambda *a, **k: started.append(capsys.readouterr().err) or 1 / 0)
     folder = _optical_set(tmp_path)
-    assert main(["benchmark", str(folder), "--methods", "fixed", "--bootstrap", "0", "--no-figures",
-                 "--out", str(tmp_path / "o")]) == 0
+    with pytest.raises(ZeroDivisionError):
+        main(["benchmark", str(folder), "--protocol", protocol, "--methods", "fixed", "--rates", "data",
+              "--calibration-s", "0.5", "--bootstrap", "0", "--out", str(tmp_path / "o")])
+    assert "3 trial(s), 1998 samples, 1 method(s): about" in started[0]      # printed before the work
+
+
+def test_many_tiny_trials_get_an_estimate_of_their_cost(capsys, monkeypatch):
+    import slipreflex.commands.benchmark as command
+
+    first = read_folder(shipped_dataset())[0]
+    command._estimate([dataclasses.replace(first, t=first.t[:8])] * 10_000, 11, ("data",), 41, figures=False)
     err = capsys.readouterr().err
-    assert "3 trial(s), 1998 samples, 1 method(s): about" in err
+    assert "10000 trial(s), 80000 samples, 11 method(s): about" in err and " h" in err
 
 
 # --- what the tables say ----------------------------------------------------------------------------------

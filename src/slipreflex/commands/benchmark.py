@@ -39,9 +39,10 @@ NAME = "benchmark"
 HELP = "score every detection method on recorded labelled slip trials (default: the shipped real data set)"
 ORDER = 35
 PROTOCOLS = ("operating", "rest-k")
-#: Seconds per sample, method and threshold of a sweep at the data's rate (measured on the shipped
-#: set on one core: about 60 s for 11 methods x 41 thresholds x 2195 samples), for the estimate.
-_SWEEP_S_PER_SAMPLE = 6e-5
+#: For the estimate before the work: seconds per run of one method on one trial at one threshold
+#: (the call's own cost, 1-2.5 ms measured on the shipped set, rounded up), per sample of it
+#: (SWT-SD's, the dearest: 4.4 us), and per trial figure of ``--protocol rest-k``.
+_RUN_S, _SAMPLE_S, _FIGURE_S = 3e-3, 6e-6, 0.5
 #: An estimate above this is printed before the work starts (s).
 _SAY_ESTIMATE_S = 5.0
 
@@ -137,7 +138,7 @@ def run(args: argparse.Namespace) -> int:
     wanted = ["operating_points.csv"] + ([] if args.no_figures else ["curves.png"])
     wanted += ["vs_sim.csv", "vs_sim.png"] if args.vs_sim else []
     outputs.check(wanted)
-    _estimate(trials, run_names, rates)
+    _estimate(trials, len(run_names), rates, GRID_POINTS, figures=False)
     staged = outputs.stage()
     try:
         ev = evaluate(trials, methods=run_names, rates=rates, reduction=args.reduction, aggregate=args.aggregate,
@@ -161,12 +162,14 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _estimate(trials, names, rates) -> None:
+def _estimate(trials, methods: int, rates, thresholds: int, *, figures: bool) -> None:
+    """Print how long the work will take, when that is more than a few seconds (before it starts)."""
     samples = sum(len(tr.t) for tr in trials)
-    factor = sum(1.0 if r == "data" else 6.0 for r in rates)
-    est = samples * len(names) * GRID_POINTS * factor * _SWEEP_S_PER_SAMPLE
+    runs = len(trials) * methods * len(rates) * thresholds
+    factor = sum(1.0 if r == "data" else 6.0 for r in rates)         # resampled: about 6 times the samples
+    est = runs * _RUN_S + samples * methods * thresholds * factor * _SAMPLE_S + figures * len(trials) * _FIGURE_S
     if est > _SAY_ESTIMATE_S:
-        print(f"benchmark: {len(trials)} trial(s), {samples} samples, {len(names)} method(s): about "
+        print(f"benchmark: {len(trials)} trial(s), {samples} samples, {methods} method(s): about "
               f"{format_duration(est)} (fewer --methods or trials shorten it)", file=sys.stderr, flush=True)
 
 
@@ -188,6 +191,7 @@ def _rest_k(args: argparse.Namespace, folder: Path) -> int:
     outputs = OutputSet(args.out, NAME)
     wanted = ["benchmark.csv", "summary.csv"] + ([] if args.no_figures else [f"{tr.name}.png" for tr in trials])
     outputs.check(wanted + (["vs_sim.csv", "vs_sim.png"] if args.vs_sim else []))
+    _estimate(trials, len(names), cfg.rates, 1, figures=not args.no_figures)
     fs = [tr.fs for tr in trials]
     print(f"benchmark: {len(trials)} trial(s) in {folder} ({sum(tr.slips for tr in trials)} with labelled slip), "
           f"{min(fs):.1f}-{max(fs):.1f} Hz, {len(names)} method(s) at rate(s) {', '.join(cfg.rates)}, "
