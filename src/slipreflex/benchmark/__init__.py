@@ -1,11 +1,18 @@
 """Detectors on recorded, labelled slip data: ``slipreflex benchmark`` (docs/benchmark.md).
 
 * :mod:`~slipreflex.benchmark.trials` - the recorded-trial format (one CSV per trial, ``t``,
-  channels, ``slip``, ``# layout``) and its reader;
+  channels, ``slip`` or ``# trial-label``, ``# layout``) and its bounded reader;
+* :mod:`~slipreflex.benchmark.sweep` - every detector at every threshold of a grid in the
+  data's units, alarms as episodes, the label tolerance; the energy statistic;
+* :mod:`~slipreflex.benchmark.learned` - the learned baseline (scikit-learn, the ``learn`` extra);
+* :mod:`~slipreflex.benchmark.protocol` - folds by trial, the operating point chosen on
+  training trials, intervals, the chance line, curves and their bootstrap areas;
+* :mod:`~slipreflex.benchmark.evaluate` - all of it over a data set (the command's default);
+* :mod:`~slipreflex.benchmark.optable` - ``operating_points.csv``, its table, ``curves.png``;
 * :mod:`~slipreflex.benchmark.scoring` - onset, detection, latency and false alarms of one
   method on one trial;
 * :mod:`~slipreflex.benchmark.run` - every registered method that applies, on every trial,
-  each with its threshold from the data before the onset;
+  each with its threshold from the data before the onset (``--protocol rest-k``);
 * :mod:`~slipreflex.benchmark.report` - ``benchmark.csv``, the per-method summary, figures;
 * :mod:`~slipreflex.benchmark.vs_sim` - the simulated tactile array held against the data.
 
