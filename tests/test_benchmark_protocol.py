@@ -132,6 +132,7 @@ def _optical_set(tmp_path):
     return folder
 
 
+@pytest.mark.slow
 def test_a_given_threshold_scores_a_constant_optical_trace_with_no_false_alarm(tmp_path, capsys):
     folder = _optical_set(tmp_path)
     out = tmp_path / "out"
@@ -185,6 +186,7 @@ def _touch_set(tmp_path, n=4):
     return folder
 
 
+@pytest.mark.slow
 def test_trial_level_labels_score_as_classification(tmp_path, capsys):
     folder = _touch_set(tmp_path)
     assert main(["benchmark", str(folder), "--methods", "energy", "fixed", "--bootstrap", "50", "--no-figures",
@@ -321,6 +323,7 @@ def test_a_symlink_planted_in_out_is_not_followed(tmp_path, capsys):
     assert victim.read_text() == "precious" and os.path.islink(out / "curves.png")
 
 
+@pytest.mark.slow
 def test_a_second_run_replaces_its_own_set(tmp_path):
     folder = _optical_set(tmp_path)
     out = tmp_path / "out"
