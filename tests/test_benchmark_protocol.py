@@ -424,3 +424,22 @@ def test_a_bad_threshold_is_one_line(tmp_path, capsys, given):
                  "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "--threshold" in err
+
+
+def test_ctrl_c_keeps_the_finished_methods(tmp_path, capsys, monkeypatch):
+    import slipreflex.benchmark.evaluate as ev_mod
+
+    folder = _optical_set(tmp_path)
+    real = ev_mod.prepare
+
+    def stop_at_dath(name, *args, **kwargs):
+        if name == "dath":
+            raise KeyboardInterrupt
+        return real(name, *args, **kwargs)
+
+    monkeypatch.setattr(ev_mod, "prepare", stop_at_dath)
+    out = tmp_path / "out"
+    assert main(["benchmark", str(folder), "--methods", "fixed", "dath", "--bootstrap", "0", "--out", str(out)]) == 130
+    with open(out / "operating_points.csv", newline="") as fh:
+        assert [r["method"] for r in csv.DictReader(fh)] == ["fixed"]
+    assert "interrupted; 1 finished method(s) kept" in capsys.readouterr().out

@@ -87,6 +87,7 @@ class Evaluation:
     positives: int = 0
     negative_min: float = 0.0
     rates_hz: tuple[float, float] = field(default=(np.nan, np.nan))
+    interrupted: bool = False
 
 
 def select_channels(trials: Sequence[RecordedTrial], names: Sequence[str] | None) -> list[RecordedTrial]:
@@ -224,6 +225,19 @@ def _learned_sweeps(trials, splits, cfg: ProtocolConfig, reduction: str, aggrega
     return per_fold
 
 
+def _sweeps(name: str, rate: str, trials, given: float | None, protocol: ProtocolConfig, reduction: str,
+            aggregate: str) -> tuple[list[Sweep], int | None]:
+    """Every trial's sweep of a registered method or the energy, and the given threshold's grid index."""
+    dets = [prepare(name, tr, rate, reduction=reduction, aggregate=aggregate) for tr in trials]
+    thr = grid(max(d.top for d in dets))
+    fix = None
+    if given is not None:
+        thr = np.unique(np.r_[thr, given])
+        fix = int(np.searchsorted(thr, given))
+    return sweeps_of(dets, trials, thr, refractory_s=protocol.refractory_s,
+                     tolerance_s=protocol.tolerance_s), fix
+
+
 def _same(a: Sequence[Sweep], b: Sequence[Sweep]) -> bool:
     return all(np.array_equal(x.thresholds, y.thresholds) and np.array_equal(x.hit, y.hit)
                and np.array_equal(x.false_alarms, y.false_alarms)
@@ -267,31 +281,30 @@ def evaluate(trials: Sequence[RecordedTrial], *, methods: Sequence[str] | None =
     points: list[OperatingPoint] = []
     seen: dict[str, list[Sweep]] = {}
     same: dict[str, str] = {}
-    for rate in rates:
-        for name in names:
-            if name in BASELINES and rate != "data":
-                continue
-            if on_method is not None:
-                on_method(f"{name}@{rate}")
-            fix = None
-            if name == LEARNED:
-                per_fold = _learned_sweeps(trials, splits, protocol, reduction, aggregate)
-                held_out = [per_fold[held_fold[i]][i] for i in held]
-            else:
-                dets = [prepare(name, tr, rate, reduction=reduction, aggregate=aggregate) for tr in trials]
-                thr = grid(max(d.top for d in dets))
-                if name in fixed:
-                    thr = np.unique(np.r_[thr, fixed[name]])
-                    fix = int(np.searchsorted(thr, fixed[name]))
-                sw = sweeps_of(dets, trials, thr, refractory_s=protocol.refractory_s, tolerance_s=protocol.tolerance_s)
-                twin = next((k for k, v in seen.items() if k.endswith("@" + rate) and _same(v, sw)), None)
-                if twin is not None and name not in fixed:
-                    same[f"{name}@{rate}"] = twin
+    interrupted = False
+    try:
+        for rate in rates:
+            for name in names:
+                if name in BASELINES and rate != "data":
                     continue
-                seen[f"{name}@{rate}"] = sw
-                per_fold = [sw] * len(splits)
-                held_out = [sw[i] for i in held]
-            points.append(operating_point(name, rate, kind, per_fold, held_out, splits, protocol, fixed=fix))
+                if on_method is not None:
+                    on_method(f"{name}@{rate}")
+                fix = None
+                if name == LEARNED:
+                    per_fold = _learned_sweeps(trials, splits, protocol, reduction, aggregate)
+                    held_out = [per_fold[held_fold[i]][i] for i in held]
+                else:
+                    sw, fix = _sweeps(name, rate, trials, fixed.get(name), protocol, reduction, aggregate)
+                    twin = next((k for k, v in seen.items() if k.endswith("@" + rate) and _same(v, sw)), None)
+                    if twin is not None and name not in fixed:
+                        same[f"{name}@{rate}"] = twin
+                        continue
+                    seen[f"{name}@{rate}"] = sw
+                    per_fold = [sw] * len(splits)
+                    held_out = [sw[i] for i in held]
+                points.append(operating_point(name, rate, kind, per_fold, held_out, splits, protocol, fixed=fix))
+    except KeyboardInterrupt:            # the methods finished so far are kept, marked partial
+        interrupted = True
     split = ("leave-one-trial-out" if protocol.test is None else
              f"declared split: {len(held)} held-out trial(s) ({', '.join(protocol.test)}), "
              f"{len(trials) - len(held)} training")
@@ -299,4 +312,4 @@ def evaluate(trials: Sequence[RecordedTrial], *, methods: Sequence[str] | None =
     return Evaluation(kind, points, skipped, same, fixed, protocol, split,
                       channel_note(trials, reduction, aggregate, channels_chosen), len(trials),
                       sum(tr.positive for tr in trials), points[0].negative_min if points else 0.0,
-                      (min(fs), max(fs)))
+                      (min(fs), max(fs)), interrupted)

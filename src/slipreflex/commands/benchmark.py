@@ -150,6 +150,11 @@ def run(args: argparse.Namespace) -> int:
                   f"{args.rest}, except those given by --threshold")
         print(format_points(ev))
         write_points(ev, staged / "operating_points.csv")
+        if ev.interrupted:
+            done = outputs.commit(staged)
+            print(f"benchmark: interrupted; {len(ev.points)} finished method(s) kept in {outputs.folder} "
+                  f"({', '.join(done)})")
+            return 130
         if not args.no_figures:
             plot_curves(ev, staged / "curves.png", title=Path(folder).name)
         if args.vs_sim:
