@@ -53,14 +53,14 @@ Examples
 from __future__ import annotations
 
 import functools
+from collections.abc import Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
-from typing import Mapping
 
 import numpy as np
 
-from ..hardware import SWT_FS
 from ..errors import ParameterError
+from ..hardware import SWT_FS
 from ..validation import integer, number, set_field
 from ._layout import KIND_SWT
 from ._validate import as_frames
@@ -111,7 +111,7 @@ def swt_persistence(reading: str) -> int:
     >>> swt_persistence("forever")
     Traceback (most recent call last):
     ...
-    slipreflex.errors.ParameterError: SWT-SD persistence reading: unknown 'forever' (known: within-window, after-crossing)
+    slipreflex.errors.ParameterError: SWT-SD persistence reading: unknown 'forever' (known: ...)
     """
     if not isinstance(reading, str) or reading not in SWT_PERSISTENCE:
         raise ParameterError(f"SWT-SD persistence reading: unknown {reading!r} "
