@@ -88,3 +88,12 @@ def test_the_default_reading_is_the_one_the_paper_reaction_times_support():
         miss[name] = sum(abs(medians[b] - PAPER_POUR_MS[b]) for b in PAPER_POUR_MS)
     other = next(n for n in SWT_PERSISTENCE if n != SWT_PERSISTENCE_DEFAULT)
     assert miss[SWT_PERSISTENCE_DEFAULT] < miss[other], miss
+
+
+def test_a_reading_keeps_its_time_when_the_benchmark_runs_swt_sd_at_a_data_rate():
+    from slipreflex.baselines import SWTSD
+    from slipreflex.benchmark.run import _scaled
+
+    after = SWTSD(threshold=0.1, speed=500.0, persist="after-crossing")
+    assert _scaled(after, 380.0, 60.0)["persist"] == 1                 # 21 ms at 60 Hz
+    assert _scaled(SWTSD(threshold=0.1, speed=500.0), 380.0, 60.0)["persist"] == 0
