@@ -18,10 +18,6 @@ from slipreflex.experiments import ReproduceConfig, method_context, run_reproduc
 from slipreflex.hardware import SLIP_FINGER
 from slipreflex.sim import HandParams, SlipSensorParams
 
-#: Grip (finger units) DATH added while nothing slipped, per trial, on the plant before the cuff's
-#: turn stopped moving the spot: 193-318 in every drop and pour cell.
-_FEEDING_PLANT_LEAST = 193.0
-
 
 def _dath_trace(experiment: str, bottle: str, trial: int):
     """One DATH trial on the nominal plant (no repeat-to-repeat variation): trace, p0, perturbation time."""
@@ -101,7 +97,7 @@ def test_dath_drop_on_dk_answered_as_fig10_and_never_dropped():
 @pytest.mark.slow
 def test_dath_adds_far_less_grip_without_slip_than_the_feeding_plant_on_tr_and_dk():
     """The grip DATH adds while nothing slips (mean per trial, nominal plant) in every TR and DK drop and pour
-    cell stays below 120 units, under two thirds of the least the feeding plant gave (193)."""
+    cell stays below 120 units; the plant on which the cuff's turn moved the spot gave 193-318 in every cell."""
     cfg = ReproduceConfig(trials=4, bottles=("TR", "DK"), methods=("dath", "fixed"), variations=False)
     res = run_reproduce(cfg, jobs=1, progress=False, plots=False)
     grip: dict[tuple, dict[int, float]] = defaultdict(dict)
@@ -111,6 +107,6 @@ def test_dath_adds_far_less_grip_without_slip_than_the_feeding_plant_on_tr_and_d
     for (experiment, bottle, method), per_trial in grip.items():
         mean = float(np.mean(list(per_trial.values())))
         if method == "dath":
-            assert mean < 120.0 < 2.0 * _FEEDING_PLANT_LEAST / 3.0, (experiment, bottle, mean)
+            assert mean < 120.0, (experiment, bottle, mean)
         else:
             assert mean < 30.0, (experiment, bottle, method, mean)
