@@ -18,9 +18,13 @@ import math
 import statistics
 
 from slipreflex import methods
+from slipreflex.baselines.swt import SWT_PERSIST, SWT_PERSISTENCE, SWT_PERSISTENCE_DEFAULT
 
-SETTINGS = (("default (k = 5, persist 8)", {}), ("k = 3", {"rest_k": 3.0}), ("k = 8", {"rest_k": 8.0}),
-            ("persist 7", {"swt_persist": 7}), ("persist 0", {"swt_persist": 0}))
+#: The default, the threshold's k either side, and every other reading of SWT-SD's persistence rule.
+SETTINGS = ((f"default (k = 5, {SWT_PERSISTENCE_DEFAULT}: persist {SWT_PERSIST})", {}),
+            ("k = 3", {"rest_k": 3.0}), ("k = 8", {"rest_k": 8.0}),
+            *((f"{name}: persist {n}", {"swt_persist": n}) for name, n in SWT_PERSISTENCE.items()
+              if name != SWT_PERSISTENCE_DEFAULT))
 
 
 def _median(values) -> str:

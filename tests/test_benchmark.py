@@ -229,7 +229,7 @@ def test_shipped_set_every_applicable_method_and_its_rates(tmp_path):
     assert fs == {("fixed", "data"): 60, ("fixed", "method"): 333, ("nmsd", "data"): 60, ("nmsd", "method"): 260,
                   ("swt", "data"): 60, ("swt", "method"): 380}
     swt = next(r for r in runs if r.method == "swt" and r.rate == "data")
-    assert swt.params["persist"] == 1                               # 21 ms at 60 Hz
+    assert swt.params["persist"] == 0                               # the default reading: no persistence, at any rate
     for r in runs:                                                   # every threshold from the span before any onset
         assert r.threshold > 0 and r.score.slips == trials[[t.name for t in trials].index(r.trial)].slips
 

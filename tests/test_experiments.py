@@ -9,6 +9,7 @@ import pytest
 
 from slipreflex import methods
 from slipreflex.baselines import NMSD, SWTSD
+from slipreflex.baselines.swt import SWT_PERSIST
 from slipreflex.chain import SlipReflex
 from slipreflex.errors import ParameterError
 from slipreflex.experiments import (
@@ -77,7 +78,7 @@ def test_the_runner_swaps_methods_by_name():
     assert isinstance(n, NMSD) and isinstance(s, SWTSD)
     assert (n.fs, s.fs) == (260.0, 380.0)
     assert n.params.speed == s.params.speed == closing_speed()
-    assert s.params.persist == 8 and _make("swt", 1.0, th, swt_persist=3).params.persist == 3
+    assert s.params.persist == SWT_PERSIST and _make("swt", 1.0, th, swt_persist=3).params.persist == 3
     with pytest.raises(ParameterError):
         _make("nope", 0.0, th)
 

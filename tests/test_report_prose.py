@@ -36,7 +36,8 @@ def test_prose_follows_the_options():
     assert "drop: 20 g" in text and "simulated 20 g drop" in text and "10 g" not in text
     assert "pour: 100 ml" in text
     default = " ".join(setup_lines(_result()) + discussion_text(_result()))
-    assert "(5 sd of the method's statistic" in default and "(21 ms)" in default and "simulated 10 g drop" in default
+    assert "(5 sd of the method's statistic" in default and "persistence 0 samples (0 ms)" in default
+    assert "simulated 10 g drop" in default and "decides at the crossing" in default and "to stay over" not in default
     assert "45 ms per detection" in default and "48 ms window" in default
 
 

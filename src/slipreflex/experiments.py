@@ -51,7 +51,7 @@ from .analysis.paper import BOTTLE_ORDER, bottle_key
 from .analysis.paper import EXPERIMENTS as PAPER_EXPERIMENTS
 from .analysis.trial import RESULT_COLUMNS, TrialStreams, analyse_trial
 from .baselines.calibration import REST_K
-from .baselines.swt import SWT_WINDOW
+from .baselines.swt import SWT_PERSIST
 from .errors import ParameterError
 from .grasping import check_run_grasp
 from .grid import Cell, grid_result, run_cells
@@ -119,8 +119,9 @@ class ReproduceConfig:
         thresholds (the rule's k, default ``REST_K`` = 5); for sensitivity
         studies, the same for every bottle.
     swt_persist : int
-        SWT-SD persistence after the crossing (samples, default ``SWT_WINDOW``,
-        8 samples = 21 ms at 380 Hz).
+        SWT-SD persistence after the crossing (samples, default ``SWT_PERSIST``,
+        0: the "within-window" reading; 8 samples = 21 ms at 380 Hz is the
+        "after-crossing" one, ``slipreflex.baselines.swt.SWT_PERSISTENCE``).
     variations : bool
         Each trial's plant varies from its seed as real repeats do
         (:mod:`slipreflex.sim.variations`); False: every repeat is the nominal plant.
@@ -161,7 +162,7 @@ class ReproduceConfig:
     after_s: float = 2.0
     calibration_s: float = 2.0
     rest_k: float = REST_K
-    swt_persist: int = SWT_WINDOW
+    swt_persist: int = SWT_PERSIST
     variations: bool = True
     independent_seeds: bool = False
     grasp_force_n: float = CONTACT_FORCE_N

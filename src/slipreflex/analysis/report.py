@@ -845,11 +845,14 @@ def _tactile_paragraph(d: _Rows) -> str:
         if (sub := [r for r in tac if r.method == m and r.experiment == e]))
     shape = " x ".join(map(str, hw.TACTILE_SHAPE))
     persist_ms = 1e3 * d.config.swt_persist / methods.get(methods.SWT).fs
+    persistence = (f"SWT-SD needs the level-{SWT_LEVEL} detail to stay over threshold for {persist_ms:.0f} ms "
+                   "after the crossing, so a slip that is over sooner, like the simulated drops, cannot "
+                   "trigger it. " if d.config.swt_persist else
+                   f"SWT-SD decides at the crossing of the level-{SWT_LEVEL} detail, whose 21 ms window "
+                   "already holds the change that follows (docs/method.md section 2.1). ")
     return (f"**NMSD and SWT-SD.** Both read the index fingertip's {shape} array with thresholds from "
             f"one rule ({d.config.rest_k:g} sd of the method's statistic at rest, the same for every "
-            f"bottle). {missed} (no command within {MAX_RESPONSE_S:g} s of the onset). SWT-SD needs the "
-            f"level-{SWT_LEVEL} detail to stay over threshold for {persist_ms:.0f} ms after the crossing, "
-            "so a slip that is over sooner, like the simulated drops, cannot trigger it. The paper "
+            f"bottle). {missed} (no command within {MAX_RESPONSE_S:g} s of the onset). {persistence}The paper "
             "gives no thresholds, wavelet or persistence rule for either method, so their absolute "
             "numbers depend on these choices (documented in docs/reproduce.md) more than on anything "
             "else.")

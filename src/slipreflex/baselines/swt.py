@@ -15,31 +15,51 @@ positive value). It is 0 until the window is full.
 
 A taxel is over threshold when ``|c_k| > threshold``; slip is declared on a
 taxel when it has been over threshold on the crossing sample and on the
-``persist = 8`` following samples (the change "persists for at least another
-21 ms"); the ON/OFF signal is the OR over the taxels. While ON, the hand is
-driven with the NMSD closing rule (:mod:`slipreflex.baselines.closing`, mode
-``"hold"``).
+``persist`` following samples; the ON/OFF signal is the OR over the taxels.
+While ON, the hand is driven with the NMSD closing rule
+(:mod:`slipreflex.baselines.closing`, mode ``"hold"``).
 
-The wavelet, the use of the first coefficient and the persistence count are
-our reading of Romeo et al.; the threshold comes from
+The paper (II-E) says slip "was considered to have occurred if the value of the
+third level detail coefficient crossed a threshold and movement would continue
+for at least another 21 ms (see [16])". That sentence has two readings, both
+kept, by name, in :data:`SWT_PERSISTENCE`:
+
+* ``"within-window"`` (``persist = 0``, the default): ``c_k`` is the level-3
+  detail at the *first* position of the 8-sample (21 ms) window, so it is known
+  only once the 21 ms after that position are in, and it crosses only if the
+  force kept changing through them (its older half against its newer half).
+  The continuing movement is the window itself, and the crossing is the
+  decision.
+* ``"after-crossing"`` (``persist = 8``): the coefficient must stay over the
+  threshold on the crossing sample and the 8 samples (21 ms) after it.
+
+The default is the reading whose pour reaction times lie nearer the paper's own
+(III-C: SWT-SD 86 ms on TR, 73 ms on DK; docs/method.md section 2 gives the
+numbers, ``tests/test_swt_persistence.py`` checks it). The wavelet, the use of
+the first coefficient and these readings are ours; the threshold comes from
 :func:`slipreflex.baselines.rest_threshold`, the same rule as for NMSD.
 
 Examples
 --------
 >>> import numpy as np
 >>> f = np.zeros((30, 4, 4)); f[10:, 1, 2] = -np.arange(20) * 0.05   # force falling
->>> on = swt_on(f, threshold=0.05)
+>>> on = swt_on(f, threshold=0.05)                        # the default reading, "within-window"
 >>> int(np.argmax(on)), bool(on[-1])
-(20, True)
+(12, True)
+>>> int(np.argmax(swt_on(f, threshold=0.05, persist="after-crossing")))
+20
 """
 
 from __future__ import annotations
 
 import functools
+from collections.abc import Mapping
 from dataclasses import dataclass
+from types import MappingProxyType
 
 import numpy as np
 
+from ..errors import ParameterError
 from ..hardware import SWT_FS
 from ..validation import integer, number, set_field
 from ._layout import KIND_SWT
@@ -48,8 +68,9 @@ from .closing import closing_commands
 from .shell import TactileParams, TactileReflex
 
 __all__ = ["SWTParams", "SWTSD", "swt_statistic", "swt_on", "swt_commands", "swt_kernel",
-           "swt_rest_statistic",
-           "SWT_WINDOW", "SWT_LEVEL", "SWT_WAVELET"]
+           "swt_rest_statistic", "swt_persistence",
+           "SWT_WINDOW", "SWT_LEVEL", "SWT_WAVELET", "SWT_PERSISTENCE", "SWT_PERSISTENCE_DEFAULT",
+           "SWT_PERSIST"]
 
 #: Moving-window length (samples): 21 ms at 380 Hz, as in the paper.
 SWT_WINDOW: int = 8
@@ -57,6 +78,45 @@ SWT_WINDOW: int = 8
 SWT_LEVEL: int = 3
 #: Mother wavelet (our choice; see the module docstring).
 SWT_WAVELET: str = "haar"
+#: The readings of the paper's persistence rule: samples the crossing must persist after the
+#: crossing sample (see the module docstring).
+SWT_PERSISTENCE: Mapping[str, int] = MappingProxyType({"within-window": 0, "after-crossing": SWT_WINDOW})
+#: The reading used unless another is asked for.
+SWT_PERSISTENCE_DEFAULT: str = "within-window"
+#: Its persistence in samples.
+SWT_PERSIST: int = SWT_PERSISTENCE[SWT_PERSISTENCE_DEFAULT]
+
+
+def swt_persistence(reading: str) -> int:
+    """The persistence (samples after the crossing) of one named reading of the paper's rule.
+
+    Parameters
+    ----------
+    reading : str
+        A key of :data:`SWT_PERSISTENCE`.
+
+    Returns
+    -------
+    int
+
+    Raises
+    ------
+    ParameterError
+        For a name that is not a reading, naming the known ones.
+
+    Examples
+    --------
+    >>> swt_persistence("after-crossing"), swt_persistence("within-window")
+    (8, 0)
+    >>> swt_persistence("forever")
+    Traceback (most recent call last):
+    ...
+    slipreflex.errors.ParameterError: SWT-SD persistence reading: unknown 'forever' (known: ...)
+    """
+    if not isinstance(reading, str) or reading not in SWT_PERSISTENCE:
+        raise ParameterError(f"SWT-SD persistence reading: unknown {reading!r} "
+                             f"(known: {', '.join(SWT_PERSISTENCE)})")
+    return SWT_PERSISTENCE[reading]
 
 
 @dataclass(frozen=True, slots=True)
@@ -68,9 +128,11 @@ class SWTParams(TactileParams):
 
     Parameters
     ----------
-    persist : int
-        Samples the crossing must persist after the crossing sample (>= 0);
-        8 samples = 21 ms at 380 Hz.
+    persist : int or str
+        Samples the crossing must persist after the crossing sample (>= 0),
+        or the name of a reading in :data:`SWT_PERSISTENCE` (stored as its
+        count). Default :data:`SWT_PERSIST` (0, ``"within-window"``); 8
+        samples = 21 ms at 380 Hz.
 
     Examples
     --------
@@ -78,14 +140,17 @@ class SWTParams(TactileParams):
     380.0
     >>> SWTParams(threshold=1.0, speed=500.0).closing.samples_per_close
     17
+    >>> SWTParams(threshold=0.1, speed=500.0, persist="after-crossing").persist
+    8
     """
 
     fs: float = SWT_FS
-    persist: int = SWT_WINDOW
+    persist: int = SWT_PERSIST
 
     def __post_init__(self) -> None:
         TactileParams.__post_init__(self)
-        set_field(self, "persist", integer("persist", self.persist, lo=0))
+        persist = swt_persistence(self.persist) if isinstance(self.persist, str) else self.persist
+        set_field(self, "persist", integer("persist", persist, lo=0))
 
 
 @functools.lru_cache(maxsize=8)
@@ -178,7 +243,7 @@ def swt_rest_statistic(frames, fs: float = SWT_FS) -> np.ndarray:
     return swt_statistic(frames)[SWT_WINDOW - 1:].ravel()
 
 
-def swt_on(frames, *, threshold: float, persist: int = SWT_WINDOW) -> np.ndarray:
+def swt_on(frames, *, threshold: float, persist: int | str = SWT_PERSIST) -> np.ndarray:
     """The ON/OFF slip signal: any taxel over threshold for ``persist + 1`` samples running.
 
     Parameters
@@ -187,8 +252,9 @@ def swt_on(frames, *, threshold: float, persist: int = SWT_WINDOW) -> np.ndarray
         Tactile forces (N).
     threshold : float
         Threshold on ``|c_k|`` (N).
-    persist : int
-        Samples the crossing must persist after the crossing sample.
+    persist : int or str
+        Samples the crossing must persist after the crossing sample, or a
+        reading's name (:data:`SWT_PERSISTENCE`).
 
     Returns
     -------
@@ -202,7 +268,7 @@ def swt_on(frames, *, threshold: float, persist: int = SWT_WINDOW) -> np.ndarray
     [10, 11, 12, 13, 14]
     """
     threshold = number("threshold", threshold, lo=0.0, lo_open=True)
-    persist = integer("persist", persist, lo=0)
+    persist = integer("persist", swt_persistence(persist) if isinstance(persist, str) else persist, lo=0)
     over = np.asarray(np.abs(swt_statistic(frames)) > threshold).reshape(len(np.asarray(frames)), -1)
     k = np.arange(over.shape[0])[:, None]
     last_below = np.maximum.accumulate(np.where(over, -1, k), axis=0)

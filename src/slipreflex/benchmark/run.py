@@ -144,7 +144,7 @@ class MethodRun:
     >>> from slipreflex.benchmark import read_folder, shipped_dataset
     >>> (r,) = run_trial(read_folder(shipped_dataset())[0], BenchmarkConfig(methods=("swt",), rates=("data",)))
     >>> r.key, r.params["persist"], len(r.t) == len(r.detections)
-    ('swt@data', 1, True)
+    ('swt@data', 0, True)
     """
 
     trial: str

@@ -102,14 +102,25 @@ class HandParams:
         How far (m) the slip sensor's spot moves over the bottle surface per
         position unit the middle fingertip advances into the wall (its
         cuff's compression and the wall's dent: in contact the digit turns
-        only as far as the wall yields). The distal segment turns ~180
-        degrees over 0..500 (0.0063 rad per unit). If the cuff pivots on a
-        stuck contact, the spot a distance ``e`` beside it moves by
-        ``e (1 / cos(theta) - 1)``, second order: 0. If the cuff's rounded
-        face (radius ~3 mm) rolls on the wall, the contact and the spot
-        advance by ``3 mm x 0.0063`` = 19 um per unit (the value used); a
-        cuff sliding as the tip sweeps moves it further (up to ~40 um).
-        Estimate from the finger's geometry; the study's range is 0-40 um.
+        only as far as the wall yields; the distal segment turns ~180
+        degrees over 0..500, 0.0063 rad per unit). The sensor looks at the
+        wall perpendicularly through the cuff's 3 mm gap (paper II-B, II-D).
+        While the cuff does not slide on the wall, the cuff's turn is a
+        rotation about a point of the wall's surface: about the stuck contact
+        if it pivots, about the instantaneous contact if its face rolls
+        (rolling without slip puts the instantaneous centre of rotation at
+        the contact point). A rotation ``omega`` about a point of the
+        surface moves the cuff's points on that surface normal to it, and the
+        sight line's turn shifts its foot by its height above the surface
+        (zero), so the spot's speed along the surface is zero to first order
+        in the turn, whatever the face's shape or the spot's offset ``e``
+        from the contact (the bottle's curvature adds ``e^2 / (2 R)`` per
+        radian, under 1 um per unit for ``e`` = 3 mm). Only sliding of the
+        cuff over the wall moves the spot at first order: 0 here (the cuff's
+        contact is stuck while the grip holds), up to ~40 um per unit in the
+        study if the cuff slides as the tip sweeps. Estimate from rigid-body
+        kinematics; an earlier 19 um took the rolling contact point's advance
+        (3 mm face radius x 0.0063) for the spot's.
     stall_force_n : float
         Normal force (N) at which a digit's motor stalls and stops advancing:
         the i-Limb's whole-hand grip is 100-136 N (Belter et al. 2013, J
@@ -161,7 +172,7 @@ class HandParams:
     cuff_normal_stiffness_n_m: float = 20000.0
     cuff_shear_stiffness_n_m: float = 10000.0
     cuff_shear_damping_n_s_m: float = 1.0
-    spot_travel_per_unit_m: float = 19e-6
+    spot_travel_per_unit_m: float = 0.0
     stall_force_n: float = 25.0
     motor_droop: float = 1.0
     motor_vibration_n: float = 0.015
@@ -212,18 +223,24 @@ class SlipSensorParams:
         OPR5005's emitter/detector overlap at 3 mm.
     gap_dent_fraction : float
         Fraction of the wall's dent under the cuff by which the gap under
-        the sensor's spot opens. The spot sits ``e`` ~ 3 mm beside the cuff's
-        contact (half the OPR5005's 5 mm package plus the cuff's rim). The
-        dent is mostly the ring's three-lobe ovalization (the wall's 600 N/m;
-        a point load's local indentation of the shell, Reissner's ``4 E t^2
-        / (R sqrt(3 (1 - nu^2)))`` ~ 12.6 kN/m for 0.25 mm PET, is ~5 % of
-        it). If ``e`` runs round the circumference the spot stays on the
-        same lobe, ``cos(3 e / R)`` = 0.96 of the ovalization, and misses
-        ``1 - exp(-(e / sqrt(R t))^2)`` = 0.66 of the local part: the gap
-        opens by 0.07 of the dent; if ``e`` runs along the axis the lobe
-        does not change over 3 mm and only the local part shows: 0.03. The
-        paper does not say which, so 0.05 (estimate); 0 when the spot sits
-        over the contact.
+        the sensor's spot opens. The sensor sits inside the cuff, centred
+        behind its window (paper Fig. 2B). The cuff's face is flat and the
+        bottle a cylinder, so the face touches the wall along the bottle's
+        generatrix through the face's centre: on the window's rim above and
+        below the spot, ``e`` ~ 3 mm each way along the axis (half the
+        OPR5005's 5 mm package plus the rim). The dent is mostly the ring's
+        three-lobe ovalization (the wall's 600 N/m), which does not change
+        over 3 mm along the axis; the rest is the shell's local indentation
+        under each rim point (Reissner's ``4 E t^2 / (R sqrt(3 (1 - nu^2)))``
+        ~ 12.6 kN/m for 0.25 mm PET, ~5 % of the dent), decaying as
+        ``exp(-(d / sqrt(R t))^2)`` with ``sqrt(R t)`` ~ 2.85 mm. Each rim
+        point carries half the load; under a rim point the local dent is
+        ``(1 + exp(-(2 e / sqrt(R t))^2)) / 2`` = 0.506 of one point load's,
+        at the spot ``exp(-(e / sqrt(R t))^2)`` = 0.330: the gap opens by
+        0.05 x 0.176 = 0.0085 of the dent (estimate from the shell's two
+        length scales; an earlier 0.05 put the spot beside a one-sided
+        contact, which a flat face on a cylinder does not make).
+        0 when the spot sits on the contact.
 
     Examples
     --------
@@ -237,7 +254,7 @@ class SlipSensorParams:
     noise_v: float = 1.5e-3
     gap_m: float = hw.SLIP_SENSOR_GAP_M
     spot_sigma_m: float = 0.8e-3
-    gap_dent_fraction: float = 0.05
+    gap_dent_fraction: float = 0.0085
 
     def __post_init__(self) -> None:
         _validate(self, zero_ok=("noise_v", "gap_dent_fraction"))

@@ -245,14 +245,16 @@ UNCERTAIN: Mapping[str, UncertainConstant] = MappingProxyType({c.name: c for c i
     _c("cuff_shear_stiffness", "N/m", _H.cuff_shear_stiffness_n_m, 4000.0, 30000.0, "loguniform",
        "estimate: bending of the middle digit along the bottle axis", "hand.cuff_shear_stiffness_n_m"),
     _c("spot_travel_per_unit", "m", _H.spot_travel_per_unit_m, 0.0, 40e-6, "uniform",
-       "absent (0: the cuff pivots on a stuck contact, the spot beside it moves at second order) to 40 um; the "
-       "distal segment turns 0.0063 rad per unit of the tip's advance into the wall: 19 um if the cuff's ~3 mm "
-       "rounded face rolls, more if it slides (estimate from the finger's geometry)",
+       "absent (0, nominal: a cuff turning about a point of the wall, pivoting on its stuck contact or rolling "
+       "without slip, moves the spot under its perpendicular sight line at second order only; rigid-body "
+       "kinematics) to 40 um: a cuff sliding over the wall as the distal segment turns 0.0063 rad per unit of the "
+       "tip's advance (estimate from the finger's geometry)",
        "hand.spot_travel_per_unit_m"),
     _c("gap_dent_fraction", "1", _S.gap_dent_fraction, 0.0, 0.15, "uniform",
-       "absent (0: the spot over the cuff's contact) to 0.15; the spot ~3 mm (1-6 mm) beside the contact; the dent "
-       "is mostly the ring's three-lobe ovalization plus a ~5 % local indentation decaying over sqrt(R t) ~ 2.9 mm: "
-       "0.03 (spot along the axis) to 0.07 (round the circumference), twice that for a spot 6 mm off, estimate",
+       "absent (0: the spot on the cuff's contact) to 0.15; the dent is mostly the ring's three-lobe ovalization "
+       "plus a ~5 % local indentation decaying over sqrt(R t) ~ 2.85 mm; nominal 0.0085: a flat cuff face on the "
+       "cylinder touches on the window's rim ~3 mm above and below the spot, which is 0.176 of the local part "
+       "less dented; 0.03-0.07 for a spot 3 mm beside a one-sided contact, twice that 6 mm off, estimate",
        "slip_sensor.gap_dent_fraction"),
     _c("pad_shear_stiffness", "N/m", _H.pad_shear_stiffness_n_m, 1000.0, 4000.0, "loguniform",
        "estimate: G A / h with G 0.1-0.4 MPa, 20 mm^2, 2 mm", "hand.pad_shear_stiffness_n_m"),
