@@ -1072,6 +1072,7 @@ class _Loop:
     def deliver(self, r: SampleRecord | None, resend: bool = False) -> None:
         """Send the grip owed as closing time: CLOSE now, or a closing in progress made longer."""
         now = self.clock()
+        self.stall_check(now)  # a finger the hand already reports stalled gets no grip counted
         sent = False
         for i, (fingers, _) in enumerate(self.grip.groups):
             g = self.owed[i]

@@ -399,4 +399,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"recorded to {recorder.path}" + (" (incomplete)" if res.recording_error else ""))
     if res.recording_error:
         print(f"slipreflex run: warning: {res.recording_error}", file=sys.stderr)
+    if res.error:  # the method failed: the fingers were held, the summary and recording are written
+        print(f"slipreflex run: error: {res.error}", file=sys.stderr)
+        return 2
     return 0

@@ -36,6 +36,7 @@ from ..experiments import BOTTLE_NAMES, EXPERIMENTS
 from ..experiments import DEFAULT_SEED as seed
 from ..paths import OutputSet
 from ..study import DEFAULT_PLANTS, DEFAULT_TRIALS, DESIGNS, StudyConfig, read_parts, run_study
+from ..study.runner import probe_scheduler
 from ..study.analyse import claim_fractions, plant_table, pooled_scan, write_outputs
 from ..validation import within
 
@@ -132,6 +133,8 @@ def run(args: argparse.Namespace) -> int:
                          ranges=args.ranges, calibrate=not args.no_calibration)
     if args.out.is_dir():   # a file of the user's where the study writes its tables: refused before any work
         OutputSet(args.out, NAME).check(OUTPUT_NAMES)
+    if args.scheduler:      # an address that is not a Dask scheduler costs one line, before the folder is touched
+        probe_scheduler(args.scheduler)
     try:
         result = run_study(config, args.out, workers=args.workers, scheduler=args.scheduler,
                            progress=not args.no_progress, dashboard=args.dashboard)
