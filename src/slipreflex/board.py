@@ -898,9 +898,9 @@ def write_board_outputs(prefix, events, counts, commands) -> tuple[Any, Any]:
     events = np.asarray(events, dtype=np.int64)
     counts = np.asarray(counts, dtype=np.int64)
     samples_path, windows_path = Path(f"{prefix}.samples.csv"), Path(f"{prefix}.windows.csv")
-    write_columns(samples_path, {"sample": np.arange(events.size), "event": events})
+    write_columns(samples_path, {"sample": np.arange(events.size), "event": events}, replace=False)
     write_columns(windows_path, {"window": np.arange(counts.size), "v": counts,
-                                 "command": np.asarray(commands, dtype=np.int64)})
+                                 "command": np.asarray(commands, dtype=np.int64)}, replace=False)
     return samples_path, windows_path
 
 
