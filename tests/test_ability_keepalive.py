@@ -13,8 +13,8 @@ from slipreflex.devices import ability as ab
 from slipreflex.devices.simrig import SimRig
 from slipreflex.devices.virtual import VirtualDevices
 from slipreflex.errors import ParameterError
-from slipreflex.hardware import FINGER_SPEED_UNITS_S, Finger
 from slipreflex.hands import open_hand
+from slipreflex.hardware import FINGER_SPEED_UNITS_S, Finger
 
 
 class _Rig:

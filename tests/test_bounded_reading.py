@@ -18,6 +18,7 @@ from slipreflex.errors import DataError
 from slipreflex.recording import read_recording
 from slipreflex.validation import LIMITS
 
+
 def _string(s: bytes) -> bytes:
     return struct.pack("<I", len(s)) + s
 
@@ -31,7 +32,8 @@ def _header() -> bytes:
 
 
 def _chunk(inner_size: int, crc: int, compression: bytes, payload: bytes) -> bytes:
-    body = struct.pack("<QQQI", 0, 0, inner_size, crc) + _string(compression) + struct.pack("<Q", len(payload)) + payload
+    body = (struct.pack("<QQQI", 0, 0, inner_size, crc) + _string(compression)
+            + struct.pack("<Q", len(payload)) + payload)
     return _record(0x06, body)
 
 

@@ -687,7 +687,7 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
     ref_ok = ref0 is not None
     if p0 is None and not ref_ok:
         raise ParameterError("run_loop: give p0 (the reflex has no initial command)")
-    given = start_positions(p0 if p0 is not None else ref0, fingers)  # checked before anything is sent
+    given = start_positions(p0 if p0 is not None else float(ref0 or 0.0), fingers)  # checked before anything is sent
     _warm_up(reflex)
     finger_offsets(reflex, fingers)
     try:
@@ -1243,12 +1243,12 @@ class _Loop:
     def stall_check(self, now: float) -> None:
         """Fingers the hand newly reports stalled (optional ``Hand.stalled()``): a fault each, and
         the rest of a closing in progress is not counted as grip."""
-        report = getattr(self.hand, "stalled", None)
+        report: Callable[[], Any] | None = getattr(self.hand, "stalled", None)
         if not callable(report):
             return
         try:
             stalled = {Finger(f).name.lower() for f in report()}
-        except (DeviceError, ValueError):
+        except (DeviceError, ValueError, TypeError):
             return
         for name in sorted(stalled - set(self.res.stalled)):
             self.res.stalled.append(name)

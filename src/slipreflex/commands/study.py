@@ -36,8 +36,8 @@ from ..experiments import BOTTLE_NAMES, EXPERIMENTS
 from ..experiments import DEFAULT_SEED as seed
 from ..paths import OutputSet
 from ..study import DEFAULT_PLANTS, DEFAULT_TRIALS, DESIGNS, StudyConfig, read_parts, run_study
-from ..study.runner import probe_scheduler
 from ..study.analyse import claim_fractions, plant_table, pooled_scan, write_outputs
+from ..study.runner import probe_scheduler
 from ..validation import within
 
 NAME = "study"
