@@ -196,8 +196,9 @@ def test_a_plugin_command_adds_at_most_one_finger_travel(plugin):
         assert res.grip_added["middle"] <= TRAVEL
 
 
-def test_grip_never_exceeds_one_travel_above_the_start():
-    g = Grip(-1e6, TRIPOD)
+def test_grip_never_exceeds_its_ceiling_and_has_none_unless_given():
+    assert Grip(0.0, TRIPOD).rise(600.0) == [600.0]  # the simulator's loops: as their compiled twin
+    g = Grip(-1e6, TRIPOD, ceiling=-1e6 + TRAVEL)
     assert g.rise(1e9) == [TRAVEL] and g.rise(2e9) == [0.0]
 
 

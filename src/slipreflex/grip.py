@@ -112,9 +112,10 @@ class Grip:
         ``offset`` units further at the first command (the position rule's
         ``command + offset``).
     ceiling : float, optional
-        The highest level any group is taken to (default: ``start`` plus one whole
-        finger travel, :data:`TRAVEL`): whatever a reflex commands (1e9, a start of
-        -1e6, an offset of 1e7), no group gets more than that much grip in a run.
+        The highest level any group is taken to (the real-rig loop gives ``start`` plus
+        one whole finger travel, :data:`TRAVEL`: whatever a reflex commands, 1e9, a
+        start of -1e6, an offset of 1e7, no finger gets more than that much grip in a
+        run). None: no ceiling (the simulator's loops, whose compiled twin has none).
 
     Attributes
     ----------
@@ -131,7 +132,7 @@ class Grip:
     >>> g = Grip(100.0, TRIPOD, {Finger.MIDDLE: 20.0})
     >>> g.rise(110.0), g.rise(115.0), g.added
     ([10.0, 30.0], [5.0, 5.0], [15.0, 35.0])
-    >>> Grip(100.0, TRIPOD).rise(1e9)        # never more than one finger travel
+    >>> Grip(100.0, TRIPOD, ceiling=100.0 + TRAVEL).rise(1e9)   # never more than one finger travel
     [500.0]
     """
 
@@ -142,8 +143,7 @@ class Grip:
         self.groups = finger_groups(fingers, offsets)
         self.levels = [float(start)] * len(self.groups)
         self.added = [0.0] * len(self.groups)
-        top = float(start) + TRAVEL
-        self.ceiling = top if ceiling is None or not math.isfinite(ceiling) else min(float(ceiling), top)
+        self.ceiling = math.inf if ceiling is None else float(ceiling)
 
     def rise(self, command: float) -> list[float]:
         """Grip (units, >= 0) each group is to add for a new ``command``.

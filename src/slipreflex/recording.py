@@ -783,6 +783,9 @@ def _chunk_records(data: bytes, pos: int, end: int, budget: _Budget) -> tuple[li
         return None, f"chunk decompresses to {'more' if len(inner) > size else 'less'} than its declared {size} bytes"
     if crc and zlib.crc32(inner) != crc:
         return None, "chunk CRC does not match"
+    why = _inner_layout(inner)
+    if why:  # e.g. megabytes of zeros: millions of empty records, never handed to the parser
+        return None, why
     out: list[Any] = []
     try:
         for r in StreamReader(io.BytesIO(inner), skip_magic=True, validate_crcs=True).records:
@@ -794,6 +797,23 @@ def _chunk_records(data: bytes, pos: int, end: int, budget: _Budget) -> tuple[li
     except Exception as err:  # noqa: BLE001 - a record inside the chunk is damaged
         return None, f"{type(err).__name__}: {err}"[:120]
     return out, ""
+
+
+#: What a chunk may hold (MCAP spec, Chunk): schemas, channels and messages.
+_IN_CHUNK = frozenset((0x03, 0x04, 0x05))
+
+
+def _inner_layout(inner: bytes) -> str:
+    """Why the records inside a chunk are not a chunk's (empty when they are): each must be a
+    schema, a channel or a message, and together fill the chunk exactly."""
+    q, n = 0, len(inner)
+    while q < n:
+        if q + _RECORD_HEAD > n:
+            return "a record inside the chunk is cut"
+        if inner[q] not in _IN_CHUNK:
+            return f"record type 0x{inner[q]:02x} inside a chunk"
+        q += _RECORD_HEAD + int.from_bytes(inner[q + 1:q + _RECORD_HEAD], "little")
+    return "" if q == n else "a record inside the chunk runs past its end"
 
 
 def _parse_record(data: bytes, pos: int, budget: _Budget) -> tuple[int, list[Any] | None, str]:

@@ -80,7 +80,7 @@ from typing import Any
 import numpy as np
 
 from .errors import DeviceError, ParameterError
-from .grip import FINGER_SPEED_UNITS_S, Grip, span
+from .grip import FINGER_SPEED_UNITS_S, TRAVEL, Grip, span
 from .hardware import FINGER_MAX, FINGER_MIN, SLIP_FINGER, THUMB_ROTATOR_MAX, TRIPOD, Finger
 from .interfaces import DaqSample, Hand, Reflex, SampleSource
 from .validation import number
@@ -864,7 +864,7 @@ class _Loop:
         # reflex's finger_offsets (authors-gui: middle + 20) are that group's extra first rise
         self.offsets = finger_offsets(reflex, self.fingers)
         # no group ever gets more than one finger travel above the grasp, whatever the command says
-        self.grip = Grip(ref0, self.fingers, self.offsets)
+        self.grip = Grip(ref0, self.fingers, self.offsets, ceiling=ref0 + TRAVEL)
         self.speed = FINGER_SPEED_UNITS_S
         self.owed = [0.0] * len(self.grip.groups)  # grip not yet sent (stale, a cut closing, a lost port)
         self.until: list[float | None] = [None] * len(self.grip.groups)  # clock time each closing ends
