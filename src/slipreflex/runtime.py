@@ -1054,7 +1054,8 @@ class _Loop:
             self.fault("command-rejected", str(err), "no grip added; fingers keep what they hold")
             return
         r.grip = {f: g for (fs, _), g in zip(self.grip.groups, rises) for f in fs}
-        if cmd >= self.top and self.res.saturated_at is None:
+        at_top = cmd >= self.top or any(level >= self.grip.ceiling for level in self.grip.levels)  # an offset's too
+        if at_top and self.res.saturated_at is None:
             self.res.saturated_at = r.sample.t
             self.fault("mpi-saturated", f"the reflex's command reached its ceiling {self.top:g} at "
                        f"t={r.sample.t:.3f} s", "it adds no grip after that; later slips cannot be answered")
