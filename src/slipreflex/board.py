@@ -856,10 +856,10 @@ def read_adc_csv(path) -> np.ndarray:
 
     path = Path(path)
     try:
-        with path.open(newline="") as fh:
+        with path.open(newline="", encoding="utf-8-sig") as fh:  # a byte order mark is not a column name
             rows = [(i + 1, [c.strip() for c in row]) for i, row in enumerate(csv.reader(fh))
                     if any(c.strip() for c in row) and not row[0].lstrip().startswith("#")]
-    except (OSError, UnicodeDecodeError) as err:
+    except (OSError, UnicodeDecodeError, csv.Error) as err:
         raise DataError(f"{path}: cannot read: {getattr(err, 'strerror', None) or err}") from None
     if not rows or "adc" not in rows[0][1]:
         raise DataError(f"{path}, line {rows[0][0] if rows else 1}: no column 'adc' "
@@ -898,9 +898,9 @@ def write_board_outputs(prefix, events, counts, commands) -> tuple[Any, Any]:
     events = np.asarray(events, dtype=np.int64)
     counts = np.asarray(counts, dtype=np.int64)
     samples_path, windows_path = Path(f"{prefix}.samples.csv"), Path(f"{prefix}.windows.csv")
-    write_columns(samples_path, {"sample": np.arange(events.size), "event": events})
+    write_columns(samples_path, {"sample": np.arange(events.size), "event": events}, replace=False)
     write_columns(windows_path, {"window": np.arange(counts.size), "v": counts,
-                                 "command": np.asarray(commands, dtype=np.int64)})
+                                 "command": np.asarray(commands, dtype=np.int64)}, replace=False)
     return samples_path, windows_path
 
 

@@ -229,7 +229,10 @@ def read_recording(path: str | os.PathLike, fs: float | None = None) -> Recordin
             if not lines and header is None:
                 _preamble_line(path, line_no, line, preamble)
             continue
-        row = [c.strip() for c in next(csv.reader([line]), [])]
+        try:
+            row = [c.strip() for c in next(csv.reader([line]), [])]
+        except csv.Error as err:  # a cell over the csv module's field limit, a stray NUL...
+            raise DataError(f"{path}, line {line_no}: not a CSV row ({err})") from None
         if not any(row) or row[0].startswith(PREAMBLE_PREFIX):
             continue
         if header is None:
@@ -276,7 +279,8 @@ def _lines(path: Path):
     limit = int(LIMITS["csv_line_bytes"].hi)
     line_no = 0
     try:
-        with path.open(newline="", encoding="utf-8") as fh:
+        # utf-8-sig: a byte order mark (as spreadsheet programs write) is read, not taken for a column name
+        with path.open(newline="", encoding="utf-8-sig") as fh:
             while True:
                 line = fh.readline(limit + 1)
                 if not line:

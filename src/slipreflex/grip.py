@@ -37,9 +37,12 @@ import math
 from collections.abc import Iterable, Mapping
 
 from .errors import ParameterError
-from .hardware import FINGER_SPEED_UNITS_S, Finger
+from .hardware import FINGER_MAX, FINGER_MIN, FINGER_SPEED_UNITS_S, Finger
 
-__all__ = ["Grip", "span", "finger_groups", "FINGER_SPEED_UNITS_S"]
+__all__ = ["Grip", "span", "finger_groups", "FINGER_SPEED_UNITS_S", "TRAVEL"]
+
+#: One whole finger travel (units): the most grip a run adds to a finger, whatever the reflex says.
+TRAVEL: float = float(FINGER_MAX - FINGER_MIN)
 
 
 def finger_groups(fingers: Iterable[Finger], offsets: Mapping[Finger, float] | None = None
@@ -108,6 +111,11 @@ class Grip:
         A reflex's declared ``finger_offsets``: that finger's group closes
         ``offset`` units further at the first command (the position rule's
         ``command + offset``).
+    ceiling : float, optional
+        The highest level any group is taken to (the real-rig loop gives ``start`` plus
+        one whole finger travel, :data:`TRAVEL`: whatever a reflex commands, 1e9, a
+        start of -1e6, an offset of 1e7, no finger gets more than that much grip in a
+        run). None: no ceiling (the simulator's loops, whose compiled twin has none).
 
     Attributes
     ----------
@@ -124,15 +132,18 @@ class Grip:
     >>> g = Grip(100.0, TRIPOD, {Finger.MIDDLE: 20.0})
     >>> g.rise(110.0), g.rise(115.0), g.added
     ([10.0, 30.0], [5.0, 5.0], [15.0, 35.0])
+    >>> Grip(100.0, TRIPOD, ceiling=100.0 + TRAVEL).rise(1e9)   # never more than one finger travel
+    [500.0]
     """
 
     def __init__(self, start: float, fingers: Iterable[Finger],
-                 offsets: Mapping[Finger, float] | None = None) -> None:
+                 offsets: Mapping[Finger, float] | None = None, ceiling: float | None = None) -> None:
         if isinstance(start, bool) or not isinstance(start, (int, float)) or not math.isfinite(start):
             raise ParameterError(f"grip: the reflex's start must be a finite number, got {start!r}")
         self.groups = finger_groups(fingers, offsets)
         self.levels = [float(start)] * len(self.groups)
         self.added = [0.0] * len(self.groups)
+        self.ceiling = math.inf if ceiling is None else float(ceiling)
 
     def rise(self, command: float) -> list[float]:
         """Grip (units, >= 0) each group is to add for a new ``command``.
@@ -154,7 +165,7 @@ class Grip:
             raise ParameterError(f"grip: the reflex's command must be a finite number, got {command!r}")
         out = []
         for i, (_, off) in enumerate(self.groups):
-            want = command + off
+            want = min(command + off, self.ceiling)
             g = want - self.levels[i] if want > self.levels[i] else 0.0
             if g > 0.0:
                 self.levels[i] = want

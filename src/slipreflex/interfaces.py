@@ -156,6 +156,11 @@ class Hand(Protocol):
     (:mod:`slipreflex.grip`); where ``positions`` reports a finger, the loops
     use it as the reflex's measured position and its start.
 
+    Two optional methods the real-time loop uses where a hand has them:
+    ``reflex_running(bool)`` (the driver's guard: no position frame while a reflex
+    runs) and ``stalled()`` (the fingers the hand reports stalled: a fault, and grip
+    sent to them is not counted as added).
+
     Examples
     --------
     >>> class Still:

@@ -29,6 +29,7 @@ import os
 import shutil
 import stat
 import tempfile
+import time
 import tomllib
 from collections.abc import Iterable, Iterator, Sequence
 from pathlib import Path
@@ -38,8 +39,8 @@ from .errors import ParameterError
 from .interrupts import signals_ignored
 from .validation import LIMITS
 
-__all__ = ["output_dir", "create_new", "publish", "new_file", "unique_name", "OutputSet", "MANIFEST",
-           "read_capped", "read_text", "read_toml", "MAX_TEXT_BYTES"]
+__all__ = ["output_dir", "create_new", "publish", "new_file", "unique_name", "unique_prefix", "OutputSet",
+           "MANIFEST", "read_capped", "read_text", "read_toml", "MAX_TEXT_BYTES"]
 
 
 def output_dir(path: str | os.PathLike, option: str = "--out") -> Path:
@@ -238,6 +239,26 @@ def unique_name(folder: str | os.PathLike, stem: str, suffix: str, *, also: Sequ
     raise AssertionError("unreachable")  # pragma: no cover
 
 
+def unique_prefix(prefix: str | os.PathLike, suffixes: Sequence[str]) -> Path:
+    """``prefix``, or ``prefix-2``, ``prefix-3``...: the first for which every ``prefix + suffix``
+    is free (nothing, not even a dangling symlink, has the name). For a command's several files
+    that belong together (``NAME.samples.csv`` and ``NAME.windows.csv``): never a mix of runs.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp()); _ = (d / "run.windows.csv").write_text("")
+    >>> unique_prefix(d / "run", [".samples.csv", ".windows.csv"]).name
+    'run-2'
+    """
+    prefix = Path(prefix)
+    for k in itertools.count(1):
+        name = prefix if k == 1 else prefix.with_name(f"{prefix.name}-{k}")
+        if not any(os.path.lexists(f"{name}{x}") for x in suffixes):
+            return name
+    raise AssertionError("unreachable")  # pragma: no cover
+
+
 #: Name of the file in which a command lists the outputs it wrote into a folder.
 MANIFEST: str = ".slipreflex-outputs.json"
 
@@ -251,7 +272,15 @@ class OutputSet:
     ones renamed into place, so the folder never mixes two runs. A stopped write
     (:meth:`abort`, also on an error) leaves the previous set untouched. A name the
     command would write that exists but no manifest of this command lists (the user's
-    own file) is refused before any work (:meth:`check`).
+    own file) is refused before any work (:meth:`check`), and so is a manifest name that is
+    not a regular file. Nothing is followed: the staged files are renamed into place, which
+    replaces a name, never what a symlink of that name points to.
+
+    One process at a time: :meth:`claim` takes the folder's lock (``flock`` on the folder) before any work
+    and refuses, in one line, while another command holds it; :meth:`commit` takes it too
+    (waiting for it) if the caller did not. When the swap fails half-way (no space for the
+    manifest, no inodes left), it is rolled back: the new files are removed and the previous
+    set put back as it was.
 
     Parameters
     ----------
@@ -275,9 +304,62 @@ class OutputSet:
     """
 
     def __init__(self, folder: str | os.PathLike, command: str, option: str = "--out") -> None:
+        self._lock_fd: int | None = None
         self.folder = output_dir(folder, option)
         self.command = command
         self.option = option
+        manifest = self.folder / MANIFEST
+        if os.path.lexists(manifest) and not (manifest.is_file() and not manifest.is_symlink()):
+            raise ParameterError(f"{option} {self.folder}: {MANIFEST} is not a regular file; slipreflex keeps "
+                                 f"its list of outputs there (move it or choose another {option})")
+
+    def claim(self, wait: float = 0.0) -> None:
+        """Take the folder's lock for this process (before any work); a no-op if held already.
+
+        Raises
+        ------
+        ParameterError
+            Another process holds it for longer than ``wait`` seconds.
+
+        Examples
+        --------
+        >>> import tempfile
+        >>> out = OutputSet(tempfile.mkdtemp(), "demo"); out.claim(); out.release()
+        """
+        import fcntl  # deferred: optional extra (POSIX only)
+
+        if self._lock_fd is not None:
+            return
+        # the folder itself is the lock (flock on its descriptor): no lock file to leave behind
+        fd = os.open(self.folder, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0) | getattr(os, "O_CLOEXEC", 0))
+        deadline = time.monotonic() + wait
+        while True:
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                break
+            except BlockingIOError:
+                if time.monotonic() >= deadline:
+                    os.close(fd)
+                    raise ParameterError(f"{self.option} {self.folder}: another slipreflex command is writing "
+                                         f"its outputs there; wait for it or choose another {self.option}") from None
+                time.sleep(0.05)
+        self._lock_fd = fd
+
+    def __del__(self) -> None:  # a command that claimed and then failed still lets the folder go
+        if getattr(self, "_lock_fd", None) is not None:
+            self.release()
+
+    def release(self) -> None:
+        """Give the folder's lock back (closing the file releases it).
+
+        Examples
+        --------
+        >>> import tempfile
+        >>> OutputSet(tempfile.mkdtemp(), "demo").release()
+        """
+        if self._lock_fd is not None:
+            os.close(self._lock_fd)
+            self._lock_fd = None
 
     def owned(self) -> list[str]:
         """Names the previous run of this command wrote here (from the manifest; [] if none).
@@ -349,23 +431,58 @@ class OutputSet:
         """
 
         staged = Path(staged)
-        names = sorted(p.name for p in staged.iterdir())
-        self.check(names)  # a file the user put here meanwhile is still not ours to replace
-        with signals_ignored():
-            old = Path(tempfile.mkdtemp(dir=self.folder, prefix=f".{self.command}-old-"))
-            try:
-                for name in self.owned():
-                    if os.path.lexists(self.folder / name):
-                        os.rename(self.folder / name, old / name)
-                with new_file(self.folder / MANIFEST, replace=True) as fh:
-                    json.dump({"command": self.command, "files": names}, fh, indent=1)
-                    fh.write("\n")
-                for name in names:
-                    os.rename(staged / name, self.folder / name)
-            finally:
-                shutil.rmtree(old, ignore_errors=True)
-                shutil.rmtree(staged, ignore_errors=True)
+        held = self._lock_fd is not None
+        self.claim(wait=_COMMIT_WAIT_S)  # two commits into one folder never interleave
+        try:
+            names = sorted(p.name for p in staged.iterdir())
+            self.check(names)  # a file the user put here meanwhile is still not ours to replace
+            with signals_ignored():
+                self._swap(staged, names)
+        finally:
+            if not held:
+                self.release()
         return names
+
+    def _swap(self, staged: Path, names: list[str]) -> None:
+        """Previous set aside, manifest, new set in; on any failure the previous set comes back."""
+        old = Path(tempfile.mkdtemp(dir=self.folder, prefix=f".{self.command}-old-"))
+        moved: list[str] = []
+        placed: list[str] = []
+        manifest_old = old / MANIFEST
+        had_manifest = os.path.lexists(self.folder / MANIFEST)
+        try:
+            if had_manifest:
+                shutil.copy2(self.folder / MANIFEST, manifest_old, follow_symlinks=False)
+            for name in self.owned():
+                if os.path.lexists(self.folder / name):
+                    os.rename(self.folder / name, old / name)
+                    moved.append(name)
+            with new_file(self.folder / MANIFEST, replace=True) as fh:
+                json.dump({"command": self.command, "files": names}, fh, indent=1)
+                fh.write("\n")
+            for name in names:
+                os.rename(staged / name, self.folder / name)
+                placed.append(name)
+        except BaseException:
+            for name in placed:  # roll back: nothing of the new set stays...
+                with contextlib.suppress(OSError):
+                    os.rename(self.folder / name, staged / name)
+            for name in moved:   # ...and the previous set is back under its names
+                with contextlib.suppress(OSError):
+                    os.rename(old / name, self.folder / name)
+            with contextlib.suppress(OSError):
+                if had_manifest:
+                    os.replace(manifest_old, self.folder / MANIFEST)
+                elif os.path.lexists(self.folder / MANIFEST):
+                    os.unlink(self.folder / MANIFEST)
+            raise
+        finally:
+            shutil.rmtree(old, ignore_errors=True)
+            shutil.rmtree(staged, ignore_errors=True)
+
+
+#: Seconds a commit waits for another process's commit into the same folder.
+_COMMIT_WAIT_S = 30.0
 
 
 # --- user input files: bounded reads, one-line errors ------------------------------------------
@@ -397,7 +514,8 @@ def read_capped(path: str | os.PathLike, what: str, limit: int = MAX_TEXT_BYTES,
     """
     p = os.fspath(path)
     try:
-        fd = os.open(p, os.O_RDONLY | getattr(os, "O_CLOEXEC", 0))
+        # O_NONBLOCK: a FIFO must not block the open; it is refused below like every non-regular file
+        fd = os.open(p, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
     except FileNotFoundError:
         raise ParameterError(f"{_where(what, p)}: no such file") from None
     except OSError as err:

@@ -69,6 +69,7 @@ import json
 import os
 import stat
 import time
+import zlib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -693,11 +694,130 @@ def read_recording(path: str | os.PathLike) -> Recording:
 _MAGIC = b"\x89MCAP0\r\n"
 _OPCODES = frozenset(range(0x01, 0x10))
 _OP_CHUNK = 0x06
+#: Attachment (0x09) and its index (0x0A): skipped whole, never parsed into memory.
+_BULKY = frozenset((0x09,))
 _RECORD_HEAD = 9
 
 
-def _parse_record(data: bytes, pos: int) -> tuple[int, list[Any] | None, str]:
-    """Parse the one record at ``pos`` (a chunk: its inner records), checking CRCs.
+class _Budget:
+    """Bytes a reading may still decompress: at most ``LIMITS["recording_chunk_bytes"]`` per chunk
+    and, in all, ``LIMITS["recording_expansion"]`` times the file (the chunk limit at least), so a
+    small file that claims or holds gigabytes (a compression bomb) is one line, not the memory."""
+
+    def __init__(self, path: str, file_bytes: int) -> None:
+        self.path = path
+        self.chunk = int(LIMITS["recording_chunk_bytes"].hi)
+        self.total = max(self.chunk, int(LIMITS["recording_expansion"].hi * file_bytes))
+        self.left = self.total
+
+    def take(self, n: int) -> None:
+        self.left -= n
+        if self.left < 0:
+            raise DataError(f"{self.path}: decompresses to more than {self.total} bytes, "
+                            f"{LIMITS['recording_expansion'].hi:g} times its size (docs/runtime.md, Limits)")
+
+
+def _decompress(compression: str, raw: bytes, size: int) -> bytes | None:
+    """At most ``size + 1`` bytes of a chunk's records (None: a compression this reader lacks)."""
+    if compression == "":
+        return raw[:size + 1]
+    if compression == "zstd":
+        import zstandard  # deferred: heavy (zstandard)
+
+        out = bytearray()
+        with zstandard.ZstdDecompressor().stream_reader(io.BytesIO(raw)) as reader:
+            while len(out) <= size:
+                got = reader.read(size + 1 - len(out))
+                if not got:
+                    break
+                out += got
+        return bytes(out)
+    if compression == "lz4":
+        import lz4.frame  # deferred: heavy (lz4)
+
+        return lz4.frame.LZ4FrameDecompressor().decompress(raw, max_length=size + 1)
+    return None
+
+
+def _chunk_layout(data: bytes, pos: int, end: int) -> tuple[int, int, str, int, int] | None:
+    """``(uncompressed size, crc, compression, records start, records end)`` of the chunk record at
+    ``pos`` if its fields are consistent with its length (MCAP spec, Chunk), else None: O(1)."""
+    body = pos + _RECORD_HEAD
+    if end - body < 36 or end > len(data):
+        return None
+    size = int.from_bytes(data[body + 16:body + 24], "little")
+    crc = int.from_bytes(data[body + 24:body + 28], "little")
+    clen = int.from_bytes(data[body + 28:body + 32], "little")
+    if clen > 16 or body + 40 + clen > end:
+        return None
+    try:
+        compression = data[body + 32:body + 32 + clen].decode("ascii")
+    except UnicodeDecodeError:
+        return None
+    rstart = body + 40 + clen
+    if rstart + int.from_bytes(data[body + 32 + clen:rstart], "little") != end:
+        return None
+    return size, crc, compression, rstart, end
+
+
+def _chunk_records(data: bytes, pos: int, end: int, budget: _Budget) -> tuple[list[Any] | None, str]:
+    """The records inside the chunk at ``pos``, decompressed within ``budget``, CRC checked."""
+    from mcap.exceptions import EndOfFile  # deferred: heavy (mcap)
+    from mcap.stream_reader import StreamReader  # deferred: heavy (mcap)
+
+    layout = _chunk_layout(data, pos, end)
+    if layout is None:
+        return None, "chunk fields do not match its length"
+    size, crc, compression, rstart, rend = layout
+    if size > budget.chunk:
+        return None, (f"chunk declares {size} bytes uncompressed, more than the {budget.chunk} a chunk may "
+                      f"have (docs/runtime.md, Limits)")
+    budget.take(size)
+    try:
+        inner = _decompress(compression, data[rstart:rend], size)
+    except Exception as err:  # noqa: BLE001 - any decoder's failure is damage in the file
+        return None, f"{compression}: {type(err).__name__}: {err}"[:120]
+    if inner is None:
+        return None, f"unknown compression {compression!r}"
+    if len(inner) != size:
+        return None, f"chunk decompresses to {'more' if len(inner) > size else 'less'} than its declared {size} bytes"
+    if crc and zlib.crc32(inner) != crc:
+        return None, "chunk CRC does not match"
+    why = _inner_layout(inner)
+    if why:  # e.g. megabytes of zeros: millions of empty records, never handed to the parser
+        return None, why
+    out: list[Any] = []
+    try:
+        for r in StreamReader(io.BytesIO(inner), skip_magic=True, validate_crcs=True).records:
+            out.append(r)
+    except EndOfFile:
+        pass
+    except (NameError, AttributeError, ImportError):
+        raise
+    except Exception as err:  # noqa: BLE001 - a record inside the chunk is damaged
+        return None, f"{type(err).__name__}: {err}"[:120]
+    return out, ""
+
+
+#: What a chunk may hold (MCAP spec, Chunk): schemas, channels and messages.
+_IN_CHUNK = frozenset((0x03, 0x04, 0x05))
+
+
+def _inner_layout(inner: bytes) -> str:
+    """Why the records inside a chunk are not a chunk's (empty when they are): each must be a
+    schema, a channel or a message, and together fill the chunk exactly."""
+    q, n = 0, len(inner)
+    while q < n:
+        if q + _RECORD_HEAD > n:
+            return "a record inside the chunk is cut"
+        if inner[q] not in _IN_CHUNK:
+            return f"record type 0x{inner[q]:02x} inside a chunk"
+        q += _RECORD_HEAD + int.from_bytes(inner[q + 1:q + _RECORD_HEAD], "little")
+    return "" if q == n else "a record inside the chunk runs past its end"
+
+
+def _parse_record(data: bytes, pos: int, budget: _Budget) -> tuple[int, list[Any] | None, str]:
+    """Parse the one record at ``pos`` (a chunk: its inner records, within ``budget``), checking CRCs.
 
     Returns ``(end, records, why)``: ``records`` is None when it is damaged or cut.
     """
@@ -710,6 +830,11 @@ def _parse_record(data: bytes, pos: int) -> tuple[int, list[Any] | None, str]:
         return end, None, f"unknown record type 0x{op:02x}"
     if end > len(data):
         return end, None, "cut"
+    if op == _OP_CHUNK:
+        records, why = _chunk_records(data, pos, end, budget)
+        return end, records, why
+    if op in _BULKY:  # attachments and the like: nothing a reader of runs needs, and no memory for it
+        return end, [], ""
     out: list[Any] = []
     try:
         for r in StreamReader(io.BytesIO(data[pos:end]), skip_magic=True, validate_crcs=True).records:
@@ -723,13 +848,18 @@ def _parse_record(data: bytes, pos: int) -> tuple[int, list[Any] | None, str]:
     return end, out, ""
 
 
-def _resync(data: bytes, pos: int) -> int | None:
-    """The next offset after ``pos`` where a whole chunk parses (None if there is none)."""
+def _resync(data: bytes, pos: int, budget: _Budget) -> int | None:
+    """The next offset after ``pos`` where a whole chunk parses (None if there is none).
+
+    Linear: a candidate byte is first checked in O(1) (its chunk fields must add up to its
+    length) and only a consistent one is decompressed, within the reading's ``budget``."""
     q = data.find(bytes([_OP_CHUNK]), pos + 1)
     while q >= 0:
-        end, records, _ = _parse_record(data, q)
-        if records is not None and end <= len(data):
-            return q
+        end = q + _RECORD_HEAD + int.from_bytes(data[q + 1:q + _RECORD_HEAD], "little")
+        if _chunk_layout(data, q, end) is not None:
+            records, _ = _chunk_records(data, q, end, budget)
+            if records is not None:
+                return q
         q = data.find(bytes([_OP_CHUNK]), q + 1)
     return None
 
@@ -741,10 +871,14 @@ def _read_bounded(path: str) -> bytes:
 
     cap = int(LIMITS["recording_bytes"].hi)
     try:
-        with open(path, "rb") as fh:
+        # O_NONBLOCK: a FIFO must not block the open; it is refused below like every non-regular file
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
+        with os.fdopen(fd, "rb") as fh:
             st = os.fstat(fh.fileno())
             if stat.S_ISDIR(st.st_mode):
                 raise RecordingError(f"{path}: is a directory, not a recording")
+            if not stat.S_ISREG(st.st_mode):
+                raise DataError(f"{path}: not a regular file (a device or a pipe is not a recording)")
             head = fh.read(len(_MAGIC))
             if head != _MAGIC:
                 if head and _MAGIC.startswith(head) and stat.S_ISREG(st.st_mode):
@@ -772,10 +906,11 @@ def _scan(path: str, rec: Recording) -> Any:
             raise DataError(f"{path}: cut short after {len(data)} bytes, before its first record")
         raise DataError(f"{path}: not an MCAP file (no MCAP magic at its start)")
     pos = len(_MAGIC)
+    budget = _Budget(path, len(data))
     while pos + _RECORD_HEAD <= len(data):
-        end, records, why = _parse_record(data, pos)
+        end, records, why = _parse_record(data, pos, budget)
         if records is None:
-            nxt = _resync(data, pos)
+            nxt = _resync(data, pos, budget)
             if nxt is None:
                 if why == "cut" or end > len(data):
                     rec.cut_at = pos

@@ -80,7 +80,7 @@ from typing import Any
 import numpy as np
 
 from .errors import DeviceError, ParameterError
-from .grip import FINGER_SPEED_UNITS_S, Grip, span
+from .grip import FINGER_SPEED_UNITS_S, TRAVEL, Grip, span
 from .hardware import FINGER_MAX, FINGER_MIN, SLIP_FINGER, THUMB_ROTATOR_MAX, TRIPOD, Finger
 from .interfaces import DaqSample, Hand, Reflex, SampleSource
 from .validation import number
@@ -88,7 +88,7 @@ from .validation import number
 __all__ = ["Fault", "SampleRecord", "RunResult", "run_loop", "print_fault", "realtime_priority",
            "tactile_message", "drop_capabilities",
            "WATCHDOG_S", "WATCHDOG_MIN_S", "WATCHDOG_MAX_S", "start_positions", "safe_start",
-           "finger_offsets"]
+           "finger_offsets", "reflex_start"]
 
 #: Seconds without a valid sample after which the watchdog holds the fingers.
 WATCHDOG_S: float = 0.1
@@ -276,6 +276,14 @@ class RunResult:
         Grip (finger name -> units) the loop told each finger to add.
     closes, stops : int
         CLOSE commands sent, and the STOPs that ended a closing.
+    grip_unknown : list of str
+        Fingers whose closing's STOP never reached the hand (a lost port): their grip is at
+        least ``grip_added`` and may be up to their end stop.
+    stalled : list of str
+        Fingers the hand reported stalled (it ignores closing until opened): grip sent to
+        them afterwards is not counted in ``grip_added``.
+    error : str or None
+        Why the run ended early: the method raised in ``step()`` (fingers held first).
 
     Examples
     --------
@@ -307,6 +315,9 @@ class RunResult:
     grip_added: dict[str, float] = field(default_factory=dict)
     closes: int = 0
     stops: int = 0
+    grip_unknown: list[str] = field(default_factory=list)
+    stalled: list[str] = field(default_factory=list)
+    error: str | None = None
 
     def latency_ms(self, since: str = "read") -> dict[str, float]:
         """p50, p99 and max of the command latency in milliseconds (NaN if none).
@@ -346,8 +357,17 @@ class RunResult:
                 "garbage_bytes", "duplicates", "reordered", "resets", "disconnects", "reconnects",
                 "frames_discarded") if k in d))
         if self.grip_added:
-            lines.append("grip added: " + ", ".join(f"{k} {v:.1f}" for k, v in self.grip_added.items())
+            lines.append("grip added: " + ", ".join(f"{k} {'>= ' * (k in self.grip_unknown)}{v:.1f}"
+                                                     for k, v in self.grip_added.items())
                          + f" units ({self.closes} closings)")
+        if self.grip_unknown:
+            lines.append(f"STOP never reached {', '.join(self.grip_unknown)}: they may have closed to their "
+                         f"end stops (grip at least as above)")
+        if self.stalled:
+            lines.append(f"stalled (the hand ignores closing until opened): {', '.join(self.stalled)}; "
+                         f"grip sent to them after the stall is not counted")
+        if self.error:
+            lines.append(f"ended early: {self.error}")
         if self.saturated_at is not None:
             lines.append(f"reflex command at its ceiling {self.ceiling:g} from t={self.saturated_at:.3f} s: it "
                          f"adds no grip after that; {self.saturated_windows} later windows with spikes "
@@ -376,7 +396,9 @@ class RunResult:
                "stale_samples": self.stale_samples, "dropped_at_start": self.dropped_at_start,
                "saturated_at": "" if self.saturated_at is None else f"{self.saturated_at:.6f}",
                "saturated_windows": self.saturated_windows, "ceiling": self.ceiling,
-               "grip_added": json.dumps(self.grip_added), "closes": self.closes, "stops": self.stops}
+               "grip_added": json.dumps(self.grip_added), "closes": self.closes, "stops": self.stops,
+               "grip_unknown": json.dumps(self.grip_unknown), "stalled": json.dumps(self.stalled),
+               "error": self.error or ""}
         for since, key in (("read", "latency"), ("frame", "frame_latency")):
             for q, v in self.latency_ms(since).items():
                 out[f"{key}_{q}_ms"] = f"{v:.4f}"
@@ -549,6 +571,25 @@ def finger_offsets(reflex: Any, fingers: Sequence[Finger] = TRIPOD) -> dict[Fing
     return out
 
 
+def reflex_start(reflex: Any) -> float | None:
+    """Where a reflex's command starts: its ``command`` before the first step, else its
+    ``params.p0`` (a board twin, a tactile method), else None (the loop then takes the
+    measured grasp). Rises above it are the grip the loop adds.
+
+    Examples
+    --------
+    >>> from slipreflex import methods
+    >>> reflex_start(methods.make("dath", p0=148.0)), reflex_start(methods.make("dath-board", p0=148.0))
+    (148.0, 148.0)
+    >>> reflex_start(object()) is None
+    True
+    """
+    for x in (getattr(reflex, "command", None), getattr(getattr(reflex, "params", None), "p0", None)):
+        if isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x):
+            return float(x)
+    return None
+
+
 def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
              p0: float | Mapping[Any, float] | None = None, recorder: Any = None,
              duration: float | None = None, watchdog: float = WATCHDOG_S, poll: float = 0.01,
@@ -642,11 +683,11 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
         raise ParameterError(f"run_loop: the hand has no {', '.join(missing)}: a reflex adds grip only by "
                              f"closing and holding (slipreflex.interfaces.Hand)")
     fingers = tuple(Finger(f) for f in fingers)
-    ref0: Any = getattr(reflex, "command", None)  # the reflex's own start (SlipReflex: clip(p0))
-    ref_ok = isinstance(ref0, (int, float)) and math.isfinite(ref0)
+    ref0 = reflex_start(reflex)
+    ref_ok = ref0 is not None
     if p0 is None and not ref_ok:
         raise ParameterError("run_loop: give p0 (the reflex has no initial command)")
-    given = start_positions(p0 if p0 is not None else ref0, fingers)  # checked before anything is sent
+    given = start_positions(p0 if p0 is not None else float(ref0 or 0.0), fingers)  # checked before anything is sent
     _warm_up(reflex)
     finger_offsets(reflex, fingers)
     try:
@@ -659,6 +700,7 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
                  ref0=float(ref0) if ref_ok else start.get(SLIP_FINGER, next(iter(start.values()))),
                  recorder=recorder, duration=duration, watchdog=watchdog, poll=poll, stop=stop,
                  on_fault=on_fault, stats_interval=stats_interval, clock=clock, taps=taps)
+    loop.check_room(loop.grip.levels[0] if loop.grip.levels else 0.0)
     if start_error is not None:
         loop.fault("hold-failed", f"safe start: {start_error}", "fingers stay where the grasp left them; "
                    "the watchdog holds again if samples stop")
@@ -715,7 +757,12 @@ def _warm_up(reflex: Any) -> None:
     except Exception:  # noqa: BLE001 - a reflex that cannot be copied is simply not warmed up
         return
     shape = getattr(getattr(reflex, "params", None), "shape", (4, 4))
-    twin.step(0.0 if getattr(reflex, "input_kind", "slip") == "slip" else np.zeros(shape), None)
+    try:
+        twin.step(0.0 if getattr(reflex, "input_kind", "slip") == "slip" else np.zeros(shape), None)
+    except Exception as err:  # noqa: BLE001 - a method that cannot take one sample is refused, nothing sent
+        name = getattr(reflex, "name", type(reflex).__name__)
+        raise ParameterError(f"run_loop: method {name!r} raised in step() on a warm-up sample "
+                             f"({type(err).__name__}: {err}); nothing was sent to the hand") from None
 
 
 class _Sink:
@@ -816,12 +863,17 @@ class _Loop:
         # grip only ever added: rises of the command become closing time per finger group; a
         # reflex's finger_offsets (authors-gui: middle + 20) are that group's extra first rise
         self.offsets = finger_offsets(reflex, self.fingers)
-        self.grip = Grip(ref0, self.fingers, self.offsets)
+        # no group ever gets more than one finger travel above the grasp, whatever the command says
+        self.grip = Grip(ref0, self.fingers, self.offsets, ceiling=ref0 + TRAVEL)
         self.speed = FINGER_SPEED_UNITS_S
         self.owed = [0.0] * len(self.grip.groups)  # grip not yet sent (stale, a cut closing, a lost port)
         self.until: list[float | None] = [None] * len(self.grip.groups)  # clock time each closing ends
+        self.begun: list[float | None] = [None] * len(self.grip.groups)  # clock time each closing began
+        self.unstopped: set[int] = set()  # groups whose ending STOP never reached the hand
         hi = getattr(getattr(reflex, "params", None), "hi", FINGER_MAX)
         self.ceiling = float(hi) if isinstance(hi, (int, float)) and math.isfinite(hi) else float(FINGER_MAX)
+        self.top = min(self.ceiling, self.grip.ceiling)  # the command is clipped here before it is grip
+        self.failed: str | None = None  # the reflex raised: the run ends, fingers held
         # the reflex's frame: its command ref0 is where the slip finger stood at start
         self.slip_shift = start.get(SLIP_FINGER, ref0) - ref0
         self.duration, self.watchdog_s, self.poll, self.stop = duration, watchdog, poll, stop
@@ -884,7 +936,17 @@ class _Loop:
             self.end_closings(final=True)  # a run never ends with the fingers still closing
         return self.finish()
 
+    def check_room(self, ref0: float) -> None:
+        """A reflex whose command starts at its ceiling can add no grip: say so now, not never."""
+        if self.top <= ref0:
+            self.res.saturated_at = 0.0
+            self.fault("no-grip-room", f"the reflex's command starts at {ref0:g}, at its ceiling "
+                       f"{self.ceiling:g}: it can add no grip in this run", "fingers hold what they hold; "
+                       "build the reflex with room above its start (slipreflex run does)")
+
     def done(self) -> bool:
+        if self.failed is not None:
+            return True
         if self.duration is not None and self.clock() - self.t0 >= self.duration:
             return True
         return self.stop is not None and self.stop.is_set()
@@ -941,7 +1003,11 @@ class _Loop:
                 pass
             if pos is not None:
                 pos -= self.slip_shift  # in the reflex's frame
-            cmd = reflex.step(s.slip_volts if self.slip else s.frame, pos)
+            try:
+                cmd = reflex.step(s.slip_volts if self.slip else s.frame, pos)
+            except Exception as err:  # noqa: BLE001 - any method's failure ends the run held, recorded
+                self.reflex_failed(s, err)
+                break
             r = SampleRecord(s, arrival, self.clock() - (s.t + (self.offset or 0.0)), pos, cmd,
                              filtered=reflex.last_filtered, threshold=reflex.last_threshold,
                              event=bool(reflex.last_event), count=reflex.last_count,
@@ -955,6 +1021,14 @@ class _Loop:
             out.append(r)
         self.processed += len(samples)
         return out
+
+    def reflex_failed(self, s: Any, err: Exception) -> None:
+        """The method raised in ``step()``: hold the fingers, record it, end the run (its state is
+        unknown, so no later command of it is trusted)."""
+        name = getattr(self.reflex, "name", type(self.reflex).__name__)
+        self.failed = f"method {name!r} raised in step() at sample seq {s.seq}: {type(err).__name__}: {err}"
+        self.hold()
+        self.fault("reflex-error", self.failed, "fingers held; the run ends (nothing more is sent)")
 
     def freshness(self, r: SampleRecord) -> None:
         if r.age > self.watchdog_s:
@@ -974,15 +1048,16 @@ class _Loop:
 
     def command(self, r: SampleRecord, cmd: float) -> None:
         try:
-            rises = self.grip.rise(cmd)
+            rises = self.grip.rise(min(cmd, self.top) if isinstance(cmd, (int, float)) else cmd)
         except ParameterError as err:
             r.note = "rejected"
             self.fault("command-rejected", str(err), "no grip added; fingers keep what they hold")
             return
         r.grip = {f: g for (fs, _), g in zip(self.grip.groups, rises) for f in fs}
-        if cmd >= self.ceiling and self.res.saturated_at is None:
+        at_top = cmd >= self.top or any(level >= self.grip.ceiling for level in self.grip.levels)  # an offset's too
+        if at_top and self.res.saturated_at is None:
             self.res.saturated_at = r.sample.t
-            self.fault("mpi-saturated", f"the reflex's command reached its ceiling {self.ceiling:g} at "
+            self.fault("mpi-saturated", f"the reflex's command reached its ceiling {self.top:g} at "
                        f"t={r.sample.t:.3f} s", "it adds no grip after that; later slips cannot be answered")
         if not any(g > 0.0 for g in rises):
             r.note = "no rise" if self.risen else "at start"  # nothing to add: the fingers stay held
@@ -998,6 +1073,7 @@ class _Loop:
     def deliver(self, r: SampleRecord | None, resend: bool = False) -> None:
         """Send the grip owed as closing time: CLOSE now, or a closing in progress made longer."""
         now = self.clock()
+        self.stall_check(now)  # a finger the hand already reports stalled gets no grip counted
         sent = False
         for i, (fingers, _) in enumerate(self.grip.groups):
             g = self.owed[i]
@@ -1028,7 +1104,9 @@ class _Loop:
             self.owed[i] = 0.0
             for f in fingers:
                 name = f.name.lower()
-                self.res.grip_added[name] = self.res.grip_added.get(name, 0.0) + g
+                # a stalled finger ignores closing (the hand's own rule): what is sent to it is not grip
+                self.res.grip_added[name] = self.res.grip_added.get(name, 0.0) + (0.0 if name in self.res.stalled
+                                                                                  else g)
             sent = True
         if not sent:
             return
@@ -1054,11 +1132,15 @@ class _Loop:
                 with self.lock:
                     self.hand.hold(fingers)
             except (DeviceError, ParameterError) as err:
+                self.unstopped.add(i)
                 if not self.stop_failed:
                     self.stop_failed = True
-                    self.fault("stop-failed", str(err), "the STOP that ends a closing is retried")
+                    names = ", ".join(f.name.lower() for f in fingers)
+                    self.fault("stop-failed", f"{err}: the closing of {names} did not end; they may close "
+                               f"to their end stops", "the STOP that ends a closing is retried")
                 continue
             self.stop_failed = False
+            self.unstopped.discard(i)
             self.until[i] = None
             self.res.stops += 1
             if until > now:  # the run ended first: that part of the grip was not added
@@ -1151,12 +1233,32 @@ class _Loop:
         if now >= self.next_counters:
             self.next_counters = now + 0.05
             self.counter_faults(now)
+            self.stall_check(now)
         if now >= self.next_stats:
             self.next_stats = now + self.stats_interval
             self.sink.write("/stats", {"time": now - self.t0, "counters": self.stats_counters()}, now)
         if self.sink.ok:
             self.sink.recorder.maybe_flush()
             self.sink.check()
+
+    def stall_check(self, now: float) -> None:
+        """Fingers the hand newly reports stalled (optional ``Hand.stalled()``): a fault each, and
+        the rest of a closing in progress is not counted as grip."""
+        report: Callable[[], Any] | None = getattr(self.hand, "stalled", None)
+        if not callable(report):
+            return
+        try:
+            stalled = {Finger(f).name.lower() for f in report()}
+        except (DeviceError, ValueError, TypeError):
+            return
+        for name in sorted(stalled - set(self.res.stalled)):
+            self.res.stalled.append(name)
+            for i, (fingers, _) in enumerate(self.grip.groups):
+                until = self.until[i]
+                if until is not None and until > now and name in {f.name.lower() for f in fingers}:
+                    self.res.grip_added[name] -= (until - now) * self.speed
+            self.fault("finger-stalled", f"the hand reports {name} stalled: it ignores closing until opened",
+                       "grip sent to it is no longer counted; the reflex cannot add grip there")
 
     def counter_faults(self, now: float, final: bool = False) -> None:
         """Increases of the DAQ's counters become fault events: the first at once, then at
@@ -1197,12 +1299,19 @@ class _Loop:
         res = self.res
         now = self.clock()
         self.counter_faults(now, final=True)
+        self.stall_check(now)
         while self.guard_faults:
             self.emit(self.guard_faults.popleft())
         res.duration = now - self.t0
         res.latencies = np.asarray(self.latencies, dtype=float)
         res.frame_latencies = np.asarray(self.frame_latencies, dtype=float)
         res.daq_stats = self.source_stats()
+        res.error = self.failed
+        res.grip_unknown = [f.name.lower() for i in sorted(self.unstopped) for f in self.grip.groups[i][0]]
+        if res.grip_unknown:
+            self.fault("grip-unknown", f"the STOP ending the closing of {', '.join(res.grip_unknown)} never "
+                       f"reached the hand: their grip is at least what the summary says, up to their end "
+                       f"stops", "hand it to the user: check the hand")
         if self.sink.ok:
             self.sink.write("/stats", {"time": res.duration, "counters": self.stats_counters()}, now)
             self.sink.recorder.add_metadata("run_summary", res.summary_metadata())

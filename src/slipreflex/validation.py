@@ -441,6 +441,12 @@ LIMITS: dict[str, Limit] = {
                              "--objects, --ranges, claims", whole=True),
     "recording_bytes": Limit(1, 8e9, "bytes", "an MCAP recording; the reader holds the whole file in memory",
                              "replay, export, recover", whole=True),
+    "recording_chunk_bytes": Limit(1, 64 * 1024 ** 2, "bytes", "one MCAP chunk, decompressed (mcap's writer "
+                                   "makes 1 MiB, this package's 16-64 KiB)", "replay, export, recover", whole=True),
+    "recording_expansion": Limit(1, 50, "times", "all the chunks of a recording, decompressed, over its size "
+                                 "(a run's recording decompresses to a few times its size; a compression "
+                                 "bomb to thousands)",
+                                 "replay, export, recover"),
 }
 
 

@@ -11,6 +11,7 @@ Examples
 from __future__ import annotations
 
 import argparse
+import ipaddress
 import sys
 from collections.abc import Iterable
 from typing import Any
@@ -21,7 +22,7 @@ from ..live import DEFAULT_PORT, LiveView, parse_address, require_foxglove
 from ..lsl import LslOutlets, require_pylsl
 from ..taps import close_all
 
-__all__ = ["add_live_arguments", "check_live_arguments", "open_taps", "close_taps"]
+__all__ = ["add_live_arguments", "check_live_arguments", "open_taps", "close_taps", "is_loopback"]
 
 
 def add_live_arguments(p: argparse.ArgumentParser, *, lsl: bool = True) -> None:
@@ -42,14 +43,34 @@ def check_live_arguments(args: argparse.Namespace) -> None:
     """Check ``--live`` / ``--lsl`` and their packages before any work starts."""
 
     if getattr(args, "live", None) is not None:
-        parse_address(args.live)
+        host, _ = parse_address(args.live)
         require_foxglove()
+        if not is_loopback(host):
+            print(f"slipreflex: warning: --live {args.live} serves the run, unauthenticated, to every host that "
+                  f"can reach {host}; keep it on 127.0.0.1 unless the network is yours", file=sys.stderr,
+                  flush=True)
     if getattr(args, "lsl", None) is not None:
 
         if not args.lsl.strip():
 
             raise ParameterError("--lsl: the stream name is empty")
         require_pylsl()
+
+
+def is_loopback(host: str) -> bool:
+    """Whether ``host`` is this machine only (``localhost``, 127.0.0.0/8, ``::1``).
+
+    Examples
+    --------
+    >>> is_loopback("127.0.0.1"), is_loopback("localhost"), is_loopback("0.0.0.0"), is_loopback("::")
+    (True, True, False, False)
+    """
+    if host.lower() == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:  # a host name: it may resolve to anything
+        return False
 
 
 def open_taps(args: argparse.Namespace, topics: Iterable[str], *, lsl_source: str = "",

@@ -25,13 +25,14 @@ from __future__ import annotations
 import argparse
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from .. import hardware as hw
-from ..analysis.figures import _plt, _save, check_figure_path
+from ..analysis.figures import _plt, check_figure_path
 from ..errors import ParameterError
-from ..paths import output_dir
+from ..paths import new_file, output_dir, unique_name
 from ._lists import names_list
 
 NAME = "calibrate"
@@ -106,7 +107,8 @@ def run(args: argparse.Namespace) -> int:
               f"{grip_gain(hand, bottle):.3f} N/unit  ({note})")
         drawn[n] = (bottle, ml)
     if args.figure is not None:
-        print(f"wrote {calibration_figure(drawn, args.figure)}")
+        wrote = calibration_figure(drawn, args.figure)
+        print(f"wrote {wrote}" + (f" ({args.figure} exists and is kept)" if wrote != args.figure else ""))
     return 0
 
 
@@ -184,4 +186,21 @@ def calibration_figure(drawn: dict, path: Path) -> Path:
     fig.suptitle("Open-loop calibration: the paper's pour (500 ml at 1 L/min), 0.8 N grasp, no reflex; "
                  "dots: each seed's first gross slip", fontsize=8)
     fig.tight_layout()
-    return _save(plt, fig, path, layout=False)
+    return _save_new(plt, fig, Path(path))
+
+
+def _save_new(plt: Any, fig: Any, path: Path) -> Path:
+    """Save ``fig`` as a new file: ``path``, or ``NAME-2.png``... when the name is taken (a file, a
+    symlink: never written through, never replaced). The figure appears whole or not at all."""
+    try:
+        for _ in range(100):  # another process may take the free name first: take the next one
+            target = unique_name(path.parent, path.stem, path.suffix)
+            try:
+                with new_file(target, "wb") as fh:
+                    fig.savefig(fh, dpi=110, format=path.suffix.lstrip(".").lower() or "png")
+                return target
+            except FileExistsError:
+                continue
+        raise ParameterError(f"--figure {path}: no free name {path.stem}-N{path.suffix} in {path.parent}")
+    finally:
+        plt.close(fig)

@@ -22,7 +22,7 @@ from ..csvfiles import Recording, irregular_steps, read_recording, write_columns
 from ..errors import DataError, ParameterError
 from ..hardware import FINGER_MAX
 from ..methods import DATH, FIXED, applicable, make
-from ..paths import output_dir
+from ..paths import output_dir, unique_prefix
 from ..validation import number, within
 
 NAME = "detect"
@@ -198,10 +198,11 @@ def run(args: argparse.Namespace) -> int:
     prefix = _prefix(args)
     _warn_irregular(rec)
     res = run_chain(rec.x, params)
+    prefix, note = _free_prefix(prefix)
     samples_path = Path(f"{prefix}.samples.csv")
     windows_path = Path(f"{prefix}.windows.csv")
-    write_columns(samples_path, res.sample_columns(rec.t))
-    write_columns(windows_path, res.window_columns(rec.t))
+    write_columns(samples_path, res.sample_columns(rec.t), replace=False)
+    write_columns(windows_path, res.window_columns(rec.t), replace=False)
     final = f"{res.commands[-1]:g}" if res.commands.size else "none (shorter than one window)"
     source = " (chain and p0 from the file's header)" if "reflex_params" in rec.preamble else ""
     if args.preset:
@@ -217,8 +218,18 @@ def run(args: argparse.Namespace) -> int:
     saturated = _saturation(res, rec.t, params)
     if saturated:
         print(saturated)
-    print(f"  wrote {samples_path} and {windows_path}")
+    print(f"  wrote {samples_path} and {windows_path}{note}")
     return 0
+
+
+_SUFFIXES = (".samples.csv", ".windows.csv")
+
+
+def _free_prefix(prefix: Path) -> tuple[Path, str]:
+    """The first prefix whose two files are both free (``NAME-2``...): detect writes new files, never
+    over a file already there, nor through a symlink of that name; and a note saying so."""
+    free = unique_prefix(prefix, _SUFFIXES)
+    return free, "" if free == prefix else f" ({prefix.name}.* exist and are kept)"
 
 
 def _prefix(args: argparse.Namespace) -> Path:
@@ -241,8 +252,9 @@ def _run_board(args: argparse.Namespace) -> int:
     prefix = _prefix(args)
     adc = read_adc_csv(args.recording)
     res = run_board_chain(adc, BoardParams.firmware(dath=method == DATH, p0=int(p0)))
+    prefix, note = _free_prefix(prefix)
     paths = write_board_outputs(prefix, res.events, res.counts, res.commands)
     print(f"{args.recording}: {adc.size} ADC counts through the board's chain, method {method}")
     print(f"  events: {int(res.events.sum())}, faulty readings: {int(res.faults.sum())}")
-    print(f"  wrote {paths[0]} and {paths[1]}")
+    print(f"  wrote {paths[0]} and {paths[1]}{note}")
     return 0

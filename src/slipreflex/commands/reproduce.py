@@ -168,6 +168,7 @@ def run(args: argparse.Namespace) -> int:
         swt_persist=args.swt_persist, variations=not args.no_variations,
         independent_seeds=args.independent_seeds, grasp_force_n=args.grasp_force, **own_objects(args))
     outputs = OutputSet(args.out, NAME)             # before the first trial, not after the last
+    outputs.claim()                                 # one command writing into --out at a time
     outputs.check(OUTPUT_NAMES)
 
     for b in config.bottles:                         # a grasp that cannot hold: one line, before the estimate

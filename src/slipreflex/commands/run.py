@@ -49,6 +49,10 @@ HELP = "run the slip reflex in real time: read the DAQ (or the hand's touch sens
 ORDER = 30
 
 
+#: Where a registered method other than fixed and dath starts its command (its own frame's open end).
+REFLEX_FRAME_P0: float = float(FINGER_MIN)
+
+
 def add_chain_arguments(p: argparse.ArgumentParser) -> None:
     """Chain options shared by ``run`` (defaults: the paper's)."""
 
@@ -193,12 +197,14 @@ def build_reflex(args: argparse.Namespace, p0: dict[Finger, float]) -> tuple[Any
         if args.preset:
             reflex.name = args.preset
         return reflex, {"reflex_params": json.dumps(params.to_dict())}
+    # Every other method runs in its own frame, started at the open end of the finger range: its
+    # command then has a whole finger travel of room below its own ceiling (a board method's is an
+    # absolute 500), whatever --p0 says. The loop maps the measured positions into that frame and
+    # sends only the command's rises, so the grip is the same for every --p0 (docs/runtime.md).
     if spec.input_kind == "slip":
-        reflex = make(spec.name, p0=start)
-        if isinstance(getattr(reflex, "params", None), ReflexParams):  # the ceiling fixed and dath get
-            reflex = make(spec.name, p0=start, hi=start + (FINGER_MAX - FINGER_MIN))
+        reflex = make(spec.name, p0=REFLEX_FRAME_P0)
     else:
-        reflex = make(spec.name, p0=start, shape=hand.tactile_shape,
+        reflex = make(spec.name, p0=REFLEX_FRAME_P0, shape=hand.tactile_shape,
                       context=MethodContext(thresholds={spec.name: args.tactile_threshold}))
     params = getattr(reflex, "params", None)
     if isinstance(params, ReflexParams):
@@ -393,4 +399,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"recorded to {recorder.path}" + (" (incomplete)" if res.recording_error else ""))
     if res.recording_error:
         print(f"slipreflex run: warning: {res.recording_error}", file=sys.stderr)
+    if res.error:  # the method failed: the fingers were held, the summary and recording are written
+        print(f"slipreflex run: error: {res.error}", file=sys.stderr)
+        return 2
     return 0

@@ -68,6 +68,7 @@ def run(args: argparse.Namespace) -> int:
         raise ParameterError(f"--distance {args.distance:g} mm is longer than {what} ({length_mm:g} mm): "
                              f"give --distance {length_mm:g} or less, or a longer --layout")
     outputs = OutputSet(args.out, NAME)
+    outputs.claim()                                  # one scan writing into --out at a time, before the work
     outputs.check(OUTPUT_NAMES)
     kw: dict[str, Any] = {"layout": layout} if args.layout is not None else {}
     result = scan(seed=args.seed, speed=args.speed * 1e-3, distance=args.distance * 1e-3, **kw)

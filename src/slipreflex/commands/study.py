@@ -37,6 +37,7 @@ from ..experiments import DEFAULT_SEED as seed
 from ..paths import OutputSet
 from ..study import DEFAULT_PLANTS, DEFAULT_TRIALS, DESIGNS, StudyConfig, read_parts, run_study
 from ..study.analyse import claim_fractions, plant_table, pooled_scan, write_outputs
+from ..study.runner import probe_scheduler
 from ..validation import within
 
 NAME = "study"
@@ -130,8 +131,13 @@ def run(args: argparse.Namespace) -> int:
     config = StudyConfig(plants=args.plants, design=args.design, trials=args.trials, bottles=tuple(args.bottles),
                          methods=tuple(args.methods), experiments=tuple(args.experiments), seed=args.seed,
                          ranges=args.ranges, calibrate=not args.no_calibration)
+    claimed: OutputSet | None = None
     if args.out.is_dir():   # a file of the user's where the study writes its tables: refused before any work
-        OutputSet(args.out, NAME).check(OUTPUT_NAMES)
+        claimed = OutputSet(args.out, NAME)
+        claimed.claim()     # held to the commit: one study writing into --out at a time
+        claimed.check(OUTPUT_NAMES)
+    if args.scheduler:      # an address that is not a Dask scheduler costs one line, before the folder is touched
+        probe_scheduler(args.scheduler)
     try:
         result = run_study(config, args.out, workers=args.workers, scheduler=args.scheduler,
                            progress=not args.no_progress, dashboard=args.dashboard)
@@ -143,7 +149,7 @@ def run(args: argparse.Namespace) -> int:
               "slipreflex study: interrupted before any plant finished; nothing kept", file=sys.stderr)
         return 130
     command = "slipreflex " + " ".join(shlex.quote(a) for a in sys.argv[1:]) if sys.argv[1:] else None
-    outputs = OutputSet(args.out, NAME)
+    outputs = claimed or OutputSet(args.out, NAME)
     staged = outputs.stage()
     try:
         write_outputs(dataclasses.replace(result, out=staged), figures=not args.no_figures, command=command)

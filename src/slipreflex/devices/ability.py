@@ -43,8 +43,10 @@ Examples
 
 from __future__ import annotations
 
+import collections
 import math
 import struct
+import threading
 import time
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
@@ -60,7 +62,8 @@ from .port import ReconnectingPort
 __all__ = ["ABILITY_BAUD", "ADDRESS", "ORDER", "TOUCH_FINGERS", "SITES", "FULL_CLOSE_DEG",
            "checksum", "stuff", "unstuff", "Unstuffer", "encode_positions", "encode_velocities", "encode_read",
            "decode_command", "AbilityReply", "decode_reply", "encode_reply", "touch_newtons",
-           "touch_counts", "degrees_of", "units_of", "AbilityHand"]
+           "touch_counts", "degrees_of", "units_of", "AbilityHand", "API_TIMEOUT_S", "KEEPALIVE_S",
+           "stalled_fingers"]
 
 #: UART baud rate of the hand (ICD 3.1: the default of the flash setting).
 ABILITY_BAUD: int = 460800
@@ -80,6 +83,13 @@ _SCALE = 32767 / 150  # int16 counts per degree (ICD 3.4.1)
 _FRAME, _ESC, _MASK = 0x7E, 0x7D, 0x20
 _POSITION, _VELOCITY, _READ = 0x10, 0x20, 0xA0
 _VSCALE = 32767 / 3000  # int16 counts per degree per second (ICD 3.4.2)
+#: Seconds of silence after which the hand leaves API mode (PSYONIC's manual: about 300 ms,
+#: "may be accompanied by undesired finger movements").
+API_TIMEOUT_S: float = 0.3
+#: The driver's longest silence (s): a read-only request at least this often, a sixth of the timeout.
+KEEPALIVE_S: float = 0.05
+#: Frames the driver keeps for :meth:`AbilityHand.read_frames` (about 15 s at 260 Hz).
+_FRAME_BACKLOG = 4096
 _REPLY_LEN = 1 + 24 + 45 + 1  # header, position/current pairs, touch, status (checksum apart)
 _FSR_C1, _FSR_C2 = 121591.0, 0.878894
 _ADC_V, _ADC_COUNTS, _R_TOP, _R_BOTTOM = 3.3, 4096, 33000.0, 10000.0
@@ -409,21 +419,25 @@ class AbilityHand:
     """The Ability Hand on a serial port: a :class:`~slipreflex.interfaces.Hand` and a
     :class:`~slipreflex.interfaces.TactileSource` (one finger's 6 touch sites per frame).
 
-    Every reply carries the touch sites, so every reply is a frame: a command's reply
-    stands for that period's read-only request (the next one waits a period), which keeps
-    the frames near ``fs``.
+    As PSYONIC's own wrapper runs it: a thread of the driver (the pump) reads the replies
+    continuously and, whenever nothing was written for one period (``1 / fs``, at most
+    ``keepalive``), writes a read-only request, so the hand hears from the host well inside its
+    API timeout (:data:`API_TIMEOUT_S`) whether or not the loop sends anything, and
+    :meth:`positions` is the newest reply's in every run, not only when tactile frames are
+    read. Every reply is a frame (it carries the touch sites), so a command's reply stands
+    for that period's request and the frames stay near ``fs``.
 
-    At construction it asks the hand for one reply (read-only mode) and fails unless
-    one comes: every later command then starts from the fingers' measured positions,
-    so a command never moves a finger it does not name. :meth:`read_frames` asks for a
-    reply at most every ``1 / fs`` seconds (read-only requests; the hand answers only
-    when asked) and returns the tactile frames of the replies that came.
+    At construction it asks the hand for one reply (read-only mode) and fails unless one
+    comes: every later command then starts from the fingers' measured positions, so a
+    command never moves a finger it does not name. The reply's status byte is read: a
+    finger whose bit is set has stalled (collision): the hand ignores further closing of it
+    until it is opened (:meth:`stalled`).
 
     Parameters
     ----------
     port : str or serial.Serial
     fs : float
-        Rate (Hz) of the read-only requests of :meth:`read_frames`.
+        Rate (Hz) of the read-only requests.
     tactile_finger : Finger
         The finger whose touch sites are the tactile frame (index by default, as the
         paper's tactile array).
@@ -431,12 +445,14 @@ class AbilityHand:
         Seconds to wait for the first reply.
     write_timeout, reconnect_interval : float
         As :class:`~slipreflex.devices.ilimb.ILimb`.
+    keepalive : float
+        Longest silence (s) the driver leaves the hand in (0 < keepalive <= API_TIMEOUT_S / 3).
 
     Attributes
     ----------
     shape : tuple of int
         Shape of a tactile frame: ``(6,)``.
-    replies, bad_replies : int
+    replies, bad_replies, requests : int
 
     Raises
     ------
@@ -453,9 +469,12 @@ class AbilityHand:
 
     def __init__(self, port: Any, *, fs: float = 260.0, tactile_finger: Finger = Finger.INDEX,
                  reply_timeout: float = 1.0, write_timeout: float = 0.01,
-                 reconnect_interval: float = 0.2) -> None:
+                 reconnect_interval: float = 0.2, keepalive: float = KEEPALIVE_S) -> None:
         if not (math.isfinite(fs) and fs > 0):
             raise ParameterError(f"Ability Hand: fs must be > 0 Hz, got {fs!r}")
+        if not (math.isfinite(keepalive) and 0 < keepalive <= API_TIMEOUT_S / 3):
+            raise ParameterError(f"Ability Hand: keepalive must be in (0, {API_TIMEOUT_S / 3:g}] s "
+                                 f"(well inside the hand's API timeout), got {keepalive!r}")
         if Finger(tactile_finger) not in TOUCH_FINGERS:
             raise ParameterError(f"Ability Hand: {Finger(tactile_finger).name.lower()} has no touch sites")
         self._port = ReconnectingPort(port, what="Ability Hand", baudrate=ABILITY_BAUD,
@@ -463,16 +482,23 @@ class AbilityHand:
         self.port_name = self._port.port_name
         self.fs = float(fs)
         self.shape = (SITES,)
+        self._period = min(1.0 / self.fs, float(keepalive))
         self._site0 = TOUCH_FINGERS.index(Finger(tactile_finger)) * SITES
         self._unstuffer = Unstuffer()
         self._measured: dict[Finger, float] = {}
+        self._stalled: frozenset[Finger] = frozenset()
         self._targets: dict[Finger, float] = {}
         self._closing: dict[Finger, float] = {}  # finger -> closing speed, degrees/s
         self._reflex = False  # the grip-only guard (reflex_running)
-        self._next_request = -math.inf
+        self._wlock = threading.Lock()  # writes: the loop's commands and the pump's requests
+        self._arrived = threading.Condition()
+        self._frames: collections.deque[TactileSample] = collections.deque(maxlen=_FRAME_BACKLOG)
+        self._error: DeviceError | None = None
+        self._stop = threading.Event()
+        self._last_write = -math.inf
         self._t0 = time.perf_counter()
         self._seq = 0
-        self.replies = self.bad_replies = 0
+        self.replies = self.bad_replies = self.requests = 0
         self.last_reply: AbilityReply | None = None
         self.last_arrival = math.nan
         deadline = time.monotonic() + reply_timeout
@@ -487,21 +513,21 @@ class AbilityHand:
             self._port.close()
             raise DeviceError(f"{self.port_name}: no reply from an Ability Hand within {reply_timeout:g} s "
                               f"(UART API with byte stuffing on, {ABILITY_BAUD} baud?)")
+        self._pump = threading.Thread(target=self._pump_run, name="ability-hand-pump", daemon=True)
+        self._pump.start()
 
     # -- bytes ------------------------------------------------------------------------
-    def _command_sent(self) -> None:
-        """A command's reply is this period's frame: the next read-only request waits a period."""
-        self._next_request = time.perf_counter() + 1 / self.fs
-
     def _write(self, frame: bytes) -> None:
         import serial  # deferred: heavy (serial)
 
-        if self._port.serial is None and not self._port.ensure_open():
-            raise DeviceError(f"{self.port_name}: Ability Hand port is not connected")
-        try:
-            self._port.write(frame)
-        except (serial.SerialException, OSError) as err:
-            raise self._port.fail(err, "write failed") from None
+        with self._wlock:
+            if self._port.serial is None and not self._port.ensure_open():
+                raise DeviceError(f"{self.port_name}: Ability Hand port is not connected")
+            try:
+                self._port.write(frame)
+            except (serial.SerialException, OSError) as err:
+                raise self._port.fail(err, "write failed") from None
+            self._last_write = time.perf_counter()
 
     def _receive(self, timeout: float) -> list[TactileSample]:
         import serial  # deferred: heavy (serial)
@@ -510,11 +536,12 @@ class AbilityHand:
         if ser is None:
             return []
         try:
-            ser.timeout = timeout
+            if ser.timeout != timeout:
+                ser.timeout = timeout
             data = ser.read(ser.in_waiting or 1)
             if data and ser.in_waiting:
                 data += ser.read(ser.in_waiting)
-        except (serial.SerialException, OSError) as err:
+        except (serial.SerialException, OSError, TypeError) as err:
             raise self._port.fail(err) from None
         if not data:
             return []
@@ -529,13 +556,40 @@ class AbilityHand:
             self.replies += 1
             self.last_reply, self.last_arrival = reply, arrival
             self._measured = {f: units_of(f, d) for f, d in zip(ORDER, reply.positions)}
+            self._stalled = stalled_fingers(reply.status)
             site = touch_newtons(reply.touch[self._site0:self._site0 + SITES])
             out.append(TactileSample(self._seq, arrival - self._t0, site))
             self._seq += 1
         return out
 
+    def _pump_run(self) -> None:
+        """The driver's own thread: a read-only request whenever nothing was written for a period,
+        and every reply read as it comes (frames queued for :meth:`read_frames`)."""
+        while not self._stop.is_set():
+            try:
+                if time.perf_counter() - self._last_write >= self._period:
+                    self._write(encode_read())
+                    self.requests += 1
+                frames = self._receive(self._period / 2)
+            except DeviceError as err:
+                with self._arrived:
+                    self._error = err
+                    self._arrived.notify_all()
+                self._stop.wait(self._period)
+                continue
+            if frames:
+                with self._arrived:
+                    self._frames.extend(frames)
+                    self._arrived.notify_all()
+            elif self._port.serial is None or not hasattr(self._port.serial, "fileno"):
+                self._stop.wait(self._period / 4)  # a port without a blocking read: do not spin
+
     # -- Hand -------------------------------------------------------------------------
     def _command(self, targets: Mapping[Finger, float]) -> tuple[bytes, dict[Finger, float]]:
+        if self._reflex:  # every position frame, an empty one included, carries every finger's angle
+            raise ParameterError("Ability Hand: position command refused while a reflex runs (a position "
+                                 "frame moves every finger to an angle; the reflex adds grip only by "
+                                 "closing and holding)")
         full = {**self._measured, **self._targets}
         for f, v in targets.items():
             f = Finger(f)
@@ -545,9 +599,6 @@ class AbilityHand:
             if not (math.isfinite(v) and FINGER_MIN <= v <= FINGER_MAX):
                 raise ParameterError(f"Ability Hand: {f.name} position must be in {FINGER_MIN}..{FINGER_MAX}, "
                                      f"got {v!r}")
-            if self._reflex:
-                raise ParameterError(f"Ability Hand: {f.name} position {v:g} refused while a reflex runs "
-                                     f"(it adds grip only by closing and holding)")
             full[f] = v
         return encode_positions([degrees_of(f, full.get(f, 0.0)) for f in ORDER]), full
 
@@ -558,13 +609,13 @@ class AbilityHand:
         Raises
         ------
         ParameterError
-            A finger the hand lacks, or a position outside 0..500 (nothing is written).
+            A finger the hand lacks, a position outside 0..500, or any position frame while
+            a reflex runs (nothing is written).
         DeviceError
             The port is gone.
         """
         frame, full = self._command(targets)
         self._write(frame)
-        self._command_sent()
         self._targets = {f: v for f, v in full.items()}
 
     def close_fingers(self, fingers: Iterable[Finger], speed: float) -> None:
@@ -586,7 +637,6 @@ class AbilityHand:
         closing = {**self._closing, **{f: abs(degrees_of(f, speed)) for f in fs}}
         self._write(encode_velocities([closing.get(f, 0.0) * (-1 if f == Finger.THUMB_ROTATOR else 1)
                                        for f in ORDER]))
-        self._command_sent()
         self._closing = closing
 
     def hold(self, fingers: Iterable[Finger] = ()) -> None:
@@ -600,37 +650,47 @@ class AbilityHand:
         closing = {f: v for f, v in self._closing.items() if f not in fs}
         self._write(encode_velocities([closing.get(f, 0.0) * (-1 if f == Finger.THUMB_ROTATOR else 1)
                                        for f in ORDER]))
-        self._command_sent()
         self._closing = closing
 
     def reflex_running(self, running: bool = True) -> None:
-        """Switch the grip-only guard on (a reflex runs) or off: while on, every position command
+        """Switch the grip-only guard on (a reflex runs) or off: while on, every position frame
         is refused before a byte is written (a reflex adds grip only by closing and holding).
         """
         self._reflex = bool(running)
 
     def positions(self) -> dict[Finger, float]:
-        """The positions of the last reply, in finger units."""
+        """The positions of the newest reply (the pump reads them continuously), in finger units."""
         return dict(self._measured)
+
+    def stalled(self) -> frozenset[Finger]:
+        """Fingers the newest reply's status byte reports stalled: the hand ignores closing them
+        until they are opened, so grip sent to them is not grip added."""
+        return self._stalled
 
     # -- TactileSource ---------------------------------------------------------------
     def read_frames(self, timeout: float) -> list[TactileSample]:
-        """Ask for a reply when one is due (every ``1 / fs`` s) and return the frames that came.
+        """The frames of the replies that came since the last call (waiting at most ``timeout``).
 
         Raises
         ------
         DeviceError
-            The port failed (later calls try to reopen it).
+            The port failed and no frame came (the pump keeps trying to reopen it).
         """
-        now = time.perf_counter()
-        if now >= self._next_request:
-            self._next_request = max(self._next_request + 1 / self.fs, now)
-            self._write(encode_read())
-        wait = min(timeout, max(0.0, self._next_request - time.perf_counter()))
-        return self._receive(wait)
+        with self._arrived:
+            if not self._frames and self._error is None:
+                self._arrived.wait(max(0.0, timeout))
+            out = list(self._frames)
+            self._frames.clear()
+            err, self._error = self._error, None
+        if err is not None and not out:
+            raise err
+        return out
 
     def close(self) -> None:
-        """Close the port if this driver opened it."""
+        """Stop the pump and close the port if this driver opened it."""
+        self._stop.set()
+        if self._pump.is_alive() and self._pump is not threading.current_thread():
+            self._pump.join(timeout=1.0)
         self._port.close()
 
     def __enter__(self) -> AbilityHand:
@@ -638,6 +698,20 @@ class AbilityHand:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def stalled_fingers(status: int) -> frozenset[Finger]:
+    """The fingers a reply's status byte reports stalled: bit ``k`` is finger ``ORDER[k]``.
+
+    PSYONIC's wrapper logs any non-zero value as a collision; this driver reads it per
+    finger, in the frame's finger order.
+
+    Examples
+    --------
+    >>> sorted(f.name for f in stalled_fingers(0b000011))
+    ['INDEX', 'MIDDLE']
+    """
+    return frozenset(f for k, f in enumerate(ORDER) if status >> k & 1)
 
 
 #: How the virtual hand spreads a 4 x 4 tactile frame over a fingertip's 6 sites:
@@ -673,9 +747,15 @@ class VirtualAbilityHand:
     reads the rig's force plus a constant on touched sites, which a method that looks at
     changes (NMSD, SWT-SD) does not see.
 
+    It models the two behaviours of the hand a host can get wrong: its API timeout (after
+    ``api_timeout`` seconds without a frame, checked by :meth:`tick`, it leaves API mode:
+    ``api_timeouts`` counts it and the fingers go open, the "undesired finger movements" of
+    PSYONIC's manual at their worst for a grasp) and the stall (:meth:`stall` a finger: its
+    status bit is set in every reply and closing it does nothing until it is opened).
+
     Attributes
     ----------
-    commands, rejected : int
+    commands, rejected, api_timeouts : int
 
     Examples
     --------
@@ -692,11 +772,27 @@ class VirtualAbilityHand:
     (100.0, [0.2, 0.2, 0.4, 0.4, 0.2, 0.2])
     """
 
-    def __init__(self, rig: Any, tactile: Iterable[Finger] = (Finger.THUMB, Finger.INDEX, Finger.MIDDLE)) -> None:
+    def __init__(self, rig: Any, tactile: Iterable[Finger] = (Finger.THUMB, Finger.INDEX, Finger.MIDDLE), *,
+                 api_timeout: float = API_TIMEOUT_S, clock: Any = time.perf_counter) -> None:
         self.rig = rig
         self.tactile = tuple(f for f in tactile if f in TOUCH_FINGERS) if hasattr(rig, "tactile") else ()
         self._unstuffer = Unstuffer()
-        self.commands = self.rejected = 0
+        self.commands = self.rejected = self.api_timeouts = 0
+        self.api_timeout, self.clock = float(api_timeout), clock
+        self.in_api = False
+        self._heard = -math.inf
+        self._stalled: set[Finger] = set()
+
+    def stall(self, finger: Finger) -> None:
+        """Stall ``finger`` (a collision): reported in the status byte, closing ignored until opened."""
+        self._stalled.add(Finger(finger))
+
+    def tick(self) -> None:
+        """Leave API mode if the host has been silent for longer than the API timeout."""
+        if self.in_api and self.clock() - self._heard > self.api_timeout:
+            self.in_api = False
+            self.api_timeouts += 1
+            self.rig.hand.set_positions({f: 0.0 for f in ORDER if f != Finger.THUMB_ROTATOR})
 
     def _touch(self) -> list[int]:
         counts = [0] * (len(TOUCH_FINGERS) * SITES)
@@ -717,6 +813,11 @@ class VirtualAbilityHand:
             if f == Finger.THUMB_ROTATOR:
                 continue
             units = units_of(f, v)
+            if f in self._stalled:
+                if units >= 0:
+                    units = 0.0  # a stalled finger ignores closing
+                else:
+                    self._stalled.discard(f)
             if units > 0 and hasattr(hand, "command") and full:
                 hand.command(HandCommand.CLOSE, [f], min(float(PWM_MAX), units / full * PWM_MAX))
             elif units == 0 and hasattr(hand, "command"):
@@ -729,7 +830,9 @@ class VirtualAbilityHand:
     def reply(self) -> bytes:
         """The reply to a command now: measured positions and touch values."""
         pos = self.rig.hand.positions()
-        return encode_reply([degrees_of(f, float(pos.get(f, 0.0))) for f in ORDER], touch=self._touch())
+        status = sum(1 << k for k, f in enumerate(ORDER) if f in self._stalled)
+        return encode_reply([degrees_of(f, float(pos.get(f, 0.0))) for f in ORDER], touch=self._touch(),
+                            status=status)
 
     def feed(self, data: bytes) -> bytes:
         """Apply the commands in ``data``; return the replies to write back."""
@@ -741,9 +844,14 @@ class VirtualAbilityHand:
                 self.rejected += 1
                 continue
             self.commands += 1
+            self._heard, self.in_api = self.clock(), True
             if degrees is not None and header & 0xF0 == _POSITION:
-                self.rig.hand.set_positions({f: min(max(units_of(f, d), FINGER_MIN), FINGER_MAX)
-                                             for f, d in zip(ORDER, degrees) if f != Finger.THUMB_ROTATOR})
+                targets = {f: min(max(units_of(f, d), FINGER_MIN), FINGER_MAX)
+                           for f, d in zip(ORDER, degrees) if f != Finger.THUMB_ROTATOR}
+                now = self.rig.hand.positions()
+                self._stalled -= {f for f, v in targets.items() if v < float(now.get(f, 0.0))}  # opened
+                self.rig.hand.set_positions({f: v for f, v in targets.items()
+                                             if f not in self._stalled or v <= float(now.get(f, 0.0))})
             elif degrees is not None:
                 self._velocities(dict(zip(ORDER, degrees)))
             out += self.reply()

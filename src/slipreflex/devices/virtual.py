@@ -578,6 +578,9 @@ class VirtualDevices:
                 self._handle(script.pop(0)[1])
             self._drain()
             samples = self.rig.advance_to(t)
+            tick = getattr(self.emulator, "tick", None)
+            if tick is not None:  # the hand's own clock: its API timeout
+                tick()
             for s in samples:
                 self._last_seq = s.seq
                 if self._daq_paused:

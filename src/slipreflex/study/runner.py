@@ -555,7 +555,11 @@ def probe_scheduler(address: str, timeout: float | None = None) -> None:
     8-byte length, then that many bytes starting with a small frame count. Anything else
     (an SSH banner, an HTTP server waiting for a request, a closed port) is refused here in
     one line, before Dask's own client would wait for minutes or try to allocate what a
-    foreign banner's first bytes claim. ``tls://`` addresses are left to Dask's client.
+    foreign banner's first bytes claim. The whole first message is read within ``timeout``
+    (a server that sends a Dask-looking header and then nothing is refused too). A ``tls://``
+    address needs Dask's TLS configuration (``distributed.comm.tls``: a CA file, or the
+    client's certificate and key); without one it is refused here, and with one it is left to
+    Dask's client.
 
     Raises
     ------
@@ -573,6 +577,9 @@ def probe_scheduler(address: str, timeout: float | None = None) -> None:
     timeout = SCHEDULER_TIMEOUT_S if timeout is None else timeout
     where = f"--scheduler {address}"
     scheme, _, rest = address.rpartition("://")
+    if scheme == "tls":
+        _require_tls_config(where)
+        return
     if scheme not in ("", "tcp"):
         return
     host, sep, port = rest.rpartition(":")
@@ -603,6 +610,7 @@ def probe_scheduler(address: str, timeout: float | None = None) -> None:
                 frames = struct.unpack("<Q", read_exact(sock, 8))[0]
                 if not 1 <= frames <= 64:
                     raise ValueError
+                read_exact(sock, size - 8)  # the rest of the handshake, within the same deadline
             except TimeoutError:
                 raise ParameterError(f"{where}: no Dask handshake within {timeout:g} s (not a Dask "
                                      f"scheduler?)") from None
@@ -610,6 +618,17 @@ def probe_scheduler(address: str, timeout: float | None = None) -> None:
                 raise ParameterError(f"{where}: answers, but not as a Dask scheduler") from None
     except OSError as err:
         raise ParameterError(f"{where}: cannot connect ({err.strerror or err})") from None
+
+
+def _require_tls_config(where: str) -> None:
+    """A one-line error unless Dask's configuration gives the client something to speak TLS with."""
+    import dask.config  # deferred: optional extra (study: dask)
+
+    tls = dask.config.get("distributed.comm.tls", default={}) or {}
+    client = tls.get("client") or {}
+    if not (tls.get("ca-file") or client.get("cert")):
+        raise ParameterError(f"{where}: tls:// needs Dask's TLS configuration (distributed.comm.tls.ca-file, "
+                             f"client.cert and client.key, e.g. in ~/.config/dask/distributed.yaml); none is set")
 
 
 def _client(workers: int | None, scheduler: str | None, dashboard: str | None = None):
