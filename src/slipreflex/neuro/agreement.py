@@ -221,10 +221,11 @@ def table(rows: list[Agreement]) -> str:
 def stage_table(rows: list[Agreement]) -> str:
     """Per stage of Eq. 1-9: where it runs, exact or approximate, and the measured agreement
     (all signals, the package's executor)."""
-    tot = {g: None for g in GRAPHS}
+    tot: dict[str, Agreement | None] = {g: None for g in GRAPHS}
     for r in rows:
         if r.backend == "reference":
-            tot[r.graph] = r if tot[r.graph] is None else tot[r.graph] + r
+            before = tot[r.graph]
+            tot[r.graph] = r if before is None else before + r
     cells = {}
     for g, a in tot.items():
         if a is None:

@@ -27,6 +27,7 @@ Examples
 from __future__ import annotations
 
 import warnings
+from typing import Any
 
 import numpy as np
 
@@ -101,8 +102,9 @@ def _spyx_form(ng):
 def nir_if_type(threshold, reset):
     """A Nengo neuron type that follows NIR's IF: ``v += J dt``; spike where ``v > threshold``; ``v = reset``."""
     import nengo  # deferred: optional extra (nengo)
+    from nengo.neurons import NeuronType  # deferred: optional extra (nengo)
 
-    class NIRIF(nengo.neurons.NeuronType):
+    class NIRIF(NeuronType):
         state = {"voltage": nengo.dists.Choice([0.0])}
         spiking = True
 
@@ -151,8 +153,9 @@ def run_nengo(graph: SpikingGraph, inputs: np.ndarray) -> np.ndarray:
     with nengo.Network(seed=0) as net:
         ends = {name: _nengo_object(nengo, node, rows) for name, node in graph.nodes.items()}
         for a, b in graph.edges:           # a cycle's edge waits one step (a synapse), the others none
-            nengo.Connection(ends[a][1], ends[b][0], synapse=0 if (a, b) in delayed else None)
-        probe = nengo.Probe(ends[graph.output_name][1], synapse=None)
+            synapse: Any = 0 if (a, b) in delayed else None
+            nengo.Connection(ends[a][1], ends[b][0], synapse=synapse)
+        probe = nengo.Probe(ends[graph.output_name][1], synapse=_NONE)
     with nengo.Simulator(net, dt=1.0, progress_bar=False, optimize=False) as sim:
         sim.run_steps(rows.shape[0])
         return (np.asarray(sim.data[probe]) > 0).astype(np.float64)
@@ -176,6 +179,8 @@ def _nengo_object(nengo, node, rows: np.ndarray):
     fn = nengo.Node(lambda t, x, w=w, b=b: w @ x + b, size_in=w.shape[1], size_out=w.shape[0])
     return fn, fn
 
+
+_NONE: Any = None       # Nengo's "no synapse", typed as its stubs do not say
 
 #: The backends by name.
 BACKENDS = {"reference": run_reference, "spyx": run_spyx, "nengo": run_nengo}

@@ -68,7 +68,7 @@ class Node:
     """
 
     kind: str
-    params: Mapping[str, np.ndarray] = field(default_factory=dict)
+    params: Mapping[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if self.kind not in SUPPORTED:

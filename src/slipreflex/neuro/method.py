@@ -111,7 +111,7 @@ class NIRReflex:
         else:
             self.last_filtered = math.nan
         self.last_event = bool(spikes is not None and spikes.any())
-        self.last_polarity = _polarity(spikes) if self.last_event else 0
+        self.last_polarity = _polarity(spikes) if spikes is not None and self.last_event else 0
         v = self._windows.step(self.last_event)
         self.last_count = v
         if v is None:
