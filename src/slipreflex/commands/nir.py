@@ -15,7 +15,11 @@ import json
 from pathlib import Path
 from typing import Any
 
+from .. import methods
 from ..errors import ParameterError
+from ..neuro import agreement as ag
+from ..neuro.backends import BACKENDS, available
+from ..neuro.graph import METADATA_KEY, chain_graph, read_graph, write_graph
 
 NAME = "nir"
 HELP = "the chain as a NIR graph: export it, measure it against the chain (Eq. 1-9), show a graph"
@@ -51,16 +55,11 @@ def apply_graph_option(args: argparse.Namespace) -> None:
     path = getattr(args, "nir_graph", None)
     if path is None:
         return
-    from .. import methods
-    from ..neuro.graph import read_graph
-
     read_graph(path)                                   # a bad file: one line, before any work
     methods.register(methods.nir_method(str(path)), replace=True)
 
 
 def _export(args: argparse.Namespace) -> int:
-    from ..neuro.graph import chain_graph, write_graph
-
     if args.out.exists():
         raise ParameterError(f"{args.out}: exists; nir export writes a new file (give another --out)")
     graph = chain_graph(args.threshold, dath=args.graph == "dath")
@@ -72,9 +71,6 @@ def _export(args: argparse.Namespace) -> int:
 
 
 def _agreement(args: argparse.Namespace) -> int:
-    from ..neuro import agreement as ag
-    from ..neuro.backends import BACKENDS, available
-
     names = [b.strip() for b in args.backends.split(",") if b.strip()]
     for b in names:
         if b not in BACKENDS:
@@ -88,8 +84,6 @@ def _agreement(args: argparse.Namespace) -> int:
 
 
 def _show(args: argparse.Namespace) -> int:
-    from ..neuro.graph import METADATA_KEY, read_graph
-
     g = read_graph(args.graph)
     for name in g.order():
         node = g.nodes[name]

@@ -17,7 +17,12 @@ from pathlib import Path
 
 import numpy as np
 
+from ..benchmark import read_trial
+from ..csvfiles import read_preamble, read_slip_csv
 from ..errors import ParameterError
+from ..neuro import events as ev
+from ..neuro.events import FORMATS, sensor_size, write_events
+from ..recording import chain_params_of, read_recording
 
 NAME = "spikes"
 HELP = "write spikes as AEDAT4, tonic's events_struct (.npy) or NIR event data"
@@ -45,8 +50,6 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def _formats(text: str) -> list[str]:
-    from ..neuro.events import FORMATS
-
     names = [f.strip() for f in text.split(",") if f.strip()]
     bad = [f for f in names if f not in FORMATS]
     if bad or not names:
@@ -55,8 +58,6 @@ def _formats(text: str) -> list[str]:
 
 
 def _events(args: argparse.Namespace) -> np.ndarray:
-    from ..neuro import events as ev
-
     if (args.source is None) == (args.simulate is None):
         raise ParameterError("give a SOURCE file or --simulate drop|pour (one of them)")
     chain = {"dath": args.dath, **({"threshold": args.threshold} if args.threshold is not None else {})}
@@ -74,31 +75,21 @@ def _events(args: argparse.Namespace) -> np.ndarray:
     if not src.is_file():
         raise ParameterError(f"{src}: no such file")
     if src.suffix == ".mcap":
-        from ..recording import chain_params_of, read_recording
-
         rec = read_recording(src)
         samples = rec.topic("/daq/samples")
         raw = np.array([np.nan if s["slip_volts"] is None else s["slip_volts"] for s in samples], dtype=float)
         return ev.chain_events(raw, [s["t"] for s in samples], chain_params_of(rec))
-    from ..csvfiles import read_preamble
-
     if "layout" in read_preamble(src):
-        from ..benchmark import read_trial
-
         if args.threshold is None:
             raise ParameterError(f"{src} is a tactile trial: give --threshold in its unit (its taxels' counts)")
         trial = read_trial(src)
         return ev.taxel_events(trial.normal_frames(), trial.t, args.threshold)
-    from ..csvfiles import read_slip_csv
-
     t, x = read_slip_csv(src)
     return ev.chain_events(x, t, **chain)
 
 
 def run(args: argparse.Namespace) -> int:
     """Check every output first, then read, encode and write."""
-    from ..neuro.events import FORMATS, sensor_size, write_events
-
     fmts = _formats(args.format)
     targets = {f: args.out.with_name(args.out.name + FORMATS[f]) for f in fmts}
     for target in targets.values():              # every destination checked before any work

@@ -27,10 +27,14 @@ Examples
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
 from .. import hardware as hw
+from ..benchmark import BenchmarkConfig, read_folder, shipped_dataset
+from ..benchmark.run import reduce_channels, to_rate
+from ..csvfiles import read_slip_csv
 from .backends import run_backend
 from .graph import chain_graph
 
@@ -146,12 +150,7 @@ def shipped_signals() -> list[Signal]:
     >>> [s.group for s in shipped_signals()][:2]
     ['example', 'imanlab']
     """
-    from pathlib import Path
-
-    from ..benchmark import BenchmarkConfig, read_folder, shipped_dataset
-    from ..benchmark.run import reduce_channels, to_rate
     from ..chain import run_chain  # deferred: heavy (numba kernels)
-    from ..csvfiles import read_slip_csv
 
     example = Path(__file__).resolve().parents[3] / "examples" / "slip_example.csv"
     out = []

@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import DataError, ParameterError
+from .graph import _nir
 
 __all__ = ["EVENT_DTYPE", "FORMATS", "chain_events", "taxel_events", "sensor_size", "write_events",
            "write_npy", "write_aedat4", "write_nir_events", "NIR_NODE", "NIR_OBSERVABLE"]
@@ -207,8 +208,6 @@ def write_nir_events(events: np.ndarray, path: str | Path, size: tuple[int, int]
     >>> write_nir_events(np.zeros(0, dtype=EVENT_DTYPE), "spikes.h5")  # doctest: +SKIP
     PosixPath('spikes.h5')
     """
-    from .graph import _nir
-
     nir = _nir()
     path = Path(path)
     width, height = size or sensor_size(events)

@@ -26,6 +26,7 @@ import numpy as np
 
 from .. import hardware as hw
 from ..errors import DataError
+from ..methods import Detections
 from .graph import SpikingGraph, chain_graph, host_params, read_graph
 from .interpreter import GraphExecutor
 
@@ -161,8 +162,6 @@ def nir_detections(reflex: NIRReflex, volts: np.ndarray):
     >>> nir_detections(NIRReflex(), np.full(40, 0.4)).event_label
     'events (graph spikes)'
     """
-    from ..methods import Detections
-
     fresh = NIRReflex(reflex.graph, p0=reflex.params.p0)
     x = np.empty(len(volts))
     events = np.zeros(len(volts), dtype=bool)
