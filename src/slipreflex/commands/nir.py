@@ -12,12 +12,14 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 from pathlib import Path
 from typing import Any
 
 from .. import methods
 from ..errors import ParameterError
 from ..neuro import agreement as ag
+from ..neuro.agreement import measure
 from ..neuro.backends import BACKENDS, available
 from ..neuro.graph import METADATA_KEY, chain_graph, read_graph, write_graph
 
@@ -28,19 +30,23 @@ ORDER = 36
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``slipreflex nir``."""
-    sub = p.add_subparsers(dest="nir_command", metavar="ACTION", required=True)
-    ex = sub.add_parser("export", help="write the fixed-threshold (or DATH) graph as a .nir file")
-    ex.add_argument("-o", "--out", type=Path, required=True, help=".nir file to write (a new file)")
-    ex.add_argument("--graph", choices=("fixed", "dath"), default="fixed",
-                    help="fixed: the fixed-threshold chain (default); dath: DATH's closest graph")
-    ex.add_argument("--threshold", type=float, default=0.008, help="theta (theta0 for dath), V (0.008)")
-    ag = sub.add_parser("agreement", help="the graphs against the chain, per stage and per backend")
-    ag.add_argument("--backends", default="reference,spyx,nengo",
-                    help="comma-separated: reference (the package's executor), spyx, nengo (default: all)")
-    ag.add_argument("--no-simulated", action="store_true", help="only the shipped recordings")
-    ag.add_argument("--stages", action="store_true", help="print the per-stage table instead")
-    sh = sub.add_parser("show", help="a .nir file's nodes, edges and the chain it stands for")
-    sh.add_argument("graph", type=Path, help=".nir file")
+    p.add_argument("action", choices=ACTIONS,
+                   help="export: write the fixed-threshold (or DATH) graph as a .nir file; agreement: the graphs "
+                        "against the chain, per stage and per backend; show: a .nir file's nodes, edges and the "
+                        "chain it stands for")
+    p.add_argument("file", type=Path, nargs="?", default=None, help="show: the .nir file")
+    p.add_argument("-o", "--out", type=Path, default=None, help="export: the .nir file to write (a new file)")
+    p.add_argument("--graph", choices=("fixed", "dath"), default="fixed",
+                   help="export: fixed, the fixed-threshold chain (default); dath, DATH's closest graph")
+    p.add_argument("--threshold", type=float, default=0.008, help="export: theta (theta0 for dath), V (0.008)")
+    p.add_argument("--backends", default="reference,spyx,nengo",
+                   help="agreement: comma-separated reference (the package's executor), spyx, nengo (default: all)")
+    p.add_argument("--no-simulated", action="store_true", help="agreement: only the shipped recordings")
+    p.add_argument("--stages", action="store_true", help="agreement: print the per-stage table instead")
+
+
+#: What ``slipreflex nir`` does.
+ACTIONS: tuple[str, ...] = ("export", "agreement", "show")
 
 
 def add_graph_option(p: Any) -> None:
@@ -60,6 +66,10 @@ def apply_graph_option(args: argparse.Namespace) -> None:
 
 
 def _export(args: argparse.Namespace) -> int:
+    if args.out is None:
+        raise ParameterError("nir export needs -o FILE.nir")
+    if not (math.isfinite(args.threshold) and args.threshold > 0):
+        raise ParameterError(f"--threshold must be > 0 V, got {args.threshold}")
     if args.out.exists():
         raise ParameterError(f"{args.out}: exists; nir export writes a new file (give another --out)")
     graph = chain_graph(args.threshold, dath=args.graph == "dath")
@@ -77,14 +87,15 @@ def _agreement(args: argparse.Namespace) -> int:
             raise ParameterError(f"--backends: unknown {b!r} (known: {', '.join(BACKENDS)})")
         if not available(b):
             raise ParameterError(f"--backends: {b} is not installed (pip install 'slipreflex[neuro]')")
-    sigs = ag.signals(simulated=not args.no_simulated)
-    rows = [ag.compare(s, g, b) for g in ag.GRAPHS for b in names for s in sigs]
+    rows = measure(tuple(names), simulated=not args.no_simulated)
     print(ag.stage_table(rows) if args.stages else ag.table(rows))
     return 0
 
 
 def _show(args: argparse.Namespace) -> int:
-    g = read_graph(args.graph)
+    if args.file is None:
+        raise ParameterError("nir show needs the .nir FILE")
+    g = read_graph(args.file)
     for name in g.order():
         node = g.nodes[name]
         params = ", ".join(f"{k}={v.tolist()}" for k, v in node.params.items())
@@ -98,4 +109,4 @@ def _show(args: argparse.Namespace) -> int:
 
 def run(args: argparse.Namespace) -> int:
     """Do the action."""
-    return {"export": _export, "agreement": _agreement, "show": _show}[args.nir_command](args)
+    return {"export": _export, "agreement": _agreement, "show": _show}[args.action](args)

@@ -62,15 +62,8 @@ def _events(args: argparse.Namespace) -> np.ndarray:
         raise ParameterError("give a SOURCE file or --simulate drop|pour (one of them)")
     chain = {"dath": args.dath, **({"threshold": args.threshold} if args.threshold is not None else {})}
     if args.simulate is not None:
-        from ..sim import PAPER_DROP, PAPER_POUR, Rig, simulate_open_loop  # deferred: heavy (numba kernels)
-
-        rig = Rig(args.bottle, seed=args.seed)
-        rig.grasp()
-        what = PAPER_DROP if args.simulate == "drop" else PAPER_POUR
-        rig.perturb(what, at=rig.t + 1.0)
-        length = 3.0 if args.simulate == "drop" else PAPER_POUR.volume_ml / 1000 / PAPER_POUR.rate_l_min * 60 + 3.0
-        tr = simulate_open_loop(rig, length)
-        return ev.chain_events(tr.volts, tr.t, **chain)
+        t, volts = simulated_trial(args.simulate, args.bottle, args.seed)
+        return ev.chain_events(volts, t, **chain)
     src: Path = args.source
     if not src.is_file():
         raise ParameterError(f"{src}: no such file")
@@ -86,6 +79,19 @@ def _events(args: argparse.Namespace) -> np.ndarray:
         return ev.taxel_events(trial.normal_frames(), trial.t, args.threshold)
     t, x = read_slip_csv(src)
     return ev.chain_events(x, t, **chain)
+
+
+def simulated_trial(kind: str, bottle: str, seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """An open-loop simulated trial: the grasp, 1 s at rest, the paper's drop or pour, 3 s after; (t, volts)."""
+    from ..sim import PAPER_DROP, PAPER_POUR, Rig, simulate_open_loop  # deferred: heavy (numba kernels)
+
+    rig = Rig(bottle, seed=seed)
+    rig.grasp()
+    what = PAPER_DROP if kind == "drop" else PAPER_POUR
+    rig.perturb(what, at=rig.t + 1.0)
+    length = 3.0 if kind == "drop" else PAPER_POUR.volume_ml / 1000 / PAPER_POUR.rate_l_min * 60 + 3.0
+    tr = simulate_open_loop(rig, length)
+    return np.asarray(tr.t), np.asarray(tr.volts)
 
 
 def run(args: argparse.Namespace) -> int:

@@ -38,7 +38,7 @@ from ..csvfiles import read_slip_csv
 from .backends import run_backend
 from .graph import chain_graph
 
-__all__ = ["Signal", "Agreement", "compare", "signals", "shipped_signals", "simulated_signals", "table",
+__all__ = ["Signal", "Agreement", "compare", "measure", "signals", "shipped_signals", "simulated_signals", "table",
            "stage_table", "GRAPHS", "GROUPS"]
 
 #: The graphs held against the chain: the fixed-threshold chain's and DATH's closest.
@@ -190,6 +190,12 @@ def simulated_signals(seeds: tuple[int, ...] = (0, 1)) -> list[Signal]:
 def signals(simulated: bool = True) -> list[Signal]:
     """Every signal of the agreement table."""
     return shipped_signals() + (simulated_signals() if simulated else [])
+
+
+def measure(backends: tuple[str, ...], *, simulated: bool = True) -> list[Agreement]:
+    """Both graphs in every backend of ``backends`` on every signal (:func:`signals`)."""
+    sigs = signals(simulated=simulated)
+    return [compare(s, g, b) for g in GRAPHS for b in backends for s in sigs]
 
 
 def summed(rows: list[Agreement]) -> dict[tuple[str, str, str], Agreement]:
