@@ -123,7 +123,15 @@ def _matched(a: np.ndarray, b: np.ndarray, reach: int) -> int:
 
 
 def compare(signal: Signal, graph: str, backend: str) -> Agreement:
-    """One graph (``"fixed"`` or ``"dath"``) in one backend against the chain on one signal."""
+    """One graph (``"fixed"`` or ``"dath"``) in one backend against the chain on one signal.
+
+    Examples
+    --------
+    >>> rise = Signal("rise", "demo", 0.4 + np.linspace(0.0, 0.2, 64), 333.33, 0.008)
+    >>> a = compare(rise, "fixed", "reference")
+    >>> a.chain_spikes > 0 and a.same_sample == a.chain_spikes
+    True
+    """
     from ..chain import count_windows, mpi, run_chain  # deferred: heavy (numba kernels)
 
     dath = graph == "dath"
@@ -171,6 +179,11 @@ def simulated_signals(seeds: tuple[int, ...] = (0, 1)) -> list[Signal]:
 
     Each run: the grasp, 1 s at rest, the paper's drop (then 2 s) or pour (its whole
     length, then 2 s), the slip sensor's volts at the DAQ rate.
+
+    Examples
+    --------
+    >>> [s.name for s in simulated_signals(seeds=(0,))][:2]       # doctest: +SKIP
+    ['drop TR seed 0', 'drop DK seed 0']
     """
     from ..sim import BOTTLES, PAPER_DROP, PAPER_POUR, Rig, simulate_open_loop  # deferred: heavy (numba)
 
@@ -188,18 +201,38 @@ def simulated_signals(seeds: tuple[int, ...] = (0, 1)) -> list[Signal]:
 
 
 def signals(simulated: bool = True) -> list[Signal]:
-    """Every signal of the agreement table."""
+    """Every signal of the agreement table.
+
+    Examples
+    --------
+    >>> sorted({s.group for s in signals(simulated=False)})
+    ['example', 'imanlab']
+    """
     return shipped_signals() + (simulated_signals() if simulated else [])
 
 
 def measure(backends: tuple[str, ...], *, simulated: bool = True) -> list[Agreement]:
-    """Both graphs in every backend of ``backends`` on every signal (:func:`signals`)."""
+    """Both graphs in every backend of ``backends`` on every signal (:func:`signals`).
+
+    Examples
+    --------
+    >>> rows = measure(("reference",), simulated=False)           # doctest: +SKIP
+    >>> sorted({r.graph for r in rows})                           # doctest: +SKIP
+    ['dath', 'fixed']
+    """
     sigs = signals(simulated=simulated)
     return [compare(s, g, b) for g in GRAPHS for b in backends for s in sigs]
 
 
 def summed(rows: list[Agreement]) -> dict[tuple[str, str, str], Agreement]:
-    """Rows summed per (graph, backend, group)."""
+    """Rows summed per (graph, backend, group).
+
+    Examples
+    --------
+    >>> a = Agreement("drop", "fixed", "reference", 1, 1, 1, 1, 1, 2, 2, 2)
+    >>> summed([a, a])[("fixed", "reference", "drop")].windows
+    4
+    """
     out: dict[tuple[str, str, str], Agreement] = {}
     for r in rows:
         key = (r.graph, r.backend, r.group)
@@ -212,7 +245,13 @@ def _share(n: int, of: int) -> str:
 
 
 def table(rows: list[Agreement]) -> str:
-    """The agreement table (markdown): one row per graph, backend and signal group."""
+    """The agreement table (markdown): one row per graph, backend and signal group.
+
+    Examples
+    --------
+    >>> print(table([Agreement("drop", "fixed", "reference", 2, 2, 2, 2, 2, 4, 4, 4)]).splitlines()[-1])
+    | fixed | reference | drop | 2 | 2/2 (100.0 %) | 2/2 (100.0 %) | 2/2 (100.0 %) | 4/4 (100.0 %) | 4/4 (100.0 %) |
+    """
     head = ("| graph | backend | signals | chain spikes | same sample | within one sample | graph spikes "
             "matched | windows equal | commands equal |\n|---|---|---|---|---|---|---|---|---|")
     lines = [head]
@@ -225,7 +264,13 @@ def table(rows: list[Agreement]) -> str:
 
 def stage_table(rows: list[Agreement]) -> str:
     """Per stage of Eq. 1-9: where it runs, exact or approximate, and the measured agreement
-    (all signals, the package's executor)."""
+    (all signals, the package's executor).
+
+    Examples
+    --------
+    >>> stage_table([]).splitlines()[0]
+    '| stage | equations | where | fixed-threshold graph | DATH graph |'
+    """
     tot: dict[str, Agreement | None] = {g: None for g in GRAPHS}
     for r in rows:
         if r.backend == "reference":
@@ -245,8 +290,9 @@ def stage_table(rows: list[Agreement]) -> str:
         "|---|---|---|---|---|",
         "| low-pass filter | section 1.1 | host (the chain's filter) | exact (same code) | exact (same code) |",
         "| change d_k = x_k - x_(k-1) | Eq. 1 | host | exact (same code) | exact (same code) |",
-        "| accumulate and fire, reset to 0 | Eq. 1-2 | graph: Affine (+1, -1) into two IF neurons | "
-        f"approximate (two accumulators, each resets alone): {fx[0]} | approximate: {dt[0]} |",
+        "| accumulate and fire, reset to 0 | Eq. 1-2 | graph: Affine (+1, -1) into two IF neurons, each spike "
+        "giving the other theta back (Linear, one step later) | approximate (two accumulators; the other neuron "
+        f"keeps the overshoot): {fx[0]} | approximate: {dt[0]} |",
         "| DATH threshold | Eq. 4 | none (NIR has no adaptive threshold) | - | lost: theta0 throughout |",
         f"| spike counts per window | Eq. 3 | host (the chain's window counter) | exact given the spikes: {fx[1]} "
         f"equal | exact given the spikes: {dt[1]} equal |",

@@ -24,7 +24,7 @@ Examples
 --------
 >>> g = chain_graph()
 >>> [g.nodes[k].kind for k in g.order()]
-['Input', 'Affine', 'IF', 'Output']
+['Input', 'Affine', 'IF', 'Linear', 'Output']
 >>> float(g.nodes["encoder"].params["v_threshold"][0])
 0.008
 """

@@ -10,10 +10,11 @@ default) it is the fixed-threshold chain with its encoder replaced by two IF neu
 Examples
 --------
 >>> import numpy as np
+>>> from slipreflex.chain import run_chain
 >>> r = NIRReflex(p0=100.0)
->>> raw = np.r_[np.full(32, 0.40), 0.40 + 0.05 * np.sin(np.arange(64) / 3.0)]
->>> [c for c in (r.step(v) for v in raw) if c is not None]
-[100.0, 100.0, 150.0, 205.0, 230.0, 250.0]
+>>> raw = np.r_[np.full(32, 0.40), np.linspace(0.40, 0.55, 64)]      # a rise: the graph is exact here
+>>> [c for c in (r.step(v) for v in raw) if c is not None] == run_chain(raw, p0=100.0).commands.tolist()
+True
 """
 
 from __future__ import annotations
@@ -176,7 +177,7 @@ def graph_spikes(graph: SpikingGraph, raw: np.ndarray, **host: Any) -> np.ndarra
 
     Examples
     --------
-    >>> graph_spikes(chain_graph(threshold=0.01), np.r_[0.0, 0.0, 0.02, 0.02]).tolist()
+    >>> graph_spikes(chain_graph(threshold=0.01), np.r_[0.0, 0.0, 0.02, 0.005], filter=False).tolist()
     [0, 0, 1, 0]
     """
     r = NIRReflex(graph, **host)
