@@ -24,7 +24,7 @@ def _loop_table(summary: Path) -> str:
     sys.path.insert(0, str(ROOT / "scripts"))
     from method_table import cell
 
-    rows = list(csv.DictReader(summary.open()))
+    rows = list(csv.DictReader(summary.read_text().splitlines()))
     keys = sorted({(r["experiment"], r["bottle"]) for r in rows})
     by = {(r["experiment"], r["bottle"], r["method"]): r for r in rows}
     lines = ["| experiment | bottle | fixed (chain) | nir (graph) |", "|---|---|---|---|"]

@@ -101,3 +101,29 @@ def test_the_nir_method_is_registered_and_keeps_the_reflex_contract():
     assert "nir" in methods.names() and "nir" not in methods.names(paper=True)
     report = check_method("nir")
     assert report.commands > 0 and report.events > 0
+
+
+@pytest.mark.slow
+def test_reproduce_runs_the_exported_graph_beside_the_chain_and_reports_both(tmp_path):
+    import csv
+
+    from slipreflex.cli import main
+    from slipreflex.neuro.graph import write_graph
+
+    pytest.importorskip("nir", reason="the neuro extra (pip install 'slipreflex[neuro]')")
+    graph = write_graph(chain_graph(), tmp_path / "fixed.nir")
+    default = methods.get("nir")
+    try:
+        code = main(["reproduce", "--methods", "fixed,nir", "--nir-graph", str(graph), "--trials", "1",
+                     "--bottles", "TR", "--jobs", "1", "--no-figures", "--no-progress", "--out", str(tmp_path / "o")])
+        assert methods.get("nir").build.args == (str(graph),)        # the method runs the file given
+    finally:
+        methods.register(default, replace=True)
+    assert code == 0
+    rows = list(csv.DictReader((tmp_path / "o" / "summary.csv").read_text().splitlines()))
+    got = {(r["experiment"], r["method"]): r for r in rows}
+    for exp in ("drop", "pour"):
+        assert {(exp, "fixed"), (exp, "nir")} <= set(got)
+        # the first spike after rest is a rise or a fall from the chain's own state: the same response
+        assert got[(exp, "nir")]["response_mean_ms"] == got[(exp, "fixed")]["response_mean_ms"]
+    assert "NIR graph" in (tmp_path / "o" / "report.md").read_text()
