@@ -60,12 +60,14 @@ def run_spyx(graph: SpikingGraph, inputs: np.ndarray) -> np.ndarray:
     [0.0, 1.0]
     """
     try:
-        import jax  # deferred: optional extra (jax, pip install slipreflex[neuro])
+        with warnings.catch_warnings():       # a dependency's deprecation notice is not this package's to fix
+            warnings.simplefilter("ignore", DeprecationWarning)
+            import jax  # deferred: optional extra (jax, pip install slipreflex[neuro])
 
-        jax.config.update("jax_platforms", "cpu")
-        jax.config.update("jax_enable_x64", True)     # float32 rounding would hide the IF rule
-        import jax.numpy as jnp  # deferred: optional extra (jax)
-        import spyx.nir  # deferred: optional extra (spyx)
+            jax.config.update("jax_platforms", "cpu")
+            jax.config.update("jax_enable_x64", True)     # float32 rounding would hide the IF rule
+            import jax.numpy as jnp  # deferred: optional extra (jax)
+            import spyx.nir  # deferred: optional extra (spyx)
     except ImportError:
         raise ParameterError("the spyx backend needs spyx and jax: pip install 'slipreflex[neuro]'") from None
     x = jnp.asarray(np.asarray(inputs, dtype=np.float64)[:, None, :])       # (steps, batch 1, inputs)
