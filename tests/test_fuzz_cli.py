@@ -39,7 +39,8 @@ WORK = [("slipreflex.commands.reproduce", "run_reproduce"), ("slipreflex.command
         ("slipreflex.commands.run", "SerialDaq"), ("slipreflex.commands.detect", "run_chain"),
         ("slipreflex.commands.detect", "run_board_chain"), ("slipreflex.sim.calibration", "first_slip_ml"),
         ("slipreflex.sim.calibration", "calibrate_bottle"), ("slipreflex.sim.uncertain", "calibrate_bottle"),
-        ("slipreflex.commands.claims", "judge_run")]
+        ("slipreflex.commands.claims", "judge_run"), ("slipreflex.commands.nir", "measure"),
+        ("slipreflex.commands.spikes", "simulated_trial")]
 
 NUMBERS = ["nan", "inf", "-inf", "-1", "0", "1", "0.5", "1e300", "1e9", "-1e-300", "3", "100000000",
            "9" * 400, "1e8", "0x10", ""]

@@ -546,3 +546,22 @@ register(chain_method(DATH_FLOOR, "DATH, floor 1 LSB", dath=True, dath_floor=hw.
 # DATH whose accumulator forgets with a 0.1 s time constant (docs/method.md, "An accumulator that forgets")
 register(chain_method(DATH_LEAK, "DATH, leak 0.1 s", dath=True, acc_leak=round(0.1 * hw.DAQ_FS, 6),
                       color="#aec7e8"))
+
+# The fixed-threshold chain whose encoder is a spiking graph (docs/neuromorphic.md): the graph the
+# `nir export` command writes, or any NIR graph through `--nir-graph FILE`; not run by default.
+NIR = "nir"
+register(MethodSpec(name=NIR, label="NIR graph", input_kind="slip", fs=hw.DAQ_FS,
+                    build=EntryPoint("slipreflex.neuro.method:build_nir"),
+                    detections=EntryPoint("slipreflex.neuro.method:nir_detections"), color="#ff9896"))
+
+
+def nir_method(graph: str) -> MethodSpec:
+    """The ``nir`` method bound to the NIR graph file ``graph`` (what ``--nir-graph FILE`` registers).
+
+    Examples
+    --------
+    >>> nir_method("fixed.nir").build.args
+    ('fixed.nir',)
+    """
+    spec = get(NIR)
+    return dataclasses.replace(spec, build=EntryPoint("slipreflex.neuro.method:build_nir_file", (graph,)))

@@ -424,7 +424,7 @@ def plan(trials: Sequence[RecordedTrial], cfg: BenchmarkConfig = BenchmarkConfig
     >>> from slipreflex.benchmark import read_folder, shipped_dataset
     >>> names, skipped = plan(read_folder(shipped_dataset()))
     >>> "nmsd" in names, [s.method for s in skipped]
-    (True, ['dath-board', 'fixed-board'])
+    (True, ['dath-board', 'fixed-board', 'nir'])
     """
     for tr in trials:
         _check_calibration(tr, cfg)

@@ -41,6 +41,7 @@ from ..replication import replicate_undecided
 from ..validation import choices, within
 from ..warmup import COLD_COMPILE_S, cold_kernels, estimate_wall_s
 from ._lists import names_list
+from .nir import add_graph_option, apply_graph_option
 
 NAME = "reproduce"
 HELP = "run the paper's drop and pour experiments on the simulated rig and write a report"
@@ -151,6 +152,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--jobs", type=int, default=None, help="worker processes (default: all cores)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--no-figures", action="store_true", help="skip the example-trial figures")
+    add_graph_option(p)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -160,6 +162,7 @@ def run(args: argparse.Namespace) -> int:
     marked partial; exit status 130.
     """
     check_limits(args, _LIMITED)
+    apply_graph_option(args)
     config = ReproduceConfig(
         trials=args.trials, bottles=tuple(args.bottles), methods=tuple(args.methods),
         experiments=tuple(args.experiments), seed=args.seed, drop_mass_kg=args.drop_mass,

@@ -43,6 +43,7 @@ from ..runtime import (
 )
 from ..validation import within
 from ._live import add_live_arguments, check_live_arguments, close_taps, open_taps
+from .nir import add_graph_option, apply_graph_option
 
 NAME = "run"
 HELP = "run the slip reflex in real time: read the DAQ (or the hand's touch sensors), drive the hand, record to MCAP"
@@ -63,6 +64,7 @@ def add_chain_arguments(p: argparse.ArgumentParser) -> None:
                         "variant of the chain on the slip sensor (dath-event, dath-floor, dath-leak, "
                         "authors-gui, ...), or a tactile method (nmsd, swt) reading the touch sensors "
                         "of a hand that has them (--hand-type ability) with --tactile-threshold")
+    add_graph_option(g)
     g.add_argument("--tactile-threshold", type=float, default=None,
                    help="a tactile method's threshold, in its unit (N/s for nmsd, N for swt), as "
                         "calibrated at rest")
@@ -222,6 +224,7 @@ def check_arguments(args: argparse.Namespace) -> dict[Finger, float]:
         raise ParameterError(f"--watchdog must be in {WATCHDOG_MIN_S:g}..{WATCHDOG_MAX_S:g} s "
                              f"(a hold needs a bounded wait), got {args.watchdog}")
     p0 = parse_p0(args.p0)
+    apply_graph_option(args)
     build_reflex(args, p0)  # validates the method and every chain option
     if getattr(args, "board_reflex", False):
         _check_board_arguments(args)

@@ -37,6 +37,7 @@ from ..paths import output_dir
 from ..runtime import realtime_priority
 from ..validation import within
 from ._live import add_live_arguments, check_live_arguments, close_taps, open_taps
+from .nir import add_graph_option, apply_graph_option
 from .reproduce import own_objects
 
 NAME = "virtual-rig"
@@ -71,6 +72,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--method", default=None,
                    help="the method 'run' will use: checked against what this rig supplies (the slip "
                         "sensor; tactile frames with --hand-type ability) and put in the printed run line")
+    add_graph_option(p)
     add_live_arguments(p, lsl=False)
     p.add_argument("--realtime", action="store_true",
                    help="run the rig's real-time thread under SCHED_FIFO (it stands in for hardware "
@@ -107,6 +109,7 @@ def _announce(dev, grasp, args: argparse.Namespace, hand, method, schedule) -> N
         line += f" --hand-type {hand.name}"
     if method is not None:
         line += f" --method {method.name}" + (" --tactile-threshold T" if tactile else "")
+        line += f" --nir-graph {args.nir_graph}" if args.nir_graph is not None else ""
     print(f"run: {line} --p0 {grasp.p0_text()}", flush=True)
     print("keys: d+Enter drop, p+Enter pour, q+Enter quit; SIGUSR1 drop, SIGUSR2 pour", flush=True)
     if schedule:
@@ -169,6 +172,7 @@ def run(args: argparse.Namespace) -> int:
     _check_arguments(args)
     check_live_arguments(args)
     hand = get_hand(args.hand_type)
+    apply_graph_option(args)
     method = None
     if args.method is not None:
         method = applicable(args.method, {"slip", "tactile"} if hand.tactile else {"slip"},
