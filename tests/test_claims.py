@@ -1,6 +1,5 @@
 """The paper's claims judged from hand-made tables: a case of every class, parts, censoring, claims.csv."""
 
-import math
 
 import numpy as np
 import pytest

@@ -90,7 +90,8 @@ __all__ = [
     "TIME_TOL_MS", "LENGTH_TOL_MM", "NEAR_ML", "MOST", "UNDER_MS", "TOLERANCES", "stated_tolerance", "Reading",
     "Part", "Claim", "ClaimInput", "ClaimResult", "CLAIMS", "CLAIMS_CSV_COLUMNS", "PARTS_CSV_COLUMNS", "judge",
     "judge_run", "scan_ensemble_for", "measured_scan", "write_claims_csv", "write_parts_csv", "read_claims_csv",
-    "claims_section", "claims_markdown", "parts_markdown", "claims_terminal", "explain", "mean_interval", "difference_interval",
+    "claims_section", "claims_markdown", "parts_markdown", "claims_terminal", "explain", "mean_interval",
+    "difference_interval",
     "ratio_interval", "proportion_interval", "median_interval", "DropBounds", "drop_bounds", "Contradiction",
     "contradictions", "contradictions_markdown", "window_phase_sd_ms", "drop_slipout_capacity_n",
     "drop_momentum_capacity_n", "first_slip_capacity_n", "STATIC_OVER_KINETIC_MAX", "REPLICATES_MAX", "LOOKS",
@@ -781,7 +782,8 @@ def _same_encoder(ci: ClaimInput, experiment: str, bottles: Sequence[str] = BOTT
         return None
     return Part(FAILS_DEFINITION, (
         f"DATH and the fixed threshold answer alike (the same sample, or neither within the cutoff) on "
-        f"{len(pairs)} of {len(pairs)} paired {experiment} slips: they are the same encoder until the first spike (Eq. 1-4: DATH changes the "
+        f"{len(pairs)} of {len(pairs)} paired {experiment} slips: they are the same encoder until the first "
+        "spike (Eq. 1-4: DATH changes the "
         "threshold only after one), so on the same input DATH cannot be faster"), 0.0,
         "DATH minus fixed response < 0 ms", 0.0, 0.0, label="DATH = fixed by definition")
 
@@ -880,7 +882,7 @@ def _scan_levels(ci: ClaimInput) -> list[Part]:
                      float(ok), crit, label="measured scan")]
     model = ""
     if ci.scan is not None:
-        model = " The model's central {:g} % over {} texture seeds: ".format(100 * CENTRAL, len(ci.scan)) + ", ".join(
+        model = f" The model's central {100 * CENTRAL:g} % over {len(ci.scan)} texture seeds: " + ", ".join(
             "{} {:.3f}-{:.3f} V".format(stat.replace("_", " "), *ci.scan.band(stat, CENTRAL))
             for stat, _, _ in _WANT_LEVELS) + "."
     return [Part(NOT_DECIDABLE, (
@@ -951,10 +953,10 @@ def _nmsd_twice(ci: ClaimInput) -> list[Part]:
     bottles = [b for b in BOTTLE_ORDER if ci.cell("drop", b, DATH) and ci.cell("drop", b, NMSD)]
     if not bottles:
         return [Part(NOT_DECIDABLE, "this run has no drop trials of DATH and NMSD on one bottle", label="cells")]
-    paper = [PAPER[("drop", "total_ms", b, NMSD)].mean / PAPER[("drop", "total_ms", b, DATH)].mean
-             for b in BOTTLE_ORDER]
-    ratio = float(np.mean([PAPER[("drop", "total_ms", b, NMSD)].mean for b in BOTTLE_ORDER])
-                  / np.mean([PAPER[("drop", "total_ms", b, DATH)].mean for b in BOTTLE_ORDER]))
+    nmsd = [_paper_mean_total("drop", b, NMSD) for b in BOTTLE_ORDER]
+    dath = [_paper_mean_total("drop", b, DATH) for b in BOTTLE_ORDER]
+    paper = [n / d for n, d in zip(nmsd, dath)]
+    ratio = float(np.mean(nmsd) / np.mean(dath))
     own = Part(HOLDS if ratio > 2 else FAILS_PAPER, f"the paper's own drop totals: NMSD / DATH {ratio:.2f} over the "
                f"bottles ({', '.join(f'{x:.2f}' for x in paper)} per bottle)", ratio, "ratio > 2",
                label="the paper's table")
@@ -1521,7 +1523,8 @@ def measured_scan(path: str | Path):
     speed = float((pos[-1] - pos[0]) * 1e-3 / (t[-1] - t[0]))
     a = ScanResult(t, pos * 1e-3, volts, regions, speed, fs).analyse()
     nan = (math.nan, math.nan)
-    lv = {f"{r}_{e}": np.array([a.ranges.get(r, nan)[i]]) for r in ("white", "black") for i, e in enumerate(("lo", "hi"))}
+    lv = {f"{r}_{e}": np.array([a.ranges.get(r, nan)[i]]) for r in ("white", "black")
+          for i, e in enumerate(("lo", "hi"))}
     gaps = {m: [v for (mm, r), v in a.min_spacing_mm.items() if mm == m and r in ("white", "black") and v is not None]
             for m in (FIXED, DATH)}
     return ScanEnsemble(seeds=np.array([0]), step_mm=speed * 1e3 / fs, **lv,

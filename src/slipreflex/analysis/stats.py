@@ -46,11 +46,13 @@ import functools
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 __all__ = ["ALPHA", "RESAMPLES", "Sample", "cluster_interval", "km_median", "rank_p", "pocock_z", "pocock_level",
-           "newcombe_interval", "wilson_interval", "look_level", "MEAN_DIFF", "RATIO", "INDEX", "FRACTION", "MEAN", "sequential"]
+           "newcombe_interval", "wilson_interval", "look_level", "MEAN_DIFF", "RATIO", "INDEX", "FRACTION", "MEAN",
+           "sequential"]
 
 #: Overall probability of a decisive class when the truth sits on the criterion (2.5 % each side).
 ALPHA: float = 0.05
@@ -311,13 +313,14 @@ def pocock_z(looks: int, alpha: float = ALPHA) -> float:
         return float(norm.ppf(1 - alpha / 2))
     i = np.arange(1, looks + 1)
     cov = np.sqrt(np.minimum.outer(i, i) / np.maximum.outer(i, i))
-    mvn = multivariate_normal(mean=np.zeros(looks), cov=cov, seed=0)
+    mvn: Any = multivariate_normal(mean=np.zeros(looks), cov=cov, seed=0)   # type: ignore[arg-type]
 
     def excess(c: float) -> float:
         inside = float(mvn.cdf(np.full(looks, c), lower_limit=np.full(looks, -c)))
         return (1.0 - inside) - alpha
 
-    return float(brentq(excess, 1.5, 4.0, xtol=1e-4))
+    root: Any = brentq(excess, 1.5, 4.0, xtol=1e-4)
+    return float(root)
 
 
 def pocock_level(looks: int, alpha: float = ALPHA) -> float:

@@ -29,7 +29,15 @@ import argparse
 import csv
 from pathlib import Path
 
-from ..analysis.claims import CLAIMS, claims_terminal, explain, judge_run, measured_scan, write_claims_csv, write_parts_csv
+from ..analysis.claims import (
+    CLAIMS,
+    claims_terminal,
+    explain,
+    judge_run,
+    measured_scan,
+    write_claims_csv,
+    write_parts_csv,
+)
 from ..analysis.outputs import scored
 from ..analysis.trial import TrialRow
 from ..errors import ParameterError

@@ -51,7 +51,7 @@ from ..baselines.swt import SWT_WINDOW
 from ..errors import ParameterError
 from ..paths import read_toml
 from .calibration import CALIBRATION_SEEDS, calibrate_bottle
-from .objects import BOTTLES, Bottle
+from .objects import BOTTLES, Bottle, Surface
 from .params import FlowParams, HandParams, ImuParams, PhysicsParams, SlipSensorParams, TactileParams, WaterParams
 from .rig import Rig
 
@@ -150,6 +150,13 @@ def _c(name: str, unit: str, nominal: float, low: float, high: float, dist: str,
 
 
 _B = BOTTLES
+
+
+def _surface(bottle: str) -> Surface:
+    """A paper bottle's surface (a bottle resolves its surface's name when it is made)."""
+    s = BOTTLES[bottle].surface
+    assert isinstance(s, Surface), s
+    return s
 _H = HandParams()
 _T = TactileParams()
 _S = SlipSensorParams()
@@ -297,12 +304,12 @@ UNCERTAIN: Mapping[str, UncertainConstant] = MappingProxyType({c.name: c for c i
        "smooth-wall slosh damping of Stephens et al. 1962 (NASA TN D-1367), times 0.7-3: its scatter and the "
        "contact-line dissipation of small containers (estimate)", "water.slosh_damping_factor"),
     *(c for b in ("TR", "DK", "TX") for c in (
-        _c(f"reflectance_{b}", "1", _B[b].surface.reflectance, round(0.7 * _B[b].surface.reflectance, 6),
-           round(min(0.95, 1.3 * _B[b].surface.reflectance), 6), "uniform",
+        _c(f"reflectance_{b}", "1", _surface(b).reflectance, round(0.7 * _surface(b).reflectance, 6),
+           round(min(0.95, 1.3 * _surface(b).reflectance), 6), "uniform",
            "estimate: the paper gives no level for its bottles, only that less reflective surfaces fluctuate "
            "less than textured ones (II-C-2); ±30 % of the nominal reflectance", f"bottle[{b}].surface.reflectance"),
-        _c(f"texture_{b}", "1", _B[b].surface.texture, round(0.5 * _B[b].surface.texture, 6),
-           round(2.0 * _B[b].surface.texture, 6), "loguniform",
+        _c(f"texture_{b}", "1", _surface(b).texture, round(0.5 * _surface(b).texture, 6),
+           round(2.0 * _surface(b).texture, 6), "loguniform",
            "estimate: the bottles' texture is known only qualitatively (II-C-2); half to twice the nominal rms",
            f"bottle[{b}].surface.texture"))),
     _c("swt_persist", "samples", float(SWT_WINDOW), 0.0, float(SWT_WINDOW), "uniform",
@@ -546,9 +553,8 @@ def plant_from_values(values: Mapping[str, float] | None = None, *,
     for b, kw in bottle_set.items():
         surface = {k.partition(".")[2]: kw.pop(k) for k in [k for k in kw if k.startswith("surface.")]}
         try:
-            if surface:
-                kw["surface"] = replace(BOTTLES[b].surface, **surface)
-            bottles[b] = replace(BOTTLES[b], **kw)
+            more: dict[str, Any] = {"surface": replace(_surface(b), **surface)} if surface else {}
+            bottles[b] = replace(BOTTLES[b], **kw, **more)
         except (ParameterError, TypeError) as err:
             raise ParameterError(f"uncertain constants -> bottle {b}: {err}") from None
     return Plant(bottles=MappingProxyType(bottles), values=MappingProxyType(full),

@@ -56,7 +56,8 @@ from ..paths import new_file
 from .design import varying
 from .runner import _arrow_table
 
-__all__ = ["wilson", "plant_table", "pooled_scan", "claim_fractions", "deciders", "reaches", "FDR", "sensitivity", "top_constants", "write_outputs",
+__all__ = ["wilson", "plant_table", "pooled_scan", "claim_fractions", "deciders", "reaches", "FDR", "sensitivity",
+           "top_constants", "write_outputs",
            "study_markdown", "CLAIMS_COLUMNS", "SENSITIVITY_COLUMNS", "Z95"]
 
 #: Normal quantile of the 95 % intervals.
@@ -522,7 +523,8 @@ def study_markdown(run: Any, plants: Sequence[Mapping[str, Any]], fractions: Seq
     for r in fractions:
         dec = r.get("decided_by") or "-"
         by = ", ".join(f"{r[v.replace('-', '_')]} {v}" for v in VERDICTS if r[v.replace("-", "_")])
-        lines.append(f"| {r['claim']} | {r['text']} | **{r['verdict']}{' (' + r['qualifier'] + ')' if r.get('qualifier') else ''}** | {_pct(r['value'])} | "
+        cls = r["verdict"] + (f" ({r['qualifier']})" if r.get("qualifier") else "")
+        lines.append(f"| {r['claim']} | {r['text']} | **{cls}** | {_pct(r['value'])} | "
                      f"{_pct(r['low'])}-{_pct(r['high'])} | {by or '-'} | {dec} |")
     lines += ["", "## What the map says", ""] + [f"- {s}" for s in _verdict_lines(fractions)] + [""]
     lines += ["## Uncertain constants", "", "| constant | unit | range | distribution |", "|---|---|---|---|"]
