@@ -25,15 +25,18 @@ CLAIMS_BEGIN, CLAIMS_END = "<!-- claims table begins -->", "<!-- claims table en
 
 
 def claims_table(claims: list[dict]) -> str:
-    """The claims' verdicts as a markdown table (claim, verdict, value [interval]) from a claims.csv's rows."""
+    """The claims' classes as a markdown table (quote, where, class, every part) from a claims.csv's rows."""
     def num(x: str) -> str:
         return f"{float(x):.3g}" if x not in ("", "nan") else ""
 
-    lines = ["| # | claim | verdict | value [95 % interval] |", "|---|---|---|---|"]
+    lines = ["| # | the paper says | where | class | parts (* primary) | value [interval] |",
+             "|---|---|---|---|---|---|"]
     for r in claims:
         v = num(r["value"])
         iv = f" [{num(r['low'])}, {num(r['high'])}]" if num(r["low"]) else ""
-        lines.append(f"| {r['claim']} | {r['text']} | {r['verdict']} | {v + iv or '-'} |")
+        cls = r["verdict"] + (f" ({r['qualifier']})" if r.get("qualifier") else "")
+        lines.append(f"| {r['claim']} | {r['text']} | {r.get('where', '')} | {cls} | {r.get('parts', '')} | "
+                     f"{v + iv or '-'} |")
     return "\n".join(lines)
 
 
