@@ -193,8 +193,11 @@ def test_claims_command_judges_claim_1_on_a_recorded_scan(tmp_path, capsys):
 
     r = scan(seed=3)
     (tmp_path / "scan.csv").write_text("t,position_mm,volts\n" + "".join(
-        f"{a!r},{b!r},{c!r}\n" for a, b, c in zip(r.t, r.position * 1e3, r.volts)))
-    write_csv(tmp_path / "results.csv", paper_like(drops=5, pours=2), RESULT_COLUMNS)
+        f"{float(a)!r},{float(b)!r},{float(c)!r}\n" for a, b, c in zip(r.t, r.position * 1e3, r.volts)))
+    from slipreflex.analysis.trial import TrialRow
+
+    rows = [TrialRow.from_dict(r) for r in paper_like(drops=5, pours=2)]
+    write_csv(tmp_path / "results.csv", rows, RESULT_COLUMNS)
     assert main(["claims", str(tmp_path / "results.csv"), "--scan", str(tmp_path / "scan.csv"),
                  "--explain", "1"]) == 0
     out = capsys.readouterr().out

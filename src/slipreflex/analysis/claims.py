@@ -1490,7 +1490,7 @@ def measured_scan(path: str | Path):
     >>> r = scan(seed=4)
     >>> p = pathlib.Path(tempfile.mkdtemp()) / "scan.csv"
     >>> _ = p.write_text("t,position_mm,volts\\n" + "".join(
-    ...     f"{a!r},{b!r},{c!r}\\n" for a, b, c in zip(r.t, r.position * 1e3, r.volts)))
+    ...     f"{float(a)!r},{float(b)!r},{float(c)!r}\\n" for a, b, c in zip(r.t, r.position * 1e3, r.volts)))
     >>> round(float(measured_scan(p).black_hi[0]), 2) > 3
     True
     """
