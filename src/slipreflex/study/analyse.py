@@ -365,7 +365,7 @@ def _columns(rows: Sequence[Mapping[str, Any]]) -> list[str]:
 
 
 _COLORS = {HOLDS: "#2ca02c", "fails-definition": "#7f0000", "fails-paper": "#ff7f0e", FAILS_PLANT: "#d62728",
-           UNRESOLVED: "#1f77b4", NOT_DECIDABLE: "0.75", "error": "black"}
+           DEPENDS_PLANT: "#9467bd", UNRESOLVED: "#1f77b4", NOT_DECIDABLE: "0.75", "error": "black"}
 
 
 def _plot_claim(plants, claim: Any, xy: list[str], table: Mapping, path: Path) -> Path:
