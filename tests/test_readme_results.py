@@ -36,8 +36,7 @@ def test_claims_table_from_a_claims_csv():
              "qualifier": "calibrated input", "parts": "scan levels* not-decidable", "value": "", "low": "", "high": ""},
             {"claim": "5", "text": "twice", "verdict": "fails-plant", "value": "0.4213", "low": "0.28", "high": "0.65"}]
     text = SCRIPT["claims_table"](rows)
-    assert '| 3 | "decreased" | III-B | fails-definition | TR* holds | 0 [0, 0] |' in text
-    assert "| not-decidable (calibrated input) | scan levels* not-decidable | - |" in text
-    assert "| 0.421 [0.28, 0.65] |" in text
+    assert '| 3 | "decreased" | fails-definition | TR* (1 of 1) |' in text
+    assert '| 1 | "300 to 500 mV" | not-decidable (calibrated input) | none (0 of 1) |' in text
     readme = (ROOT / "README.md").read_text()
     assert readme.count(SCRIPT["CLAIMS_BEGIN"]) == 1 and readme.count(SCRIPT["CLAIMS_END"]) == 1
