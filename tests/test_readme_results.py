@@ -33,7 +33,8 @@ def test_claims_table_from_a_claims_csv():
     rows = [{"claim": "3", "text": '"decreased"', "where": "III-B", "verdict": "fails-definition", "qualifier": "",
              "parts": "TR* holds", "value": "0.0", "low": "0.0", "high": "0.0"},
             {"claim": "1", "text": '"300 to 500 mV"', "where": "III-A", "verdict": "not-decidable",
-             "qualifier": "calibrated input", "parts": "scan levels* not-decidable", "value": "", "low": "", "high": ""},
+             "qualifier": "calibrated input", "parts": "scan levels* not-decidable", "value": "", "low": "",
+             "high": ""},
             {"claim": "5", "text": "twice", "verdict": "fails-plant", "value": "0.4213", "low": "0.28", "high": "0.65"}]
     text = SCRIPT["claims_table"](rows)
     assert '| 3 | "decreased" | fails-definition | TR* (1 of 1) |' in text

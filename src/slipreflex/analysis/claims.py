@@ -1677,7 +1677,7 @@ def claims_terminal(results: Sequence[ClaimResult]) -> str:
     Examples
     --------
     >>> print(claims_terminal(judge([])).splitlines()[0])
-    paper's claims: 3 fails-paper, 8 not-decidable
+    paper's claims: 1 fails-paper, 10 not-decidable
     """
     lines = [f"paper's claims: {_counts(results)}"]
     for r in results:
@@ -1691,8 +1691,8 @@ def explain(result: ClaimResult) -> str:
 
     Examples
     --------
-    >>> print(explain(judge([])[7]).splitlines()[0])
-    claim 8 (IV; abstract): fails-paper
+    >>> print(explain(judge([])[10]).splitlines()[0])
+    claim 11 (III-B, III-C, Figs. 14, 17): fails-paper
     """
     claim = {c.number: c for c in CLAIMS}[result.number]
     lines = [f"claim {result.number} ({result.where}): {result.class_text}", f"  the paper: {claim.quote}",

@@ -13,7 +13,7 @@ Examples
 >>> res = run_reproduce(ReproduceConfig(trials=1, bottles=("TX",), methods=("fixed",),
 ...                                     experiments=("drop",)), jobs=1, progress=False, plots=False)
 >>> sorted(write_outputs(res, tempfile.mkdtemp()))[:3]
-['bars_drop_response.png', 'bars_drop_total.png', 'claims']
+['bars_drop_response.png', 'bars_drop_total.png', 'claim_parts']
 """
 
 from __future__ import annotations

@@ -252,8 +252,10 @@ def km_median(s: Sample, cutoff: float = math.inf) -> float:
 
     Examples
     --------
-    >>> km_median(Sample.of({1: [10.0], 2: [20.0], 3: [math.inf], 4: [math.inf]}), cutoff=1000.0)
+    >>> km_median(Sample.of({1: [10.0], 2: [math.inf], 3: [math.inf], 4: [math.inf]}), cutoff=1000.0)
     inf
+    >>> km_median(Sample.of({1: [10.0], 2: [20.0], 3: [30.0], 4: [math.inf]}), cutoff=1000.0)
+    20.0
     """
     from scipy.stats import CensoredData, ecdf  # deferred: heavy (scipy.stats)
 
