@@ -63,7 +63,10 @@ def main(argv: list[str] | None = None) -> int:
     lines += ["| replicate grids | " + " | ".join(cost) + " |", "",
               f"{same} of {len(table)} claims have the same class on all {len(seeds)} seeds "
               f"(`python scripts/claims_seeds.py --seeds {args.seeds}`"
-              + (f" --trials {args.trials}" if args.trials is not None else "") + ")."]
+              + (f" --trials {args.trials}" if args.trials is not None else "") + "). A master seed changes "
+              "the trials' noise (texture draws, sensor noise, onsets), never the plant's physics: the same class "
+              "on every seed says the class does not hang on one draw of the noise, not that it holds on other "
+              "plants (docs/study.md does that)."]
     body = "\n".join(lines)
     print(body)
     if args.write:

@@ -25,15 +25,17 @@ CLAIMS_BEGIN, CLAIMS_END = "<!-- claims table begins -->", "<!-- claims table en
 
 
 def claims_table(claims: list[dict]) -> str:
-    """The claims' verdicts as a markdown table (claim, verdict, value [interval]) from a claims.csv's rows."""
-    def num(x: str) -> str:
-        return f"{float(x):.3g}" if x not in ("", "nan") else ""
+    """The claims' classes as a markdown table (where, class, the parts that hold) from a claims.csv's rows."""
+    def short(text: str, most: int = 48) -> str:
+        return text if len(text) <= most else text[:most].rsplit(" ", 1)[0] + ' ..."'
 
-    lines = ["| # | claim | verdict | value [95 % interval] |", "|---|---|---|---|"]
+    lines = ["| # | the paper says | class | parts that hold (* primary) |", "|---|---|---|---|"]
     for r in claims:
-        v = num(r["value"])
-        iv = f" [{num(r['low'])}, {num(r['high'])}]" if num(r["low"]) else ""
-        lines.append(f"| {r['claim']} | {r['text']} | {r['verdict']} | {v + iv or '-'} |")
+        cls = r["verdict"] + (f" ({r['qualifier']})" if r.get("qualifier") else "")
+        parts = [p.rsplit(" ", 1) for p in r.get("parts", "").split("; ") if " " in p]
+        held = [name for name, v in parts if v == "holds"]
+        lines.append(f"| {r['claim']} | {short(r['text'])} | {cls} | "
+                     f"{', '.join(held) or 'none'} ({len(held)} of {len(parts)}) |")
     return "\n".join(lines)
 
 

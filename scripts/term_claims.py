@@ -11,12 +11,14 @@ Run: ``python scripts/term_claims.py [--jobs 2] [--terms grip,roll,...]``.
 
 ``python scripts/term_claims.py --study DIR`` instead reads a finished study's ``plants.csv`` and prints, for
 claims 4, 5 and 7, on how many plants each was decidable (a verdict other than not-decidable) and held, and the
-constants whose values go with the claim being decidable (Spearman's rho, p < 0.05).
+constants whose values go with the claim being decidable (Spearman's rho; Benjamini-Hochberg q < 0.05 over the
+constants that can reach the claim).
 """
 
 from __future__ import annotations
 
 import argparse
+from typing import Any
 
 #: Each term and the uncertain constants that switch it off (their "absent" values).
 TERMS: dict[str, dict[str, float]] = {
@@ -38,10 +40,11 @@ def decidable(folder: str, claims: tuple[int, ...] = (4, 5, 7)) -> list[str]:
     from pathlib import Path
 
     import numpy as np
-    from scipy.stats import spearmanr
+    from scipy.stats import false_discovery_control, spearmanr
 
     from slipreflex.analysis.claims import HOLDS, NOT_DECIDABLE
     from slipreflex.sim.uncertain import UNCERTAIN
+    from slipreflex.study.analyse import FDR, reaches
 
     out: list[str] = []
     rows = [r for r in csv.DictReader((Path(folder) / "plants.csv").open())
@@ -54,16 +57,19 @@ def decidable(folder: str, claims: tuple[int, ...] = (4, 5, 7)) -> list[str]:
         out.append(f"claim {n}: decidable on {int(testable.sum())} of {len(rows)} plants, holds on {holds} ({kinds})")
         print(out[-1])
         if 0 < testable.sum() < len(rows):
-            found = []
+            tests = []
             for name in UNCERTAIN:
+                if name not in rows[0] or not reaches(UNCERTAIN[name], n):
+                    continue
                 x = np.array([float(r[name]) for r in rows])
                 if np.ptp(x) == 0:
                     continue
-                rho, p = spearmanr(x, testable)
-                if p < 0.05:
-                    found.append((abs(rho), name, rho, p))
-            for _, name, rho, p in sorted(found, reverse=True):
-                out.append(f"  testable with {name}: rho {rho:+.2f} (p {p:.2g})")
+                res: Any = spearmanr(x, testable)
+                tests.append((name, float(res.statistic), float(res.pvalue)))
+            q = false_discovery_control([p for _, _, p in tests]) if tests else []
+            found = [(abs(rho), name, rho, qv) for (name, rho, _), qv in zip(tests, q) if qv < FDR]
+            for _, name, rho, qv in sorted(found, reverse=True):
+                out.append(f"  testable with {name}: rho {rho:+.2f} (Benjamini-Hochberg q {qv:.2g})")
                 print(out[-1])
     return out
 

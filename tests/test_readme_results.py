@@ -30,12 +30,14 @@ def test_readme_holds_each_marker_once():
 
 
 def test_claims_table_from_a_claims_csv():
-    rows = [{"claim": "3", "text": "Drop: DATH faster", "verdict": "fails-definition", "value": "0.0", "low": "0.0",
-             "high": "0.0"},
-            {"claim": "8", "text": "under 85 ms", "verdict": "fails-paper", "value": "", "low": "", "high": ""},
+    rows = [{"claim": "3", "text": '"decreased"', "where": "III-B", "verdict": "fails-definition", "qualifier": "",
+             "parts": "TR* holds", "value": "0.0", "low": "0.0", "high": "0.0"},
+            {"claim": "1", "text": '"300 to 500 mV"', "where": "III-A", "verdict": "not-decidable",
+             "qualifier": "calibrated input", "parts": "scan levels* not-decidable", "value": "", "low": "",
+             "high": ""},
             {"claim": "5", "text": "twice", "verdict": "fails-plant", "value": "0.4213", "low": "0.28", "high": "0.65"}]
     text = SCRIPT["claims_table"](rows)
-    assert "| 3 | Drop: DATH faster | fails-definition | 0 [0, 0] |" in text
-    assert "| 8 | under 85 ms | fails-paper | - |" in text and "| 0.421 [0.28, 0.65] |" in text
+    assert '| 3 | "decreased" | fails-definition | TR* (1 of 1) |' in text
+    assert '| 1 | "300 to 500 mV" | not-decidable (calibrated input) | none (0 of 1) |' in text
     readme = (ROOT / "README.md").read_text()
     assert readme.count(SCRIPT["CLAIMS_BEGIN"]) == 1 and readme.count(SCRIPT["CLAIMS_END"]) == 1

@@ -9,14 +9,30 @@ from slipreflex.sim import BOTTLES, UNCERTAIN, Plant, load_ranges, plant_from_va
 from slipreflex.sim.uncertain import UncertainConstant, nominal_values
 
 
+def _reading_default(fld):
+    """What the package uses when no study draws a reading: the method's and the judge's defaults."""
+    from slipreflex.analysis.claims import Reading
+    from slipreflex.analysis.trial import MAX_RESPONSE_S
+    from slipreflex.baselines import REST_K, SWTParams
+
+    if fld == "cutoff_ms":
+        assert Reading().cutoff_ms == 1e3 * MAX_RESPONSE_S
+    persist = SWTParams.__dataclass_fields__["persist"].default
+    return {"swt_persist": persist, "rest_k": REST_K}.get(fld, getattr(Reading(), fld, None))
+
+
 def _field(plant, target, bottle="TR"):
     from slipreflex.sim.uncertain import _parse_target
 
     head, sel, fld, ratio_of = _parse_target(target)
     if head == "calibration":
         return getattr(plant, fld)
+    if head in ("method", "judge"):
+        return plant.readings.get(fld, _reading_default(fld))
     if head == "bottle":
         b = plant.bottles[(sel or (bottle,))[0]]
+        if fld.startswith("surface."):
+            return getattr(b.surface, fld.partition(".")[2])
         return getattr(b, fld) / getattr(b, ratio_of) if ratio_of else getattr(b, fld)
     return getattr(getattr(plant, head), fld)
 
@@ -176,3 +192,15 @@ def test_the_tape_s_pad_friction_is_drawn_apart_from_the_smooth_bottles():
     ratio = {b: q.bottles[b].mu_k / q.bottles[b].mu_s for b in q.bottles}
     assert ratio["TR"] == pytest.approx(0.9) and ratio["DK"] == pytest.approx(0.9)
     assert ratio["TX"] == pytest.approx(0.65)
+
+
+def test_readings_of_the_paper_ride_beside_the_plant_and_reach_the_methods():
+    p = plant_from_values({"swt_persist": 0.4, "rest_k": 3.5, "response_cutoff": 700.0})
+    assert p.method_options() == {"swt_persist": 0, "rest_k": 3.5}
+    assert p.readings["cutoff_ms"] == 700.0 and p.bottles == plant_from_values({}).bottles
+    q = plant_from_values({"reflectance_DK": 0.2, "texture_TX": 0.04})
+    assert q.bottles["DK"].surface.reflectance == 0.2 and q.bottles["TX"].surface.texture == 0.04
+    assert q.bottles["TR"].surface == BOTTLES["TR"].surface
+    import pickle
+
+    assert pickle.loads(pickle.dumps(p)).readings == p.readings

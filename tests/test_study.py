@@ -1,5 +1,6 @@
 """slipreflex study: reproducible design, resume, errors recorded, same rows serial / LocalCluster / scheduler."""
 
+import math
 import os
 import subprocess
 import sys
@@ -161,7 +162,7 @@ def test_claim_fractions_and_wilson():
     r = claim_fractions(plants)[2]
     got = (r["plants"], r["errors"], r["rejected"], r["holds"], r["fails_plant"], r["unresolved"])
     assert got == (5, 1, 1, 3, 1, 1)
-    assert r["value"] == 0.6 and r["verdict"] == "unresolved" and "3 of 5 plants" in r["reason"]
+    assert r["value"] == 0.6 and r["verdict"] == "depends-plant" and "holds on 3 of 5 plants" in r["reason"]
 
 
 def test_the_study_verdict_of_a_claim_the_equations_decide_is_theirs():
@@ -169,8 +170,33 @@ def test_the_study_verdict_of_a_claim_the_equations_decide_is_theirs():
     plants += [{"error": "", "claim_3": "holds", "reason_3": ""}]
     r = claim_fractions(plants)[2]
     assert r["verdict"] == "fails-definition" and r["reason"] == "6 of 7 plants: same encoder"
-    many = [{"error": "", "claim_5": "fails-plant"} for _ in range(30)] + [{"error": "", "claim_5": "holds"}]
-    assert claim_fractions(many)[4]["verdict"] == "fails-plant"
+    every = [{"error": "", "claim_5": "fails-plant"} for _ in range(30)]
+    assert claim_fractions(every)[4]["verdict"] == "fails-plant"
+    # "fails on this plant" only when it fails on every plant: one plant that holds makes it depend on the plant
+    r = claim_fractions(every + [{"error": "", "claim_5": "holds"}])[4]
+    assert r["verdict"] == "depends-plant" and "holds on 1 of 31 plants" in r["reason"]
+
+
+def test_depends_on_the_plant_names_the_constants_that_pass_the_false_discovery_control():
+    from slipreflex.study.analyse import reaches
+
+    design = draw_design(UNCERTAIN, 48, "sobol", seed=3)
+    cut = UNCERTAIN["texture_TX"].nominal
+    plants = [{**v, "error": "", "claim_10": HOLDS if v["texture_TX"] < cut else "fails-plant",
+               "claim_2": HOLDS if v["wall_stiffness"] < 700 else "fails-plant"} for v in design]
+    sens = sensitivity(plants, UNCERTAIN)
+    r10 = claim_fractions(plants, None, sens)[9]
+    assert r10["verdict"] == "depends-plant" and "texture_TX (rho -0." in r10["decided_by"]
+    assert "; decided by " in r10["reason"] and "texture_TX" in r10["reason"] and 0 < r10["value"] < 1
+    # a scan claim is never "decided by" a constant that cannot reach a scan (no bottle, no wall)
+    assert not reaches(UNCERTAIN["wall_stiffness"], 2) and "wall_stiffness" not in claim_fractions(
+        plants, None, sens)[1]["decided_by"]
+    assert all(math.isnan(x["bh_q"]) for x in sens if x["claim"] == 2 and x["constant"] == "wall_stiffness")
+    # q-values are Benjamini-Hochberg over every reachable (constant, claim)
+    from scipy.stats import false_discovery_control
+    tested = [x for x in sens if x["reaches"] and x["spearman_p"] == x["spearman_p"]]
+    want = false_discovery_control([x["spearman_p"] for x in tested])
+    assert [x["bh_q"] for x in tested] == pytest.approx(list(want))
 
 
 def test_sensitivity_finds_the_deciding_constant_with_sobol_indices():
@@ -189,9 +215,9 @@ def test_outputs_and_figures(tmp_path):
     run = run_study(StudyConfig(plants=3, **TINY), tmp_path, workers=0, progress=False)
     paths = write_outputs(run, figures=True)
     assert (tmp_path / "figures" / "fractions.png").stat().st_size > 0
-    assert len([p for p in paths if p.startswith("claim_")]) == 10
+    assert len([p for p in paths if p.startswith("claim_")]) == 11
     md = (tmp_path / "study.md").read_text()
-    assert "| 8 | DATH responds in under 85 ms" in md and "## What the map says" in md
+    assert '| 8 | "an overall response time of less than 85 ms"' in md and "## What the map says" in md
     header = (tmp_path / "results.csv").read_text().splitlines()[0].split(",")
     assert {"plant", "error", "hand_latency", "response_ms"} <= set(header)
 
@@ -228,4 +254,4 @@ def test_a_plant_whose_observed_first_slip_leaves_the_band_is_counted_apart(monk
 def test_a_claim_most_plants_cannot_decide_is_unresolved_in_the_study():
     plants = [{"error": "", "claim_6": "unresolved"} for _ in range(30)] + [{"error": "", "claim_6": "fails-plant"}]
     r = claim_fractions(plants)[5]
-    assert r["verdict"] == "unresolved" and "30 of 31 plants unresolved" in r["reason"]
+    assert r["verdict"] == "unresolved" and "fails on 1" in r["reason"] and "do not decide it" in r["reason"]

@@ -13,7 +13,7 @@ Examples
 >>> res = run_reproduce(ReproduceConfig(trials=1, bottles=("TX",), methods=("fixed",),
 ...                                     experiments=("drop",)), jobs=1, progress=False, plots=False)
 >>> sorted(write_outputs(res, tempfile.mkdtemp()))[:3]
-['bars_drop_response.png', 'bars_drop_total.png', 'claims']
+['bars_drop_response.png', 'bars_drop_total.png', 'claim_parts']
 """
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ from .. import experiment_specs
 from ..interrupts import worker_signals
 from ..methods import DATH
 from . import figures as F
-from .claims import judge_run, write_claims_csv
+from .claims import judge_run, write_claims_csv, write_parts_csv
 from .figures import TrialPlot
 from .onset import OnsetParams, accel_envelope
 from .paper import BOTTLE_ORDER
@@ -139,7 +139,7 @@ def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str 
     Returns
     -------
     dict
-        Paths by name ("results", "summary", "report", "claims" (claims.csv: the paper's claims
+        Paths by name ("results", "summary", "report", "claims" and "claim_parts" (the paper's claims
         judged, unless the run is partial or has none of the paper's cells), and one per figure).
 
     Examples
@@ -150,7 +150,7 @@ def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str 
     >>> res = run_reproduce(cfg, jobs=1, progress=False)
     >>> paths = write_outputs(res, tempfile.mkdtemp())
     >>> sorted(p for p in paths if not p.endswith(".png"))
-    ['claims', 'report', 'results', 'summary']
+    ['claim_parts', 'claims', 'report', 'results', 'summary']
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -173,6 +173,7 @@ def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str 
     claims = judged_claims(result)
     if claims:
         paths["claims"] = write_claims_csv(out / "claims.csv", claims)
+        paths["claim_parts"] = write_parts_csv(out / "claim_parts.csv", claims)
     md = report_markdown(summary=paper.summary, rows=paper.rows, figures=figs,
                          setup=setup_lines(result, command), notices=notices,
                          discussion=list(discussion) if discussion is not None else discussion_text(paper),

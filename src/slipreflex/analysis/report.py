@@ -20,7 +20,7 @@ from __future__ import annotations
 import csv
 import math
 import os
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -262,23 +262,39 @@ def fmt_mean_sd(mean: float, sd: float, n: int | None = None, digits: int = 0) -
     return s + (f" ({n})" if n is not None else "")
 
 
+def _answered(s: Mapping[str, Any]) -> str:
+    """A cell's response as mean ± sd over the slips answered, and how many of its slips those were.
+
+    A slip no response answered within the cutoff is a censored trial: the mean is over the
+    answered ones, and the count says how many were not.
+
+    Examples
+    --------
+    >>> _answered({"response_mean_ms": 62.0, "response_sd_ms": 21.0, "response_n": 12, "n_events": 20})
+    '62 ± 21 (12 of 20)'
+    """
+    text = fmt_mean_sd(s["response_mean_ms"], s["response_sd_ms"])
+    slips = s.get("n_events")
+    return text if text == "-" else text + (f" ({s['response_n']} of {slips})" if slips else f" ({s['response_n']})")
+
+
 def terminal_table(summary: Sequence[dict[str, Any]]) -> str:
     """A compact text table of the summary for the terminal.
 
     Examples
     --------
     >>> print(terminal_table([]))
-    exp   bottle method  response ms (n)   total ms (n)      success/trial success/slip event grip w/o slip
+    exp   bottle method  response ms (n of N)  total ms (n)      success/trial success/slip event grip w/o slip
     """
     w = max([7] + [len(_label(s["method"])) for s in summary])
-    head = (f"{'exp':5} {'bottle':6} {'method':{w}} {'response ms (n)':17} {'total ms (n)':17} "
+    head = (f"{'exp':5} {'bottle':6} {'method':{w}} {'response ms (n of N)':21} {'total ms (n)':17} "
             f"{'success/trial':13} {'success/slip event':18} grip w/o slip")
     lines = [head]
     for s in summary:
         grip = s.get("grip_without_slip_mean", math.nan)
         lines.append(
             f"{s['experiment']:5} {s['bottle']:6} {_label(s['method']):{w}} "
-            f"{fmt_mean_sd(s['response_mean_ms'], s['response_sd_ms'], s['response_n']):17} "
+            f"{_answered(s):21} "
             f"{fmt_mean_sd(s['total_mean_ms'], s['total_sd_ms'], s['total_n']):17} "
             f"{_pct(s, 'trial'):13} {_pct(s, 'event'):18} "
             + ("-" if not _finite(cell_float(grip)) else f"{float(grip):.0f} units"))

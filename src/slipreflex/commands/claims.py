@@ -8,12 +8,18 @@ fails-definition, fails-paper, fails-plant, unresolved or not-decidable, its rea
 the interval behind it) and writes it as ``claims.csv`` beside the results (or to
 ``--out``). A ``replicates.csv`` beside the results (the replicate grids ``reproduce``
 ran where one run's trials left a claim unresolved) is pooled with them, so the
-table is the one ``reproduce`` wrote. Claims 1-2 are judged on the characterization scan of the simulated slip
-sensor over texture seeds from ``--seed``.
+table is the one ``reproduce`` wrote; every part of every claim goes to ``claim_parts.csv``
+beside the claims table. Claim 2 is judged on the characterization scan of the simulated
+slip sensor over texture seeds from ``--seed``. Claim 1 (the scan's levels) is an input the
+simulator was calibrated to, so it is not decidable on a simulation; ``--scan scan.csv``
+judges it on a real or replayed scan (columns ``t``, ``position_mm``, ``volts``, as
+``slipreflex scan`` writes them, over the paper's layout). ``--explain N`` prints claim N
+whole: the paper's sentence, the reading, every part and why.
 
 Examples (shell)::
 
     slipreflex claims out/reproduce/results.csv
+    slipreflex claims out/reproduce/results.csv --scan bench/scan.csv --explain 1
     slipreflex claims old-run/results.csv --seed 20191215 --out old-run/claims-now.csv
 """
 
@@ -23,7 +29,15 @@ import argparse
 import csv
 from pathlib import Path
 
-from ..analysis.claims import claims_terminal, judge_run, write_claims_csv
+from ..analysis.claims import (
+    CLAIMS,
+    claims_terminal,
+    explain,
+    judge_run,
+    measured_scan,
+    write_claims_csv,
+    write_parts_csv,
+)
 from ..analysis.outputs import scored
 from ..analysis.trial import TrialRow
 from ..errors import ParameterError
@@ -47,6 +61,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "master seed)")
     parser.add_argument("--no-replicates", action="store_true",
                         help="judge RESULTS.csv alone, without a replicates.csv beside it")
+    parser.add_argument("--scan", type=Path, default=None, metavar="SCAN.csv",
+                        help="a real or replayed characterization scan (t, position_mm, volts): judges claim 1")
+    parser.add_argument("--explain", type=int, default=None, metavar="N",
+                        help="also print claim N whole: the paper's sentence, the reading, every part")
     parser.add_argument("--out", type=Path, default=None, metavar="CLAIMS.csv",
                         help="where to write the claims table (default: claims.csv beside RESULTS.csv)")
 
@@ -85,6 +103,13 @@ def run(args: argparse.Namespace) -> int:
         raise ParameterError(f"--out {out}: would overwrite the results table it judges")
     if not out.parent.is_dir():
         raise ParameterError(f"--out {out}: no such directory {out.parent}")
+    numbers = [c.number for c in CLAIMS]
+    if args.explain is not None and args.explain not in numbers:
+        raise ParameterError(f"--explain {args.explain}: no such claim (1-{numbers[-1]})")
+    try:
+        measured = None if args.scan is None else measured_scan(args.scan)
+    except ValueError as err:
+        raise ParameterError(f"--scan {err}") from None
     rows = read_rows(args.results)
     print(f"{len(rows)} rows of {args.results}")
     replicates = args.results.parent / "replicates.csv"
@@ -93,8 +118,12 @@ def run(args: argparse.Namespace) -> int:
         print(f"pooled with {len(more)} rows of {replicates} (replicate grids; --no-replicates: without)")
         rows += more
     rows = scored(rows)
-    results = judge_run(rows, seed=args.seed)
+    results = judge_run(rows, seed=args.seed, measured=measured)
     print(claims_terminal(results))
+    if args.explain is not None:
+        print(explain(results[numbers.index(args.explain)]))
     write_claims_csv(out, results)
-    print(f"wrote {out}")
+    parts = write_parts_csv(out.with_name(out.stem.replace("claims", "claim_parts") if "claims" in out.stem
+                                          else out.stem + "_parts").with_suffix(".csv"), results)
+    print(f"wrote {out} and {parts}")
     return 0

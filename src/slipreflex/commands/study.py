@@ -12,10 +12,10 @@ Examples
 --------
 >>> from slipreflex.cli import main
 >>> main(["study", "--plants", "2", "--trials", "1", "--workers", "0", "--out", "/tmp/s"])  # doctest: +SKIP
-claim  verdict           holds (95% CI)     text
-    1  holds              100% (  34-100%)  Scan: white about 0.3-0.5 V, black about 3.32-3.35 V
+claim  class             holds (95% CI)     the paper says (decided by)
+    1  not-decidable        0% (    0-66%)  "oscillated around a low value (300 to 500 mV)"; ...
 ...
-    8  fails-paper          0% (    0-66%)  DATH responds in under 85 ms on every bottle and experiment
+   11  fails-paper          0% (    0-66%)  "DATH performed consistently better than the NMSD and ...
 ...
 2 plants (2 computed now, 0 with errors) in 6.2 s on serial; wrote /tmp/s/{results.parquet, ...}
 """
@@ -31,12 +31,13 @@ from pathlib import Path
 from typing import Any
 
 from .. import experiment_specs, methods
+from ..analysis.claims import DEPENDS_PLANT
 from ..errors import SlipreflexError
 from ..experiments import BOTTLE_NAMES, EXPERIMENTS
 from ..experiments import DEFAULT_SEED as seed
 from ..paths import OutputSet
 from ..study import DEFAULT_PLANTS, DEFAULT_TRIALS, DESIGNS, StudyConfig, read_parts, run_study
-from ..study.analyse import claim_fractions, plant_table, pooled_scan, write_outputs
+from ..study.analyse import claim_fractions, plant_table, pooled_scan, sensitivity, write_outputs
 from ..study.runner import probe_scheduler
 from ..validation import within
 
@@ -165,11 +166,13 @@ def run(args: argparse.Namespace) -> int:
     paths = {"study_md": outputs.folder / "study.md"}
     plants = plant_table(result.parts)
 
-    print("claim  verdict           holds (95% CI)     text")
-    for r in claim_fractions(plants, pooled_scan(result.parts)):
+    sens = sensitivity(plants, result.config.table, design=result.config.design, seed=result.config.seed)
+    print("claim  class             holds (95% CI)     the paper says (decided by)")
+    for r in claim_fractions(plants, pooled_scan(result.parts), sens):
         ci = f"{100 * r['low']:.0f}-{100 * r['high']:.0f}%" if r["plants"] else "-"
         frac = f"{100 * r['value']:.0f}%" if r["plants"] else "-"
-        print(f"{r['claim']:>5}  {r['verdict']:16}  {frac:>5} ({ci:>9})  {r['text']}")
+        dec = f" (decided by {r['decided_by']})" if r["verdict"] == DEPENDS_PLANT and r["decided_by"] else ""
+        print(f"{r['claim']:>5}  {r['verdict']:16}  {frac:>5} ({ci:>9})  {r['text']}{dec}")
     errors = sum(1 for p in plants if p.get("error"))
     files = "results.parquet, results.csv, plants.csv, claims.csv, sensitivity.csv, study.md"
     files += "" if args.no_figures else ", figures/"

@@ -46,10 +46,12 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
+from ..baselines.calibration import REST_K
+from ..baselines.swt import SWT_PERSIST, SWT_PERSISTENCE
 from ..errors import ParameterError
 from ..paths import read_toml
 from .calibration import CALIBRATION_SEEDS, calibrate_bottle
-from .objects import BOTTLES, Bottle
+from .objects import BOTTLES, Bottle, Surface
 from .params import FlowParams, HandParams, ImuParams, PhysicsParams, SlipSensorParams, TactileParams, WaterParams
 from .rig import Rig
 
@@ -148,6 +150,13 @@ def _c(name: str, unit: str, nominal: float, low: float, high: float, dist: str,
 
 
 _B = BOTTLES
+
+
+def _surface(bottle: str) -> Surface:
+    """A paper bottle's surface (a bottle resolves its surface's name when it is made)."""
+    s = BOTTLES[bottle].surface
+    assert isinstance(s, Surface), s
+    return s
 _H = HandParams()
 _T = TactileParams()
 _S = SlipSensorParams()
@@ -296,6 +305,33 @@ UNCERTAIN: Mapping[str, UncertainConstant] = MappingProxyType({c.name: c for c i
     _c("slosh_damping_factor", "1", _W.slosh_damping_factor, 0.7, 3.0, "loguniform",
        "smooth-wall slosh damping of Stephens et al. 1962 (NASA TN D-1367), times 0.7-3: its scatter and the "
        "contact-line dissipation of small containers (estimate)", "water.slosh_damping_factor"),
+    *(c for b in ("TR", "DK", "TX") for c in (
+        _c(f"reflectance_{b}", "1", _surface(b).reflectance, round(0.7 * _surface(b).reflectance, 6),
+           round(min(0.95, 1.3 * _surface(b).reflectance), 6), "uniform",
+           "estimate: the paper gives no level for its bottles, only that less reflective surfaces fluctuate "
+           "less than textured ones (II-C-2); ±30 % of the nominal reflectance", f"bottle[{b}].surface.reflectance"),
+        _c(f"texture_{b}", "1", _surface(b).texture, round(0.5 * _surface(b).texture, 6),
+           round(2.0 * _surface(b).texture, 6), "loguniform",
+           "estimate: the bottles' texture is known only qualitatively (II-C-2); half to twice the nominal rms",
+           f"bottle[{b}].surface.texture"))),
+    _c("swt_persist", "samples", float(SWT_PERSIST), float(min(SWT_PERSISTENCE.values())),
+       float(max(SWT_PERSISTENCE.values())), "uniform",
+       "a reading, not physics: the paper's 'movement would continue for at least another 21 ms' as samples "
+       "the SWT-SD crossing must persist (rounded to a whole sample), between the two named readings of "
+       "baselines.swt: 0 'within-window' (the nominal, the project's reading) and 8 'after-crossing'",
+       "method.swt_persist"),
+    _c("rest_k", "1", REST_K, 3.0, 6.0, "uniform",
+       "a reading, not physics: the rest-noise multiple of NMSD's and SWT-SD's thresholds (baselines."
+       "calibration); 3-6 standard deviations span the common choices", "method.rest_k"),
+    _c("response_cutoff", "ms", 1000.0, 500.0, 2000.0, "loguniform",
+       "a reading, not physics: a command rise later than this after a slip's onset is no response (a censored "
+       "trial); the paper gives none, its slowest reported totals are under 0.8 s", "judge.cutoff_ms"),
+    _c("time_tolerance", "ms", round(1e3 / 333.3333333333333, 6), 0.0, round(2e3 / 333.3333333333333, 6),
+       "uniform", "a reading, not physics: claim 8's tolerance on 85 ms, none to two DAQ samples",
+       "judge.time_tol_ms"),
+    _c("near_volume", "ml", 50.0, 25.0, 100.0, "uniform",
+       "a reading, not physics: claim 6's 'about 200 ml' and 'about 400 ml', an eighth to a half of the 200 ml "
+       "between them", "judge.near_ml"),
 )})
 
 
@@ -354,6 +390,24 @@ class Plant:
     bottles: Mapping[str, Bottle] = field(default_factory=lambda: dict(BOTTLES))
     values: Mapping[str, float] = field(default_factory=nominal_values)
     first_slip_ml: float = 200.0
+    readings: Mapping[str, float] = field(default_factory=dict)
+
+    def method_options(self) -> dict[str, Any]:
+        """The method readings this plant carries, as :class:`~slipreflex.experiments.ReproduceConfig` fields.
+
+        Examples
+        --------
+        >>> plant_from_values({"swt_persist": 2.4}).method_options()["swt_persist"]
+        2
+        >>> Plant().method_options()
+        {}
+        """
+        out: dict[str, Any] = {}
+        if "swt_persist" in self.readings:
+            out["swt_persist"] = int(round(self.readings["swt_persist"]))
+        if "rest_k" in self.readings:
+            out["rest_k"] = float(self.readings["rest_k"])
+        return out
 
     def __reduce__(self):
         """Pickle with plain dicts (a read-only mappingproxy does not pickle): worker processes get plants.
@@ -367,7 +421,7 @@ class Plant:
         (True, 'mappingproxy')
         """
         state = {f.name: getattr(self, f.name) for f in fields(self)}
-        state.update(bottles=dict(self.bottles), values=dict(self.values))
+        state.update(bottles=dict(self.bottles), values=dict(self.values), readings=dict(self.readings))
         return (_unpickle_plant, (state,))
 
     def calibrated(self, seeds: tuple[int, ...] | None = None) -> Plant:
@@ -415,7 +469,8 @@ class Plant:
 def _unpickle_plant(state: dict[str, Any]) -> Plant:
     """A pickled :class:`Plant` with its mappings read-only again."""
     return Plant(**{**state, "bottles": MappingProxyType(state["bottles"]),
-                    "values": MappingProxyType(state["values"])})
+                    "values": MappingProxyType(state["values"]),
+                    "readings": MappingProxyType(state.get("readings", {}))})
 
 
 def _parse_target(target: str) -> tuple[str, tuple[str, ...] | None, str, str | None]:
@@ -466,6 +521,7 @@ def plant_from_values(values: Mapping[str, float] | None = None, *,
         raise ParameterError(f"unknown uncertain constant {unknown[0]!r} (known: {', '.join(table)})")
     full = {k: float(values.get(k, c.nominal)) for k, c in table.items()}
     sections: dict[str, dict[str, float]] = {s: {} for s in (*_SECTIONS, "calibration")}
+    readings: dict[str, float] = {}
     bottle_set: dict[str, dict[str, float]] = {b: {} for b in BOTTLES}
     ratios: list[tuple[str, str, float, str]] = []
     for name, val in full.items():
@@ -479,6 +535,8 @@ def plant_from_values(values: Mapping[str, float] | None = None, *,
                         bottle_set[b][fld] = val
             elif head in sections:
                 sections[head][fld] = val
+            elif head in ("method", "judge"):      # readings of the paper, not physics: carried beside it
+                readings[fld] = val
             else:
                 raise ParameterError(f"{name}: unknown target {target!r}")
     for b, fld, val, ratio_of in ratios:
@@ -497,11 +555,14 @@ def plant_from_values(values: Mapping[str, float] | None = None, *,
             raise ParameterError(f"uncertain constants -> {s}: {err}") from None
     bottles = {}
     for b, kw in bottle_set.items():
+        surface = {k.partition(".")[2]: kw.pop(k) for k in [k for k in kw if k.startswith("surface.")]}
         try:
-            bottles[b] = replace(BOTTLES[b], **kw)
+            more: dict[str, Any] = {"surface": replace(_surface(b), **surface)} if surface else {}
+            bottles[b] = replace(BOTTLES[b], **kw, **more)
         except (ParameterError, TypeError) as err:
             raise ParameterError(f"uncertain constants -> bottle {b}: {err}") from None
-    return Plant(bottles=MappingProxyType(bottles), values=MappingProxyType(full), **built)
+    return Plant(bottles=MappingProxyType(bottles), values=MappingProxyType(full),
+                 readings=MappingProxyType(readings), **built)
 
 
 _RANGE_KEYS = ("low", "high", "nominal", "fixed", "distribution")

@@ -40,7 +40,10 @@ import numpy as np
 from ..analysis.claims import (
     CLAIMS,
     CLAIMS_CSV_COLUMNS,
+    DEPENDS_PLANT,
     FAILING,
+    FAILS_DEFINITION,
+    FAILS_PAPER,
     FAILS_PLANT,
     HOLDS,
     NOT_DECIDABLE,
@@ -53,18 +56,55 @@ from ..paths import new_file
 from .design import varying
 from .runner import _arrow_table
 
-__all__ = ["wilson", "plant_table", "pooled_scan", "claim_fractions", "sensitivity", "top_constants", "write_outputs",
+__all__ = ["wilson", "plant_table", "pooled_scan", "claim_fractions", "deciders", "reaches", "FDR", "sensitivity",
+           "top_constants", "write_outputs",
            "study_markdown", "CLAIMS_COLUMNS", "SENSITIVITY_COLUMNS", "Z95"]
 
 #: Normal quantile of the 95 % intervals.
 Z95: float = 1.959963984540054
 #: Columns of claims.csv: the claims table's (value: the fraction of plants where the claim holds, low/high
 #: its Wilson interval), then the plants and the count of each verdict.
-CLAIMS_COLUMNS: tuple[str, ...] = (*CLAIMS_CSV_COLUMNS[:-1], "plants", "errors", "rejected",
+CLAIMS_COLUMNS: tuple[str, ...] = (*CLAIMS_CSV_COLUMNS[:-1], "plants", "errors", "rejected", "decided_by",
                                    *(v.replace("-", "_") for v in VERDICTS))
+#: False-discovery rate of the "decided by" column (Benjamini-Hochberg over every constant x claim).
+FDR: float = 0.05
+#: The claims read off the characterization scan (no bottle, no hand, no method reading reaches them).
+SCAN_CLAIMS: tuple[int, ...] = (1, 2)
+#: Which claims a reading of the paper can reach (the rest reach none).
+READING_REACH: dict[str, tuple[int, ...]] = {
+    "method.swt_persist": (6, 7, 9),
+    "method.rest_k": (5, 6, 7, 9, 11),
+    "judge.cutoff_ms": (3, 5, 6, 7, 8, 9, 10, 11),
+    "judge.time_tol_ms": (8,),
+    "judge.near_ml": (6,),
+}
+
+
+def reaches(constant: Any, claim: int) -> bool:
+    """Whether an uncertain constant can change a claim's quantity at all.
+
+    The scan claims see only the slip sensor (a scan has no bottle, hand or water); a
+    reading of the paper reaches only the claims that use it; every physical constant
+    of the rig can reach every trial claim.
+
+    Examples
+    --------
+    >>> from slipreflex.sim.uncertain import UNCERTAIN
+    >>> reaches(UNCERTAIN["wall_stiffness"], 1), reaches(UNCERTAIN["wall_stiffness"], 5)
+    (False, True)
+    >>> reaches(UNCERTAIN["near_volume"], 6), reaches(UNCERTAIN["near_volume"], 8)
+    (True, False)
+    """
+    targets = tuple(getattr(constant, "targets", ()))
+    readings = [t for t in targets if t.split(".")[0] in ("method", "judge")]
+    if readings:
+        return any(claim in READING_REACH.get(t, ()) for t in readings)
+    if claim in SCAN_CLAIMS:
+        return any(t.startswith("slip_sensor.") for t in targets)
+    return True
 #: Columns of sensitivity.csv.
-SENSITIVITY_COLUMNS: tuple[str, ...] = ("claim", "constant", "n", "spearman_rho", "spearman_p",
-                                        "sobol_s1", "sobol_s1_conf", "sobol_st", "sobol_st_conf", "rank")
+SENSITIVITY_COLUMNS: tuple[str, ...] = ("claim", "constant", "n", "spearman_rho", "spearman_p", "bh_q",
+                                        "reaches", "sobol_s1", "sobol_s1_conf", "sobol_st", "sobol_st_conf", "rank")
 
 
 def wilson(k: int, n: int) -> tuple[float, float]:
@@ -117,61 +157,89 @@ def pooled_scan(parts: Mapping[int, tuple[dict, list]]):
     return ScanEnsemble(step_mm=1.0 / 333.3333333333333, **cols)
 
 
-def _study_verdict(claim: Any, verdicts: list[str], reasons: list[str]) -> tuple[str, str]:
-    """The study's verdict on a claim from its plants' verdicts (and the reason)."""
+def _study_verdict(claim: Any, verdicts: list[str], reasons: list[str], deciders: str = "") -> tuple[str, str]:
+    """The study's class of a claim from its plants' classes (and the reason).
+
+    The same class on most plants for a reason no plant changes (the method's equations,
+    the paper's numbers, nothing to judge): that class. Otherwise: holds on every plant,
+    holds; fails on every plant, fails on this plant; holds on some plants and fails on
+    others, depends on the plant (the fraction, and the constants that decide it); the
+    rest (plants whose own trials do not decide it), unresolved.
+    """
     if not verdicts:
         return NOT_DECIDABLE, "no plant ran"
     top = max(VERDICTS, key=verdicts.count)
     k, n = verdicts.count(HOLDS), len(verdicts)
+    failing = sum(v in FAILING for v in verdicts)
     share = f"{verdicts.count(top)} of {n} plants"
-    if top in FAILING[:2] or top == NOT_DECIDABLE:   # the same on every plant: the equations or the paper
+    if top in (FAILS_DEFINITION, FAILS_PAPER, NOT_DECIDABLE):   # the equations or the paper: not the plant
         why = max(set(r for v, r in zip(verdicts, reasons) if v == top), key=reasons.count)
         return top, f"{share}: {why}"
     f, lo, hi = proportion_interval(k, n)
-    text = f"holds on {k} of {n} plants ({100 * f:.0f} %, {100 * lo:.0f}-{100 * hi:.0f} %)"
-    if top == UNRESOLVED:   # most plants' own trials could not decide it: the study cannot either
-        return UNRESOLVED, (f"{share} unresolved: their trials' intervals straddle the criterion (one trial per "
-                            f"cell gives none); {text}; more --trials decide it")
-    if lo > 0.5:
+    text = f"holds on {k} of {n} plants ({100 * f:.0f} %, Wilson {100 * lo:.0f}-{100 * hi:.0f} %)"
+    decided = f"; decided by {deciders}" if deciders else "; no constant passes the false-discovery control"
+    if k == n:
         return HOLDS, text
-    if hi < 0.5:
-        return FAILS_PLANT, text + " (what decides it: sensitivity.csv)"
-    return UNRESOLVED, text + ": it depends on the plant (see its figure)"
+    if failing == n:
+        return FAILS_PLANT, f"fails on every one of the {n} plants"
+    if k and failing:
+        return DEPENDS_PLANT, f"{text}, fails on {failing}{decided}"
+    return UNRESOLVED, (f"{text}, fails on {failing}; on the other {n - k - failing} the plant's own trials do not "
+                        "decide it (more --trials would)")
 
 
-def claim_fractions(plants: Sequence[Mapping[str, Any]], scan: Any = None) -> list[dict[str, Any]]:
-    """Per claim: the study's verdict and reason, the fraction of plants where it holds (Wilson), class counts.
+def deciders(sens: Sequence[Mapping[str, Any]], claim: int, k: int = 3) -> str:
+    """The constants that decide ``claim``: Benjamini-Hochberg q below :data:`FDR`, reaching the claim.
+
+    Examples
+    --------
+    >>> deciders([{"claim": 5, "constant": "a", "spearman_rho": 0.5, "bh_q": 0.01, "reaches": True},
+    ...           {"claim": 5, "constant": "b", "spearman_rho": 0.4, "bh_q": 0.2, "reaches": True}], 5)
+    'a (rho +0.50, q 0.01)'
+    """
+    rows = [r for r in sens if r["claim"] == claim and r.get("reaches") and r.get("bh_q") == r.get("bh_q")
+            and r["bh_q"] < FDR]
+    rows.sort(key=lambda r: (r["bh_q"], r["constant"]))
+    return ", ".join(f"{r['constant']} (rho {r['spearman_rho']:+.2f}, q {r['bh_q']:.2g})" for r in rows[:k])
+
+
+def claim_fractions(plants: Sequence[Mapping[str, Any]], scan: Any = None,
+                    sens: Sequence[Mapping[str, Any]] = ()) -> list[dict[str, Any]]:
+    """Per claim: the study's class and reason, the fraction of plants where it holds (Wilson), class counts.
 
     Plants with an error, or rejected for an observed first slip outside the paper's band,
     are counted apart. ``scan``: the pooled scans (:func:`pooled_scan`) judge claims 1-2.
+    ``sens``: the sensitivity rows (:func:`sensitivity`) that name what decides a claim
+    that depends on the plant.
 
     Examples
     --------
     >>> rows = claim_fractions([{"error": "", "claim_3": "holds"}, {"error": "", "claim_3": "fails-plant"}])
     >>> rows[2]["holds"], rows[2]["value"], rows[2]["verdict"]
-    (1, 0.5, 'unresolved')
+    (1, 0.5, 'depends-plant')
     """
 
     ok = [p for p in plants if not p.get("error") and not p.get("rejected")]
+    order = {x: i for i, x in enumerate(VERDICTS)}
     out = []
     for c in CLAIMS:
         v = [p.get(f"claim_{c.number}", NOT_DECIDABLE) for p in ok]
         why = [str(p.get(f"reason_{c.number}", "")) for p in ok]
         k = v.count(HOLDS)
         frac, lo, hi = proportion_interval(k, len(v))
-        verdict, reason = _study_verdict(c, v, why)
-        criterion = "holds on most plants (Wilson interval above 50 %)"
-        if c.number in (1, 2) and scan is not None:
-            judged = [p for p in c.judge(ClaimInput([], scan)) ]
-            order = {x: i for i, x in enumerate(VERDICTS)}
-            d = min(judged, key=lambda p: order[p.verdict])
-            verdict, reason, criterion = d.verdict, f"{len(scan)} scans pooled over the plants: {d.reason}", \
-                d.criterion
-        out.append({"claim": c.number, "text": c.text, "verdict": verdict, "reason": reason,
-                    "value": frac if v else float("nan"), "criterion": criterion, "low": lo, "high": hi,
-                    "plants": len(v), "errors": sum(bool(p.get("error")) for p in plants),
+        dec = deciders(sens, c.number)
+        verdict, reason = _study_verdict(c, v, why, dec)
+        criterion, qualifier = "the class on every plant; holds on some and fails on others: depends on the plant", ""
+        if c.number in SCAN_CLAIMS and scan is not None:
+            judged = c.judge(ClaimInput([], scan))
+            d = min([p for p in judged if p.primary] or judged, key=lambda p: order[p.verdict])
+            verdict, reason, criterion, qualifier = (d.verdict, f"{len(scan)} scans pooled over the plants: "
+                                                     f"{d.reason}", d.criterion, d.qualifier)
+        out.append({"claim": c.number, "text": c.text, "where": c.where, "verdict": verdict, "qualifier": qualifier,
+                    "reason": reason, "value": frac if v else float("nan"), "criterion": criterion, "low": lo,
+                    "high": hi, "plants": len(v), "errors": sum(bool(p.get("error")) for p in plants),
                     "rejected": sum(bool(p.get("rejected")) and not p.get("error") for p in plants),
-                    **{x.replace("-", "_"): v.count(x) for x in VERDICTS}})
+                    "decided_by": dec, **{x.replace("-", "_"): v.count(x) for x in VERDICTS}})
     return out
 
 
@@ -213,7 +281,7 @@ def sensitivity(plants: Sequence[Mapping[str, Any]], table: Mapping, *, design: 
     ok = [p for p in plants if not p.get("error") and not p.get("rejected")]
     out = []
     for c in CLAIMS:
-        testable = [p for p in ok if p.get(f"claim_{c.number}") in (HOLDS, FAILS_PLANT, UNRESOLVED)]
+        testable = [p for p in ok if p.get(f"claim_{c.number}") in (HOLDS, FAILS_PLANT, UNRESOLVED, DEPENDS_PLANT)]
         y = np.array([p[f"claim_{c.number}"] == HOLDS for p in testable], dtype=float)
         sob = _sobol(plants, names, table, c.number, seed) if design == "saltelli" and len(ok) == len(plants) \
             else {}
@@ -226,7 +294,8 @@ def sensitivity(plants: Sequence[Mapping[str, Any]], table: Mapping, *, design: 
                 rho, pv = float(res.statistic), float(res.pvalue)
             s = sob.get(k, (float("nan"),) * 4)
             rows.append({"claim": c.number, "constant": k, "n": len(testable), "spearman_rho": rho,
-                         "spearman_p": pv, "sobol_s1": s[0], "sobol_s1_conf": s[1], "sobol_st": s[2],
+                         "spearman_p": pv, "bh_q": float("nan"), "reaches": reaches(table[k], c.number),
+                         "sobol_s1": s[0], "sobol_s1_conf": s[1], "sobol_st": s[2],
                          "sobol_st_conf": s[3]})
         key = (lambda r: -r["sobol_st"]) if sob else (lambda r: -abs(r["spearman_rho"]))
         ranked = sorted(rows, key=lambda r: (math.isnan(key(r)), key(r) if not math.isnan(key(r)) else 0,
@@ -234,7 +303,24 @@ def sensitivity(plants: Sequence[Mapping[str, Any]], table: Mapping, *, design: 
         for i, r in enumerate(ranked):
             r["rank"] = i + 1 if not math.isnan(key(r)) else 0
         out += sorted(ranked, key=lambda r: names.index(r["constant"]))
+    _false_discovery(out)
     return out
+
+
+def _false_discovery(rows: list[dict[str, Any]]) -> None:
+    """Fill ``bh_q``: Benjamini-Hochberg over every (constant, claim) the constant can reach.
+
+    ``scipy.stats.false_discovery_control``; a constant that cannot reach a claim gets no
+    q and never counts among the tests.
+    """
+    from scipy.stats import false_discovery_control  # deferred: heavy (scipy.stats)
+
+    tested = [r for r in rows if r["reaches"] and r["spearman_p"] == r["spearman_p"]]
+    if not tested:
+        return
+    q = false_discovery_control(np.array([r["spearman_p"] for r in tested]), method="bh")
+    for r, v in zip(tested, q):
+        r["bh_q"] = float(v)
 
 
 def top_constants(sens: Sequence[Mapping[str, Any]], claim: int, k: int = 2) -> list[str]:
@@ -279,7 +365,7 @@ def _columns(rows: Sequence[Mapping[str, Any]]) -> list[str]:
 
 
 _COLORS = {HOLDS: "#2ca02c", "fails-definition": "#7f0000", "fails-paper": "#ff7f0e", FAILS_PLANT: "#d62728",
-           UNRESOLVED: "#1f77b4", NOT_DECIDABLE: "0.75", "error": "black"}
+           DEPENDS_PLANT: "#9467bd", UNRESOLVED: "#1f77b4", NOT_DECIDABLE: "0.75", "error": "black"}
 
 
 def _plot_claim(plants, claim: Any, xy: list[str], table: Mapping, path: Path) -> Path:
@@ -370,11 +456,11 @@ def write_outputs(run: Any, *, figures: bool = True, command: str | None = None)
     paths["results_csv"] = _write_csv(out / "results.csv", rows, _columns(rows))
     plants = plant_table(run.parts)
     paths["plants"] = _write_csv(out / "plants.csv", plants, _columns(plants))
-    fractions = claim_fractions(plants, pooled_scan(run.parts))
-    paths["claims"] = _write_csv(out / "claims.csv", fractions, CLAIMS_COLUMNS)
     table = run.config.table
     sens = sensitivity(plants, table, design=run.config.design, seed=run.config.seed)
     paths["sensitivity"] = _write_csv(out / "sensitivity.csv", sens, SENSITIVITY_COLUMNS)
+    fractions = claim_fractions(plants, pooled_scan(run.parts), sens)
+    paths["claims"] = _write_csv(out / "claims.csv", fractions, CLAIMS_COLUMNS)
     figs: list[tuple[str, str]] = []
     if figures:
         fig_dir = out / "figures"
@@ -425,22 +511,20 @@ def study_markdown(run: Any, plants: Sequence[Mapping[str, Any]], fractions: Seq
               "left the paper's band (counted apart).", ""]
     lines += _calibration_lines(plants, cfg.table) if cfg.calibrate else []
     lines += ["## Claims", "",
-              "Verdict: the study's class (fails-definition, fails-paper and not-decidable when most plants say "
-              "so, for the same reason; otherwise holds / fails-plant / unresolved as the 95 % Wilson interval "
-              "of the holding fraction lies above, below or across one half; claims 1-2 on every plant's scans "
-              "pooled). Holds: % of the plants that ran (and were not rejected) where the claim holds. Decided "
-              "by: the constants that matter most (sensitivity.csv; Spearman's rho between the constant and the "
-              "claim holding, over the plants where the plant decides it"
-              + (", ranked by SALib's total Sobol' index" if cfg.design == "saltelli" else "") + ").", "",
+              "Class: the study's (fails-definition, fails-paper and not-decidable when most plants say so, for "
+              "a reason no plant changes; otherwise holds on every plant: holds; fails on every plant: "
+              "fails-plant; holds on some and fails on others: depends-plant; the rest unresolved; claims 1-2 on "
+              "every plant's scans pooled). Holds: % of the plants that ran (and were not rejected) where the "
+              "claim holds. Decided by: the constants whose Spearman correlation with the claim holding passes "
+              f"Benjamini-Hochberg at {100 * FDR:g} % over every constant and claim it can reach (sensitivity.csv"
+              + ("; SALib's total Sobol' indices beside it" if cfg.design == "saltelli" else "") + ").", "",
               "| # | claim | verdict | holds | 95 % interval | plants by verdict | decided by |",
               "|---|---|---|---|---|---|---|"]
     for r in fractions:
-        top = [s for s in sens if s["claim"] == r["claim"] and 0 < s["rank"] <= 2]
-        top.sort(key=lambda s: s["rank"])
-        dec = ", ".join(f"{s['constant']} (rho {s['spearman_rho']:+.2f}, p {s['spearman_p']:.2g})"
-                        for s in top) or "-"
+        dec = r.get("decided_by") or "-"
         by = ", ".join(f"{r[v.replace('-', '_')]} {v}" for v in VERDICTS if r[v.replace("-", "_")])
-        lines.append(f"| {r['claim']} | {r['text']} | **{r['verdict']}** | {_pct(r['value'])} | "
+        cls = r["verdict"] + (f" ({r['qualifier']})" if r.get("qualifier") else "")
+        lines.append(f"| {r['claim']} | {r['text']} | **{cls}** | {_pct(r['value'])} | "
                      f"{_pct(r['low'])}-{_pct(r['high'])} | {by or '-'} | {dec} |")
     lines += ["", "## What the map says", ""] + [f"- {s}" for s in _verdict_lines(fractions)] + [""]
     lines += ["## Uncertain constants", "", "| constant | unit | range | distribution |", "|---|---|---|---|"]

@@ -172,7 +172,8 @@ class StudyConfig:
         """
 
         return ReproduceConfig(trials=self.trials, bottles=tuple(self.bottles), methods=tuple(self.methods),
-                               experiments=tuple(self.experiments), seed=self.seed, plant=plant)
+                               experiments=tuple(self.experiments), seed=self.seed, plant=plant,
+                               **({} if plant is None else plant.method_options()))
 
     @property
     def trials_per_plant(self) -> int:
