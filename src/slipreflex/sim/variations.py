@@ -201,7 +201,10 @@ def grasped_rig(bottle: str | Bottle, seed: int, force: float, *, spread: Variat
     >>> a is not b, a.t == b.t, ga == gb
     (True, True, True)
     """
-    key = pickle.dumps((bottle, seed, force, spread, rig_kwargs, bottles))
+    from .rig import default_stepping
+
+    # the stepping is part of the key: a rig grasped by the other kernel is another rig
+    key = pickle.dumps((bottle, seed, force, spread, rig_kwargs, bottles, default_stepping()))
     if key not in _GRASPED:
         rig = trial_rig(bottle, seed, spread=spread, rig_kwargs=rig_kwargs, bottles=bottles)
         grasp = rig.grasp(force)
