@@ -20,7 +20,8 @@ from slipreflex.sim import kernel as K
 from slipreflex.sim.rig import STEPPING_ENV, default_stepping, stepping
 
 #: The declared tolerances of a trial's row (docs/simulator.md, "Time step"): times in ms, distances in mm.
-ROW_TOLERANCE = {"onset_s": 2e-3, "true_onset_s": 2e-3, "response_ms": 3.0, "total_ms": 3.0, "fell_out_s": 2e-3}
+ROW_TOLERANCE = {"onset_s": 2e-3, "true_onset_s": 2e-3, "response_ms": 3.0, "total_ms": 3.0, "fell_out_s": 2e-3,
+                 "true_slip_mm": 0.01, "true_slip_ms": 1.0}
 
 
 def _held_pour(kind: str, seconds: float, fs: float | None = None):
@@ -90,7 +91,8 @@ def test_a_drop_keeps_its_onset_slide_and_tilt():
     (on_f, x_f, th_f, v_f), (on_a, x_a, th_a, v_a) = out["fixed"], out["adaptive"]
     assert len(on_f) == len(on_a) and np.allclose(on_f, on_a, atol=1e-3)
     assert math.isclose(x_a, x_f, rel_tol=0.01) and math.isclose(th_a, th_f, rel_tol=0.02, abs_tol=1e-4)
-    assert np.mean(v_f == v_a) >= 0.99
+    # the ringing's tail after the impact, under 2.5 um, is taken in coarse steps: a code apart here and there
+    assert np.mean(v_f == v_a) >= 0.97 and np.max(np.abs(v_f - v_a)) <= hw.ADC_LSB + 1e-12
 
 
 def test_samples_stay_on_their_clocks_however_the_run_is_cut():
@@ -140,3 +142,24 @@ def test_adaptive_steps_keep_every_trial_row_and_every_claim_class():
             assert (math.isnan(a) and math.isnan(b)) or abs(a - b) <= tol, (key, field, a, b)
     assert [(c.number, c.verdict) for c in judge(rows["fixed"])] == \
         [(c.number, c.verdict) for c in judge(rows["adaptive"])]
+
+
+def test_the_speed_table_reads_both_kernels_and_their_ratio_from_the_benchmark():
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "scripts"))
+    try:
+        import speed_table
+    finally:
+        sys.path.pop(0)
+    lines = [f"{m:14s} {e:10s} {d:6.1f}   {500:8.0f} ({300:6.0f})   {1500:8.0f} ({900:6.0f})   {3.0:5.2f}x"
+             for m in ("dath", "fixed", "nmsd", "swt") for e, d in (("drop", 2.5), ("pour", 32.5))]
+    for what in ("", ", 260 Hz tactile", ", 380 Hz tactile"):
+        lines.append(f"held pour{what}: open loop (physics + sensors alone) fixed   400 adaptive  2000 (5.00x) sim-s "
+                     f"per CPU-s; closed by a compiled reflex that never commands fixed   410 adaptive  1800 (4.39x)")
+    row = speed_table.closed_loop("\n".join(lines))
+    assert row.startswith("adaptive kernel (ratio to the fixed-step reference in the same run): pour 1500 (3.00x)")
+    assert "never commands: 1800 (4.39x; fixed 410)" in row
+    with pytest.raises(speed_table.Missing, match="bench_closed_loop"):
+        speed_table.closed_loop("\n".join(lines[1:]))
