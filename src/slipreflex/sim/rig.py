@@ -906,12 +906,12 @@ class Rig:
         >>> Rig("TR").coarse_steps()
         16
         """
-        P = self._P if P is None else P
+        par: np.ndarray = self._P if P is None else P
         m, dt = self.bottle.mass_kg, self.physics.dt
-        kt = sum(P[K.P_C0 + i * K.PC_SIZE + K.PC_KT] for i in range(3))
-        inertia, _ = K.tilt_inertia(0.0, P)
-        tilt_k = float(sum(P[K.P_C0 + i * K.PC_SIZE + K.PC_KT] * P[K.P_LEVER0 + i] ** 2 for i in range(3)))
-        omega = max(math.sqrt(kt / m), math.sqrt(P[K.P_KLAT] / m), math.sqrt(tilt_k / inertia))
+        kts = [float(par[K.P_C0 + i * K.PC_SIZE + K.PC_KT]) for i in range(3)]
+        inertia, _ = K.tilt_inertia(0.0, par)
+        tilt_k = sum(k * float(par[K.P_LEVER0 + i]) ** 2 for i, k in enumerate(kts))
+        omega = max(math.sqrt(sum(kts) / m), math.sqrt(float(par[K.P_KLAT]) / m), math.sqrt(tilt_k / inertia))
         return max(1, min(int(COARSE_STEP_S / dt + 1e-9), int(1.0 / (omega * dt))))
 
     def _water_params(self, P: np.ndarray) -> None:
