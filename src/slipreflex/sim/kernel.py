@@ -1166,7 +1166,15 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
             # drawn (the last before each row; the others would be overwritten unseen: the same rows)
             seen = True
             if coarse > 1:
-                seen = _fire_end((j + 1) * acc_t, dt) > _fire_end(C[C_DAQ] * daq_t, dt)
+                if C[C_DAQ] != daq_at:
+                    daq_at = C[C_DAQ]
+                    daq_end = _fire_end(daq_at * daq_t, dt)
+                    seen_j = np.int64(np.floor((daq_end * dt + 1e-12) / acc_t)) + 1
+                    while seen_j >= 0 and _fire_end(seen_j * acc_t, dt) > daq_end:
+                        seen_j -= 1
+                    seen_end = _fire_end(seen_j * acc_t, dt)
+                # the reading the next row carries is the last taken by the row's step
+                seen = j == seen_j
             if not seen:
                 S[S_AFRESH] = 1.0
                 C[C_ACC] = j + 1
