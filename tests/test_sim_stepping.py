@@ -164,3 +164,16 @@ def test_the_speed_table_reads_both_kernels_and_their_ratio_from_the_benchmark()
     assert "never commands: 1800 (4.39x; fixed 410)" in row
     with pytest.raises(speed_table.Missing, match="bench_closed_loop"):
         speed_table.closed_loop("\n".join(lines[1:]))
+
+
+def test_a_study_runs_every_plant_with_its_own_stepping_and_fingerprints_it(monkeypatch):
+    from slipreflex.study import StudyConfig
+
+    monkeypatch.setenv(STEPPING_ENV, "fixed")
+    fixed = StudyConfig(plants=2)
+    monkeypatch.delenv(STEPPING_ENV)
+    adaptive = StudyConfig(plants=2)
+    assert (fixed.stepping, adaptive.stepping) == ("fixed", "adaptive")
+    assert fixed.fingerprint() != adaptive.fingerprint()
+    with pytest.raises(ParameterError, match="stepping: unknown 'half'"):
+        StudyConfig(plants=2, stepping="half")
