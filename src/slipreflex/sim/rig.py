@@ -44,6 +44,7 @@ from __future__ import annotations
 import bisect
 import math
 import operator
+import os
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
@@ -102,8 +103,6 @@ def default_stepping() -> str:
     >>> default_stepping() in STEPPINGS
     True
     """
-    import os
-
     kind = os.environ.get(STEPPING_ENV, "adaptive") or "adaptive"
     if kind not in STEPPINGS:
         raise ParameterError(f"{STEPPING_ENV}={kind!r}: unknown stepping (known: {', '.join(STEPPINGS)})")
@@ -129,15 +128,11 @@ class stepping:  # noqa: N801 - a context manager used like a function
         self._old: str | None = None
 
     def __enter__(self) -> stepping:
-        import os
-
         self._old = os.environ.get(STEPPING_ENV)
         os.environ[STEPPING_ENV] = self.kind
         return self
 
     def __exit__(self, *exc: object) -> None:
-        import os
-
         if self._old is None:
             os.environ.pop(STEPPING_ENV, None)
         else:
