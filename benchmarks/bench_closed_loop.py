@@ -1,20 +1,20 @@
-"""Speed of one closed-loop trial: simulated seconds per second of one core, compiled loop and Python loop.
+"""Speed of one closed-loop trial, the fixed-step reference beside the adaptive kernel, in one run.
 
 For each method (default: every registered method) and each experiment (the
 default reproduction's drop and pour, bottle TR), the trial is set up exactly as
 ``reproduce`` sets it up (rig, grasp, calibrated thresholds, perturbation) and only
-``run_closed_loop`` is timed: with the compiled loop (``compiled=True``, what
-``reproduce`` runs) and with the Python loop (``compiled=False``). Each figure is
-the median over ``--repeat`` runs of simulated seconds per CPU second of this
-process (the steadier measure of one core on a shared machine; wall-clock figures
-beside it). Then the loop's own cost: the same held grasp through the paper's pour
-advanced open loop (physics and sensors alone, also with a 260 Hz and a 380 Hz
-tactile stream, the tactile methods' floor) and closed by a compiled reflex that
-never commands (the compiled loop's overhead is the difference).
+``run_closed_loop`` (the compiled loop) is timed, once with the fixed-step kernel
+(``stepping="fixed"``, the reference) and once with the adaptive one, alternately,
+so both see the same load on a shared machine; the ratio is adaptive over fixed.
+Each figure is the median over ``--repeat`` runs of simulated seconds per CPU
+second of this process (wall-clock figures beside it). Then the held pour: the
+paper's pour on a grasp squeezed 40 units firmer (it holds throughout), advanced
+open loop (physics and sensors alone, also with a 260 Hz and a 380 Hz tactile
+stream) and closed by a compiled reflex that never commands, each with both kernels.
+``--python`` adds the Python loop (``compiled=False``, fixed steps) for scale.
 
 Run: ``python benchmarks/bench_closed_loop.py`` (``--methods dath,nmsd``,
-``--repeat 5``). Issue 10's target: 1500 simulated s per CPU s or more for every
-method (at least 1000). The README quotes its output; tests never assert on time.
+``--repeat 5``). The README and docs/speed.md quote its output; tests never assert on time.
 """
 
 from __future__ import annotations
@@ -35,10 +35,11 @@ from slipreflex.sim.variations import VariationSpread, trial_rig
 
 
 def trial(config: ReproduceConfig, thresholds: dict, method: str, experiment: str, compiled: bool,
-          bottle: str = "TR") -> tuple[float, float, float]:
+          bottle: str = "TR", stepping: str = "adaptive") -> tuple[float, float, float]:
     """(simulated s, wall s, CPU s) of the closed loop of one trial, set up as ``run_trial`` does."""
     seed = trial_seed(config.seed, experiment, bottle, 0)
-    rig = trial_rig(bottle, seed, spread=None if config.variations else VariationSpread.none())
+    rig = trial_rig(bottle, seed, spread=None if config.variations else VariationSpread.none(),
+                    rig_kwargs={"stepping": stepping})
     g = rig.grasp(config.grasp_force_n)
     spec = methods.get(method)
     reflex = spec.build(float(round(g.positions[hw.SLIP_FINGER])),
@@ -74,10 +75,11 @@ class Never:
         self.S[:] = 0.0
 
 
-def held(closed: bool, duration: float = 40.0, tactile_fs: float | None = None) -> tuple[float, float, float]:
+def held(closed: bool, duration: float = 40.0, tactile_fs: float | None = None,
+         stepping: str = "adaptive") -> tuple[float, float, float]:
     """The paper's pour on a grasp squeezed 40 units firmer (it holds throughout), open or closed loop,
     optionally with a tactile stream at ``tactile_fs`` (what a tactile method adds to the physics)."""
-    rig = Rig("TR", seed=1)
+    rig = Rig("TR", seed=1, stepping=stepping)
     g = rig.grasp()
     rig.hand.set_positions({f: g.positions[f] + 40 for f in hw.TRIPOD})
     rig.perturb(PAPER_POUR, at=rig.t + 0.5)
@@ -96,28 +98,46 @@ def median_rate(fn, repeat: int, *args) -> tuple[float, float]:
     return statistics.median(s / c for s, _, c in runs), statistics.median(s / w for s, w, _ in runs)
 
 
+def paired_rates(fn, repeat: int, *args) -> dict[str, tuple[float, float]]:
+    """Median (per CPU-s, per wall-s) of ``fn(*args, stepping=...)`` for both kernels, run alternately."""
+    for kind in ("fixed", "adaptive"):   # warm-up (compilation, caches)
+        fn(*args, stepping=kind)
+    runs: dict[str, list] = {"fixed": [], "adaptive": []}
+    for _ in range(repeat):
+        for kind in runs:
+            runs[kind].append(fn(*args, stepping=kind))
+    return {k: (statistics.median(s / c for s, _, c in v), statistics.median(s / w for s, w, _ in v))
+            for k, v in runs.items()}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--methods", default=",".join(methods.names()), help="comma-separated (default: all)")
     ap.add_argument("--repeat", type=int, default=3, help="timed runs per figure (median)")
+    ap.add_argument("--python", action="store_true", help="also time the Python loop (fixed steps)")
     args = ap.parse_args()
     config = ReproduceConfig(trials=1)
     thresholds = calibrate(config)
-    print(f"{'method':14s} {'experiment':10s} {'sim s':>6s}   {'compiled':>18s}   {'python':>18s}   "
-          f"{'speed-up':>8s}")
+    print(f"{'method':14s} {'experiment':10s} {'sim s':>6s}   {'fixed step':>18s}   {'adaptive':>18s}   "
+          f"{'ratio':>6s}" + (f"   {'python loop':>18s}" if args.python else ""))
     print(f"{'':33s}   {'per CPU-s (wall)':>18s}   {'per CPU-s (wall)':>18s}")
     for method in args.methods.split(","):
         for experiment in ("drop", "pour"):
-            fast = median_rate(trial, args.repeat, config, thresholds, method, experiment, True)
-            slow = median_rate(trial, args.repeat, config, thresholds, method, experiment, False)
-            print(f"{method:14s} {experiment:10s} {config.duration(experiment):6.1f}   "
-                  f"{fast[0]:8.0f} ({fast[1]:6.0f})   {slow[0]:8.0f} ({slow[1]:6.0f})   {fast[0] / slow[0]:7.1f}x")
+            r = paired_rates(trial, args.repeat, config, thresholds, method, experiment, True)
+            fx, ad = r["fixed"], r["adaptive"]
+            line = (f"{method:14s} {experiment:10s} {config.duration(experiment):6.1f}   "
+                    f"{fx[0]:8.0f} ({fx[1]:6.0f})   {ad[0]:8.0f} ({ad[1]:6.0f})   {ad[0] / fx[0]:5.2f}x")
+            if args.python:
+                slow = median_rate(trial, args.repeat, config, thresholds, method, experiment, False, "TR", "fixed")
+                line += f"   {slow[0]:8.0f} ({slow[1]:6.0f})"
+            print(line)
     for fs, what in ((None, ""), (hw.NMSD_FS, ", 260 Hz tactile"), (hw.SWT_FS, ", 380 Hz tactile")):
-        phys = median_rate(held, args.repeat, False, 40.0, fs)
-        loop = median_rate(held, args.repeat, True, 40.0, fs)
-        print(f"held pour{what}: open loop (physics + sensors alone) {phys[0]:5.0f} sim-s per CPU-s; closed by a "
-              f"compiled reflex that never commands {loop[0]:5.0f} (the loop's own cost: "
-              f"{100 * (phys[0] / loop[0] - 1):.0f}%)")
+        phys = paired_rates(held, args.repeat, False, 40.0, fs)
+        loop = paired_rates(held, args.repeat, True, 40.0, fs)
+        print(f"held pour{what}: open loop (physics + sensors alone) fixed {phys['fixed'][0]:5.0f} adaptive "
+              f"{phys['adaptive'][0]:5.0f} ({phys['adaptive'][0] / phys['fixed'][0]:.2f}x) sim-s per CPU-s; closed "
+              f"by a compiled reflex that never commands fixed {loop['fixed'][0]:5.0f} adaptive "
+              f"{loop['adaptive'][0]:5.0f} ({loop['adaptive'][0] / loop['fixed'][0]:.2f}x)")
 
 
 if __name__ == "__main__":

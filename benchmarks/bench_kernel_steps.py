@@ -10,6 +10,9 @@ tactile sampler), best of 7 repeats of 100 000 steps started from the same saved
 
 and the time per frame of ``kernel.tactile_frames`` (20 000 frames of one contact).
 
+The rigs take the fixed step (``stepping="fixed"``): this is the fine step's cost (the adaptive
+kernel's coarse steps are timed per simulated second by ``bench_closed_loop.py``).
+
 Run: ``python benchmarks/bench_kernel_steps.py``. docs/simulator.md ("Speed") quotes it; it
 uses the rig's internal arrays, so it runs against older versions of the kernel too.
 """
@@ -27,7 +30,7 @@ from slipreflex.sim import kernel as K
 
 def held_rig(pour: bool, after_s: float) -> Rig:
     """Grasp, squeeze 40 units, optionally start the paper's pour, advance ``after_s``."""
-    rig = Rig("TR", seed=1)
+    rig = Rig("TR", seed=1, stepping="fixed")
     g = rig.grasp()
     rig.hand.set_positions({f: g.positions[f] + 40 for f in hw.TRIPOD})
     if pour:

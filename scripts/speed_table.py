@@ -104,17 +104,20 @@ def kernel_steps(out: str) -> str:
 
 def closed_loop(out: str) -> str:
     names = ("dath", "fixed", "nmsd", "swt")
-    rate = {(m, e): find(rf"^{m}\s+{e}\s+[\d.]+\s+(\d+) \(\s*\d+\)\s+(\d+) \(", out, "bench_closed_loop")
+    rate = {(m, e): find(rf"^{m}\s+{e}\s+[\d.]+\s+(\d+) \(\s*\d+\)\s+(\d+) \(\s*\d+\)\s+([\d.]+)x", out,
+                         "bench_closed_loop")
             for m in names for e in ("drop", "pour")}
-    held = [find(rf"^held pour{what}: open loop .*? (\d+) sim-s per CPU-s; closed by a compiled reflex that "
-                 rf"never commands\s+(\d+)", out, "bench_closed_loop")
+    held = [find(rf"^held pour{what}: open loop .*? fixed\s+(\d+) adaptive\s+(\d+) \(([\d.]+)x\) sim-s per CPU-s; "
+                 rf"closed by a compiled reflex that never commands fixed\s+(\d+) adaptive\s+(\d+) \(([\d.]+)x\)",
+                 out, "bench_closed_loop")
             for what in ("", ", 260 Hz tactile", ", 380 Hz tactile")]
-    return (f"pour: {' / '.join(rate[m, 'pour'][0] for m in names)}; drop: "
-            f"{' / '.join(rate[m, 'drop'][0] for m in names)} (Python loop on the pour: "
-            f"{' / '.join(rate[m, 'pour'][1] for m in names)}). The floor, the same held pour open loop: "
-            f"{held[0][0]} ({held[1][0]} with a 260 Hz, {held[2][0]} with a 380 Hz tactile stream); closed by a "
-            f"compiled reflex that never commands: {held[0][1]} ({held[1][1]}, {held[2][1]}). Sim-s per CPU-s, "
-            "median of 3 runs")
+
+    def cells(e: str) -> str:
+        return " / ".join(f"{rate[m, e][1]} ({rate[m, e][2]}x)" for m in names)
+    return (f"adaptive kernel (ratio to the fixed-step reference in the same run): pour {cells('pour')}; drop "
+            f"{cells('drop')}. The held pour closed by a compiled reflex that never commands: {held[0][4]} "
+            f"({held[0][5]}x; fixed {held[0][3]}), with a 260 Hz tactile stream {held[1][4]} ({held[1][5]}x), 380 Hz "
+            f"{held[2][4]} ({held[2][5]}x); open loop {held[0][1]} ({held[0][2]}x). Sim-s per CPU-s, median of 3 runs")
 
 
 def interrupt(out: str) -> str:
@@ -183,7 +186,8 @@ ROWS: list[tuple[str, str, str, list[str], Callable[[str], str]]] = [
     ("simulator, physics + sensors, one core", ">= 1000", "bench_sim.py", ["--quick"], sim),
     ("simulator, one physics step", "", "bench_kernel_steps.py", [], kernel_steps),
     ("simulator, one closed-loop trial (compiled loop), DATH / fixed / NMSD / SWT-SD",
-     ">= 1500, at least 1000", "bench_closed_loop.py", ["--methods", "dath,fixed,nmsd,swt", "--repeat", "3"],
+     ">= 4x the fixed step on the held pour", "bench_closed_loop.py",
+     ["--methods", "dath,fixed,nmsd,swt", "--repeat", "3"],
      closed_loop),
     ("`slipreflex reproduce` stopping after Ctrl-C / SIGTERM, signal to exit with the finished trials written",
      "<= 2 s", "bench_interrupt.py", [], interrupt),

@@ -93,7 +93,9 @@ def test_builtins_are_read_only():
 
 
 def _run(seed, chunks=None):
-    rig = Rig("DK", seed=seed)
+    # the fixed-step reference: with adaptive steps a call's end also ends a coarse step (the rows stay
+    # within the tolerance of tests/test_sim_stepping.py, not the same bits)
+    rig = Rig("DK", seed=seed, stepping="fixed")
     rig.grasp()
     rig.perturb(Drop(), at=rig.t + 0.1)
     s = rig.tactile_sampler(380.0, keep=True)

@@ -249,7 +249,7 @@ def _advance(horizon, S, C, P, keys, D, W, track, tac_rates, tac_next, tac_conta
             if n < due < stop:
                 stop = due
         while C[K.C_N] < stop:
-            part = min(stop, C[K.C_N] + chunk)
+            part = min(stop, (C[K.C_N] // chunk + 1) * chunk)   # an absolute grid, as Rig._advance_rows
             K.step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, part, s_daq, s_tac,
                          s_ev, s_n)
             cnt[N_DAQ] = _append(daq, cnt[N_DAQ], s_daq, s_n[0])

@@ -126,9 +126,11 @@ S_SIZE = STATE.size
 # ---- counters C (int64) ---------------------------------------------------
 # C_NFAIL: implicit friction solves that did not converge; C_NITER: most iterations one took.
 # C_SPL: index j of the 1 ms splash-noise interval [j, j + 1) ms the values S_SPL0, S_SPL1 belong to.
-# C_MS0, C_MS1: micro-slip events of the thumb's and the index finger's pad so far.
-COUNTERS = Layout("the rig's counters C", "N DAQ ACC NFAIL NITER SPL MS0 MS1", prefix="C_")
-C_N, C_DAQ, C_ACC, C_NFAIL, C_NITER, C_SPL, C_MS0, C_MS1 = COUNTERS.slots
+# C_MS0, C_MS1: micro-slip events of the thumb's and the index finger's pad so far. C_STEPS: steps taken (a
+# coarse step of the adaptive stepping counts once; with fixed steps it equals C_N). C_RECHECK: the step from
+# which the adaptive stepping looks again whether the rig is calm (kept here: a call's end changes nothing).
+COUNTERS = Layout("the rig's counters C", "N DAQ ACC NFAIL NITER SPL MS0 MS1 STEPS RECHECK", prefix="C_")
+C_N, C_DAQ, C_ACC, C_NFAIL, C_NITER, C_SPL, C_MS0, C_MS1, C_STEPS, C_RECHECK = COUNTERS.slots
 C_SIZE = COUNTERS.size
 
 # ---- parameters P ---------------------------------------------------------
@@ -168,7 +170,8 @@ PARAMS = Layout("the rig's parameters P", f"""
     MS_ETA MS_PER_M MS_W2 MS_2ZW MS_W INCIPIENT
     MV_F MV_W MV_INV_SPEED
     TAPER TAPER_SIN
-    LEVER0:3 ZG IB MBD DROP_E TILT_PEN""", prefix="P_")
+    LEVER0:3 ZG IB MBD DROP_E TILT_PEN
+    COARSE=1""", prefix="P_")
 (P_DT, P_G, P_MB, P_KN, P_LAM, P_QC, P_KSERVO, P_STALL, P_GRIP,
  P_DAQ_T, P_ACC_T, P_ACC_ALPHA, P_ACC_NOISE, P_ACC_LSB, P_ACC_RANGE, P_TILT_X, P_TILT_Z, P_TILT_Y,
  P_VCC, P_VSAT, P_KNEE, P_VNOISE, P_GAP, P_ADC_LSB, P_ADC_MAX, P_TRACK_DX, P_TRACK_OFF,
@@ -181,7 +184,8 @@ PARAMS = Layout("the rig's parameters P", f"""
  P_MS_ETA, P_MS_PER_M, P_MS_W2, P_MS_2ZW, P_MS_W, P_INCIPIENT,
  P_MV_F, P_MV_W, P_MV_INV_SPEED,
  P_TAPER, P_TAPER_SIN,
- P_LEVER0, P_ZG, P_IB, P_MBD, P_DROP_E, P_TILT_PEN) = PARAMS.slots
+ P_LEVER0, P_ZG, P_IB, P_MBD, P_DROP_E, P_TILT_PEN,
+ P_COARSE) = PARAMS.slots
 P_L0 = P_SPL_RMS
 P_SIZE = PARAMS.size
 #: Friction laws (PC_LAW): Coulomb with a Stribeck curve; slip weakening + healing + log rate.
@@ -457,7 +461,7 @@ def rs_slide_speed(R, K, N, mu_st, a, v0, C, z_guess=0.0):
 
 
 @njit(cache=CACHE, inline="always")
-def _rs_contact(kt, ct, s, mus, muk, phi, z_prev, w_prev, a, v0, dc, heal_s, heal_decay, x, v, nc, dt):
+def _rs_contact(kt, ct, s, mus, muk, phi, z_prev, w_prev, a, v0, dc, heal_s, heal_decay, x, v, nc, dt, dt_fine):
     """One step of a rate-state contact (implicit, return mapping); scalars in and out.
 
     The contact sticks while the trial force ``k_t (x - s + v dt) + c_t v``
@@ -473,9 +477,13 @@ def _rs_contact(kt, ct, s, mus, muk, phi, z_prev, w_prev, a, v0, dc, heal_s, hea
     the force on the bottle (up when positive), the new anchor, sliding speed,
     solver variable (0 when stuck), direction (0 when stuck), state, and the
     solver's iterations and convergence.
+
+    ``dt_fine`` is the fine step: the trial force's predictor ``v dt_fine`` (which damps the stuck pad like
+    ``k_t dt_fine`` more) stays the fine step's in a coarse step of ``dt``, so a ringing grasp decays as
+    with fixed steps.
     """
     mu_st = muk + (mus - muk) * phi
-    A = kt * (x - s + v * dt) + ct * v
+    A = kt * (x - s + v * dt_fine) + ct * v
     R = abs(A)
     w = 0.0
     z = 0.0
@@ -577,6 +585,77 @@ def slosh_zeta0(radius, nu, g, damp_factor=1.0):
     return 0.79 * (nu / (g ** 0.5 * radius ** 1.5)) ** 0.5 * damp_factor
 
 
+#: The adaptive stepping (``P_COARSE`` > 1, :func:`step_until`): a contact counts as calm while it sticks with
+#: its force under this share of its static threshold (the cuff: ``_CALM_RATIO_CUFF``; its yield alone is no
+#: gross slip, and the fast slide that follows it takes fine steps) (the splash's peaks are ~3 % of it; a pour's load
+#: takes ~0.2 s to rise by 5 %), or, the cuff only, once its state has weakened under ``_CALM_PHI`` (its
+#: friction within that share of the static-to-kinetic drop of kinetic) while it sticks or creeps slower than
+#: ``_CALM_SLIP`` of its slip-weakening distance per coarse step ...
+_CALM_RATIO = 0.9
+_CALM_RATIO_CUFF = 0.99
+_CALM_SLIP = 0.5
+_CALM_PHI = 0.25
+#: ... and the bottle while it moves slower than ``_CALM_V`` (m/s; the stick resonance's ringing at 2.5 um,
+#: a held pour's splash ~6e-5 m/s) and turns slower than ``_CALM_OM`` (rad/s), a dropped mass resting
+#: on the bottom when its speed and its spring's deviation from rest are under ``_CALM_V`` as well.
+_CALM_V = 1e-3
+_CALM_OM = 1e-3
+#: A finger counts as still within this many position units of its target (2 um of travel; its servo then
+#: turns it at most 0.4 units/s, 1e-3 of full speed: its motor's shake, 1e-5 N at 0.1 Hz, is left out).
+_CALM_Q = 1e-2
+#: ... and its motor's shake under this force (N; 1e-5 N within _CALM_Q of the target).
+_CALM_FM = 1e-4
+#: Fine steps after a calm check that failed before the next one (the check costs a few ns).
+_CALM_RECHECK = 8
+
+
+@njit(cache=CACHE, inline="always")
+def _fire_end(T, dt):
+    """The step count ``k`` at whose end a sample due at ``T`` is taken: the least ``k`` with
+    ``T <= k dt + 1e-12`` (the sensors' rule in :func:`step_until`)."""
+    k = np.int64(np.ceil((T - 1e-12) / dt))
+    while T <= (k - 1) * dt + 1e-12:
+        k -= 1
+    while T > k * dt + 1e-12:
+        k += 1
+    return k
+
+
+@njit(cache=CACHE, inline="always")
+def _tactile_end(j, r, dt):
+    """The step count at whose end tactile sample ``j`` of a sampler at ``r`` Hz is taken: the least ``k``
+    with ``j <= (k dt + 1e-12) r``."""
+    k = np.int64(np.ceil((j / r - 1e-12) / dt))
+    while j <= ((k - 1) * dt + 1e-12) * r:
+        k -= 1
+    while j > (k * dt + 1e-12) * r:
+        k += 1
+    return k
+
+
+@njit(cache=CACHE, inline="always")
+def _load_switch(n, t_switch, dt):
+    """The first step ``k > n`` whose start lies past ``t_switch`` (a pour's water arrives at ``k dt >
+    t_switch``), or a step count far away when that step is not after ``n``."""
+    k = np.int64(np.floor(t_switch / dt))
+    while k > 0 and (k - 1) * dt > t_switch:
+        k -= 1
+    while k * dt <= t_switch:
+        k += 1
+    return k if k > n else np.int64(1) << 62
+
+
+@njit(cache=CACHE, inline="always")
+def _load_stop(n, ta, dur, dt):
+    """The first step ``k > n`` with ``k dt - ta >= dur`` (a pour's water stops), or a step count far away."""
+    k = np.int64(np.floor((ta + dur) / dt))
+    while k > 0 and (k - 1) * dt - ta >= dur:
+        k -= 1
+    while k * dt - ta < dur:
+        k += 1
+    return k if k > n else np.int64(1) << 62
+
+
 @njit(cache=CACHE)
 def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_end, daq_out, tac_out, ev_out,
                counts):
@@ -629,14 +708,117 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
     v1 = S[S_V1]
     th = S[S_TH]
     om = S[S_OM]
+    coarse = np.int64(P[P_COARSE])
+    acc_lq = np.log1p(-acc_alpha)
+    alpha_coarse = -np.expm1(coarse * acc_lq)
+    # the step at whose end the next DAQ row is taken (for the counter's value daq_at; recomputed when it
+    # moves), and the last IMU reading before it (seen_j) and its step
+    daq_at = np.int64(-1)
+    daq_end = np.int64(0)
+    seen_j = np.int64(-1)
+    seen_end = np.int64(0)
+    acc_t = P[P_ACC_T]
+    daq_t = P[P_DAQ_T]
+    n_switch = n   # the next step where a load switches (a drop's release, a pour's start or stop): look first
     while n < n_end:
         if nev + 3 + D.shape[0] > cap_ev or nd + 2 > cap_daq:
             break
+        # the step: one fine step, or (adaptive, while nothing needs the fine step) ``ms`` of them at once,
+        # ending where the next sample is due; ``h`` its length, loads taken at its middle ``tl``
+        ms = 1
+        if coarse > 1 and n >= C[C_RECHECK]:
+            # calm: nothing in the rig needs the fine step (the conditions are written out here, not in a
+            # helper: an inlined helper taking arrays costs an atomic reference count per array and call)
+            # a fallen bottle falls freely (no contact, nothing rings on it, its fingers touch nothing)
+            gone = S[S_FALLEN] > 0.0
+            calm = gone or (abs(v) <= _CALM_V and abs(om) <= _CALM_OM)
+            if calm and not gone:
+                calm = S[S_VY0] == 0.0 and S[S_VV0] == 0.0 and S[S_VY1] == 0.0 and S[S_VV1] == 0.0
+            if calm and not gone:
+                calm = x + abs(th) * max(abs(lev0), abs(lev1)) < grip
+            for i in range(3 if calm and not gone else 0):
+                if abs(S[S_TGT0 + i] - S[S_Q0 + i]) > _CALM_Q or abs(S[S_FM0 + i]) > _CALM_FM:
+                    calm = False
+            if calm and not gone and S[S_SUPPORTED] == 0.0:
+                ncc = S[S_NC]
+                for i in range(3):
+                    bs = S_C0 + i * SC_SIZE
+                    bp = P_C0 + i * PC_SIZE
+                    rs = P[bp + PC_LAW] == LAW_RATE_STATE
+                    if i == 2 and rs and S[bs + SC_PHI] < _CALM_PHI:
+                        # the cuff weakened, creeping or stuck for a moment between creeps: a yield releases
+                        # at most _CALM_PHI of its static-to-kinetic drop
+                        if S[bs + SC_STUCK] == 0.0 and S[bs + SC_W] * coarse * dt > _CALM_SLIP * P[bp + PC_DC]:
+                            calm = False
+                    elif S[bs + SC_STUCK] > 0.0:
+                        lim = (P[bp + PC_MUK] + (P[bp + PC_MUS] - P[bp + PC_MUK]) * S[bs + SC_PHI] if rs
+                               else P[bp + PC_MUS])
+                        if abs(S[bs + SC_FT]) > (_CALM_RATIO if i < 2 else _CALM_RATIO_CUFF) * lim * ncc:
+                            calm = False
+                    else:
+                        calm = False
+            cap = coarse
+            for d in range(D.shape[0] if calm else 0):
+                if D[d, D_ACT] > 0.0:
+                    # a mass resting on the bottom rings on its contact spring: omega h <= 1
+                    cap = min(cap, max(1, np.int64(1.0 / (np.sqrt(D[d, D_KC] / D[d, D_M]) * dt))))
+                    # a dropped mass in flight, or bouncing on the bottom (its speed or its spring's sag from
+                    # rest over _CALM_V)
+                    sag = D[d, D_Z] - x - D[d, D_M] * g / D[d, D_KC]
+                    if (D[d, D_LANDED] == 0.0 or abs(D[d, D_VZ] - v) > _CALM_V
+                            or abs(sag) * np.sqrt(D[d, D_KC] / D[d, D_M]) > _CALM_V):
+                        calm = False
+            if calm:
+                # the coarse step ends where the next IMU, DAQ or tactile sample is taken (each from the state
+                # at its instant, as with fixed steps), before a drop's release and where a pour's water
+                # starts or stops
+                if n >= n_switch:
+                    n_switch = np.int64(1) << 62
+                    for d in range(D.shape[0]):
+                        if D[d, D_ACT] == 0.0:
+                            k = _fire_end(D[d, D_REL] + 1e-12, dt) - 1   # the first k with (k + 1) dt > rel
+                            while (k + 1) * dt <= D[d, D_REL]:
+                                k += 1
+                            while k > 0 and k * dt > D[d, D_REL]:
+                                k -= 1
+                            if k >= n:
+                                n_switch = min(n_switch, k)
+                    for p in range(W.shape[0]):
+                        ta = W[p, W_START] + W[p, W_DELAY]
+                        n_switch = min(n_switch, _load_switch(n, ta, dt), _load_stop(n, ta, W[p, W_DUR], dt))
+                if C[C_DAQ] != daq_at:
+                    daq_at = C[C_DAQ]
+                    daq_end = _fire_end(daq_at * daq_t, dt)
+                    # the IMU reading the row will carry: the last taken by the row's step (the readings
+                    # before it are drawn by no one, and end no step)
+                    seen_j = np.int64(np.floor((daq_end * dt + 1e-12) / acc_t)) + 1
+                    while seen_j >= 0 and _fire_end(seen_j * acc_t, dt) > daq_end:
+                        seen_j -= 1
+                    seen_end = _fire_end(seen_j * acc_t, dt)
+                ms = min(cap, n_end - n, n_switch - n, daq_end - n)
+                if seen_j >= C[C_ACC]:
+                    ms = min(ms, seen_end - n)
+                for si in range(nsamp):
+                    ms = min(ms, _tactile_end(tac_next[si], tac_rates[si], dt) - n)
+                if ms < 1:
+                    ms = 1
+            else:
+                C[C_RECHECK] = n + _CALM_RECHECK
         t0 = n * dt
-        t1 = (n + 1) * dt
-        # ---- fingers
+        if ms == 1:
+            h = dt
+            t1 = (n + 1) * dt
+            tl = t0
+            alpha_h = acc_alpha
+        else:
+            h = ms * dt
+            t1 = (n + ms) * dt
+            tl = t0 + 0.5 * (ms - 1) * dt
+            alpha_h = alpha_coarse if ms == coarse else -np.expm1(ms * acc_lq)
+        # ---- fingers (in a coarse step of a held bottle within _CALM_Q of their targets: their motors quiet)
         nc_prev = S[S_NC]
         moving = False
+        quiet = ms > 1 and S[S_FALLEN] == 0.0
         for i in range(3):
             q = S[S_Q0 + i]
             tg = S[S_TGT0 + i]
@@ -652,16 +834,18 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
                 r = -sp
             if r > 0.0 and nc_prev >= stall:
                 r = 0.0
-            qn = q + r * dt
+            qn = q + r * h
             if (tg - qn) * e < 0.0:
                 qn = tg
             S[S_Q0 + i] = qn
+            if quiet:
+                S[S_FM0 + i] = 0.0
             # the digit's motor shakes its contact while it turns: rotor unbalance, force and frequency
             # proportional to the speed
-            if mv_f > 0.0:
+            if mv_f > 0.0 and not quiet:
                 if qn != q:
-                    mvr = abs(qn - q) * mv_inv_dt
-                    ph = S[S_MPH0 + i] + mv_w * mvr * dt
+                    mvr = abs(qn - q) * (mv_inv_dt if ms == 1 else mv_inv_dt * dt / h)
+                    ph = S[S_MPH0 + i] + mv_w * mvr * h
                     if ph > 6.283185307179586:
                         ph -= 6.283185307179586
                     S[S_MPH0 + i] = ph
@@ -695,9 +879,9 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
         fjet = 0.0
         for p in range(W.shape[0]):
             ta = W[p, W_START] + W[p, W_DELAY]
-            if t0 > ta:
-                mw += W[p, W_RATE_KG_S] * min(t0 - ta, W[p, W_DUR])
-                if t0 - ta < W[p, W_DUR]:
+            if tl > ta:
+                mw += W[p, W_RATE_KG_S] * min(tl - ta, W[p, W_DUR])
+                if tl - ta < W[p, W_DUR]:
                     fjet += W[p, W_JET_N]
         # ---- the jet's splash: a one-pole (Ornstein-Uhlenbeck) noise drawn on a fixed 1 ms grid and
         # interpolated, so it does not depend on dt; the grid (and the slosh mode's coefficients, which
@@ -706,16 +890,19 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
         if fjet > 0.0:
             gdt = P[P_SPL_DT]
             advanced = False
-            while (C[C_SPL] + 1) * gdt <= t0:
+            tenth = False
+            while (C[C_SPL] + 1) * gdt <= tl:
                 j = C[C_SPL] + 1
                 S[S_SPL0] = S[S_SPL1]
                 S[S_SPL1] = P[P_SPL_RHO] * S[S_SPL1] + P[P_SPL_SIG] * normal(key5, j + 1)
                 C[C_SPL] = j
                 advanced = True
-            fr = t0 * P[P_SPL_INV] - C[C_SPL]
+                tenth = tenth or j % 10 == 0
+            fr = tl * P[P_SPL_INV] - C[C_SPL]
             fspl = P[P_SPL_RMS] * fjet * (S[S_SPL0] + fr * (S[S_SPL1] - S[S_SPL0]))
-            # the mode follows the fill every 10 ms (0.17 ml at 1 L/min: its mass changes by < 0.1 %)
-            if (advanced and C[C_SPL] % 10 == 0) or S[S_M1] == 0.0:
+            # the mode follows the fill every 10 ms (0.17 ml at 1 L/min: its mass changes by < 0.1 %; a coarse
+            # step that passes a tenth grid point updates it too)
+            if (advanced and (C[C_SPL] % 10 == 0 or (ms > 1 and tenth))) or S[S_M1] == 0.0:
                 kth, m1, zeta, beta = slosh_mode(mw, P[P_SLOSH_R], P[P_RHO_W], P[P_ZETA0], P[P_PHIJ])
                 S[S_KTH] = kth
                 S[S_M1] = m1
@@ -748,20 +935,32 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
                     nev += 1
             if D[d, D_LANDED] > 0.0:
                 mland += D[d, D_M]
-            D[d, D_VZ] += (g - f / D[d, D_M]) * dt
-            D[d, D_Z] += D[d, D_VZ] * dt
+            D[d, D_VZ] += (g - f / D[d, D_M]) * h
+            D[d, D_Z] += D[d, D_VZ] * h
             fdrop += f
             if f != 0.0 and drop_e != 0.0:
                 # its force on the bottom, at the eccentricity; the bottom point z_g below the axis moves
                 # sideways with the tilt, shortening the lever
                 mdrop += f * (drop_e - zg * th)
         m = mb + mw
-        S[S_MASS] = m + mland
+        mrec = mw
+        if ms > 1:
+            # the truth's mass as the fixed steps record it: at the start of the step that ends at t1
+            mrec = 0.0
+            tr = t1 - dt
+            for p in range(W.shape[0]):
+                ta = W[p, W_START] + W[p, W_DELAY]
+                if tr > ta:
+                    mrec += W[p, W_RATE_KG_S] * min(tr - ta, W[p, W_DUR])
+            S[S_MASS] = mb + mrec + mland
+        else:
+            S[S_MASS] = m + mland
         wload = m * g + fjet + fspl + fdrop
         # on the shoulder the three normal forces lean along the axis and push the bottle out of the grasp
         if taper > 0.0 and shl > 0.0 and not fallen:
             wload += 3.0 * nc * taper_sin
-        S[S_LOAD] = wload
+        # recorded with the mass recorded (the splash and the drops' forces: the step's)
+        S[S_LOAD] = wload if ms == 1 else wload + (mrec - mw) * g
         # ---- the slosh (sideways): slosh mass m1 on the spring m1 k tanh(k h) (g - a) and damper c1,
         # tied to the bottle, which the grasp holds sideways; the jet's force drives the mode (equal and
         # opposite on the bottle: a vertical jet gives the pair no sideways momentum)
@@ -774,10 +973,10 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
             fq = S[S_BETA] * (fjet + fspl)
             S[S_FWAT] = fs - fq
             ab = (fs - fq + flat - klat * yb - clat * vb) / (m + mland - m1)
-            v1 += (fq - fs) / m1 * dt
-            y1 += v1 * dt
-            vb += ab * dt
-            yb += vb * dt
+            v1 += (fq - fs) / m1 * h
+            y1 += v1 * h
+            vb += ab * h
+            yb += vb * h
             S[S_V1] = v1
             S[S_Y1] = y1
             S[S_VB] = vb
@@ -786,8 +985,8 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
         elif (flat != 0.0 or vb != 0.0 or yb != 0.0) and not fallen:
             # no water: the bottle alone on the grasp's sideways stiffness
             ab = (flat - klat * yb - clat * vb) / (m + mland)
-            vb += ab * dt
-            yb += vb * dt
+            vb += ab * h
+            yb += vb * h
             if abs(yb) < 1e-15 and abs(vb) < 1e-12:
                 yb = 0.0
                 vb = 0.0
@@ -804,8 +1003,8 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
             S[S_FT] = 0.0
         elif fallen:
             a = wload / m
-            v += a * dt
-            x += v * dt
+            v += a * h
+            x += v * h
             S[S_FT] = 0.0
         else:
             # thumb and index pads with the same constants see the same x, v and N, so they
@@ -829,10 +1028,13 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
                     xi = x + lv * th
                     vi = v + lv * om
                 if P[bp + PC_LAW] == LAW_RATE_STATE:
+                    hdec = P[bp + PC_HEAL_DECAY]
+                    if ms > 1 and S[bs + SC_PHI] < 1.0:
+                        hdec = np.exp(-h / P[bp + PC_HEAL])
                     F, s_new, w, z, d, phi, it, ok = _rs_contact(
                         P[bp + PC_KT], P[bp + PC_CT], S[bs + SC_S], P[bp + PC_MUS], P[bp + PC_MUK], S[bs + SC_PHI],
                         S[bs + SC_Z], S[bs + SC_W], P[bp + PC_A], P[bp + PC_V0], P[bp + PC_DC], P[bp + PC_HEAL],
-                        P[bp + PC_HEAL_DECAY], xi, vi, nc, dt)
+                        hdec, xi, vi, nc, h, dt)
                     S[bs + SC_S] = s_new
                     S[bs + SC_Z] = z
                     if d != 0.0:
@@ -856,16 +1058,16 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
                 if tilt_now:
                     mom -= F * P[P_LEVER0 + i]
             a = (wload - ftot) / m
-            v += a * dt
-            x += v * dt
+            v += a * h
+            x += v * h
             th_old = th
             if tilt_now:
                 # the contacts' tangential forces at their levers (each bounded by its friction: together
                 # the friction couple), the drop's eccentric force and gravity on the centre of mass below
                 # the axis (restoring) turn the bottle about the axis
                 inertia, mgd = tilt_inertia(mw, P)
-                om += (mom + mdrop - g * mgd * th) / inertia * dt
-                th += om * dt
+                om += (mom + mdrop - g * mgd * th) / inertia * h
+                th += om * h
             sliding = True
             s_mean = 0.0
             w_min = np.inf
@@ -951,15 +1153,32 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
         a_prev = a
         # the IMU's DLPF states; flushed to zero below 1e-200 m/s^2 (they decay toward an exact zero at rest
         # and would otherwise sit in the subnormal range, where every step's arithmetic is slow)
-        af = S[S_AF] + (a - S[S_AF]) * acc_alpha
+        af = S[S_AF] + (a - S[S_AF]) * alpha_h
         S[S_AF] = af if abs(af) > 1e-200 else 0.0
         # the accelerometer's x axis (radial at the thumb, 30 degrees off the normal of the tilt axis) also
         # reads gravity tilted with the bottle
-        afl = S[S_AFL] + (S[S_ALAT] + (_COS30 * g * th if th != 0.0 and not fallen else 0.0) - S[S_AFL]) * acc_alpha
+        afl = S[S_AFL] + (S[S_ALAT] + (_COS30 * g * th if th != 0.0 and not fallen else 0.0) - S[S_AFL]) * alpha_h
         S[S_AFL] = afl if abs(afl) > 1e-200 else 0.0
         # ---- accelerometer ticks (own ODR)
-        while C[C_ACC] * P[P_ACC_T] <= t1 + 1e-12:
+        while C[C_ACC] * acc_t <= t1 + 1e-12:
             j = C[C_ACC]
+            # a DAQ row carries the latest reading: with adaptive steps only the readings a row will carry are
+            # drawn (the last before each row; the others would be overwritten unseen: the same rows)
+            seen = True
+            if coarse > 1:
+                if C[C_DAQ] != daq_at:
+                    daq_at = C[C_DAQ]
+                    daq_end = _fire_end(daq_at * daq_t, dt)
+                    seen_j = np.int64(np.floor((daq_end * dt + 1e-12) / acc_t)) + 1
+                    while seen_j >= 0 and _fire_end(seen_j * acc_t, dt) > daq_end:
+                        seen_j -= 1
+                    seen_end = _fire_end(seen_j * acc_t, dt)
+                # the reading the next row carries is the last taken by the row's step
+                seen = j == seen_j
+            if not seen:
+                S[S_AFRESH] = 1.0
+                C[C_ACC] = j + 1
+                continue
             spec = 1.0 - S[S_AF] / g
             lsb = P[P_ACC_LSB]
             rng = P[P_ACC_RANGE]
@@ -973,7 +1192,7 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
         while C[C_DAQ] * P[P_DAQ_T] <= t1 + 1e-12 and nd < cap_daq:
             k = C[C_DAQ]
             tk = k * P[P_DAQ_T]
-            frac = (tk - t0) / dt
+            frac = (tk - t0) / h
             if frac < 0.0:
                 frac = 0.0
             xk = x_old + frac * (x - x_old)
@@ -1015,7 +1234,7 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
             daq_out[nd, O_FALLEN] = S[S_FALLEN]
             daq_out[nd, O_A] = a
             daq_out[nd, O_ALAT] = S[S_ALAT]
-            daq_out[nd, O_LOAD] = wload
+            daq_out[nd, O_LOAD] = S[S_LOAD]
             daq_out[nd, O_FWAT] = S[S_FWAT]
             nd += 1
             C[C_DAQ] = k + 1
@@ -1039,7 +1258,8 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
                 tac_out[ntac, T_MS] = C[C_MS0 + tac_contact[si]] if tac_contact[si] < 2 else 0.0
                 ntac += 1
                 tac_next[si] += 1
-        n += 1
+        n += ms
+        C[C_STEPS] += 1
     C[C_N] = n
     counts[0] = nd
     counts[1] = ntac

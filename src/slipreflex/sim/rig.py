@@ -44,6 +44,7 @@ from __future__ import annotations
 import bisect
 import math
 import operator
+import os
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
@@ -72,11 +73,70 @@ from .params import (
 from .sensors import Track
 
 __all__ = ["Rig", "SimHand", "TactileSampler", "GraspResult", "DaqBlock", "SlipEvent", "KernelArrays",
-           "seed_sequence", "fill_slip_sensor_params"]
+           "seed_sequence", "fill_slip_sensor_params", "STEPPINGS", "STEPPING_ENV", "COARSE_STEP_S",
+           "default_stepping", "stepping"]
 
 _CHUNK_S = 0.25  # longest stretch one kernel call covers (bounds the buffers)
 _SPLASH_GRID_S = 1e-3  # the splash noise is drawn every 1 ms (independent of dt) and interpolated
 _ROUND = 1e-9
+
+#: How the kernel steps: ``"adaptive"`` takes one coarse step of up to :data:`COARSE_STEP_S` while nothing
+#: needs the fine step (every contact sticking with a margin, the cuff at most creeping, no finger moving,
+#: no pad ringing, nothing in flight), ending where the next sample is due; ``"fixed"`` takes every
+#: ``PhysicsParams.dt``, the reference (docs/simulator.md, "Time step").
+STEPPINGS: tuple[str, ...] = ("adaptive", "fixed")
+#: The environment variable that sets the stepping of rigs made without ``stepping=`` (worker processes
+#: inherit it: ``SLIPREFLEX_STEPPING=fixed slipreflex reproduce`` runs the reference kernel).
+STEPPING_ENV: str = "SLIPREFLEX_STEPPING"
+#: Longest coarse step (s), the DAQ's period; a rig's own bound is shorter: the stiffest mode a calm rig
+#: rings in (the bottle on its contacts' shear stiffness along the axis or sideways, the tilt on the pads)
+#: stays at omega h <= 1, inside the semi-implicit Euler's stability bound (2), with its frequency off by
+#: under (omega h)^2 / 24 = 4 % (:meth:`Rig.coarse_steps`).
+COARSE_STEP_S: float = 3e-3
+
+
+def default_stepping() -> str:
+    """The stepping of a rig made without ``stepping=``: :data:`STEPPING_ENV`, or ``"adaptive"``.
+
+    Examples
+    --------
+    >>> default_stepping() in STEPPINGS
+    True
+    """
+    kind = os.environ.get(STEPPING_ENV, "adaptive") or "adaptive"
+    if kind not in STEPPINGS:
+        raise ParameterError(f"{STEPPING_ENV}={kind!r}: unknown stepping (known: {', '.join(STEPPINGS)})")
+    return kind
+
+
+class stepping:  # noqa: N801 - a context manager used like a function
+    """Make rigs (in this process and in worker processes started inside) step as ``kind``.
+
+    Sets :data:`STEPPING_ENV` for the block and restores it after.
+
+    Examples
+    --------
+    >>> with stepping("fixed"):
+    ...     Rig("TR").stepping
+    'fixed'
+    """
+
+    def __init__(self, kind: str) -> None:
+        if kind not in STEPPINGS:
+            raise ParameterError(f"stepping: unknown {kind!r} (known: {', '.join(STEPPINGS)})")
+        self.kind = kind
+        self._old: str | None = None
+
+    def __enter__(self) -> stepping:
+        self._old = os.environ.get(STEPPING_ENV)
+        os.environ[STEPPING_ENV] = self.kind
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self._old is None:
+            os.environ.pop(STEPPING_ENV, None)
+        else:
+            os.environ[STEPPING_ENV] = self._old
 
 
 def seed_sequence(seed: int | np.random.SeedSequence | np.random.Generator | None) -> np.random.SeedSequence:
@@ -690,6 +750,10 @@ class Rig:
         :func:`~slipreflex.sim.run_closed_loop`; about 50 kB per simulated
         second). A long real-time session that only streams samples can
         turn it off.
+    stepping : {"adaptive", "fixed"}, optional
+        How the kernel steps (:data:`STEPPINGS`; default :func:`default_stepping`):
+        coarse steps while nothing needs the fine one, or every ``physics.dt``
+        (the reference).
 
     Examples
     --------
@@ -704,7 +768,11 @@ class Rig:
                  | None = 0, *, hand: HandParams | None = None, slip_sensor: SlipSensorParams | None = None,
                  imu: ImuParams | None = None, tactile: TactileParams | None = None, flow: FlowParams | None = None,
                  physics: PhysicsParams | None = None, water: WaterParams | None = None,
-                 history: bool = True) -> None:
+                 history: bool = True, stepping: str | None = None) -> None:
+        stepping = default_stepping() if stepping is None else stepping
+        if stepping not in STEPPINGS:
+            raise ParameterError(f"stepping: unknown {stepping!r} (known: {', '.join(STEPPINGS)})")
+        self.stepping = stepping
         if isinstance(bottle, str):
             if bottle not in BOTTLES:
                 raise ParameterError(f"bottle: unknown bottle {bottle!r} (known: {', '.join(BOTTLES)})")
@@ -772,6 +840,7 @@ class Rig:
         b, h, s, imu, ph = self.bottle, self.hand_params, self.slip_sensor, self.imu, self.physics
         P = K.PARAMS.new()   # NaN until filled: checked complete below
         P[K.P_DT] = ph.dt
+        P[K.P_COARSE] = 1
         P[K.P_G] = hw.GRAVITY
         P[K.P_MB] = b.mass_kg
         fill_contact_params(P, h, b, ph.dt)
@@ -819,7 +888,26 @@ class Rig:
         P[K.P_FLOW_K] = flow_k
         P[K.P_FLOW_PHASE] = flow_phase
         self._water_params(P)
+        if self.stepping == "adaptive":
+            P[K.P_COARSE] = self.coarse_steps(P)
         return K.PARAMS.check(P)
+
+    def coarse_steps(self, P: np.ndarray | None = None) -> int:
+        """Fine steps one coarse step of the adaptive stepping spans at most: ``omega h <= 1`` for the stiffest
+        mode of the held bottle (empty: its highest frequencies), and at most :data:`COARSE_STEP_S`.
+
+        Examples
+        --------
+        >>> Rig("TR").coarse_steps()
+        16
+        """
+        par: np.ndarray = self._P if P is None else P
+        m, dt = self.bottle.mass_kg, self.physics.dt
+        kts = [float(par[K.P_C0 + i * K.PC_SIZE + K.PC_KT]) for i in range(3)]
+        inertia, _ = K.tilt_inertia(0.0, par)
+        tilt_k = sum(k * float(par[K.P_LEVER0 + i]) ** 2 for i, k in enumerate(kts))
+        omega = max(math.sqrt(sum(kts) / m), math.sqrt(float(par[K.P_KLAT]) / m), math.sqrt(tilt_k / inertia))
+        return max(1, min(int(COARSE_STEP_S / dt + 1e-9), int(1.0 / (omega * dt))))
 
     def _water_params(self, P: np.ndarray) -> None:
         """The water's splash and slosh constants (:class:`WaterParams`) and the grasp's sideways stiffness."""
@@ -857,6 +945,20 @@ class Rig:
         0
         """
         return self._n
+
+    @property
+    def steps_taken(self) -> int:
+        """Kernel steps taken so far: every ``physics.dt`` with fixed steps, fewer with adaptive ones
+        (a coarse step counts once).
+
+        Examples
+        --------
+        >>> rig = Rig("TR", stepping="fixed")
+        >>> _ = rig.advance(0.01)
+        >>> rig.steps_taken == rig.step_index
+        True
+        """
+        return int(self._C[K.C_STEPS])
 
     @property
     def finger_q(self) -> np.ndarray:
@@ -1049,7 +1151,8 @@ class Rig:
                 break
             due = hand.next_due_step()
             nxt = n_end if due is None else due
-            stop = min(n_end, n + chunk, nxt if nxt > n else n_end)
+            # chunks end on a grid of absolute steps: where a run is cut must not depend on where it started
+            stop = min(n_end, (n // chunk + 1) * chunk, nxt if nxt > n else n_end)
             rows.append(self._run(stop))
         if not rows:
             return np.zeros((0, K.O_SIZE))

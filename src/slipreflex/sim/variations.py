@@ -45,7 +45,7 @@ import numpy as np
 from ..errors import ParameterError
 from .objects import BOTTLES, Bottle
 from .params import HandParams
-from .rig import Rig
+from .rig import Rig, default_stepping
 
 __all__ = ["TrialVariation", "VariationSpread", "draw_variation", "apply_variation", "trial_rig", "grasped_rig"]
 
@@ -201,7 +201,8 @@ def grasped_rig(bottle: str | Bottle, seed: int, force: float, *, spread: Variat
     >>> a is not b, a.t == b.t, ga == gb
     (True, True, True)
     """
-    key = pickle.dumps((bottle, seed, force, spread, rig_kwargs, bottles))
+    # the stepping is part of the key: a rig grasped by the other kernel is another rig
+    key = pickle.dumps((bottle, seed, force, spread, rig_kwargs, bottles, default_stepping()))
     if key not in _GRASPED:
         rig = trial_rig(bottle, seed, spread=spread, rig_kwargs=rig_kwargs, bottles=bottles)
         grasp = rig.grasp(force)

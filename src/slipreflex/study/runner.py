@@ -83,6 +83,14 @@ _META_KEY = b"slipreflex.study"
 CALIBRATION_SEEDS: tuple[int, ...] = (0,)
 
 
+def _stepping_default() -> str:
+    """This process's stepping (the environment's, or adaptive), checked."""
+
+    from ..sim.rig import default_stepping  # deferred: heavy (numba kernels)
+
+    return default_stepping()
+
+
 def _grid_defaults() -> tuple:
     """The reproduce defaults: every bottle, the paper's methods, both experiments, the master seed."""
 
@@ -114,6 +122,10 @@ class StudyConfig:
     scan_seeds : int
         Texture seeds of each plant's scans (its own seeds: :func:`scan_seed_base`); the
         study judges claims 1-2 on all plants' scans pooled (``plants x scan_seeds`` draws).
+    stepping : {"adaptive", "fixed"}
+        The simulator's stepping (:data:`slipreflex.sim.rig.STEPPINGS`; default: this process's,
+        ``SLIPREFLEX_STEPPING`` or adaptive). Every plant runs with it wherever it runs (a remote
+        worker's own environment does not decide), and it is part of the fingerprint.
 
     Examples
     --------
@@ -134,13 +146,17 @@ class StudyConfig:
     calibrate: bool = True
     scan: bool = True
     scan_seeds: int = 4
+    stepping: str = field(default_factory=lambda: _stepping_default())
     _table: Any = field(default=None, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
+        from ..sim.rig import STEPPINGS  # deferred: heavy (numba kernels)
         from ..sim.uncertain import UNCERTAIN, load_ranges  # deferred: heavy (numba kernels)
 
         if self.design not in DESIGNS:
             raise ParameterError(f"design: unknown {self.design!r} (known: {', '.join(DESIGNS)})")
+        if self.stepping not in STEPPINGS:
+            raise ParameterError(f"stepping: unknown {self.stepping!r} (known: {', '.join(STEPPINGS)})")
 
         object.__setattr__(self, "plants", within("plants", self.plants))
         if isinstance(self.scan_seeds, bool) or not isinstance(self.scan_seeds, int) or self.scan_seeds < 1:
@@ -208,6 +224,7 @@ class StudyConfig:
         rc = self.reproduce_config()
         doc = {"version": __version__, "plants": self.plants, "design": self.design, "seed": self.seed,
                "calibrate": self.calibrate, "scan": self.scan, "scan_seeds": self.scan_seeds,
+               "stepping": self.stepping,
                "grid": {f.name: repr(getattr(rc, f.name)) for f in dataclasses.fields(rc) if f.name != "plant"},
                "table": {k: [c.low, c.high, c.nominal, c.distribution] for k, c in self.table.items()}}
         return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()[:20]
@@ -332,6 +349,13 @@ def run_plant(index: int, values: Mapping[str, float], config: StudyConfig) -> P
     ('', 1, 'not-decidable')
     """
 
+    from ..sim.rig import stepping  # deferred: heavy (numba kernels)
+
+    with stepping(config.stepping):
+        return _run_plant(index, values, config)
+
+
+def _run_plant(index: int, values: Mapping[str, float], config: StudyConfig) -> PlantOutcome:
     from ..sim.scan import scan_ensemble  # deferred: heavy (llvmlite, numba, scipy)
     from ..sim.uncertain import plant_from_values  # deferred: heavy (numba kernels)
 
@@ -492,7 +516,7 @@ class _Progress:
 #: Options of ``slipreflex study`` by StudyConfig field, for the message naming what differs.
 _OPTIONS = {"plants": "--plants", "design": "--design", "trials": "--trials", "bottles": "--bottles",
             "methods": "--methods", "experiments": "--experiments", "seed": "--seed", "ranges": "--ranges",
-            "calibrate": "--no-calibration", "scan": "scan"}
+            "calibrate": "--no-calibration", "scan": "scan", "stepping": "SLIPREFLEX_STEPPING"}
 
 
 def _differences(old: Mapping[str, Any], config: StudyConfig) -> list[str]:
