@@ -729,6 +729,11 @@ class _FrameReader:
     def read(self, timeout: float) -> list[Any]:
         return self.tactile.read_frames(timeout)
 
+    def drop_buffered(self) -> int:
+        # a source that reads on its own thread (the Ability Hand's pump) queues frames during the set-up
+        drop = getattr(self.tactile, "drop_buffered", None)
+        return int(drop()) if callable(drop) else 0
+
     def close(self) -> None:
         self.tactile.close()
 

@@ -22,6 +22,7 @@ True
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -114,11 +115,17 @@ def check_figure_path(path: str | Path, option: str) -> None:
 
 def _save(plt, fig, path: str | Path, layout: bool = True) -> Path:
     """Lay out (unless done), write (creating the folder) and close one figure; the path written."""
+    crop = False
     if layout:
-        fig.tight_layout()
+        with warnings.catch_warnings():
+            warnings.filterwarnings("error", "Tight layout not applied", UserWarning)
+            try:
+                fig.tight_layout()
+            except UserWarning:  # a legend beside the axes wider than the margins: crop to what is drawn instead
+                crop = True
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=110, bbox_inches="tight" if crop else None)
     plt.close(fig)
     return path
 

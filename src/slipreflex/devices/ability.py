@@ -686,6 +686,24 @@ class AbilityHand:
             raise err
         return out
 
+    def drop_buffered(self) -> int:
+        """Drop the frames the pump queued and no one has read yet.
+
+        ``run_loop`` calls this once just before its clock starts: frames that came while the
+        run set up (the chain warmed up, the safe start's STOP) are from before the run and
+        would otherwise be processed as a stale backlog, as :meth:`SerialDaq.drop_buffered
+        <slipreflex.devices.daq.SerialDaq.drop_buffered>` drops the DAQ's.
+
+        Returns
+        -------
+        int
+            Frames dropped.
+        """
+        with self._arrived:
+            dropped = len(self._frames)
+            self._frames.clear()
+        return dropped
+
     def close(self) -> None:
         """Stop the pump and close the port if this driver opened it."""
         self._stop.set()
