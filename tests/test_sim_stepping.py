@@ -177,3 +177,21 @@ def test_a_study_runs_every_plant_with_its_own_stepping_and_fingerprints_it(monk
     assert fixed.fingerprint() != adaptive.fingerprint()
     with pytest.raises(ParameterError, match="stepping: unknown 'half'"):
         StudyConfig(plants=2, stepping="half")
+
+
+def test_the_tabled_dlpf_factor_is_the_one_the_kernel_would_compute():
+    from numba import njit
+
+    @njit
+    def computed(alpha, m):
+        return -np.expm1(m * np.log1p(-alpha))
+
+    for alpha in (Rig("TR")._P[K.P_ACC_ALPHA], 0.05, 0.3, 1e-3):
+        P = np.zeros(K.P_SIZE)
+        P[K.P_ACC_ALPHA] = alpha
+        K.fill_dlpf_table(P)
+        assert P[K.P_ACC_LQ] == np.log1p(-alpha)
+        for m in range(K.ALPHA_STEPS + 1):
+            assert P[K.P_ACC_ALPHA_H + m] == computed(alpha, m)   # bit for bit, not approximately
+    rig = Rig("TR")
+    assert rig._P[K.P_ACC_ALPHA_H + 1] == rig._P[K.P_ACC_ALPHA]   # one fine step: the filter's own factor
