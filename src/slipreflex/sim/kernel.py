@@ -160,9 +160,10 @@ FRICTION = Layout("a contact's friction block of the rig's parameters P", """
 (PC_LAW, PC_MUS, PC_MUK, PC_VS, PC_A, PC_V0, PC_DC, PC_HEAL, PC_KT, PC_CT, PC_DECAY,
  PC_HEAL_DECAY) = FRICTION.slots
 PC_SIZE = FRICTION.size
-#: The IMU's DLPF over a step of ``m`` fine steps, ``1 - (1 - ACC_ALPHA)^m``, is tabled in P for ``m`` up to this
-#: (``ACC_ALPHA_H[m]``; longer steps compute it): the adaptive stepping would otherwise take an ``expm1`` per
-#: step. ``ACC_LQ`` is ``log1p(-ACC_ALPHA)`` (:func:`fill_dlpf_table` fills both).
+#: The IMU's DLPF over a step of ``m`` fine steps, ``1 - (1 - ACC_ALPHA)^m``, and each contact's healing over it,
+#: ``exp(-m dt / t_heal)``, are tabled in P for ``m`` up to this (``ACC_ALPHA_H[m]``, ``HEAL_DECAY_H[c * (ALPHA_STEPS
+#: + 1) + m]`` for contact ``c``; longer steps compute them): the adaptive stepping would otherwise take an
+#: ``expm1`` and an ``exp`` per step. ``ACC_LQ`` is ``log1p(-ACC_ALPHA)`` (:func:`fill_step_tables` fills them).
 ALPHA_STEPS = 32
 PARAMS = Layout("the rig's parameters P", f"""
     DT G MB KN LAM QC KSERVO STALL GRIP
@@ -177,7 +178,7 @@ PARAMS = Layout("the rig's parameters P", f"""
     MV_F MV_W MV_INV_SPEED
     TAPER TAPER_SIN
     LEVER0:3 ZG IB MBD DROP_E TILT_PEN
-    COARSE=1 ACC_LQ ACC_ALPHA_H:{ALPHA_STEPS + 1}""", prefix="P_")
+    COARSE=1 ACC_LQ ACC_ALPHA_H:{ALPHA_STEPS + 1} HEAL_DECAY_H:{3 * (ALPHA_STEPS + 1)}""", prefix="P_")
 (P_DT, P_G, P_MB, P_KN, P_LAM, P_QC, P_KSERVO, P_STALL, P_GRIP,
  P_DAQ_T, P_ACC_T, P_ACC_ALPHA, P_ACC_NOISE, P_ACC_LSB, P_ACC_RANGE, P_TILT_X, P_TILT_Z, P_TILT_Y,
  P_VCC, P_VSAT, P_KNEE, P_VNOISE, P_GAP, P_ADC_LSB, P_ADC_MAX, P_TRACK_DX, P_TRACK_OFF,
@@ -191,7 +192,7 @@ PARAMS = Layout("the rig's parameters P", f"""
  P_MV_F, P_MV_W, P_MV_INV_SPEED,
  P_TAPER, P_TAPER_SIN,
  P_LEVER0, P_ZG, P_IB, P_MBD, P_DROP_E, P_TILT_PEN,
- P_COARSE, P_ACC_LQ, P_ACC_ALPHA_H) = PARAMS.slots
+ P_COARSE, P_ACC_LQ, P_ACC_ALPHA_H, P_HEAL_DECAY_H) = PARAMS.slots
 P_L0 = P_SPL_RMS
 P_SIZE = PARAMS.size
 #: Friction laws (PC_LAW): Coulomb with a Stribeck curve; slip weakening + healing + log rate.
@@ -276,21 +277,29 @@ def derive_key(key, i):
     return _mix(key ^ (np.uint64(i) * _GOLDEN))
 
 
-def fill_dlpf_table(P: np.ndarray) -> np.ndarray:
-    """Fill ``P_ACC_LQ`` and ``P_ACC_ALPHA_H`` from ``P[P_ACC_ALPHA]`` (the IMU's DLPF per fine step); ``P``.
+def fill_step_tables(P: np.ndarray) -> np.ndarray:
+    """Fill ``P_ACC_LQ``, ``P_ACC_ALPHA_H`` and ``P_HEAL_DECAY_H`` from ``P[P_DT]``, ``P[P_ACC_ALPHA]`` (the IMU's
+    DLPF per fine step) and each contact's ``PC_HEAL``; return ``P``.
 
-    The same libm functions :func:`step_until` would call, so a tabled value is the computed one, bit for bit.
+    The same arithmetic and libm functions :func:`step_until` would use, so a tabled value is the computed
+    one, bit for bit.
 
     Examples
     --------
-    >>> P = np.zeros(P_SIZE); P[P_ACC_ALPHA] = 0.5
-    >>> float(fill_dlpf_table(P)[P_ACC_ALPHA_H + 2])    # 1 - (1 - 0.5)^2
+    >>> P = np.zeros(P_SIZE); P[P_DT] = 1e-4; P[P_ACC_ALPHA] = 0.5
+    >>> for c in range(3): P[P_C0 + c * PC_SIZE + PC_HEAL] = 0.1
+    >>> float(fill_step_tables(P)[P_ACC_ALPHA_H + 2])    # 1 - (1 - 0.5)^2
     0.75
     """
+    dt = float(P[P_DT])
     lq = math.log1p(-float(P[P_ACC_ALPHA]))
     P[P_ACC_LQ] = lq
     for m in range(ALPHA_STEPS + 1):
         P[P_ACC_ALPHA_H + m] = -math.expm1(m * lq)
+    for c in range(3):
+        heal = float(P[P_C0 + c * PC_SIZE + PC_HEAL])
+        for m in range(ALPHA_STEPS + 1):
+            P[P_HEAL_DECAY_H + c * (ALPHA_STEPS + 1) + m] = math.exp(-(m * dt) / heal)
     return P
 
 
@@ -1044,7 +1053,8 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
                 if P[bp + PC_LAW] == LAW_RATE_STATE:
                     hdec = P[bp + PC_HEAL_DECAY]
                     if ms > 1 and S[bs + SC_PHI] < 1.0:
-                        hdec = np.exp(-h / P[bp + PC_HEAL])
+                        hdec = (P[P_HEAL_DECAY_H + i * (ALPHA_STEPS + 1) + ms] if ms <= ALPHA_STEPS
+                                else np.exp(-h / P[bp + PC_HEAL]))
                     F, s_new, w, z, d, phi, it, ok = _rs_contact(
                         P[bp + PC_KT], P[bp + PC_CT], S[bs + SC_S], P[bp + PC_MUS], P[bp + PC_MUK], S[bs + SC_PHI],
                         S[bs + SC_Z], S[bs + SC_W], P[bp + PC_A], P[bp + PC_V0], P[bp + PC_DC], P[bp + PC_HEAL],

@@ -877,7 +877,6 @@ class Rig:
         P[K.P_DAQ_T] = hw.DAQ_PERIOD_S
         P[K.P_ACC_T] = 1.0 / imu.fs
         P[K.P_ACC_ALPHA] = 1.0 - math.exp(-2.0 * math.pi * imu.dlpf_hz * ph.dt)
-        K.fill_dlpf_table(P)
         P[K.P_ACC_NOISE] = imu.noise_g
         P[K.P_ACC_LSB] = 1.0 / imu.lsb_per_g
         P[K.P_ACC_RANGE] = imu.range_g
@@ -891,6 +890,7 @@ class Rig:
         self._water_params(P)
         if self.stepping == "adaptive":
             P[K.P_COARSE] = self.coarse_steps(P)
+        K.fill_step_tables(P)
         return K.PARAMS.check(P)
 
     def coarse_steps(self, P: np.ndarray | None = None) -> int:
