@@ -5,7 +5,7 @@ compiled reflex that never commands and open loop, alone and with a 260 Hz tacti
 stream) and the default reproduction's drop and pour for every registered method on
 the bottles TR and DK (set up as ``reproduce`` sets them up), prints one line per
 trace: a SHA-256 over every recorded column, the commands, the tactile frames, the
-onsets, the slip episodes and the rig's final state. Run it on two checkouts and
+onsets, the slip episodes and the rig's final state and counters. Run it on two checkouts and
 compare: ``python benchmarks/trace_digest.py > after.txt`` then ``diff before.txt after.txt``
 (no output: the same bits). A speed figure lives in ``bench_closed_loop.py``; this
 script times nothing.
@@ -23,7 +23,10 @@ from slipreflex import hardware as hw
 from slipreflex import methods
 from slipreflex.experiments import ReproduceConfig, calibrate, method_context, trial_seed
 from slipreflex.sim import PAPER_POUR, Rig, run_closed_loop, simulate_open_loop
+from slipreflex.sim import kernel as K
 from slipreflex.sim.variations import trial_rig
+
+_RECORDED_COUNTERS = ("N", "DAQ", "ACC", "NFAIL", "NITER", "SPL", "MS0", "MS1", "STEPS", "RECHECK")
 
 
 def digest(trace, rig) -> str:
@@ -37,7 +40,8 @@ def digest(trace, rig) -> str:
         h.update(np.ascontiguousarray(np.asarray(a, dtype=float)).tobytes())
     h.update(repr((trace.fallen, trace.fall_time, trace.slip_events)).encode())
     h.update(rig._S.tobytes())
-    h.update(rig._C.tobytes())
+    # the counters that record the run (not the adaptive stepping's caches of its next sample's step)
+    h.update(np.array([rig._C[getattr(K, f"C_{name}")] for name in _RECORDED_COUNTERS], dtype=np.int64).tobytes())
     return h.hexdigest()[:16]
 
 

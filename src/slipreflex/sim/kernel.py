@@ -131,8 +131,13 @@ S_SIZE = STATE.size
 # C_MS0, C_MS1: micro-slip events of the thumb's and the index finger's pad so far. C_STEPS: steps taken (a
 # coarse step of the adaptive stepping counts once; with fixed steps it equals C_N). C_RECHECK: the step from
 # which the adaptive stepping looks again whether the rig is calm (kept here: a call's end changes nothing).
-COUNTERS = Layout("the rig's counters C", "N DAQ ACC NFAIL NITER SPL MS0 MS1 STEPS RECHECK", prefix="C_")
-C_N, C_DAQ, C_ACC, C_NFAIL, C_NITER, C_SPL, C_MS0, C_MS1, C_STEPS, C_RECHECK = COUNTERS.slots
+# C_DAQ_AT1 .. C_SEEN_END: the adaptive stepping's next DAQ row (plus one; 0: none yet), the step at whose end
+# it is taken, the IMU reading it carries and that reading's step, functions of the row alone, kept from call
+# to call (a closed loop calls once per row).
+COUNTERS = Layout("the rig's counters C", "N DAQ ACC NFAIL NITER SPL MS0 MS1 STEPS RECHECK DAQ_AT1 DAQ_END SEEN_J "
+                  "SEEN_END", prefix="C_")
+(C_N, C_DAQ, C_ACC, C_NFAIL, C_NITER, C_SPL, C_MS0, C_MS1, C_STEPS, C_RECHECK, C_DAQ_AT1, C_DAQ_END, C_SEEN_J,
+ C_SEEN_END) = COUNTERS.slots
 C_SIZE = COUNTERS.size
 
 # ---- parameters P ---------------------------------------------------------
@@ -735,10 +740,10 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
     alpha_coarse = P[P_ACC_ALPHA_H + coarse] if coarse <= ALPHA_STEPS else -np.expm1(coarse * acc_lq)
     # the step at whose end the next DAQ row is taken (for the counter's value daq_at; recomputed when it
     # moves), and the last IMU reading before it (seen_j) and its step
-    daq_at = np.int64(-1)
-    daq_end = np.int64(0)
-    seen_j = np.int64(-1)
-    seen_end = np.int64(0)
+    daq_at = C[C_DAQ_AT1] - 1
+    daq_end = C[C_DAQ_END]
+    seen_j = C[C_SEEN_J] if daq_at >= 0 else np.int64(-1)
+    seen_end = C[C_SEEN_END]
     acc_t = P[P_ACC_T]
     daq_t = P[P_DAQ_T]
     n_switch = n   # the next step where a load switches (a drop's release, a pour's start or stop): look first
@@ -1290,6 +1295,10 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
         n += ms
         C[C_STEPS] += 1
     C[C_N] = n
+    C[C_DAQ_AT1] = daq_at + 1
+    C[C_DAQ_END] = daq_end
+    C[C_SEEN_J] = seen_j
+    C[C_SEEN_END] = seen_end
     counts[0] = nd
     counts[1] = ntac
     counts[2] = nev
