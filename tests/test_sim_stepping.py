@@ -177,3 +177,28 @@ def test_a_study_runs_every_plant_with_its_own_stepping_and_fingerprints_it(monk
     assert fixed.fingerprint() != adaptive.fingerprint()
     with pytest.raises(ParameterError, match="stepping: unknown 'half'"):
         StudyConfig(plants=2, stepping="half")
+
+
+def test_the_tabled_step_factors_are_the_ones_the_kernel_would_compute():
+    from numba import njit
+
+    @njit
+    def computed(alpha, heal, dt, m):
+        h = m * dt
+        return -np.expm1(m * np.log1p(-alpha)), np.exp(-h / heal)
+
+    rig = Rig("TR")
+    for alpha, heal, dt in ((rig._P[K.P_ACC_ALPHA], rig._P[K.P_C0 + 2 * K.PC_SIZE + K.PC_HEAL], rig.physics.dt),
+                            (0.05, 0.3, 1e-4), (0.3, 2.0, 5e-5), (1e-3, 0.07, 2e-4)):
+        P = np.zeros(K.P_SIZE)
+        P[K.P_DT], P[K.P_ACC_ALPHA] = dt, alpha
+        for c in range(3):
+            P[K.P_C0 + c * K.PC_SIZE + K.PC_HEAL] = heal * (c + 1)
+        K.fill_step_tables(P)
+        assert P[K.P_ACC_LQ] == np.log1p(-alpha)
+        for m in range(2, K.ALPHA_STEPS + 1):   # bit for bit, not approximately
+            assert P[K.P_ACC_ALPHA_H + m] == computed(alpha, heal, dt, m)[0]
+            for c in range(3):
+                tabled = P[K.P_HEAL_DECAY_H + c * (K.ALPHA_STEPS + 1) + m]
+                assert tabled == computed(alpha, heal * (c + 1), dt, m)[1]
+    assert rig._P[K.P_ACC_ALPHA_H + 1] == rig._P[K.P_ACC_ALPHA]   # one fine step: the filter's own factor

@@ -196,6 +196,10 @@ def _command(c, ts, n, cfg, q_i, q_v, cnt, cmd_g, cmd_off, g_level, g_until, cmd
     cnt[N_CMD] = k + 1
 
 
+#: DAQ rows the slip loop checks its outputs' room for at once (each check takes eleven arrays: a reference count each).
+_ROOM_ROWS = 8
+
+
 @njit(cache=CACHE, inline="always")
 def _room(C, D, tac_rates, cfg, cnt, q_i, q_v, daq, ev, tac, cmd_t, n_groups, horizon, fs_in):
     """Whether every output can take what advancing to ``horizon`` may produce (else the caller grows them)."""
@@ -240,7 +244,10 @@ def _advance(horizon, S, C, P, keys, D, W, track, tac_rates, tac_next, tac_conta
     chunk = np.int64(cfg[CF_CHUNK])
     while True:
         n = C[K.C_N]
-        _apply_due(n, S, tgt, spd, q_i, q_v, masks, cnt, cfg[CF_SPEED])
+        # (checked here, not only inside: an inlined helper taking arrays costs an atomic reference count per
+        # array and call, and most rows have no command due)
+        if cnt[N_QHEAD] < cnt[N_QLEN] and q_i[cnt[N_QHEAD], Q_STEP] <= n:
+            _apply_due(n, S, tgt, spd, q_i, q_v, masks, cnt, cfg[CF_SPEED])
         if n >= n_end:
             break
         stop = n_end
@@ -252,9 +259,12 @@ def _advance(horizon, S, C, P, keys, D, W, track, tac_rates, tac_next, tac_conta
             part = min(stop, (C[K.C_N] // chunk + 1) * chunk)   # an absolute grid, as Rig._advance_rows
             K.step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, part, s_daq, s_tac,
                          s_ev, s_n)
-            cnt[N_DAQ] = _append(daq, cnt[N_DAQ], s_daq, s_n[0])
-            cnt[N_TAC] = _append(tac, cnt[N_TAC], s_tac, s_n[1])
-            cnt[N_EV] = _append(ev, cnt[N_EV], s_ev, s_n[2])
+            if s_n[0] > 0:
+                cnt[N_DAQ] = _append(daq, cnt[N_DAQ], s_daq, s_n[0])
+            if s_n[1] > 0:
+                cnt[N_TAC] = _append(tac, cnt[N_TAC], s_tac, s_n[1])
+            if s_n[2] > 0:
+                cnt[N_EV] = _append(ev, cnt[N_EV], s_ev, s_n[2])
 
 
 @njit(cache=_CACHE)
@@ -268,17 +278,46 @@ def _closed_slip(step, RS, RP, S, C, P, keys, D, W, track, tac_rates, tac_next, 
     t_end = cfg[CF_TEND]
     dt = cfg[CF_DT]
     daq_t = cfg[CF_DAQ_T]
+    chunk = np.int64(cfg[CF_CHUNK])
+    roomy = -np.inf   # the outputs have room for everything advancing to this time may produce
     while C[K.C_DAQ] * daq_t <= t_end + _EPS:
         t = C[K.C_N] * dt
         horizon = min(t_end, max(t + dt, C[K.C_DAQ] * daq_t + cfg[CF_LAT]))
         if np.ceil(horizon / dt - _ROUND) <= C[K.C_N]:
             return _DONE   # no step left before t_end (a zero-length run from t = 0)
-        if not _room(C, D, tac_rates, cfg, cnt, q_i, q_v, daq, ev, tac, cmd_t, cmd_g.shape[0], horizon,
-                     1.0 / daq_t):
-            return _GROW
+        if horizon > roomy:
+            # the room for the next _ROOM_ROWS rows at once (each term grows with the horizon, so room for a
+            # later one is room for every earlier one, commands and events included)
+            ahead = min(t_end, horizon + _ROOM_ROWS * daq_t)
+            if not _room(C, D, tac_rates, cfg, cnt, q_i, q_v, daq, ev, tac, cmd_t, cmd_g.shape[0], ahead,
+                         1.0 / daq_t):
+                return _GROW
+            roomy = ahead
         k0 = cnt[N_DAQ]
-        _advance(horizon, S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, tgt, spd, q_i, q_v,
-                 masks, cfg, cnt, daq, ev, tac, s_daq, s_ev, s_tac, s_n)
+        # _advance(horizon, ...) written out: the inlined helper takes 24 arrays, an atomic reference count
+        # each per row (the tactile loop, at a frame per several rows, keeps the call)
+        n_end = np.int64(np.ceil(horizon / dt - _ROUND))
+        while True:
+            n = C[K.C_N]
+            if cnt[N_QHEAD] < cnt[N_QLEN] and q_i[cnt[N_QHEAD], Q_STEP] <= n:
+                _apply_due(n, S, tgt, spd, q_i, q_v, masks, cnt, cfg[CF_SPEED])
+            if n >= n_end:
+                break
+            stop = n_end
+            if cnt[N_QHEAD] < cnt[N_QLEN]:
+                due = q_i[cnt[N_QHEAD], Q_STEP]
+                if n < due < stop:
+                    stop = due
+            while C[K.C_N] < stop:
+                part = min(stop, (C[K.C_N] // chunk + 1) * chunk)   # an absolute grid, as Rig._advance_rows
+                K.step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, part, s_daq, s_tac,
+                             s_ev, s_n)
+                if s_n[0] > 0:
+                    cnt[N_DAQ] = _append(daq, cnt[N_DAQ], s_daq, s_n[0])
+                if s_n[1] > 0:
+                    cnt[N_TAC] = _append(tac, cnt[N_TAC], s_tac, s_n[1])
+                if s_n[2] > 0:
+                    cnt[N_EV] = _append(ev, cnt[N_EV], s_ev, s_n[2])
         n = C[K.C_N]
         for k in range(k0, cnt[N_DAQ]):
             c = step(RS, RP, daq[k, K.O_VOLTS], np.rint(daq[k, K.O_Q2]))

@@ -81,6 +81,8 @@ reference-count pruning does not remove: with them a held grasp took about
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
@@ -129,8 +131,13 @@ S_SIZE = STATE.size
 # C_MS0, C_MS1: micro-slip events of the thumb's and the index finger's pad so far. C_STEPS: steps taken (a
 # coarse step of the adaptive stepping counts once; with fixed steps it equals C_N). C_RECHECK: the step from
 # which the adaptive stepping looks again whether the rig is calm (kept here: a call's end changes nothing).
-COUNTERS = Layout("the rig's counters C", "N DAQ ACC NFAIL NITER SPL MS0 MS1 STEPS RECHECK", prefix="C_")
-C_N, C_DAQ, C_ACC, C_NFAIL, C_NITER, C_SPL, C_MS0, C_MS1, C_STEPS, C_RECHECK = COUNTERS.slots
+# C_DAQ_AT1 .. C_SEEN_END: the adaptive stepping's next DAQ row (plus one; 0: none yet), the step at whose end
+# it is taken, the IMU reading it carries and that reading's step, functions of the row alone, kept from call
+# to call (a closed loop calls once per row).
+COUNTERS = Layout("the rig's counters C", "N DAQ ACC NFAIL NITER SPL MS0 MS1 STEPS RECHECK DAQ_AT1 DAQ_END SEEN_J "
+                  "SEEN_END", prefix="C_")
+(C_N, C_DAQ, C_ACC, C_NFAIL, C_NITER, C_SPL, C_MS0, C_MS1, C_STEPS, C_RECHECK, C_DAQ_AT1, C_DAQ_END, C_SEEN_J,
+ C_SEEN_END) = COUNTERS.slots
 C_SIZE = COUNTERS.size
 
 # ---- parameters P ---------------------------------------------------------
@@ -158,6 +165,11 @@ FRICTION = Layout("a contact's friction block of the rig's parameters P", """
 (PC_LAW, PC_MUS, PC_MUK, PC_VS, PC_A, PC_V0, PC_DC, PC_HEAL, PC_KT, PC_CT, PC_DECAY,
  PC_HEAL_DECAY) = FRICTION.slots
 PC_SIZE = FRICTION.size
+#: The IMU's DLPF over a step of ``m`` fine steps, ``1 - (1 - ACC_ALPHA)^m``, and each contact's healing over it,
+#: ``exp(-m dt / t_heal)``, are tabled in P for ``m`` up to this (``ACC_ALPHA_H[m]``, ``HEAL_DECAY_H[c * (ALPHA_STEPS
+#: + 1) + m]`` for contact ``c``; longer steps compute them): the adaptive stepping would otherwise take an
+#: ``expm1`` and an ``exp`` per step. ``ACC_LQ`` is ``log1p(-ACC_ALPHA)`` (:func:`fill_step_tables` fills them).
+ALPHA_STEPS = 32
 PARAMS = Layout("the rig's parameters P", f"""
     DT G MB KN LAM QC KSERVO STALL GRIP
     DAQ_T ACC_T ACC_ALPHA ACC_NOISE ACC_LSB ACC_RANGE TILT_X TILT_Z TILT_Y
@@ -171,7 +183,7 @@ PARAMS = Layout("the rig's parameters P", f"""
     MV_F MV_W MV_INV_SPEED
     TAPER TAPER_SIN
     LEVER0:3 ZG IB MBD DROP_E TILT_PEN
-    COARSE=1""", prefix="P_")
+    COARSE=1 ACC_LQ ACC_ALPHA_H:{ALPHA_STEPS + 1} HEAL_DECAY_H:{3 * (ALPHA_STEPS + 1)}""", prefix="P_")
 (P_DT, P_G, P_MB, P_KN, P_LAM, P_QC, P_KSERVO, P_STALL, P_GRIP,
  P_DAQ_T, P_ACC_T, P_ACC_ALPHA, P_ACC_NOISE, P_ACC_LSB, P_ACC_RANGE, P_TILT_X, P_TILT_Z, P_TILT_Y,
  P_VCC, P_VSAT, P_KNEE, P_VNOISE, P_GAP, P_ADC_LSB, P_ADC_MAX, P_TRACK_DX, P_TRACK_OFF,
@@ -185,7 +197,7 @@ PARAMS = Layout("the rig's parameters P", f"""
  P_MV_F, P_MV_W, P_MV_INV_SPEED,
  P_TAPER, P_TAPER_SIN,
  P_LEVER0, P_ZG, P_IB, P_MBD, P_DROP_E, P_TILT_PEN,
- P_COARSE) = PARAMS.slots
+ P_COARSE, P_ACC_LQ, P_ACC_ALPHA_H, P_HEAL_DECAY_H) = PARAMS.slots
 P_L0 = P_SPL_RMS
 P_SIZE = PARAMS.size
 #: Friction laws (PC_LAW): Coulomb with a Stribeck curve; slip weakening + healing + log rate.
@@ -268,6 +280,32 @@ def uniform(key, i):
 def derive_key(key, i):
     """A new stream key from ``key`` and a small integer (wrap-around arithmetic)."""
     return _mix(key ^ (np.uint64(i) * _GOLDEN))
+
+
+def fill_step_tables(P: np.ndarray) -> np.ndarray:
+    """Fill ``P_ACC_LQ``, ``P_ACC_ALPHA_H`` and ``P_HEAL_DECAY_H`` from ``P[P_DT]``, ``P[P_ACC_ALPHA]`` (the IMU's
+    DLPF per fine step) and each contact's ``PC_HEAL``; return ``P``.
+
+    The same arithmetic and libm functions :func:`step_until` would use, so a tabled value is the computed
+    one, bit for bit.
+
+    Examples
+    --------
+    >>> P = np.zeros(P_SIZE); P[P_DT] = 1e-4; P[P_ACC_ALPHA] = 0.5
+    >>> for c in range(3): P[P_C0 + c * PC_SIZE + PC_HEAL] = 0.1
+    >>> float(fill_step_tables(P)[P_ACC_ALPHA_H + 2])    # 1 - (1 - 0.5)^2
+    0.75
+    """
+    dt = float(P[P_DT])
+    lq = math.log1p(-float(P[P_ACC_ALPHA]))
+    P[P_ACC_LQ] = lq
+    for m in range(ALPHA_STEPS + 1):
+        P[P_ACC_ALPHA_H + m] = -math.expm1(m * lq)
+    for c in range(3):
+        heal = float(P[P_C0 + c * PC_SIZE + PC_HEAL])
+        for m in range(ALPHA_STEPS + 1):
+            P[P_HEAL_DECAY_H + c * (ALPHA_STEPS + 1) + m] = math.exp(-(m * dt) / heal)
+    return P
 
 
 @njit(cache=CACHE, inline="always")
@@ -380,17 +418,6 @@ def tilt_inertia(mw, P):
     h = mw / (P[P_RHO_W] * np.pi * r * r)
     dw = zg - 0.5 * h
     return P[P_IB] + mw * (0.25 * r * r + h * h / 12.0 + dw * dw), P[P_MBD] + mw * dw
-
-
-@njit(cache=CACHE, inline="always")
-def _litres(W, t):
-    """Litres through the flow sensor at ``t`` (the pumps start at ``W_START``)."""
-    litres = 0.0
-    for p in range(W.shape[0]):
-        st = W[p, W_START]
-        if t > st:
-            litres += W[p, W_RATE_L_S] * min(t - st, W[p, W_DUR])
-    return litres
 
 
 @njit(cache=CACHE, inline="always")
@@ -709,14 +736,14 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
     th = S[S_TH]
     om = S[S_OM]
     coarse = np.int64(P[P_COARSE])
-    acc_lq = np.log1p(-acc_alpha)
-    alpha_coarse = -np.expm1(coarse * acc_lq)
+    acc_lq = P[P_ACC_LQ]
+    alpha_coarse = P[P_ACC_ALPHA_H + coarse] if coarse <= ALPHA_STEPS else -np.expm1(coarse * acc_lq)
     # the step at whose end the next DAQ row is taken (for the counter's value daq_at; recomputed when it
     # moves), and the last IMU reading before it (seen_j) and its step
-    daq_at = np.int64(-1)
-    daq_end = np.int64(0)
-    seen_j = np.int64(-1)
-    seen_end = np.int64(0)
+    daq_at = C[C_DAQ_AT1] - 1
+    daq_end = C[C_DAQ_END]
+    seen_j = C[C_SEEN_J] if daq_at >= 0 else np.int64(-1)
+    seen_end = C[C_SEEN_END]
     acc_t = P[P_ACC_T]
     daq_t = P[P_DAQ_T]
     n_switch = n   # the next step where a load switches (a drop's release, a pour's start or stop): look first
@@ -814,7 +841,8 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
             h = ms * dt
             t1 = (n + ms) * dt
             tl = t0 + 0.5 * (ms - 1) * dt
-            alpha_h = alpha_coarse if ms == coarse else -np.expm1(ms * acc_lq)
+            alpha_h = (alpha_coarse if ms == coarse else P[P_ACC_ALPHA_H + ms] if ms <= ALPHA_STEPS
+                       else -np.expm1(ms * acc_lq))
         # ---- fingers (in a coarse step of a held bottle within _CALM_Q of their targets: their motors quiet)
         nc_prev = S[S_NC]
         moving = False
@@ -1030,7 +1058,8 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
                 if P[bp + PC_LAW] == LAW_RATE_STATE:
                     hdec = P[bp + PC_HEAL_DECAY]
                     if ms > 1 and S[bs + SC_PHI] < 1.0:
-                        hdec = np.exp(-h / P[bp + PC_HEAL])
+                        hdec = (P[P_HEAL_DECAY_H + i * (ALPHA_STEPS + 1) + ms] if ms <= ALPHA_STEPS
+                                else np.exp(-h / P[bp + PC_HEAL]))
                     F, s_new, w, z, d, phi, it, ok = _rs_contact(
                         P[bp + PC_KT], P[bp + PC_CT], S[bs + SC_S], P[bp + PC_MUS], P[bp + PC_MUK], S[bs + SC_PHI],
                         S[bs + SC_Z], S[bs + SC_W], P[bp + PC_A], P[bp + PC_V0], P[bp + PC_DC], P[bp + PC_HEAL],
@@ -1220,7 +1249,12 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
             daq_out[nd, O_AZ] = S[S_AZ]
             daq_out[nd, O_AFRESH] = S[S_AFRESH]
             S[S_AFRESH] = 0.0
-            litres = _litres(W, tk)
+            # litres through the flow sensor at tk (the pumps start at W_START; written out, not in a helper:
+            # an inlined helper taking W would cost a reference count per row)
+            litres = 0.0
+            for p in range(W.shape[0]):
+                if tk > W[p, W_START]:
+                    litres += W[p, W_RATE_L_S] * min(tk - W[p, W_START], W[p, W_DUR])
             daq_out[nd, O_PULSES] = np.floor(P[P_FLOW_K] * litres + P[P_FLOW_PHASE]) if litres > 0.0 else 0.0
             daq_out[nd, O_X] = xk
             daq_out[nd, O_V] = v
@@ -1261,6 +1295,10 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
         n += ms
         C[C_STEPS] += 1
     C[C_N] = n
+    C[C_DAQ_AT1] = daq_at + 1
+    C[C_DAQ_END] = daq_end
+    C[C_SEEN_J] = seen_j
+    C[C_SEEN_END] = seen_end
     counts[0] = nd
     counts[1] = ntac
     counts[2] = nev

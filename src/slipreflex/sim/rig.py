@@ -890,6 +890,7 @@ class Rig:
         self._water_params(P)
         if self.stepping == "adaptive":
             P[K.P_COARSE] = self.coarse_steps(P)
+        K.fill_step_tables(P)
         return K.PARAMS.check(P)
 
     def coarse_steps(self, P: np.ndarray | None = None) -> int:
