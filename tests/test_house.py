@@ -229,7 +229,7 @@ def test_a_simulation_at_collection_time_stops_the_run(tmp_path):
     shutil.copy(ROOT / "tests" / "conftest.py", probe / "conftest.py")
     (probe / "test_probe.py").write_text('from slipreflex.sim import Rig\nRIG = Rig("TR")\n\n\n'
                                          "def test_nothing():\n    pass\n")
-    # outside the project's config, so its addopts' "-p no:nengo" (the neuro extra's plugin breaks pytest 9) is given here
+    # outside the project's config: its addopts' "-p no:nengo" (the neuro extra's plugin breaks pytest 9) given here
     res = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-p", "no:nengo", str(probe)],
                          capture_output=True, text=True, timeout=300, cwd=tmp_path)
     assert res.returncode != 0

@@ -731,8 +731,8 @@ class _FrameReader:
 
     def drop_buffered(self) -> int:
         # a source that reads on its own thread (the Ability Hand's pump) queues frames during the set-up
-        drop = getattr(self.tactile, "drop_buffered", None)
-        return int(drop()) if callable(drop) else 0
+        drop: Any = getattr(self.tactile, "drop_buffered", None)
+        return int(drop()) if drop is not None else 0
 
     def close(self) -> None:
         self.tactile.close()
