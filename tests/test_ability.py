@@ -156,8 +156,13 @@ def test_run_dath_with_the_daq_and_the_ability_hand(tmp_path, capsys):
     from slipreflex.recording import read_recording
 
     path = tmp_path / "ab.mcap"
+    from slipreflex.methods import make
     from slipreflex.sim import Pour
 
+    # the pour's clock starts at connect; on a cold numba cache the chain's first compile (run's warm-up,
+    # after connect) would outlast the slip, so this process compiles it first, as an earlier run would have
+    warm = make("dath")
+    warm.step(0.5), warm.step(0.6)
     # a fast pour: past the first slip (200 ml) about 2.5 s after it starts
     # the pour's clock starts at run's first packet, so a slow start under load cannot miss it
     dev, grasp = _virtual(tmp_path, Pour(rate_l_min=6.0, volume_ml=300.0), schedule=[("pour", 0.5)],
