@@ -391,3 +391,20 @@ def test_missing_counts_do_not_break_the_judge():
     rows = [{**r, "n_events": "", "event": None} if r["experiment"] == "pour" else r for r in paper_like()]
     res = judged(rows)
     assert res[6].verdict in (C.FAILS_PLANT, C.NOT_DECIDABLE)
+
+
+@pytest.mark.slow
+def test_claims_command_writes_new_files_never_over_nor_through_a_link(tmp_path, capsys):
+    from slipreflex.analysis.trial import TrialRow
+    from slipreflex.cli import main
+
+    write_csv(tmp_path / "results.csv", [TrialRow.from_dict(r) for r in paper_like(drops=2, pours=1)],
+              RESULT_COLUMNS)
+    (tmp_path / "claims.csv").write_text("mine\n")
+    outside = tmp_path / "elsewhere.txt"
+    outside.write_text("keep\n")
+    (tmp_path / "claim_parts.csv").symlink_to(outside)
+    assert main(["claims", str(tmp_path / "results.csv")]) == 0
+    assert "writing claims-2.csv and claim_parts-2.csv" in capsys.readouterr().out
+    assert (tmp_path / "claims.csv").read_text() == "mine\n" and outside.read_text() == "keep\n"
+    assert (tmp_path / "claims-2.csv").is_file() and (tmp_path / "claim_parts-2.csv").is_file()

@@ -27,6 +27,8 @@ from __future__ import annotations
 
 import argparse
 import csv
+import itertools
+import os
 from pathlib import Path
 
 from ..analysis.claims import (
@@ -103,6 +105,7 @@ def run(args: argparse.Namespace) -> int:
         raise ParameterError(f"--out {out}: would overwrite the results table it judges")
     if not out.parent.is_dir():
         raise ParameterError(f"--out {out}: no such directory {out.parent}")
+    out, parts_path = _free_pair(out)
     numbers = [c.number for c in CLAIMS]
     if args.explain is not None and args.explain not in numbers:
         raise ParameterError(f"--explain {args.explain}: no such claim (1-{numbers[-1]})")
@@ -123,7 +126,24 @@ def run(args: argparse.Namespace) -> int:
     if args.explain is not None:
         print(explain(results[numbers.index(args.explain)]))
     write_claims_csv(out, results)
-    parts = write_parts_csv(out.with_name(out.stem.replace("claims", "claim_parts") if "claims" in out.stem
-                                          else out.stem + "_parts").with_suffix(".csv"), results)
+    parts = write_parts_csv(parts_path, results)
     print(f"wrote {out} and {parts}")
     return 0
+
+
+def _parts_name(out: Path) -> Path:
+    return out.with_name(out.stem.replace("claims", "claim_parts") if "claims" in out.stem
+                         else out.stem + "_parts").with_suffix(".csv")
+
+
+def _free_pair(out: Path) -> tuple[Path, Path]:
+    """``out`` and its parts file, or ``NAME-2``... where either is taken: outputs are new files,
+    never written over (nor through a symlink), chosen before any work."""
+    for k in itertools.count(1):
+        name = out if k == 1 else out.with_name(f"{out.stem}-{k}{out.suffix}")
+        pair = (name, _parts_name(name))
+        if not any(os.path.lexists(p) for p in pair):
+            if k > 1:
+                print(f"{out.name} or its parts file exists: writing {pair[0].name} and {pair[1].name}")
+            return pair
+    raise AssertionError("unreachable")  # pragma: no cover
