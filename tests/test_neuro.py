@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -127,3 +128,16 @@ def test_reproduce_runs_the_exported_graph_beside_the_chain_and_reports_both(tmp
         # the first spike after rest is a rise or a fall from the chain's own state: the same response
         assert got[(exp, "nir")]["response_mean_ms"] == got[(exp, "fixed")]["response_mean_ms"]
     assert "NIR graph" in (tmp_path / "o" / "report.md").read_text()
+
+
+def test_nir_export_and_spikes_refuse_a_taken_name_even_a_dangling_link(tmp_path, capsys):
+    from slipreflex.cli import main
+
+    outside = tmp_path / "outside"
+    (tmp_path / "g.nir").symlink_to(outside)
+    assert main(["nir", "export", "-o", str(tmp_path / "g.nir")]) == 2
+    (tmp_path / "s.npy").symlink_to(outside)
+    example = Path(__file__).resolve().parents[1] / "examples" / "slip_example.csv"
+    assert main(["spikes", str(example), "-o", str(tmp_path / "s"), "--format", "tonic"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("exists;") == 2 and not outside.exists()

@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 from pathlib import Path
 from typing import Any
 
@@ -70,7 +71,7 @@ def _export(args: argparse.Namespace) -> int:
         raise ParameterError("nir export needs -o FILE.nir")
     if not (math.isfinite(args.threshold) and args.threshold > 0):
         raise ParameterError(f"--threshold must be > 0 V, got {args.threshold}")
-    if args.out.exists():
+    if os.path.lexists(args.out):  # a dangling symlink too: the writer would follow it
         raise ParameterError(f"{args.out}: exists; nir export writes a new file (give another --out)")
     graph = chain_graph(args.threshold, dath=args.graph == "dath")
     write_graph(graph, args.out)

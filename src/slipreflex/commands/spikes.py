@@ -13,6 +13,7 @@ wrote slip.npy (44 events, 1 x 1 pixels)
 from __future__ import annotations
 
 import argparse
+import os
 from pathlib import Path
 
 import numpy as np
@@ -99,7 +100,7 @@ def run(args: argparse.Namespace) -> int:
     fmts = _formats(args.format)
     targets = {f: args.out.with_name(args.out.name + FORMATS[f]) for f in fmts}
     for target in targets.values():              # every destination checked before any work
-        if target.exists():
+        if os.path.lexists(target):  # a dangling symlink too: the writers would follow it
             raise ParameterError(f"{target}: exists; spikes writes new files (give another -o)")
         if not target.parent.is_dir():
             raise ParameterError(f"{target.parent}: no such folder")
