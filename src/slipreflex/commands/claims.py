@@ -6,7 +6,8 @@ or by your own analysis with the same columns: see
 ``reproduce`` prints (each of the paper's claims with its verdict class: holds,
 fails-definition, fails-paper, fails-plant, unresolved or not-decidable, its reason and
 the interval behind it) and writes it as ``claims.csv`` beside the results (or to
-``--out``; new files: ``claims-2.csv`` where the name, or its parts file's, is taken). A ``replicates.csv`` beside the results (the replicate grids ``reproduce``
+``--out``; new files: ``claims-2.csv`` where the name, or its parts file's, is taken).
+A ``replicates.csv`` beside the results (the replicate grids ``reproduce``
 ran where one run's trials left a claim unresolved) is pooled with them, so the
 table is the one ``reproduce`` wrote; every part of every claim goes to ``claim_parts.csv``
 beside the claims table. Claim 2 is judged on the characterization scan of the simulated
