@@ -66,6 +66,9 @@ from ...methods import DATH, FIXED
 from ...methods import NMSD as NMSD
 from ...methods import SWT as SWT
 from ...methods import names as method_names
+
+# Public names outside __all__, importable from here as before the split.
+from .drop import DROP_ASSUMPTIONS as DROP_ASSUMPTIONS
 from .drop import (
     STATIC_OVER_KINETIC_MAX,
     DropBounds,
@@ -76,6 +79,8 @@ from .drop import (
 )
 from .findings import Contradiction, claims_section, contradictions, contradictions_markdown, window_phase_sd_ms
 from .judging import CLAIMS, _combine, tilt_and_taper
+from .judging import PHYSICS as PHYSICS
+from .judging import POUR_ORDER as POUR_ORDER
 from .judging import _compare as _compare
 from .tables import (
     CLAIMS_CSV_COLUMNS,
@@ -127,6 +132,8 @@ from .verdicts import (
     ratio_interval,
     stated_tolerance,
 )
+from .verdicts import INF as INF
+from .verdicts import PAPER_DROP_TRIALS as PAPER_DROP_TRIALS
 
 __all__ = [
     "HOLDS", "FAILS_DEFINITION", "FAILS_PAPER", "FAILS_PLANT", "DEPENDS_PLANT", "UNRESOLVED", "NOT_DECIDABLE",
@@ -141,6 +148,7 @@ __all__ = [
     "drop_momentum_capacity_n", "first_slip_capacity_n", "STATIC_OVER_KINETIC_MAX", "REPLICATES_MAX", "LOOKS",
     "looks_level", "plant_reading", "tilt_and_taper", "replicate_seed", "undecided_methods", "about_rate_band",
 ]
+
 
 def undecided_methods(results: Sequence[ClaimResult]) -> tuple[str, ...]:
     """The methods whose trials decide the claims ``results`` leaves unresolved (what to replicate).

@@ -22,6 +22,7 @@ __all__ = [
     "STATIC_OVER_KINETIC_MAX"
 ]
 
+
 #: Generous upper bound of static over sliding friction for polymer and elastomer contacts on PET.
 STATIC_OVER_KINETIC_MAX: float = 2.0
 #: What claim 4's bounds assume, named in every report that prints them.

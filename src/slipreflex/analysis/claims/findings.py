@@ -26,6 +26,7 @@ from .verdicts import FAILS_PAPER, TOLERANCES, VERDICTS, ClaimInput, ClaimResult
 
 __all__ = ["claims_section", "Contradiction", "contradictions", "contradictions_markdown", "window_phase_sd_ms"]
 
+
 @dataclass(frozen=True)
 class Contradiction:
     """One finding about the paper's own numbers.

@@ -70,6 +70,7 @@ from .verdicts import (
 
 __all__ = ["CLAIMS", "tilt_and_taper"]
 
+
 def _side(lo: float, hi: float, band: tuple[float, float], strict: tuple[bool, bool]) -> str:
     """HOLDS when the interval lies inside ``band``, FAILS_PLANT when it misses it, else UNRESOLVED.
 

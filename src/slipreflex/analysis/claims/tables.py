@@ -24,6 +24,7 @@ __all__ = [
     "claims_markdown", "parts_markdown", "claims_terminal", "explain"
 ]
 
+
 #: Columns of claims.csv (``reproduce``, ``claims`` and, with a study's counts, ``study``).
 CLAIMS_CSV_COLUMNS: tuple[str, ...] = ("claim", "verdict", "qualifier", "parts", "reason", "value", "criterion",
                                        "low", "high", "text", "where", "numbers")

@@ -37,6 +37,7 @@ __all__ = [
     "proportion_interval", "median_interval", "REPLICATES_MAX", "LOOKS", "looks_level", "about_rate_band"
 ]
 
+
 HOLDS = "holds"
 FAILS_DEFINITION = "fails-definition"
 FAILS_PAPER = "fails-paper"
