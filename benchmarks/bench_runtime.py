@@ -88,6 +88,25 @@ def live_client(url: str, seconds: float) -> int:
     return 0
 
 
+def _stop(rig: subprocess.Popen, hogs: list[subprocess.Popen]) -> None:
+    """End the CPU hogs and the virtual rig (asked to quit first, killed after 10 s)."""
+    for hog in hogs:
+        hog.kill()
+        hog.wait()
+    try:
+        rig.stdin.write("q\n")
+        rig.stdin.flush()
+    except OSError:
+        pass
+    try:
+        rig.wait(timeout=10)
+    except subprocess.TimeoutExpired:
+        rig.kill()
+        rig.wait()
+    rig.stdin.close()
+    rig.stdout.close()
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the benchmark; print the numbers."""
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -148,21 +167,7 @@ def main(argv: list[str] | None = None) -> int:
                 rec.close()
                 size = os.path.getsize(rec.path)
         finally:
-            for hog in hogs:
-                hog.kill()
-                hog.wait()
-            try:
-                rig.stdin.write("q\n")
-                rig.stdin.flush()
-            except OSError:
-                pass
-            try:
-                rig.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                rig.kill()
-                rig.wait()
-            rig.stdin.close()
-            rig.stdout.close()
+            _stop(rig, hogs)
     lat, frame = res.latency_ms(), res.latency_ms("frame")
     print(f"machine: {platform.machine()}, {os.cpu_count()} cpus, python {platform.python_version()}, "
           f"load average {os.getloadavg()[0]:.2f}")

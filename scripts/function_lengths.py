@@ -1,10 +1,11 @@
-"""Print the longest functions of the package (lines from ``def`` to the last line, docstring excluded).
+"""Print the longest functions of the package, scripts/ and benchmarks/ (``def`` to last line, docstring excluded).
 
 Numba kernels (functions decorated with ``njit`` / ``jit``) are listed apart: they are
 written as flat loops on purpose. Used for the house measure "no function outside the
-numba kernels longer than about 80 lines"; ``tests/test_house.py`` checks the limit.
+numba kernels longer than about 80 lines", which holds in every folder of :data:`ROOTS`;
+``tests/test_house.py`` checks the limit.
 
-Usage: python scripts/function_lengths.py [N] [--root src/slipreflex] [--with-docstrings]
+Usage: python scripts/function_lengths.py [N] [--root src/slipreflex --root scripts ...] [--with-docstrings]
 """
 
 from __future__ import annotations
@@ -12,6 +13,10 @@ from __future__ import annotations
 import argparse
 import ast
 from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+#: The folders the 80-line rule holds in: the package, the scripts, the benchmarks.
+ROOTS: tuple[Path, ...] = (REPO / "src" / "slipreflex", REPO / "scripts", REPO / "benchmarks")
 
 
 def _is_kernel(node: ast.AST) -> bool:
@@ -45,10 +50,13 @@ def function_lengths(root: Path, *, docstrings: bool = False) -> list[tuple[int,
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("n", nargs="?", type=int, default=10)
-    ap.add_argument("--root", type=Path, default=Path(__file__).resolve().parents[1] / "src" / "slipreflex")
+    ap.add_argument("--root", type=Path, action="append", default=None,
+                    help="a folder to measure (repeatable; default: the package, scripts/ and benchmarks/)")
     ap.add_argument("--with-docstrings", action="store_true", help="count docstring lines too")
     args = ap.parse_args()
-    rows = function_lengths(args.root, docstrings=args.with_docstrings)
+    roots = args.root or ROOTS
+    rows = sorted((row for root in roots for row in function_lengths(root, docstrings=args.with_docstrings)),
+                  reverse=True)
     what = "docstring included" if args.with_docstrings else "docstring excluded"
     print(f"longest functions outside numba kernels (lines, {what}):")
     for n, where, _ in [r for r in rows if not r[2]][: args.n]:

@@ -59,13 +59,17 @@ def test_the_params_and_overrides_contract_names_the_unknown_keyword():
 
 
 def test_no_function_outside_the_numba_kernels_is_longer_than_80_lines():
+    """In the package, the scripts and the benchmarks alike."""
     sys.path.insert(0, str(ROOT / "scripts"))
     try:
-        from function_lengths import function_lengths
+        from function_lengths import ROOTS, function_lengths
     finally:
         sys.path.pop(0)
-    rows = function_lengths(ROOT / "src" / "slipreflex")
+    assert {root.relative_to(ROOT).as_posix() for root in ROOTS} == {"src/slipreflex", "scripts", "benchmarks"}
+    rows = [row for root in ROOTS for row in function_lengths(root)]
     assert any(kernel for _, _, kernel in rows), "the numba kernels were not recognised"
+    assert any(where.startswith("scripts/") for _, where, _ in rows), "the scripts were not measured"
+    assert any(where.startswith("benchmarks/") for _, where, _ in rows), "the benchmarks were not measured"
     long = [(n, where) for n, where, kernel in rows if not kernel and n > 80]
     assert not long, f"functions over 80 lines (docstring excluded): {long}"
 
