@@ -124,7 +124,8 @@ def test_an_experiment_from_a_file_runs_through_reproduce_its_outputs_and_figure
 # The run's own modules: what happens in a trial and what its outputs show is read from the
 # experiment's specification, never decided by comparing its name with "drop" or "pour".
 PIPELINE = ["experiments.py", "grid.py", "paper_experiments.py", "analysis/outputs.py", "analysis/figures.py",
-            "analysis/trial.py", "analysis/report.py", "devices/simrig.py", "devices/virtual.py"]
+            "analysis/trial.py", "analysis/report/tables.py", "analysis/report/prose.py", "devices/simrig.py",
+            "devices/virtual.py"]
 
 
 @pytest.mark.parametrize("module", PIPELINE)

@@ -76,7 +76,7 @@ def test_no_function_outside_the_numba_kernels_is_longer_than_80_lines():
 
 def test_experiments_keeps_to_its_job_in_at_most_500_lines():
     """Issue 12: configuration, seeds, the trial and the grid; running the grid is grid.py's,
-    the report's prose analysis/report.py's. Its public names stay importable from it."""
+    the report's prose analysis/report's. Its public names stay importable from it."""
     from slipreflex import experiments, grid
 
     lines = (ROOT / "src" / "slipreflex" / "experiments.py").read_text().count("\n")
