@@ -5,7 +5,7 @@ Usage::
     python scripts/regenerate.py              # run every default step (a default reproduction first)
     python scripts/regenerate.py --with-tiers # ... and time both test tiers (the whole suite: minutes)
     python scripts/regenerate.py --dry-run    # list the steps and the markers each one writes
-    python scripts/regenerate.py --only "speed table"   # one step (by its name in the list)
+    python scripts/regenerate.py --only "speed table"   # one step and the steps it needs, first
     python scripts/regenerate.py --jobs 4     # worker processes of the reproduction (default 2)
 
 Each table sits between two markers, ``<!-- NAME begins -->`` and ``<!-- NAME ends -->``, and
@@ -38,6 +38,16 @@ docs quote in one commit. Steps:
    written to ``timing.json`` in each one's folder);
 13. only with ``--with-tiers``: ``scripts/tier_times.py --write``, docs/development.md's test
    tiers (it runs the fast tier and then the whole suite).
+
+**What a step needs.** Each step names the steps whose outputs it reads (:attr:`Step.needs`):
+the README tables and the report read the default reproduction's folder, the study tables the
+study's, the speed table both runs' timings, and so on. ``--only STEP`` runs STEP's needs first
+(and theirs), in the order of the list, then STEP (:func:`plan`). A need is always run again,
+never taken from an earlier regeneration: every run writes into a new temporary folder, and the
+speed table's timings must be this run's (a timing of another session on another load would
+make the table lie). ``--dry-run`` prints the plan, each step with what it writes and needs;
+``tests/test_regenerate.py`` checks that the needs form no circle and cover every folder a
+step's command reads.
 """
 
 from __future__ import annotations
@@ -46,6 +56,7 @@ import json
 import subprocess
 import sys
 import tempfile
+from dataclasses import dataclass
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -55,48 +66,77 @@ SCRIPTS = ROOT / "scripts"
 METHOD_VARIANTS = ("fixed", "dath", "nmsd", "swt", "authors-gui", "authors-chain", "dath-event", "dath-floor",
                    "dath-leak")
 
-#: (step name, markers it writes, command; "{out}" is the reproduction's directory).
-STEPS: list[tuple[str, tuple[str, ...], list[str]]] = [
-    ("reproduce", (), [sys.executable, "-m", "slipreflex", "reproduce", "--jobs", "{jobs}", "--out", "{out}",
-                       "--no-progress"]),
-    ("README results and claims tables", ("results table", "claims table"),
-     [sys.executable, str(SCRIPTS / "readme_results.py"), "{out}/summary.csv", "--write"]),
-    ("docs/reproduce.md report", ("report.md",),
-     [sys.executable, str(SCRIPTS / "splice_report.py"), "{out}/report.md"]),
-    ("benchmark tables", ("benchmark table", "operating points", "ranking", "benchmark summary", "vs-sim table",
-                          "chain rule", "k sensitivity", "why"),
-     [sys.executable, str(SCRIPTS / "benchmark_table.py"), "--write"]),
-    ("limits table", ("limits table",), [sys.executable, str(SCRIPTS / "limits_table.py"), "--write"]),
-    ("claims over five master seeds", ("claims seeds table",),
-     [sys.executable, str(SCRIPTS / "claims_seeds.py"), "--jobs", "{jobs}", "--write"]),
-    ("open-loop table", ("open-loop table",), [sys.executable, str(SCRIPTS / "open_loop_table.py"), "--write"]),
-    ("physics terms table", ("physics terms table",),
-     [sys.executable, str(SCRIPTS / "physics_terms.py"), "--figure", str(ROOT / "docs" / "physics_terms.png"),
-      "--write"]),
-    ("term claims table", ("term claims table",),
-     [sys.executable, str(SCRIPTS / "term_claims.py"), "--jobs", "{jobs}", "--write"]),
-    ("study", (), [sys.executable, "-m", "slipreflex", "study", "--out", "{out}-study", "--no-progress"]),
-    ("study claims table", ("study claims table",),
-     [sys.executable, str(SCRIPTS / "study_table.py"), "{out}-study", "--write"]),
-    ("study decidable", ("study decidable",),
-     [sys.executable, str(SCRIPTS / "term_claims.py"), "--study", "{out}-study", "--write"]),
-    ("threshold sensitivity table", ("threshold sensitivity table",),
-     [sys.executable, str(SCRIPTS / "threshold_sensitivity.py"), "--jobs", "{jobs}", "--write"]),
-    ("method variants", (), [sys.executable, "-m", "slipreflex", "reproduce", "--methods", ",".join(METHOD_VARIANTS),
-                             "--trials", "3", "--jobs", "{jobs}", "--no-figures", "--no-progress",
-                             "--out", "{out}-methods"]),
-    ("method variants table", ("method variants table",),
-     [sys.executable, str(SCRIPTS / "method_table.py"), "{out}-methods/summary.csv", "--write"]),
-    ("NIR agreement tables", ("nir stages table", "nir backends table"),
-     [sys.executable, str(SCRIPTS / "nir_table.py"), "--write"]),
-    ("NIR loop", (), [sys.executable, "-m", "slipreflex", "reproduce", "--methods", "fixed,nir", "--trials", "3",
-                      "--jobs", "{jobs}", "--no-figures", "--no-progress", "--out", "{out}-nir"]),
-    ("NIR loop table", ("nir loop table",),
-     [sys.executable, str(SCRIPTS / "nir_table.py"), "--loop", "{out}-nir/summary.csv", "--write"]),
-    ("speed table", ("speed table",), [sys.executable, str(SCRIPTS / "speed_table.py"), "--write",
-                                       "--reproduce-timing", "{out}/timing.json",
-                                       "--study-timing", "{out}-study/timing.json"]),
-    ("test tiers", ("test tiers",), [sys.executable, str(SCRIPTS / "tier_times.py"), "--write"]),
+
+@dataclass(frozen=True)
+class Step:
+    """One step: its name, the markers it writes, its command ("{out}" is the run's folder), its needs.
+
+    Examples
+    --------
+    >>> step = Step("table", ("t",), ["python", "t.py", "{out}-study/plants.csv"], needs=("study",))
+    >>> step.reads(), Step("study", (), ["x", "--out", "{out}-study"]).folder()
+    (['{out}-study/plants.csv'], '{out}-study')
+    """
+
+    name: str
+    writes: tuple[str, ...]
+    command: list[str]
+    needs: tuple[str, ...] = ()
+
+    def folder(self) -> str | None:
+        """The folder this step's command writes (after ``--out``), or None."""
+        return self.command[self.command.index("--out") + 1] if "--out" in self.command else None
+
+    def reads(self) -> list[str]:
+        """The paths under a step's folder this step's command reads (every "{out}" argument but its own --out)."""
+        own = self.folder()
+        return [c for c in self.command if c.startswith("{out}") and c != own]
+
+
+STEPS: list[Step] = [
+    Step("reproduce", (), [sys.executable, "-m", "slipreflex", "reproduce", "--jobs", "{jobs}", "--out", "{out}",
+                           "--no-progress"]),
+    Step("README results and claims tables", ("results table", "claims table"),
+         [sys.executable, str(SCRIPTS / "readme_results.py"), "{out}/summary.csv", "--write"], needs=("reproduce",)),
+    Step("docs/reproduce.md report", ("report.md",),
+         [sys.executable, str(SCRIPTS / "splice_report.py"), "{out}/report.md"], needs=("reproduce",)),
+    Step("benchmark tables", ("benchmark table", "operating points", "ranking", "benchmark summary", "vs-sim table",
+                              "chain rule", "k sensitivity", "why"),
+         [sys.executable, str(SCRIPTS / "benchmark_table.py"), "--write"]),
+    Step("limits table", ("limits table",), [sys.executable, str(SCRIPTS / "limits_table.py"), "--write"]),
+    Step("claims over five master seeds", ("claims seeds table",),
+         [sys.executable, str(SCRIPTS / "claims_seeds.py"), "--jobs", "{jobs}", "--write"]),
+    Step("open-loop table", ("open-loop table",), [sys.executable, str(SCRIPTS / "open_loop_table.py"), "--write"]),
+    Step("physics terms table", ("physics terms table",),
+         [sys.executable, str(SCRIPTS / "physics_terms.py"), "--figure", str(ROOT / "docs" / "physics_terms.png"),
+          "--write"]),
+    Step("term claims table", ("term claims table",),
+         [sys.executable, str(SCRIPTS / "term_claims.py"), "--jobs", "{jobs}", "--write"]),
+    Step("study", (), [sys.executable, "-m", "slipreflex", "study", "--out", "{out}-study", "--no-progress"]),
+    Step("study claims table", ("study claims table",),
+         [sys.executable, str(SCRIPTS / "study_table.py"), "{out}-study", "--write"], needs=("study",)),
+    Step("study decidable", ("study decidable",),
+         [sys.executable, str(SCRIPTS / "term_claims.py"), "--study", "{out}-study", "--write"], needs=("study",)),
+    Step("threshold sensitivity table", ("threshold sensitivity table",),
+         [sys.executable, str(SCRIPTS / "threshold_sensitivity.py"), "--jobs", "{jobs}", "--write"]),
+    Step("method variants", (), [sys.executable, "-m", "slipreflex", "reproduce", "--methods",
+                                 ",".join(METHOD_VARIANTS), "--trials", "3", "--jobs", "{jobs}", "--no-figures",
+                                 "--no-progress", "--out", "{out}-methods"]),
+    Step("method variants table", ("method variants table",),
+         [sys.executable, str(SCRIPTS / "method_table.py"), "{out}-methods/summary.csv", "--write"],
+         needs=("method variants",)),
+    Step("NIR agreement tables", ("nir stages table", "nir backends table"),
+         [sys.executable, str(SCRIPTS / "nir_table.py"), "--write"]),
+    Step("NIR loop", (), [sys.executable, "-m", "slipreflex", "reproduce", "--methods", "fixed,nir", "--trials", "3",
+                          "--jobs", "{jobs}", "--no-figures", "--no-progress", "--out", "{out}-nir"]),
+    Step("NIR loop table", ("nir loop table",),
+         [sys.executable, str(SCRIPTS / "nir_table.py"), "--loop", "{out}-nir/summary.csv", "--write"],
+         needs=("NIR loop",)),
+    Step("speed table", ("speed table",), [sys.executable, str(SCRIPTS / "speed_table.py"), "--write",
+                                           "--reproduce-timing", "{out}/timing.json",
+                                           "--study-timing", "{out}-study/timing.json"],
+         needs=("reproduce", "study")),
+    Step("test tiers", ("test tiers",), [sys.executable, str(SCRIPTS / "tier_times.py"), "--write"]),
 ]
 
 #: Steps timed as they run, the speed table's rows of the default jobs: step -> its timing option there.
@@ -106,42 +146,80 @@ TIMED: dict[str, str] = {"reproduce": "--reproduce-timing", "study": "--study-ti
 OPT_IN: dict[str, str] = {"test tiers": "--with-tiers"}
 
 
+def plan(only: str | None = None, steps: list[Step] = STEPS) -> list[Step]:
+    """The steps to run, in the list's order: every step, or ``only`` after everything it needs (transitively).
+
+    Examples
+    --------
+    >>> [s.name for s in plan("speed table")]
+    ['reproduce', 'study', 'speed table']
+    >>> [s.name for s in plan("limits table")]
+    ['limits table']
+    """
+    if only is None:
+        return list(steps)
+    by_name = {s.name: s for s in steps}
+    wanted, todo = set(), [only]
+    while todo:
+        name = todo.pop()
+        if name not in wanted:
+            wanted.add(name)
+            todo.extend(by_name[name].needs)
+    return [s for s in steps if s.name in wanted]
+
+
+def _command(step: Step, out: str, jobs: str, timed_here: set[str]) -> list[str]:
+    """The step's command for this run; a timing option only where this run timed that step."""
+    cmd = [c.replace("{out}", out).replace("{jobs}", jobs) for c in step.command]
+    for timed_step, option in TIMED.items():     # only this run's timings, never an older file's
+        if option in cmd and timed_step not in timed_here:
+            cmd = cmd[:cmd.index(option)] + cmd[cmd.index(option) + 2:]
+    return cmd
+
+
+def _run(step: Step, cmd: list[str], timed_here: set[str]) -> int:
+    """Run one step (timed when it is one of :data:`TIMED`); its exit code, with a line on failure."""
+    if step.name in TIMED:      # timed: the speed table's row of this default job (not run twice)
+        sys.path.insert(0, str(SCRIPTS))
+        from speed_table import Missing, timed
+        try:
+            timing = timed(cmd)
+        except Missing as err:
+            print(f"regenerate: step '{step.name}' failed: {err}; later steps not run", file=sys.stderr)
+            return 1
+        Path(cmd[cmd.index("--out") + 1], "timing.json").write_text(json.dumps(timing))
+        timed_here.add(step.name)
+        return 0
+    done = subprocess.run(cmd, cwd=ROOT)
+    if done.returncode != 0:
+        print(f"regenerate: step '{step.name}' failed (exit {done.returncode}); later steps not run",
+              file=sys.stderr)
+    return done.returncode
+
+
 def main(argv: list[str]) -> int:
     dry = "--dry-run" in argv
     only = argv[argv.index("--only") + 1] if "--only" in argv else None
-    if only is not None and only not in [name for name, _, _ in STEPS]:
-        print(f"regenerate: --only {only!r}: no such step (steps: {', '.join(n for n, _, _ in STEPS)})",
+    if only is not None and only not in [s.name for s in STEPS]:
+        print(f"regenerate: --only {only!r}: no such step (steps: {', '.join(s.name for s in STEPS)})",
               file=sys.stderr)
         return 2
     jobs = argv[argv.index("--jobs") + 1] if "--jobs" in argv else "2"
     out = str(Path(tempfile.mkdtemp(prefix="slipreflex-regenerate-")) / "repro")
     timed_here: set[str] = set()
-    for name, markers, command in STEPS:
-        cmd = [c.replace("{out}", out).replace("{jobs}", jobs) for c in command]
-        flag = OPT_IN.get(name)
-        print(f"regenerate: {name}: {' '.join(cmd)}" + (f"  (writes: {', '.join(markers)})" if markers else "")
+    for step in plan(only):
+        flag = OPT_IN.get(step.name)
+        # the timings are left in: a dry run prints the command of a run that times its steps
+        cmd = _command(step, out, jobs, set(TIMED) if dry else timed_here)
+        print(f"regenerate: {step.name}: {' '.join(cmd)}"
+              + (f"  (writes: {', '.join(step.writes)})" if step.writes else "")
+              + (f"  (needs: {', '.join(step.needs)})" if step.needs else "")
               + (f"  (only with {flag})" if flag else ""), flush=True)
-        if dry or (flag and flag not in argv and only != name) or (only and only != name):
+        if dry or (flag and flag not in argv and only != step.name):
             continue
-        for step, option in TIMED.items():     # only this run's timings, never an older file's
-            if option in cmd and step not in timed_here:
-                cmd = cmd[:cmd.index(option)] + cmd[cmd.index(option) + 2:]
-        if name in TIMED:      # timed: the speed table's row of this default job (not run twice)
-            sys.path.insert(0, str(SCRIPTS))
-            from speed_table import Missing, timed
-            try:
-                timing = timed(cmd)
-            except Missing as err:
-                print(f"regenerate: step '{name}' failed: {err}; later steps not run", file=sys.stderr)
-                return 1
-            Path(cmd[cmd.index("--out") + 1], "timing.json").write_text(json.dumps(timing))
-            timed_here.add(name)
-            continue
-        done = subprocess.run(cmd, cwd=ROOT)
-        if done.returncode != 0:
-            print(f"regenerate: step '{name}' failed (exit {done.returncode}); later steps not run",
-                  file=sys.stderr)
-            return done.returncode
+        code = _run(step, cmd, timed_here)
+        if code != 0:
+            return code
     return 0
 
 

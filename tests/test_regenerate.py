@@ -1,5 +1,6 @@
 """scripts/regenerate.py rewrites every generated table the README and docs/ quote: each marker
-pair there is written by one of its steps, and each step's script exists."""
+pair there is written by one of its steps, each step's script exists, and each step declares the
+steps whose outputs it reads (no circle; ``--only`` plans them first)."""
 
 from __future__ import annotations
 
@@ -30,14 +31,14 @@ def _markers() -> dict[str, str]:
 
 
 def test_every_generated_table_has_a_step_and_every_step_a_script():
-    written = {m for _, markers, _ in regenerate.STEPS for m in markers}
+    written = {m for step in regenerate.STEPS for m in step.writes}
     missing = {name: where for name, where in _markers().items() if name not in written}
     assert not missing, f"tables no step of scripts/regenerate.py writes: {missing}"
     assert _markers(), "no generated table found"
-    for name, _, command in regenerate.STEPS:
-        for part in command:
+    for step in regenerate.STEPS:
+        for part in step.command:
             if part.endswith(".py"):
-                assert Path(part).exists(), f"step {name!r}: {part} does not exist"
+                assert Path(part).exists(), f"step {step.name!r}: {part} does not exist"
 
 
 def test_the_dry_run_lists_the_steps_in_order():
@@ -45,8 +46,96 @@ def test_the_dry_run_lists_the_steps_in_order():
                          capture_output=True, text=True, timeout=120)
     assert res.returncode == 0, res.stderr
     lines = res.stdout.splitlines()
-    assert [line.split(":")[1].strip() for line in lines] == [name for name, _, _ in regenerate.STEPS]
+    assert [line.split(":")[1].strip() for line in lines] == [step.name for step in regenerate.STEPS]
     assert "--jobs 2" in lines[0] and "(writes: results table, claims table)" in lines[1]
+
+
+def _circle(needs: dict[str, tuple[str, ...]]) -> list[str] | None:
+    """One circle of the ``needs`` graph (step names, the first repeated last), or None."""
+    state: dict[str, int] = {}
+    stack: list[str] = []
+
+    def visit(v: str) -> list[str] | None:
+        state[v] = 1
+        stack.append(v)
+        for w in needs.get(v, ()):
+            if state.get(w) == 1:
+                return stack[stack.index(w):] + [w]
+            if w not in state and (found := visit(w)):
+                return found
+        stack.pop()
+        state[v] = 2
+        return None
+
+    for v in needs:
+        if v not in state and (found := visit(v)):
+            return found
+    return None
+
+
+def _producer(path: str) -> str:
+    """The step whose folder (``--out``) holds ``path`` (a "{out}..." argument of a command)."""
+    found = [s.name for s in regenerate.STEPS
+             if (folder := s.folder()) and (path == folder or path.startswith(folder + "/"))]
+    assert len(found) == 1, f"{path}: written by {found or 'no step'}"
+    return found[0]
+
+
+def test_the_steps_needs_name_steps_listed_before_them_and_form_no_circle():
+    names = [s.name for s in regenerate.STEPS]
+    needs = {s.name: s.needs for s in regenerate.STEPS}
+    assert len(set(names)) == len(names)
+    assert _circle(needs) is None, f"a circle of needs: {_circle(needs)}"
+    for i, step in enumerate(regenerate.STEPS):
+        for need in step.needs:
+            assert need in names[:i], f"step {step.name!r} needs {need!r}, which is not a step listed before it"
+    assert any(needs.values()), "no step declares a need"
+
+
+def test_the_circle_finder_finds_a_circle():
+    assert _circle({"a": ("b",), "b": ("c",), "c": ("a",)}) == ["a", "b", "c", "a"]
+    assert _circle({"a": ("b",), "b": (), "c": ("a", "b")}) is None
+
+
+def test_every_step_needs_exactly_the_steps_whose_folders_its_command_reads():
+    """A folder a command reads ("{out}/summary.csv", "{out}-study") is the --out of one step, and
+    that step is among the reader's needs; a need is there because its folder is read."""
+    for step in regenerate.STEPS:
+        read = {_producer(path) for path in step.reads()}
+        assert read == set(step.needs), f"step {step.name!r} reads the folders of {read}, declares {step.needs}"
+    readers = [s for s in regenerate.STEPS if s.reads()]
+    assert len(readers) >= 6 and {"reproduce", "study"} <= {n for s in readers for n in s.needs}
+
+
+def test_only_plans_what_a_step_needs_first_and_nothing_else():
+    plan = regenerate.plan
+    assert [s.name for s in plan("speed table")] == ["reproduce", "study", "speed table"]
+    assert [s.name for s in plan("README results and claims tables")] == ["reproduce",
+                                                                          "README results and claims tables"]
+    assert [s.name for s in plan("NIR loop table")] == ["NIR loop", "NIR loop table"]
+    assert [s.name for s in plan("limits table")] == ["limits table"]
+    assert [s.name for s in plan()] == [s.name for s in regenerate.STEPS]
+    for step in regenerate.STEPS:       # every need of a planned step is planned before it
+        names = [s.name for s in plan(step.name)]
+        assert names[-1] == step.name
+        for i, planned in enumerate(plan(step.name)):
+            assert set(planned.needs) <= set(names[:i]), (step.name, planned.name)
+    chained = [regenerate.Step("a", (), ["x", "--out", "{out}-a"]),
+               regenerate.Step("b", (), ["x", "{out}-a", "--out", "{out}-b"], needs=("a",)),
+               regenerate.Step("c", (), ["x"]),
+               regenerate.Step("d", ("d",), ["x", "{out}-b/f.csv"], needs=("b",))]
+    assert [s.name for s in plan("d", chained)] == ["a", "b", "d"]
+
+
+def test_the_dry_run_of_only_a_dependent_step_prints_its_plan():
+    res = subprocess.run([sys.executable, str(ROOT / "scripts" / "regenerate.py"), "--dry-run", "--only",
+                          "study claims table"], capture_output=True, text=True, timeout=120)
+    assert res.returncode == 0, res.stderr
+    lines = res.stdout.splitlines()
+    assert [line.split(":")[1].strip() for line in lines] == ["study", "study claims table"]
+    assert lines[1].endswith("(needs: study)")
+    study_out = lines[0].split("--out ")[1].split()[0]
+    assert f"study_table.py {study_out} --write" in lines[1]
 
 
 def _script(name: str):
