@@ -47,6 +47,7 @@ import operator
 import os
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy.special import j1
@@ -58,7 +59,8 @@ from ..hardware import Finger, HandCommand
 from ..interfaces import DaqSample, GraspResult
 from . import kernel as K
 from .contacts import fill_contact_params
-from .objects import BOTTLES, WATER_DENSITY, Bottle, Drop, Pour, Surface
+from .loads import kind_of
+from .objects import BOTTLES, WATER_DENSITY, Bottle, Surface
 from .params import (
     SLOSH_ROOT,
     WATER_KINEMATIC_VISCOSITY,
@@ -827,7 +829,7 @@ class Rig:
         self._daq_chunks: list[np.ndarray] = []
         self.history = bool(history)
         self._events: list[np.ndarray] = []
-        self.perturbations: list[tuple[float, Drop | Pour]] = []
+        self.perturbations: list[tuple[float, Any]] = []
         cap_steps = int(math.ceil(_CHUNK_S / self.physics.dt)) + 2
         self._daq_buf = np.empty((int(_CHUNK_S * 2 * hw.DAQ_FS) + 8, K.O_SIZE))
         self._ev_buf = np.empty((3 * cap_steps + 8, 3))
@@ -1356,17 +1358,19 @@ class Rig:
         """
         self._S[K.S_SUPPORTED] = 0.0
 
-    def perturb(self, what: Drop | Pour, at: float | None = None) -> None:
-        """Schedule a load change: a :class:`Drop` released, or a :class:`Pour` started, at ``at`` (s).
+    def perturb(self, what: Any, at: float | None = None) -> None:
+        """Schedule a load change at ``at`` (s): a :class:`Drop` released, a :class:`Pour` started, or any
+        registered load kind's object (:mod:`slipreflex.sim.loads` says how the rig applies each).
 
         Parameters
         ----------
-        what : Drop or Pour
+        what : Drop, Pour or a registered load kind's object
         at : float, optional
-            Rig time of the release / pump start (default: now). Not in the past.
+            Rig time of the release / start (default: now). Not in the past.
 
         Examples
         --------
+        >>> from slipreflex.sim import Pour
         >>> rig = Rig("TR"); _ = rig.grasp()
         >>> rig.perturb(Pour(rate_l_min=1.0, volume_ml=50), at=rig.t)
         >>> _ = rig.advance(4.0)
@@ -1376,30 +1380,12 @@ class Rig:
         at = self.t if at is None else float(at)
         if not math.isfinite(at) or at < self.t - 1e-12:
             raise ParameterError(f"at must be >= the rig time {self.t:.4f} s, got {at!r}")
-        g = hw.GRAVITY
-        if isinstance(what, Drop):
-            zeta = -math.log(max(what.restitution, 1e-6)) / math.sqrt(math.pi**2 + math.log(max(what.restitution,
-                                                                                                  1e-6))**2)
-            row = K.DROP.new()
-            row[K.D_REL] = at
-            row[K.D_M] = what.mass_kg
-            row[K.D_H0] = self.bottle.height_m + what.height_m
-            row[K.D_KC] = what.contact_stiffness_n_m
-            row[K.D_CC] = 2.0 * zeta * math.sqrt(what.contact_stiffness_n_m * what.mass_kg)
-            self._D = np.vstack([self._D, K.DROP.check(row)])
-        elif isinstance(what, Pour):
-            rate_l_s = what.rate_l_min / 60.0
-            row = K.POUR.new()
-            row[K.W_START] = at
-            row[K.W_RATE_L_S] = rate_l_s
-            row[K.W_RATE_KG_S] = rate_l_s * 1e-3 * WATER_DENSITY
-            row[K.W_DUR] = what.duration_s
-            row[K.W_TOTAL_KG] = what.volume_ml * 1e-6 * WATER_DENSITY
-            row[K.W_DELAY] = math.sqrt(2.0 * what.fall_height_m / g)
-            row[K.W_JET_N] = row[K.W_RATE_KG_S] * math.sqrt(2.0 * g * what.fall_height_m)
-            self._W = np.vstack([self._W, K.POUR.check(row)])
+        kind = kind_of(what)
+        row = kind.layout.check(np.asarray(kind.row(what, at, self), dtype=float))
+        if kind.table == "drops":
+            self._D = np.vstack([self._D, row])
         else:
-            raise ParameterError(f"perturb: expected a Drop or a Pour, got {what!r}")
+            self._W = np.vstack([self._W, row])
         self.perturbations.append((at, what))
 
     # ------------------------------------------------------------------ truth
