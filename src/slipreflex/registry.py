@@ -146,7 +146,7 @@ class Registry(Generic[S]):
             try:
                 obj = ep.load()
                 got = obj() if callable(obj) and not isinstance(obj, self.spec_type) else obj
-                specs = [got] if isinstance(got, self.spec_type) else list(got)
+                specs = [got] if isinstance(got, self.spec_type) else list(got)  # pyright: ignore[reportArgumentType]
             except Exception as err:  # a broken plugin is the user's to fix: say which one
                 raise ParameterError(f"{self.kind} plugin {ep.name!r} ({ep.value}): cannot load: {err}") from err
             for spec in specs:
