@@ -77,14 +77,15 @@ def _jolt_row(what: _Jolt, at: float, rig) -> np.ndarray:
     return row
 
 
+@pytest.mark.slow        # two rigs grasp and are shaken (the kernels loaded)
 def test_a_registered_kind_moves_the_grip_and_the_imu_reads_it():
     from slipreflex.sim import Rig
 
     LOAD_KINDS.register(LoadKind("jolt", _Jolt, "timed", _jolt_row))
     try:
         peaks = []
-        for accel in (0.0, 9.80665):
-            rig = Rig("TR", seed=3)
+        for accel, stepping in ((0.0, "adaptive"), (9.80665, "adaptive"), (9.80665, "fixed")):
+            rig = Rig("TR", seed=3, stepping=stepping)
             rig.grasp()
             rig.perturb(_Jolt(accel) if accel else _Jolt(1e-300), at=rig.t + 0.05)
             samples = rig.advance(0.6)
@@ -94,6 +95,8 @@ def test_a_registered_kind_moves_the_grip_and_the_imu_reads_it():
         LOAD_KINDS.unregister("jolt")
     # the accelerometer's vertical axis reads gravity alone, then gravity plus a 1 g shake of the grip
     assert peaks[0] < 1.2 < 1.6 < peaks[1]
+    # the adaptive stepping follows the shake as the fixed-step reference does
+    assert abs(peaks[1] - peaks[2]) < 0.02
 
 
 @pytest.mark.slow        # a fresh interpreter, the kernels loaded and 3 trials run
