@@ -142,3 +142,33 @@ def test_the_hand_twin_example_gets_the_reflexs_close_commands(tmp_path):
     closes = [c for c in commands if c["command"] == "close"]
     assert closes and all(c["speed"] > 0 and c["fingers"] for c in closes)
     assert {c["command"] for c in commands} <= {"close", "hold"}    # a reflex never sets positions
+
+
+class _EntryPoint:
+    def __init__(self, name, obj):
+        self.name, self.value, self._obj = name, f"pkg.mod:{name}", obj
+
+    def load(self):
+        if isinstance(self._obj, Exception):
+            raise self._obj
+        return self._obj
+
+
+def test_an_installed_package_adds_a_hand_through_its_entry_point_group(monkeypatch):
+    import importlib.metadata
+
+    from slipreflex.hands import HandSpec
+    from slipreflex.registry import Registry
+
+    twin = HandSpec("twin", "hand twin", dict)
+    groups = {"slipreflex.hands": [_EntryPoint("twin", lambda: [twin])]}
+    monkeypatch.setattr(importlib.metadata, "entry_points", lambda group: groups.get(group, []))
+    hands = Registry("hand", HandSpec, group="slipreflex.hands")
+    assert hands.names() == ("twin",) and hands.get("twin") is twin
+    assert hands.load_entry_points() == ()          # read once
+    groups["slipreflex.hands"] = [_EntryPoint("broken", ImportError("no module named pkg"))]
+    with pytest.raises(ParameterError, match=r"hand plugin 'broken' \(pkg.mod:broken\): cannot load: no module"):
+        Registry("hand", HandSpec, group="slipreflex.hands").names()
+    groups["slipreflex.hands"] = [_EntryPoint("odd", 42)]
+    with pytest.raises(ParameterError, match="hand plugin 'odd'"):
+        Registry("hand", HandSpec, group="slipreflex.hands").names()
