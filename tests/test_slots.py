@@ -89,8 +89,8 @@ def test_a_vector_starts_nan_and_an_unfilled_slot_is_an_error_naming_it():
 
 def test_a_rig_with_a_parameter_nobody_filled_refuses_to_run(monkeypatch):
     """A forgotten fill is an error before any kernel runs, not a silent 0.0 in the physics."""
-    from slipreflex.sim import rig
+    from slipreflex.sim import rig_params
 
-    monkeypatch.setattr(rig, "fill_slip_sensor_params", lambda P, *a, **k: P)
+    monkeypatch.setattr(rig_params, "fill_slip_sensor_params", lambda P, *a, **k: P)
     with pytest.raises(_slots.LayoutError, match="the rig's parameters P: slot.*VCC"):
         Rig("TR")

@@ -133,7 +133,8 @@ class ExperimentSpec:
 #: The paper's experiments, which cannot be unregistered.
 _PAPER = ("drop", "pour")
 #: The experiment registry (registration order is the seed-branch order); the functions below read it.
-EXPERIMENTS: Registry[ExperimentSpec] = Registry("experiment", ExperimentSpec, protected=_PAPER)
+EXPERIMENTS: Registry[ExperimentSpec] = Registry("experiment", ExperimentSpec, protected=_PAPER,
+                                                 group="slipreflex.experiments")
 
 
 def register(spec: ExperimentSpec, *, replace: bool = False) -> None:

@@ -90,7 +90,8 @@ def _check_hand(spec: HandSpec) -> None:
 
 
 #: The hand registry (``--hand-type`` names one); the functions below read it.
-HANDS: Registry[HandSpec] = Registry("hand", HandSpec, any_case=True, label="--hand-type", check=_check_hand)
+HANDS: Registry[HandSpec] = Registry("hand", HandSpec, any_case=True, label="--hand-type", check=_check_hand,
+                                   group="slipreflex.hands")
 
 
 def register_hand(spec: HandSpec, *, replace: bool = False) -> None:

@@ -29,6 +29,10 @@ slipreflex.errors.ParameterError: tool: unknown 'hammer' (known: saw, drill)
 from __future__ import annotations
 
 import importlib
+import importlib.util
+import os
+import re
+import sys
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from typing import Any, Generic, Protocol, TypeVar
@@ -36,8 +40,14 @@ from typing import Any, Generic, Protocol, TypeVar
 from .errors import ParameterError
 from .validation import choice
 
-__all__ = ["Registry", "EntryPoint"]
+__all__ = ["Registry", "EntryPoint", "PLUGIN_ENV", "load_plugin_file", "load_env_plugins"]
 
+#: The environment variable naming plugin files (Python files, separated by ``os.pathsep``) that every
+#: registry loads before its first lookup; ``slipreflex --plugin FILE`` adds to it, so the worker
+#: processes of a run load the same files.
+PLUGIN_ENV: str = "SLIPREFLEX_PLUGINS"
+_loaded_files: dict[str, Any] = {}
+_env_read = ""   # the variable's value whose files are loaded
 
 
 class _Named(Protocol):
@@ -68,6 +78,12 @@ class Registry(Generic[S]):
         Names that cannot be unregistered (the paper's own).
     before_read : callable, optional
         Called before every lookup or listing (a plugin loader that runs once).
+    group : str, optional
+        The entry-point group through which installed packages add entries (``"slipreflex.hands"``):
+        read once, before the first lookup or listing (:meth:`load_entry_points`).
+
+    Every lookup or listing first loads the plugin files named in :data:`PLUGIN_ENV` (once per
+    process; :func:`load_plugin_file`).
 
     Examples
     --------
@@ -78,16 +94,68 @@ class Registry(Generic[S]):
 
     def __init__(self, kind: str, spec_type: type[S], *, any_case: bool = False, label: str | None = None,
                  check: Callable[[S], None] | None = None, protected: Iterable[str] = (),
-                 before_read: Callable[[], Any] | None = None) -> None:
+                 before_read: Callable[[], Any] | None = None, group: str | None = None) -> None:
         self.kind, self.spec_type, self.any_case = kind, spec_type, any_case
         self.label = label or kind
         self.check, self.protected, self.before_read = check, tuple(protected), before_read
+        self.group, self._group_read = group, group is None
         self._specs: dict[str, S] = {}
 
     def _table(self) -> dict[str, S]:
+        load_env_plugins()
+        if not self._group_read:
+            self.load_entry_points()
         if self.before_read is not None:
             self.before_read()
         return self._specs
+
+    def load_entry_points(self) -> tuple[str, ...]:
+        """Register what installed packages declare in this registry's entry-point group (once).
+
+        A package declares, in its ``pyproject.toml``::
+
+            [project.entry-points."slipreflex.hands"]
+            my-hand = "my_package.hand:MY_HAND"
+
+        where the object is a specification, a sequence of them, or a function returning
+        either; read in name order; a name already registered is kept.
+
+        Returns
+        -------
+        tuple of str
+            The names added by this call.
+
+        Raises
+        ------
+        ParameterError
+            When an entry point cannot be loaded or gives something else (naming it).
+
+        Examples
+        --------
+        >>> from slipreflex.hands import HANDS
+        >>> HANDS.load_entry_points()       # nothing installed declares one here, and it runs once
+        ()
+        """
+        if self._group_read or self.group is None:
+            return ()
+        self._group_read = True
+        from importlib.metadata import entry_points  # deferred: heavy (importlib.metadata, ~30 ms of import)
+
+        added = []
+        for ep in sorted(entry_points(group=self.group), key=lambda e: e.name):
+            try:
+                obj = ep.load()
+                got = obj() if callable(obj) and not isinstance(obj, self.spec_type) else obj
+                specs = [got] if isinstance(got, self.spec_type) else list(got)  # pyright: ignore[reportArgumentType]
+            except Exception as err:  # a broken plugin is the user's to fix: say which one
+                raise ParameterError(f"{self.kind} plugin {ep.name!r} ({ep.value}): cannot load: {err}") from err
+            for spec in specs:
+                if not isinstance(spec, self.spec_type):
+                    raise ParameterError(f"{self.kind} plugin {ep.name!r} ({ep.value}): gave {spec!r}, "
+                                         f"not a {self.spec_type.__name__}")
+                if self.add_new(spec):
+                    added.append(spec.name)
+        return tuple(added)
 
     def register(self, spec: S, *, replace: bool = False) -> None:
         """Add ``spec`` at the end of the order (``replace``: a spec of the same name keeps its place).
@@ -247,3 +315,82 @@ class EntryPoint:
     def __call__(self, *args: Any, **kwargs: Any) -> Any:
         module, _, name = self.target.partition(":")
         return getattr(importlib.import_module(module), name)(*self.args, *args, **kwargs)
+
+
+def load_plugin_file(path: str | os.PathLike[str]) -> Any:
+    """Run one plugin file (a Python file that registers hands, experiments, methods or loads), once.
+
+    The file is imported as the module ``slipreflex_plugin_<stem>`` (so what it defines pickles
+    into worker processes); loading the same file again returns the same module.
+
+    Parameters
+    ----------
+    path : str or path
+        A ``.py`` file.
+
+    Returns
+    -------
+    module
+        The plugin's module.
+
+    Raises
+    ------
+    ParameterError
+        One line naming the file: missing, not a ``.py`` file, or raising when run.
+
+    Examples
+    --------
+    >>> load_plugin_file("no-such-plugin.py")
+    Traceback (most recent call last):
+    ...
+    slipreflex.errors.ParameterError: plugin no-such-plugin.py: no such file
+    """
+    text_path = os.fspath(path)
+    resolved = os.path.realpath(text_path)
+    if resolved in _loaded_files:
+        return _loaded_files[resolved]
+    if not os.path.isfile(resolved):
+        raise ParameterError(f"plugin {text_path}: no such file")
+    if not resolved.endswith(".py"):
+        raise ParameterError(f"plugin {text_path}: not a Python file (.py)")
+    stem = re.sub(r"\W", "_", os.path.basename(resolved)[:-3])
+    name = f"slipreflex_plugin_{stem}"
+    if name in sys.modules:
+        raise ParameterError(f"plugin {text_path}: another plugin file is already loaded as {name}")
+    spec = importlib.util.spec_from_file_location(name, resolved)
+    if spec is None or spec.loader is None:  # pragma: no cover - a .py file always has a loader
+        raise ParameterError(f"plugin {text_path}: cannot be imported")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    _loaded_files[resolved] = module
+    try:
+        spec.loader.exec_module(module)
+    except Exception as err:  # the plugin's own error, in one line naming the file
+        del sys.modules[name], _loaded_files[resolved]
+        where = f"line {err.lineno}: " if isinstance(err, SyntaxError) else ""
+        raise ParameterError(f"plugin {text_path}: {where}{type(err).__name__}: {err}") from err
+    return module
+
+
+def load_env_plugins() -> tuple[str, ...]:
+    """Load the plugin files :data:`PLUGIN_ENV` names (each once; an empty variable loads nothing).
+
+    Returns
+    -------
+    tuple of str
+        The files named.
+
+    Examples
+    --------
+    >>> import os
+    >>> PLUGIN_ENV in os.environ or load_env_plugins() == ()
+    True
+    """
+    global _env_read
+    value = os.environ.get(PLUGIN_ENV, "")
+    files = tuple(f for f in value.split(os.pathsep) if f.strip())
+    if value != _env_read:
+        for file in files:
+            load_plugin_file(file)
+        _env_read = value
+    return files

@@ -212,9 +212,13 @@ DROP = Layout("a drop's row of D", "REL M H0 KC CC ACT=0 Z=0 VZ=0 LANDED=0", pre
 D_REL, D_M, D_H0, D_KC, D_CC, D_ACT, D_Z, D_VZ, D_LANDED = DROP.slots
 D_SIZE = DROP.size
 
-# ---- pours W (one row per pour) -------------------------------------------
-POUR = Layout("a pour's row of W", "START RATE_KG_S TOTAL_KG DELAY JET_N RATE_L_S DUR", prefix="W_")
-W_START, W_RATE_KG_S, W_TOTAL_KG, W_DELAY, W_JET_N, W_RATE_L_S, W_DUR = POUR.slots
+# ---- timed loads W (one row per pour or shake) -----------------------------
+# A row acts from START + DELAY for DUR: a pour's water (RATE_KG_S, JET_N; TOTAL_KG, RATE_L_S for the
+# rig) and the grip's own acceleration along the axis, ACC sin(ACC_W t) (m/s^2, down positive; t from the
+# row's start), which the held bottle feels as the force -m ACC in the grip's frame and the IMU reads
+POUR = Layout("a timed load's row of W", "START RATE_KG_S TOTAL_KG DELAY JET_N RATE_L_S DUR ACC=0 ACC_W=0",
+              prefix="W_")
+W_START, W_RATE_KG_S, W_TOTAL_KG, W_DELAY, W_JET_N, W_RATE_L_S, W_DUR, W_ACC, W_ACC_W = POUR.slots
 W_SIZE = POUR.size
 
 # ---- DAQ output rows --------------------------------------------------------
@@ -795,6 +799,10 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
                     if (D[d, D_LANDED] == 0.0 or abs(D[d, D_VZ] - v) > _CALM_V
                             or abs(sag) * np.sqrt(D[d, D_KC] / D[d, D_M]) > _CALM_V):
                         calm = False
+            for p in range(W.shape[0] if calm else 0):
+                # a shaking grip: ten coarse steps a radian of its shake at most
+                if W[p, W_ACC] != 0.0 and n * dt - W[p, W_START] - W[p, W_DELAY] < W[p, W_DUR]:
+                    cap = min(cap, max(1, np.int64(0.1 / (W[p, W_ACC_W] * dt))))
             if calm:
                 # the coarse step ends where the next IMU, DAQ or tactile sample is taken (each from the state
                 # at its instant, as with fixed steps), before a drop's release and where a pour's water
@@ -905,12 +913,17 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
         # ---- loads
         mw = 0.0
         fjet = 0.0
+        gacc = 0.0
         for p in range(W.shape[0]):
             ta = W[p, W_START] + W[p, W_DELAY]
             if tl > ta:
                 mw += W[p, W_RATE_KG_S] * min(tl - ta, W[p, W_DUR])
                 if tl - ta < W[p, W_DUR]:
                     fjet += W[p, W_JET_N]
+                    if W[p, W_ACC] != 0.0:
+                        gacc += W[p, W_ACC] * np.sin(W[p, W_ACC_W] * (tl - ta))
+        # the weight in the grip's frame: gravity less the grip's acceleration (down positive)
+        geff = g - gacc if gacc != 0.0 else g
         # ---- the jet's splash: a one-pole (Ornstein-Uhlenbeck) noise drawn on a fixed 1 ms grid and
         # interpolated, so it does not depend on dt; the grid (and the slosh mode's coefficients, which
         # change with the fill) advances only while a jet flows, catching up on its first use
@@ -963,7 +976,7 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
                     nev += 1
             if D[d, D_LANDED] > 0.0:
                 mland += D[d, D_M]
-            D[d, D_VZ] += (g - f / D[d, D_M]) * h
+            D[d, D_VZ] += (geff - f / D[d, D_M]) * h
             D[d, D_Z] += D[d, D_VZ] * h
             fdrop += f
             if f != 0.0 and drop_e != 0.0:
@@ -983,7 +996,7 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
             S[S_MASS] = mb + mrec + mland
         else:
             S[S_MASS] = m + mland
-        wload = m * g + fjet + fspl + fdrop
+        wload = m * geff + fjet + fspl + fdrop
         # on the shoulder the three normal forces lean along the axis and push the bottle out of the grasp
         if taper > 0.0 and shl > 0.0 and not fallen:
             wload += 3.0 * nc * taper_sin
@@ -1182,7 +1195,8 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
         a_prev = a
         # the IMU's DLPF states; flushed to zero below 1e-200 m/s^2 (they decay toward an exact zero at rest
         # and would otherwise sit in the subnormal range, where every step's arithmetic is slow)
-        af = S[S_AF] + (a - S[S_AF]) * alpha_h
+        # (the IMU reads the bottle's acceleration in the world: the grip's added)
+        af = S[S_AF] + ((a + gacc if gacc != 0.0 else a) - S[S_AF]) * alpha_h
         S[S_AF] = af if abs(af) > 1e-200 else 0.0
         # the accelerometer's x axis (radial at the thumb, 30 degrees off the normal of the tilt axis) also
         # reads gravity tilted with the bottle

@@ -41,15 +41,11 @@ Examples
 
 from __future__ import annotations
 
-import bisect
 import math
 import operator
-import os
-from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
-from scipy.special import j1
 
 from .. import hardware as hw
 from .._slots import slot
@@ -57,11 +53,9 @@ from ..errors import ParameterError
 from ..hardware import Finger, HandCommand
 from ..interfaces import DaqSample, GraspResult
 from . import kernel as K
-from .contacts import fill_contact_params
-from .objects import BOTTLES, WATER_DENSITY, Bottle, Drop, Pour, Surface
+from .loads import kind_of
+from .objects import BOTTLES, Bottle, Surface
 from .params import (
-    SLOSH_ROOT,
-    WATER_KINEMATIC_VISCOSITY,
     FlowParams,
     HandParams,
     ImuParams,
@@ -70,7 +64,13 @@ from .params import (
     TactileParams,
     WaterParams,
 )
+from .rig_data import DaqBlock, KernelArrays, SlipEvent
+from .rig_params import fill_slip_sensor_params, rig_params
 from .sensors import Track
+from .sim_hand import SimHand
+from .stepping import COARSE_STEP_S, STEPPING_ENV, STEPPINGS, default_stepping, seed_sequence, stepping
+from .stepping import STEP_ROUND as _ROUND
+from .tactile_sampler import TactileSampler
 
 __all__ = ["Rig", "SimHand", "TactileSampler", "GraspResult", "DaqBlock", "SlipEvent", "KernelArrays",
            "seed_sequence", "fill_slip_sensor_params", "STEPPINGS", "STEPPING_ENV", "COARSE_STEP_S",
@@ -78,660 +78,6 @@ __all__ = ["Rig", "SimHand", "TactileSampler", "GraspResult", "DaqBlock", "SlipE
 
 _CHUNK_S = 0.25  # longest stretch one kernel call covers (bounds the buffers)
 _SPLASH_GRID_S = 1e-3  # the splash noise is drawn every 1 ms (independent of dt) and interpolated
-_ROUND = 1e-9
-
-#: How the kernel steps: ``"adaptive"`` takes one coarse step of up to :data:`COARSE_STEP_S` while nothing
-#: needs the fine step (every contact sticking with a margin, the cuff at most creeping, no finger moving,
-#: no pad ringing, nothing in flight), ending where the next sample is due; ``"fixed"`` takes every
-#: ``PhysicsParams.dt``, the reference (docs/simulator.md, "Time step").
-STEPPINGS: tuple[str, ...] = ("adaptive", "fixed")
-#: The environment variable that sets the stepping of rigs made without ``stepping=`` (worker processes
-#: inherit it: ``SLIPREFLEX_STEPPING=fixed slipreflex reproduce`` runs the reference kernel).
-STEPPING_ENV: str = "SLIPREFLEX_STEPPING"
-#: Longest coarse step (s), the DAQ's period; a rig's own bound is shorter: the stiffest mode a calm rig
-#: rings in (the bottle on its contacts' shear stiffness along the axis or sideways, the tilt on the pads)
-#: stays at omega h <= 1, inside the semi-implicit Euler's stability bound (2), with its frequency off by
-#: under (omega h)^2 / 24 = 4 % (:meth:`Rig.coarse_steps`).
-COARSE_STEP_S: float = 3e-3
-
-
-def default_stepping() -> str:
-    """The stepping of a rig made without ``stepping=``: :data:`STEPPING_ENV`, or ``"adaptive"``.
-
-    Examples
-    --------
-    >>> default_stepping() in STEPPINGS
-    True
-    """
-    kind = os.environ.get(STEPPING_ENV, "adaptive") or "adaptive"
-    if kind not in STEPPINGS:
-        raise ParameterError(f"{STEPPING_ENV}={kind!r}: unknown stepping (known: {', '.join(STEPPINGS)})")
-    return kind
-
-
-class stepping:  # noqa: N801 - a context manager used like a function
-    """Make rigs (in this process and in worker processes started inside) step as ``kind``.
-
-    Sets :data:`STEPPING_ENV` for the block and restores it after.
-
-    Examples
-    --------
-    >>> with stepping("fixed"):
-    ...     Rig("TR").stepping
-    'fixed'
-    """
-
-    def __init__(self, kind: str) -> None:
-        if kind not in STEPPINGS:
-            raise ParameterError(f"stepping: unknown {kind!r} (known: {', '.join(STEPPINGS)})")
-        self.kind = kind
-        self._old: str | None = None
-
-    def __enter__(self) -> stepping:
-        self._old = os.environ.get(STEPPING_ENV)
-        os.environ[STEPPING_ENV] = self.kind
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        if self._old is None:
-            os.environ.pop(STEPPING_ENV, None)
-        else:
-            os.environ[STEPPING_ENV] = self._old
-
-
-def seed_sequence(seed: int | np.random.SeedSequence | np.random.Generator | None) -> np.random.SeedSequence:
-    """Turn a seed, SeedSequence or Generator into a SeedSequence.
-
-    Parameters
-    ----------
-    seed : int, SeedSequence, Generator or None
-        None means 0 (the rig is deterministic by default).
-
-    Returns
-    -------
-    numpy.random.SeedSequence
-
-    Examples
-    --------
-    >>> seed_sequence(3).entropy
-    3
-    """
-    if seed is None:
-        return np.random.SeedSequence(0)
-    if isinstance(seed, np.random.SeedSequence):
-        return seed
-    if isinstance(seed, np.random.Generator):
-        return np.random.SeedSequence([int(v) for v in seed.integers(0, 2**63, size=4)])
-    if isinstance(seed, (int, np.integer)) and not isinstance(seed, bool) and seed >= 0:
-        return np.random.SeedSequence(int(seed))
-    raise ParameterError(f"seed must be a non-negative int, a SeedSequence or a Generator, got {seed!r}")
-
-
-@dataclass(frozen=True)
-class DaqBlock:
-    """DAQ samples (and the truth at the same instants) as arrays.
-
-    Attributes
-    ----------
-    seq : ndarray of int64
-        Sample numbers since the rig started (not wrapped).
-    t, volts : ndarray
-        Sample time (s) and slip-sensor volts (ADC-quantized).
-    accel : ndarray, shape (n, 3)
-        Latest accelerometer reading (g) at each sample.
-    accel_fresh : ndarray of bool
-        Whether a new accelerometer reading arrived since the previous sample.
-    flow_pulses : ndarray of int64
-        Cumulative flow-sensor pulses.
-    displacement, velocity, slip : ndarray
-        Truth: bottle position below the grasp (m), its velocity (m/s, down
-        positive), sliding distance at the contacts (m).
-    stuck, fallen : ndarray of bool
-        Truth: contacts stuck; bottle fallen out.
-    normal_force : ndarray
-        Truth: normal force per fingertip contact (N).
-    load_mass : ndarray
-        Truth: bottle + water + landed masses (kg).
-    fingers : ndarray, shape (n, 3)
-        Finger positions (thumb, index, middle), i-Limb units.
-    accel_true : ndarray
-        Truth: bottle acceleration (m/s^2, down positive).
-    accel_lateral : ndarray
-        Truth: the bottle's sideways acceleration (m/s^2) from the water's slosh,
-        along the accelerometer's x axis.
-    load_force : ndarray
-        Truth: the axial load on the grasp (N): weight of bottle and water, the
-        jet's push and splash, a landing mass's contact force.
-    water_force_lateral : ndarray
-        Truth: the water's sideways force on the bottle (N): the slosh and the
-        jet's drive of it (see :class:`~slipreflex.sim.params.WaterParams`).
-
-    Examples
-    --------
-    >>> from slipreflex.sim import Rig
-    >>> b = Rig("DK").advance_block(0.01)
-    >>> b.t.shape == b.volts.shape
-    True
-    """
-
-    seq: np.ndarray
-    t: np.ndarray
-    volts: np.ndarray
-    accel: np.ndarray
-    accel_fresh: np.ndarray
-    flow_pulses: np.ndarray
-    displacement: np.ndarray
-    velocity: np.ndarray
-    slip: np.ndarray
-    stuck: np.ndarray
-    fallen: np.ndarray
-    normal_force: np.ndarray
-    load_mass: np.ndarray
-    fingers: np.ndarray
-    accel_true: np.ndarray
-    accel_lateral: np.ndarray
-    load_force: np.ndarray
-    water_force_lateral: np.ndarray
-
-    @classmethod
-    def from_rows(cls, rows: np.ndarray, seq0: int) -> DaqBlock:
-        """Build from kernel rows (internal layout).
-
-        Examples
-        --------
-        >>> import numpy as np
-        >>> DaqBlock.from_rows(np.zeros((0, K.O_SIZE)), 0).t.size
-        0
-        """
-        n = rows.shape[0]
-        return cls(
-            seq=np.arange(seq0, seq0 + n, dtype=np.int64), t=rows[:, K.O_T].copy(),
-            volts=rows[:, K.O_VOLTS].copy(), accel=rows[:, K.O_AX:K.O_AZ + 1].copy(),
-            accel_fresh=rows[:, K.O_AFRESH] > 0, flow_pulses=rows[:, K.O_PULSES].astype(np.int64),
-            displacement=rows[:, K.O_X].copy(), velocity=rows[:, K.O_V].copy(), slip=rows[:, K.O_S].copy(),
-            stuck=rows[:, K.O_STUCK] > 0, fallen=rows[:, K.O_FALLEN] > 0, normal_force=rows[:, K.O_NC].copy(),
-            load_mass=rows[:, K.O_MASS].copy(), fingers=rows[:, K.O_Q0:K.O_Q2 + 1].copy(),
-            accel_true=rows[:, K.O_A].copy(), accel_lateral=rows[:, K.O_ALAT].copy(),
-            load_force=rows[:, K.O_LOAD].copy(), water_force_lateral=rows[:, K.O_FWAT].copy())
-
-    def samples(self) -> list[DaqSample]:
-        """The block as :class:`~slipreflex.interfaces.DaqSample` objects.
-
-        Examples
-        --------
-        >>> from slipreflex.sim import Rig
-        >>> Rig("TR").advance_block(0.006).samples()[0].seq
-        0
-        """
-        out = []
-        for i in range(self.t.size):
-            acc = (float(self.accel[i][0]), float(self.accel[i][1]), float(self.accel[i][2])) \
-                if self.accel_fresh[i] else None
-            out.append(DaqSample(seq=int(self.seq[i]), t=float(self.t[i]), slip_volts=float(self.volts[i]),
-                                 accel_g=acc, flow_pulses=int(self.flow_pulses[i])))
-        return out
-
-
-@dataclass(frozen=True)
-class KernelArrays:
-    """The rig's live kernel arrays (:meth:`Rig.kernel_arrays`); layouts in :mod:`slipreflex.sim.kernel`.
-
-    Examples
-    --------
-    >>> from slipreflex.sim import Rig
-    >>> Rig("TR").kernel_arrays().C.dtype
-    dtype('int64')
-    """
-
-    S: np.ndarray
-    C: np.ndarray
-    P: np.ndarray
-    keys: np.ndarray
-    D: np.ndarray
-    W: np.ndarray
-    track: np.ndarray
-    tac_rates: np.ndarray
-    tac_next: np.ndarray
-    tac_contact: np.ndarray
-    targets: np.ndarray
-    speeds: np.ndarray
-
-
-@dataclass(frozen=True)
-class SlipEvent:
-    """One episode of sliding (truth), from the first stick -> slip transition
-    after a quiet period to the last re-stick before the next quiet period.
-
-    Attributes
-    ----------
-    onset, end : float
-        Times (s); ``end`` is None if the contact was still sliding (or the
-        bottle fell) when the record ends.
-    distance : float
-        Sliding distance (m) over the episode.
-
-    Examples
-    --------
-    >>> SlipEvent(1.0, 1.2, 0.002).duration
-    0.2
-    """
-
-    onset: float
-    end: float | None
-    distance: float
-
-    @property
-    def duration(self) -> float | None:
-        """``end - onset`` (s), or None while open.
-
-        Examples
-        --------
-        >>> SlipEvent(1.0, None, 0.0).duration is None
-        True
-        """
-        return None if self.end is None else round(self.end - self.onset, 12)
-
-
-class TactileSampler:
-    """Frames of one finger's 4 x 4 tactile array at a fixed rate.
-
-    Created by :meth:`Rig.tactile_sampler`; frames accumulate as the rig
-    advances and :meth:`read` returns those not yet read. With
-    ``keep=True`` every frame is also kept for :attr:`history`.
-
-    Examples
-    --------
-    >>> from slipreflex.sim import Rig
-    >>> from slipreflex.hardware import NMSD_FS
-    >>> rig = Rig("TR")
-    >>> s = rig.tactile_sampler(NMSD_FS)
-    >>> _ = rig.advance(0.1)
-    >>> t, frames = s.read()
-    >>> frames.shape[1:], len(t)
-    ((4, 4), 27)
-    """
-
-    def __init__(self, rig: Rig, fs: float, finger: Finger, key: np.uint64, keep: bool) -> None:
-        self.fs = float(fs)
-        self.finger = Finger(finger)
-        self.gain = rig.tactile_gain(self.finger)
-        self._rig = rig
-        self._key = key
-        self._keep = keep
-        self._t: list[np.ndarray] = []
-        self._f: list[np.ndarray] = []
-        self._hist_t: list[np.ndarray] = []
-        self._hist_f: list[np.ndarray] = []
-        self._state = np.full((2,) + hw.TACTILE_SHAPE, np.nan)   # the taxels' low-pass and play
-        # the first frame strictly after now (a frame at the current instant was due in the past)
-        self.next_index = 0 if rig.step_index == 0 else int(math.floor(rig.t * self.fs + 1e-9)) + 1
-
-    @property
-    def key(self) -> int:
-        """The noise stream key of this sampler's frames (a compiled loop builds frames with it).
-
-        Examples
-        --------
-        >>> from slipreflex.sim import Rig
-        >>> rig = Rig("TR"); rig.tactile_sampler(100.0).key == rig.tactile_sampler(100.0).key
-        False
-        """
-        return int(self._key)
-
-    @property
-    def filter_state(self) -> np.ndarray:
-        """A copy of the taxels' low-pass and play state ``(2, 4, 4)`` (NaN before the first frame).
-
-        Examples
-        --------
-        >>> from slipreflex.sim import Rig
-        >>> bool(np.isnan(Rig("TR").tactile_sampler(100.0).filter_state).all())
-        True
-        """
-        return self._state.copy()
-
-    @property
-    def next_time(self) -> float:
-        """Time (s) of the next frame not produced yet.
-
-        Examples
-        --------
-        >>> from slipreflex.sim import Rig
-        >>> Rig("TR").tactile_sampler(100.0).next_time
-        0.0
-        """
-        return self.next_index / self.fs
-
-    def feed(self, snapshots: np.ndarray, params: TactileParams) -> None:
-        """Turn the rig's contact snapshots (kernel rows) into frames and queue them (called by the rig).
-
-        Examples
-        --------
-        >>> from slipreflex.sim import Rig
-        >>> s = Rig("TR").tactile_sampler(100.0)
-        >>> s.feed(np.zeros((0, 8)), TactileParams()); s.read()[0].size
-        0
-        """
-        if not snapshots.shape[0]:
-            return
-        out = np.empty((snapshots.shape[0],) + hw.TACTILE_SHAPE)
-        alpha = 1.0 - math.exp(-2.0 * math.pi * params.bandwidth_hz / self.fs)
-        K.tactile_frames(snapshots, self._key, self.gain, params.patch_sigma_taxels, params.shear_shift_taxels,
-                         params.noise_n, params.resolution_n, alpha, params.hysteresis_n,
-                         params.drift_per_decade, self._state, out)
-        self._push(snapshots[:, K.T_T].copy(), out)
-
-    def take(self, t: np.ndarray, frames: np.ndarray, state: np.ndarray) -> None:
-        """Queue frames built elsewhere from this sampler's snapshots (by a compiled loop, with
-        :func:`~slipreflex.sim.kernel.tactile_frames`, :attr:`key`, :attr:`gain` and
-        :attr:`filter_state`), and take the filter state they left: as if fed.
-
-        Examples
-        --------
-        >>> from slipreflex.sim import Rig
-        >>> s = Rig("TR").tactile_sampler(100.0)
-        >>> s.take(np.zeros(1), np.ones((1, 4, 4)), np.zeros((2, 4, 4)))
-        >>> float(s.read()[1].sum()), float(s.filter_state.sum())
-        (16.0, 0.0)
-        """
-        self._state[...] = state
-        self._push(t, frames)
-
-    def _push(self, t: np.ndarray, frames: np.ndarray) -> None:
-        self._t.append(t)
-        self._f.append(frames)
-        if self._keep:
-            self._hist_t.append(t)
-            self._hist_f.append(frames)
-
-    def read(self) -> tuple[np.ndarray, np.ndarray]:
-        """Frames produced since the last call: times (s) and ``(n, 4, 4)`` newtons.
-
-        Examples
-        --------
-        >>> from slipreflex.sim import Rig
-        >>> Rig("TR").tactile_sampler(380.0).read()[1].shape
-        (0, 4, 4)
-        """
-        t = np.concatenate(self._t) if self._t else np.zeros(0)
-        f = np.concatenate(self._f) if self._f else np.zeros((0,) + hw.TACTILE_SHAPE)
-        self._t.clear()
-        self._f.clear()
-        return t, f
-
-    @property
-    def history(self) -> tuple[np.ndarray, np.ndarray]:
-        """All frames since creation (only with ``keep=True``).
-
-        Examples
-        --------
-        >>> from slipreflex.sim import Rig
-        >>> Rig("TR").tactile_sampler(260.0, keep=True).history[0].size
-        0
-        """
-        t = np.concatenate(self._hist_t) if self._hist_t else np.zeros(0)
-        f = np.concatenate(self._hist_f) if self._hist_f else np.zeros((0,) + hw.TACTILE_SHAPE)
-        return t, f
-
-    def close(self) -> None:
-        """Stop sampling (the rig forgets this sampler).
-
-        Examples
-        --------
-        >>> from slipreflex.sim import Rig
-        >>> rig = Rig("TR"); s = rig.tactile_sampler(100.0); s.close()
-        >>> s in rig.samplers
-        False
-        """
-        self._rig.detach_sampler(self)
-
-
-class SimHand:
-    """The simulated i-Limb: position servos with a speed limit and a command latency.
-
-    Implements :class:`slipreflex.interfaces.Hand`. Commands take effect
-    ``latency`` seconds after they are given (rig time). Thumb, index and
-    middle are simulated with their dynamics; the other digits, the thumb
-    rotator and the wrist just take their targets after the latency.
-    Besides position targets it accepts the i-Limb's close / open / stop
-    commands with a PWM speed (0..297).
-
-    Examples
-    --------
-    >>> from slipreflex.sim import Rig
-    >>> from slipreflex.interfaces import Hand
-    >>> rig = Rig("TR")
-    >>> isinstance(rig.hand, Hand)
-    True
-    >>> rig.hand.set_positions({Finger.THUMB: 100})
-    >>> _ = rig.advance(0.5)
-    >>> rig.hand.positions()[Finger.THUMB]
-    100.0
-    """
-
-    def __init__(self, rig: Rig, params: HandParams) -> None:
-        self._rig = rig
-        self.params = params
-        self._pending: list[tuple[int, int, HandCommand, tuple[Finger, ...], float]] = []
-        self._count = 0
-        self._others: dict[Finger, float] = {f: 0.0 for f in Finger if f not in hw.TRIPOD}
-        #: When the closing a closed loop started for each finger ends (rig time, s; the grip
-        #: rule of :mod:`slipreflex.grip`: a later rise extends it rather than cutting it short).
-        self.closing_until: dict[Finger, float] = {}
-        #: Servo targets and speed limits of thumb, index and middle (the rig hands them to the physics).
-        self.targets = np.zeros(len(hw.TRIPOD))
-        self.speeds = np.full(len(hw.TRIPOD), params.speed_units_s)
-
-    @property
-    def latency(self) -> float:
-        """Command latency (s).
-
-        Examples
-        --------
-        >>> from slipreflex.sim import Rig
-        >>> Rig("TR").hand.latency
-        0.01
-        """
-        return self.params.latency_s
-
-    def command(self, kind: HandCommand, fingers: Iterable[Finger], value: float = 0.0,
-                at: float | None = None) -> None:
-        """Queue one i-Limb command for some fingers.
-
-        Parameters
-        ----------
-        kind : HandCommand
-            POSITION (value = target 0..500, rounded to whole units as the
-            packet carries them), CLOSE / OPEN (value = PWM 0..297, the
-            speed), or STOP (hold the whole-unit position the finger has when
-            the command arrives).
-        fingers : iterable of Finger
-        value : float
-        at : float, optional
-            Time the command is sent (default: now). Must not be before the
-            rig's time minus the latency.
-
-        Examples
-        --------
-        >>> from slipreflex.sim import Rig
-        >>> rig = Rig("TR")
-        >>> rig.hand.command(HandCommand.CLOSE, [Finger.INDEX], 297)
-        >>> _ = rig.advance(0.2)
-        >>> 110 < rig.hand.positions()[Finger.INDEX] < 125
-        True
-        """
-        kind = HandCommand(kind)
-        fingers = tuple(Finger(f) for f in fingers)
-        if not math.isfinite(value):
-            raise ParameterError(f"hand command value must be finite, got {value!r}")
-        sent = self._rig.t if at is None else float(at)
-        dt = self._rig.physics.dt
-        step = max(int(math.ceil((sent + self.params.latency_s) / dt - _ROUND)), self._rig.step_index)
-        bisect.insort(self._pending, (step, self._count, kind, fingers, float(value)))
-        self._count += 1
-
-    def set_positions(self, targets: Mapping[Finger, float], at: float | None = None) -> None:
-        """Position targets (0..500, clipped) for the named fingers.
-
-        Examples
-        --------
-        >>> from slipreflex.sim import Rig
-        >>> Rig("TR").hand.set_positions({Finger.MIDDLE: 250})
-        """
-        by_value: dict[float, list[Finger]] = {}
-        for f, v in targets.items():
-            by_value.setdefault(float(v), []).append(f)
-        for v, fingers in by_value.items():
-            self.command(HandCommand.POSITION, fingers, v, at=at)
-
-    def close_fingers(self, fingers: Iterable[Finger], speed: float, at: float | None = None) -> None:
-        """CLOSE ``fingers`` at ``speed`` units/s (the PWM duty ``speed / speed_units_s * 297``).
-
-        Examples
-        --------
-        >>> from slipreflex.sim import Rig
-        >>> rig = Rig("TR"); rig.hand.close_fingers([Finger.INDEX], 625.0)
-        >>> rig.hand.queue()[0][0][2:]
-        (<HandCommand.CLOSE: 1>, (<Finger.INDEX: 1>,), 297.0)
-        """
-        if not (math.isfinite(speed) and speed > 0):
-            raise ParameterError(f"closing speed must be a number > 0 units/s, got {speed!r}")
-        pwm = min(float(hw.PWM_MAX), speed / self.params.speed_units_s * hw.PWM_MAX)
-        self.command(HandCommand.CLOSE, fingers, pwm, at=at)
-
-    def hold(self, fingers: Iterable[Finger], at: float | None = None) -> None:
-        """STOP ``fingers`` where they are.
-
-        Examples
-        --------
-        >>> from slipreflex.sim import Rig
-        >>> rig = Rig("TR"); rig.hand.hold([Finger.INDEX]); rig.hand.queue()[0][0][2]
-        <HandCommand.STOP: 0>
-        """
-        self.command(HandCommand.STOP, fingers, 0.0, at=at)
-
-    def positions(self) -> dict[Finger, float]:
-        """Measured positions (rounded to whole units, as the control unit reports them).
-
-        Examples
-        --------
-        >>> from slipreflex.sim import Rig
-        >>> Rig("TR").hand.positions()[Finger.INDEX]
-        0.0
-        """
-        q = self._rig.finger_q
-        out = {f: float(round(q[i])) for i, f in enumerate(hw.TRIPOD)}
-        out.update({f: float(round(v)) for f, v in self._others.items()})
-        return dict(sorted(out.items()))
-
-    def queue(self) -> tuple[list[tuple[int, int, HandCommand, tuple[Finger, ...], float]], int]:
-        """The pending commands (due step, sequence number, kind, fingers, value), in order, and the next number.
-
-        Examples
-        --------
-        >>> from slipreflex.sim import Rig
-        >>> rig = Rig("TR"); rig.hand.set_positions({Finger.INDEX: 10})
-        >>> rig.hand.queue()
-        ([(100, 0, <HandCommand.POSITION: 3>, (<Finger.INDEX: 1>,), 10.0)], 1)
-        """
-        return list(self._pending), self._count
-
-    def restore_queue(self, pending: list[tuple[int, int, HandCommand, tuple[Finger, ...], float]],
-                      count: int) -> None:
-        """Replace the pending commands and the next sequence number (what a compiled loop hands back).
-
-        Examples
-        --------
-        >>> from slipreflex.sim import Rig
-        >>> rig = Rig("TR"); rig.hand.set_positions({Finger.INDEX: 10})
-        >>> rig.hand.restore_queue([], 1); rig.hand.next_due_step() is None
-        True
-        """
-        self._pending = sorted(pending)
-        self._count = int(count)
-
-    def next_due_step(self) -> int | None:
-        """Physics step at which the next queued command takes effect (None: nothing queued).
-
-        Examples
-        --------
-        >>> from slipreflex.sim import Rig
-        >>> rig = Rig("TR"); rig.hand.set_positions({Finger.INDEX: 10}); rig.hand.next_due_step()
-        100
-        """
-        return self._pending[0][0] if self._pending else None
-
-    def apply_due(self, n: int) -> bool:
-        """Carry out the commands due by physics step ``n`` (called by the rig); True if any was.
-
-        Updates :attr:`targets` and :attr:`speeds` of the tripod fingers.
-
-        Examples
-        --------
-        >>> from slipreflex.sim import Rig
-        >>> rig = Rig("TR"); rig.hand.set_positions({Finger.INDEX: 10})
-        >>> rig.hand.apply_due(99), rig.hand.apply_due(100), float(rig.hand.targets[1])
-        (False, True, 10.0)
-        """
-        if not (self._pending and self._pending[0][0] <= n):
-            return False
-        p = self.params
-        q = self._rig.finger_q
-        tgt, spd = self.targets, self.speeds
-        while self._pending and self._pending[0][0] <= n:
-            _, _, kind, fingers, value = self._pending.pop(0)
-            for f in fingers:
-                if f in hw.TRIPOD:
-                    i = hw.TRIPOD.index(f)
-                    if kind == HandCommand.POSITION:
-                        # the packet carries whole units (value MSB, LSB)
-                        tgt[i] = min(max(round(value), hw.FINGER_MIN), hw.FINGER_MAX)
-                        spd[i] = p.speed_units_s
-                    elif kind in (HandCommand.CLOSE, HandCommand.OPEN):
-                        tgt[i] = hw.FINGER_MAX if kind == HandCommand.CLOSE else hw.FINGER_MIN
-                        spd[i] = p.speed_units_s * min(max(value, 0.0), hw.PWM_MAX) / hw.PWM_MAX
-                    else:
-                        # STOP: the digit controller holds its encoder count (whole units)
-                        tgt[i] = round(q[i])
-                        spd[i] = p.speed_units_s
-                else:
-                    top = hw.THUMB_ROTATOR_MAX if f == Finger.THUMB_ROTATOR else hw.FINGER_MAX
-                    if kind == HandCommand.POSITION:
-                        self._others[f] = min(max(value, 0.0), top)
-                    elif kind == HandCommand.CLOSE:
-                        self._others[f] = float(top)
-                    elif kind == HandCommand.OPEN:
-                        self._others[f] = 0.0
-        return True
-
-
-
-def fill_slip_sensor_params(P: np.ndarray, sensor: SlipSensorParams, track: Track) -> np.ndarray:
-    """Write the slip sensor's constants and its track into a kernel parameter vector.
-
-    The one place that maps :class:`SlipSensorParams` and a :class:`Track` onto the
-    kernel's slots; the rig and the scan both use it.
-
-    Examples
-    --------
-    >>> from slipreflex.sim.sensors import Track
-    >>> import numpy as np
-    >>> P = fill_slip_sensor_params(np.zeros(K.P_SIZE), SlipSensorParams(),
-    ...                             Track(np.zeros(4), 5e-6, 0.0))
-    >>> float(P[K.P_VCC])
-    5.0
-    """
-    P[K.P_VCC] = sensor.supply_v
-    P[K.P_VSAT] = sensor.v_sat
-    P[K.P_KNEE] = sensor.knee_v
-    P[K.P_VNOISE] = sensor.noise_v
-    P[K.P_GAP] = sensor.gap_m
-    P[K.P_DENT_FRAC] = sensor.gap_dent_fraction
-    P[K.P_ADC_LSB] = hw.ADC_LSB
-    P[K.P_ADC_MAX] = (1 << hw.ADC_BITS) - 1
-    P[K.P_TRACK_DX] = track.dx
-    P[K.P_TRACK_OFF] = track.origin
-    return P
 
 class Rig:
     """A bottle in the i-Limb's tripod grasp, with slip sensor, IMU, tactile arrays and flow sensor.
@@ -827,7 +173,7 @@ class Rig:
         self._daq_chunks: list[np.ndarray] = []
         self.history = bool(history)
         self._events: list[np.ndarray] = []
-        self.perturbations: list[tuple[float, Drop | Pour]] = []
+        self.perturbations: list[tuple[float, Any]] = []
         cap_steps = int(math.ceil(_CHUNK_S / self.physics.dt)) + 2
         self._daq_buf = np.empty((int(_CHUNK_S * 2 * hw.DAQ_FS) + 8, K.O_SIZE))
         self._ev_buf = np.empty((3 * cap_steps + 8, 3))
@@ -837,61 +183,7 @@ class Rig:
 
     # ------------------------------------------------------------------ setup
     def _params(self, flow_k: float, flow_phase: float) -> np.ndarray:
-        b, h, s, imu, ph = self.bottle, self.hand_params, self.slip_sensor, self.imu, self.physics
-        P = K.PARAMS.new()   # NaN until filled: checked complete below
-        P[K.P_DT] = ph.dt
-        P[K.P_COARSE] = 1
-        P[K.P_G] = hw.GRAVITY
-        P[K.P_MB] = b.mass_kg
-        fill_contact_params(P, h, b, ph.dt)
-        P[K.P_SPOT_K] = h.spot_travel_per_unit_m
-        P[K.P_LAM] = h.travel_per_unit_m
-        P[K.P_QC] = (h.aperture_radius_m - b.diameter_m / 2.0) / h.travel_per_unit_m
-        P[K.P_KSERVO] = h.servo_gain
-        P[K.P_STALL] = h.stall_force_n
-        P[K.P_DROOP] = h.motor_droop
-        tp = self.tactile_params
-        w = 2.0 * math.pi * tp.slip_vibration_hz
-        P[K.P_MS_ETA] = tp.slip_events
-        P[K.P_MS_PER_M] = 1.0 / b.slip_distance_m
-        P[K.P_MS_W2] = w * w
-        P[K.P_MS_2ZW] = 2.0 * tp.slip_vibration_zeta * w
-        P[K.P_MS_W] = w
-        P[K.P_INCIPIENT] = tp.incipient_slip
-        P[K.P_MV_F] = h.motor_vibration_n
-        P[K.P_MV_W] = 2.0 * math.pi * h.motor_vibration_hz
-        P[K.P_MV_INV_SPEED] = 1.0 / h.speed_units_s
-        P[K.P_TAPER] = b.shoulder_slope
-        P[K.P_TAPER_SIN] = b.shoulder_slope / math.sqrt(1.0 + b.shoulder_slope ** 2)
-        P[K.P_GRIP] = b.grip_travel_m
-        # the tilt about the horizontal axis through the grasp's centre and the middle finger's contact (the
-        # stiff cuff on the axis: the softest of the tripod's tilts); thumb and index 120 degrees either side
-        r, zg, hb = b.diameter_m / 2.0, b.grasp_height_m, b.height_m
-        P[K.P_LEVER0:K.P_LEVER0 + 3] = (r * math.sqrt(3.0) / 2.0, -r * math.sqrt(3.0) / 2.0, 0.0)
-        P[K.P_ZG] = zg
-        # the empty bottle as a thin-walled cylinder: about its centre m (R^2 / 2 + H^2 / 12), moved to the axis
-        P[K.P_IB] = b.mass_kg * (r * r / 2.0 + hb * hb / 12.0 + (zg - hb / 2.0) ** 2)
-        P[K.P_MBD] = b.mass_kg * (zg - hb / 2.0)
-        P[K.P_DROP_E] = b.drop_eccentricity_m
-        P[K.P_TILT_PEN] = float(sum(P[K.P_LEVER0 + i] ** 2 for i in range(3))) / (3.0 * r)
-        P[K.P_DAQ_T] = hw.DAQ_PERIOD_S
-        P[K.P_ACC_T] = 1.0 / imu.fs
-        P[K.P_ACC_ALPHA] = 1.0 - math.exp(-2.0 * math.pi * imu.dlpf_hz * ph.dt)
-        P[K.P_ACC_NOISE] = imu.noise_g
-        P[K.P_ACC_LSB] = 1.0 / imu.lsb_per_g
-        P[K.P_ACC_RANGE] = imu.range_g
-        tx, tz = math.radians(imu.tilt_x_deg), math.radians(imu.tilt_z_deg)
-        P[K.P_TILT_X] = math.sin(tx)
-        P[K.P_TILT_Z] = math.cos(tx) * math.sin(tz)
-        P[K.P_TILT_Y] = math.cos(tx) * math.cos(tz)
-        fill_slip_sensor_params(P, s, self.track)
-        P[K.P_FLOW_K] = flow_k
-        P[K.P_FLOW_PHASE] = flow_phase
-        self._water_params(P)
-        if self.stepping == "adaptive":
-            P[K.P_COARSE] = self.coarse_steps(P)
-        K.fill_step_tables(P)
-        return K.PARAMS.check(P)
+        return rig_params(self, flow_k, flow_phase)
 
     def coarse_steps(self, P: np.ndarray | None = None) -> int:
         """Fine steps one coarse step of the adaptive stepping spans at most: ``omega h <= 1`` for the stiffest
@@ -909,27 +201,6 @@ class Rig:
         tilt_k = sum(k * float(par[K.P_LEVER0 + i]) ** 2 for i, k in enumerate(kts))
         omega = max(math.sqrt(sum(kts) / m), math.sqrt(float(par[K.P_KLAT]) / m), math.sqrt(tilt_k / inertia))
         return max(1, min(int(COARSE_STEP_S / dt + 1e-9), int(1.0 / (omega * dt))))
-
-    def _water_params(self, P: np.ndarray) -> None:
-        """The water's splash and slosh constants (:class:`WaterParams`) and the grasp's sideways stiffness."""
-
-        w, r = self.water, self.bottle.diameter_m / 2.0
-        P[K.P_SPL_RMS] = w.splash_rms
-        P[K.P_SPL_DT] = _SPLASH_GRID_S
-        P[K.P_SPL_INV] = 1.0 / _SPLASH_GRID_S
-        rho = math.exp(-2.0 * math.pi * w.splash_corner_hz * _SPLASH_GRID_S)
-        P[K.P_SPL_RHO] = rho
-        P[K.P_SPL_SIG] = math.sqrt(1.0 - rho * rho)
-        P[K.P_SLOSH_R] = r
-        P[K.P_ZETA0] = K.slosh_zeta0(r, WATER_KINEMATIC_VISCOSITY, hw.GRAVITY, w.slosh_damping_factor)
-        P[K.P_PHIJ] = float(j1(SLOSH_ROOT * w.jet_offset_m / r) / j1(SLOSH_ROOT))
-        P[K.P_RHO_W] = WATER_DENSITY
-        # sideways, three contacts 120 degrees apart: their normal stiffness (k_n, mean cos^2 = 1/2) and
-        # their shear stiffness along the circumference (mean sin^2 = 1/2)
-        kt = sum(P[K.P_C0 + i * K.PC_SIZE + K.PC_KT] for i in range(3))
-        ct = sum(P[K.P_C0 + i * K.PC_SIZE + K.PC_CT] for i in range(3))
-        P[K.P_KLAT] = 1.5 * P[K.P_KN] + 0.5 * kt
-        P[K.P_CLAT] = 0.5 * ct
 
     # ------------------------------------------------------------------ time
     @property
@@ -1356,17 +627,19 @@ class Rig:
         """
         self._S[K.S_SUPPORTED] = 0.0
 
-    def perturb(self, what: Drop | Pour, at: float | None = None) -> None:
-        """Schedule a load change: a :class:`Drop` released, or a :class:`Pour` started, at ``at`` (s).
+    def perturb(self, what: Any, at: float | None = None) -> None:
+        """Schedule a load change at ``at`` (s): a :class:`Drop` released, a :class:`Pour` started, or any
+        registered load kind's object (:mod:`slipreflex.sim.loads` says how the rig applies each).
 
         Parameters
         ----------
-        what : Drop or Pour
+        what : Drop, Pour or a registered load kind's object
         at : float, optional
-            Rig time of the release / pump start (default: now). Not in the past.
+            Rig time of the release / start (default: now). Not in the past.
 
         Examples
         --------
+        >>> from slipreflex.sim import Pour
         >>> rig = Rig("TR"); _ = rig.grasp()
         >>> rig.perturb(Pour(rate_l_min=1.0, volume_ml=50), at=rig.t)
         >>> _ = rig.advance(4.0)
@@ -1376,30 +649,12 @@ class Rig:
         at = self.t if at is None else float(at)
         if not math.isfinite(at) or at < self.t - 1e-12:
             raise ParameterError(f"at must be >= the rig time {self.t:.4f} s, got {at!r}")
-        g = hw.GRAVITY
-        if isinstance(what, Drop):
-            zeta = -math.log(max(what.restitution, 1e-6)) / math.sqrt(math.pi**2 + math.log(max(what.restitution,
-                                                                                                  1e-6))**2)
-            row = K.DROP.new()
-            row[K.D_REL] = at
-            row[K.D_M] = what.mass_kg
-            row[K.D_H0] = self.bottle.height_m + what.height_m
-            row[K.D_KC] = what.contact_stiffness_n_m
-            row[K.D_CC] = 2.0 * zeta * math.sqrt(what.contact_stiffness_n_m * what.mass_kg)
-            self._D = np.vstack([self._D, K.DROP.check(row)])
-        elif isinstance(what, Pour):
-            rate_l_s = what.rate_l_min / 60.0
-            row = K.POUR.new()
-            row[K.W_START] = at
-            row[K.W_RATE_L_S] = rate_l_s
-            row[K.W_RATE_KG_S] = rate_l_s * 1e-3 * WATER_DENSITY
-            row[K.W_DUR] = what.duration_s
-            row[K.W_TOTAL_KG] = what.volume_ml * 1e-6 * WATER_DENSITY
-            row[K.W_DELAY] = math.sqrt(2.0 * what.fall_height_m / g)
-            row[K.W_JET_N] = row[K.W_RATE_KG_S] * math.sqrt(2.0 * g * what.fall_height_m)
-            self._W = np.vstack([self._W, K.POUR.check(row)])
+        kind = kind_of(what)
+        row = kind.layout.check(np.asarray(kind.row(what, at, self), dtype=float))
+        if kind.table == "drops":
+            self._D = np.vstack([self._D, row])
         else:
-            raise ParameterError(f"perturb: expected a Drop or a Pour, got {what!r}")
+            self._W = np.vstack([self._W, row])
         self.perturbations.append((at, what))
 
     # ------------------------------------------------------------------ truth
