@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from .interfaces import RunRecorder, TactileSample, optional
 from .loop_results import SampleRecord
 
 __all__ = ["tactile_message"]
@@ -52,7 +53,7 @@ class _Sink:
     def check(self) -> None:
         if self.ok and self.recorder.error is not None:
             self.ok = False
-            self.error = f"{getattr(self.recorder, 'path', 'recording')}: {self.recorder.error}"
+            self.error = f"{optional(self.recorder, RunRecorder, 'path')}: {self.recorder.error}"
             self.on_fail(self.error)
 
     def samples(self, records: list[SampleRecord], finger_names: list[str], last_flow: int | None) -> int | None:
@@ -60,8 +61,7 @@ class _Sink:
             return last_flow
         for r in records:
             s, arr = r.sample, r.arrival
-            frame = getattr(s, "frame", None)
-            if frame is not None:  # a tactile source's frame, flat
+            if isinstance(s, TactileSample):  # a tactile source's frame, flat
                 self.write("/tactile/frames", tactile_message(s, r.position), arr)
                 self._chain(r, finger_names)
                 continue

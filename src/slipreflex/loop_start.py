@@ -18,7 +18,7 @@ import numpy as np
 
 from .errors import ParameterError
 from .hardware import FINGER_MAX, FINGER_MIN, THUMB_ROTATOR_MAX, TRIPOD, Finger
-from .interfaces import Hand
+from .interfaces import Hand, Reflex, SampleSource, TactileSource, missing, optional
 from .validation import number
 
 __all__ = ["start_positions", "safe_start", "finger_offsets", "reflex_start"]
@@ -171,7 +171,7 @@ def finger_offsets(reflex: Any, fingers: Sequence[Finger] = TRIPOD) -> dict[Fing
     {}
     """
     out: dict[Finger, float] = {}
-    for k, v in (getattr(reflex, "finger_offsets", None) or {}).items():
+    for k, v in (optional(reflex, Reflex, "finger_offsets") or {}).items():
         f = Finger(k)
         if f not in fingers:
             continue
@@ -195,7 +195,7 @@ def reflex_start(reflex: Any) -> float | None:
     >>> reflex_start(object()) is None
     True
     """
-    for x in (getattr(reflex, "command", None), getattr(getattr(reflex, "params", None), "p0", None)):
+    for x in (optional(reflex, Reflex, "command"), optional(reflex, Reflex, "params.p0")):
         if isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x):
             return float(x)
     return None
@@ -206,18 +206,18 @@ class _FrameReader:
 
     def __init__(self, source: Any) -> None:
         self.tactile = source
-        self.port_name = getattr(source, "port_name", "the tactile source")
+        self.port_name = optional(source, TactileSource, "port_name")
 
     @property
     def last_arrival(self) -> float:
-        return getattr(self.tactile, "last_arrival", math.nan)
+        return optional(self.tactile, TactileSource, "last_arrival")
 
     def read(self, timeout: float) -> list[Any]:
         return self.tactile.read_frames(timeout)
 
     def drop_buffered(self) -> int:
         # a source that reads on its own thread (the Ability Hand's pump) queues frames during the set-up
-        drop: Any = getattr(self.tactile, "drop_buffered", None)
+        drop: Any = optional(self.tactile, TactileSource, "drop_buffered")
         return int(drop()) if drop is not None else 0
 
     def close(self) -> None:
@@ -226,14 +226,13 @@ class _FrameReader:
 
 def _source_for(source: Any, reflex: Any) -> Any:
     """The source the loop reads for this reflex's input (a one-line error if it has none)."""
-    kind = getattr(reflex, "input_kind", "slip")
-    name = getattr(reflex, "name", reflex)
+    kind, name = reflex.input_kind, reflex.name
     if kind == "tactile":
-        if not callable(getattr(source, "read_frames", None)):
+        if missing(source, TactileSource, ("read_frames",)):
             raise ParameterError(f"run_loop: reflex {name!r} reads tactile frames, but the source gives "
                                  f"none (a TactileSource, e.g. the Ability Hand's touch sites)")
         return _FrameReader(source)
-    if kind != "slip" or not callable(getattr(source, "read", None)):
+    if kind != "slip" or missing(source, SampleSource, ("read",)):
         raise ParameterError(f"run_loop: reflex {name!r} reads {kind!r}, but the source gives "
                              f"slip-sensor samples only")
     return source
@@ -247,10 +246,10 @@ def _warm_up(reflex: Any) -> None:
         twin = copy.deepcopy(reflex)
     except Exception:  # noqa: BLE001 - a reflex that cannot be copied is simply not warmed up
         return
-    shape = getattr(getattr(reflex, "params", None), "shape", (4, 4))
+    shape = optional(reflex, Reflex, "params.shape")
     try:
-        twin.step(0.0 if getattr(reflex, "input_kind", "slip") == "slip" else np.zeros(shape), None)
+        twin.step(0.0 if reflex.input_kind == "slip" else np.zeros(shape), None)
     except Exception as err:  # noqa: BLE001 - a method that cannot take one sample is refused, nothing sent
-        name = getattr(reflex, "name", type(reflex).__name__)
+        name = reflex.name
         raise ParameterError(f"run_loop: method {name!r} raised in step() on a warm-up sample "
                              f"({type(err).__name__}: {err}); nothing was sent to the hand") from None

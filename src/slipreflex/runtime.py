@@ -77,10 +77,11 @@ import numpy as np
 from .errors import DeviceError, ParameterError
 from .grip import FINGER_SPEED_UNITS_S, TRAVEL, Grip, span
 from .hardware import FINGER_MAX, SLIP_FINGER, TRIPOD, Finger
-from .interfaces import DaqSample, Hand, Reflex, SampleSource
+from .interfaces import DaqSample, Hand, Reflex, RunRecorder, SampleSource, missing, optional
 from .loop_results import Fault, RunResult, SampleRecord, print_fault
 from .loop_sink import _Sink, tactile_message
 from .loop_start import _source_for, _warm_up, finger_offsets, reflex_start, safe_start, start_positions
+from .loop_states import Age, Arrival, FirstFrame, HandPort, HoldRetry, LoopStates, Rise, StopRetry
 from .privileges import drop_capabilities, realtime_priority
 
 __all__ = ["Fault", "SampleRecord", "RunResult", "run_loop", "print_fault", "realtime_priority",
@@ -96,6 +97,9 @@ WATCHDOG_MAX_S: float = 0.5
 #: How fast (s per s) the estimate of a frame's arrival may follow the board's clock drifting
 #: behind the PC's; a crystal is within 1e-4, so a real stall is never absorbed quickly.
 _CLOCK_DRIFT = 1e-3
+#: What the loop reads of every reflex (run_loop refuses one without them, before anything is sent).
+_LOOP_READS_OF_REFLEX = ("name", "input_kind", "step", "last_event", "last_filtered", "last_threshold",
+                         "last_count")
 #: A valid frame should arrive within this many seconds of the start (else a warning).
 _FIRST_FRAME_S = 1.0
 #: Shortest interval (s) between two fault events of the same DAQ counter.
@@ -195,6 +199,9 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
     >>> [f.kind for f in r.faults], h.held >= 2      # the safe start's STOP, then the watchdog's
     (['watchdog'], True)
     """
+    lacks = missing(reflex, Reflex, _LOOP_READS_OF_REFLEX)
+    if lacks:
+        raise ParameterError(f"run_loop: the reflex has no {', '.join(lacks)} (slipreflex.interfaces.Reflex)")
     source = _source_for(source, reflex)
     if not WATCHDOG_MIN_S <= watchdog <= WATCHDOG_MAX_S:
         raise ParameterError(f"run_loop: watchdog must be in {WATCHDOG_MIN_S:g}..{WATCHDOG_MAX_S:g} s, "
@@ -203,9 +210,9 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
         raise ParameterError(f"run_loop: poll must be in (0, watchdog / 2], got {poll!r}")
     if duration is not None and not (math.isfinite(duration) and duration > 0):
         raise ParameterError(f"run_loop: duration must be > 0 s, got {duration!r}")
-    missing = [m for m in ("close_fingers", "hold", "positions") if not callable(getattr(hand, m, None))]
-    if missing:
-        raise ParameterError(f"run_loop: the hand has no {', '.join(missing)}: a reflex adds grip only by "
+    lacks = missing(hand, Hand, ("close_fingers", "hold", "positions"))
+    if lacks:
+        raise ParameterError(f"run_loop: the hand has no {', '.join(lacks)}: a reflex adds grip only by "
                              f"closing and holding (slipreflex.interfaces.Hand)")
     fingers = tuple(Finger(f) for f in fingers)
     ref0 = reflex_start(reflex)
@@ -219,7 +226,7 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
         start, start_error = safe_start(hand, given, fingers), None
     except DeviceError as err:  # the STOP did not go out: the fingers stay as the grasp left them
         start, start_error = given, err
-    drop_buffered = getattr(source, "drop_buffered", None)   # optional in the SampleSource protocol
+    drop_buffered = optional(source, SampleSource, "drop_buffered")
     dropped = drop_buffered() if drop_buffered is not None else 0
     loop = _Loop(source, hand, reflex, start=start,
                  ref0=float(ref0) if ref_ok else start.get(SLIP_FINGER, next(iter(start.values()))),
@@ -230,7 +237,7 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
         loop.fault("hold-failed", f"safe start: {start_error}", "fingers stay where the grasp left them; "
                    "the watchdog holds again if samples stop")
     loop.res.dropped_at_start = dropped
-    guard_on = getattr(hand, "reflex_running", None)
+    guard_on = optional(hand, Hand, "reflex_running")
     if callable(guard_on):
         guard_on(True)
     try:
@@ -248,7 +255,7 @@ class _Loop:
                  stop: threading.Event | None, on_fault: Callable[[Fault], None] | None,
                  stats_interval: float, clock: Callable[[], float], taps: Sequence[Any] = ()) -> None:
         self.source, self.hand, self.reflex = source, hand, reflex
-        self.slip = getattr(reflex, "input_kind", "slip") == "slip"  # else a tactile frame per step
+        self.slip = reflex.input_kind == "slip"  # else a tactile frame per step
         self.fingers = tuple(start)
         self.finger_names = [f.name.lower() for f in self.fingers]
         self.start = start
@@ -262,7 +269,7 @@ class _Loop:
         self.until: list[float | None] = [None] * len(self.grip.groups)  # clock time each closing ends
         self.begun: list[float | None] = [None] * len(self.grip.groups)  # clock time each closing began
         self.unstopped: set[int] = set()  # groups whose ending STOP never reached the hand
-        hi = getattr(getattr(reflex, "params", None), "hi", FINGER_MAX)
+        hi = optional(reflex, Reflex, "params.hi")
         self.ceiling = float(hi) if isinstance(hi, (int, float)) and math.isfinite(hi) else float(FINGER_MAX)
         self.top = min(self.ceiling, self.grip.ceiling)  # the command is clipped here before it is grip
         self.failed: str | None = None  # the reflex raised: the run ends, fingers held
@@ -284,10 +291,7 @@ class _Loop:
         self.anchor_resets = 0  # the source's reset counter at the last re-anchoring
         self.last_valid = self.t0
         self.last_hold = self.last_retry = -math.inf
-        self.no_data = self.stale = self.risen = self.hold_failed = self.warned = False
-        self.hand_ok = True
-        self.held_back = False  # grip came while stale: send it when fresh
-        self.stop_failed = False
+        self.states = LoopStates()  # the link and watchdog states (slipreflex.loop_states)
         self.processed = 0
         self.last_flow: int | None = None
         self.counters: dict[str, int] = {}
@@ -295,7 +299,7 @@ class _Loop:
         self.counter_emitted: dict[str, float] = {}
         self.next_stats = self.t0 + stats_interval
         self.next_counters = self.t0
-        if recorder is not None and hasattr(recorder, "add_metadata"):
+        if recorder is not None:
             recorder.add_metadata("start", {"p0": json.dumps(self.res.start), "reflex_start": repr(ref0),
                                             "initial_command": self.res.initial_command,
                                             "finger_offsets": json.dumps({f.name.lower(): v for f, v
@@ -356,7 +360,7 @@ class _Loop:
             return [], math.nan
         if not samples:
             return samples, math.nan
-        arrival = getattr(self.source, "last_arrival", math.nan)
+        arrival = optional(self.source, SampleSource, "last_arrival")
         if not (isinstance(arrival, float) and math.isfinite(arrival)):
             arrival = self.clock()
         self.anchor(samples[-1].t, arrival)
@@ -377,8 +381,7 @@ class _Loop:
         """Whether the source counted a board reset since the last re-anchoring. A source
         without counters cannot tell a reset from a backlog, so any old frame counts as one;
         with counters, a backlog read in pieces keeps its age (it is stale, not a reset)."""
-        st = getattr(self.source, "stats", None)
-        if st is None:
+        if optional(self.source, SampleSource, "stats") is None:
             return True
         resets = int(self.source_stats().get("resets", 0))
         restarted, self.anchor_resets = resets > self.anchor_resets, resets
@@ -403,8 +406,8 @@ class _Loop:
             r = SampleRecord(s, arrival, self.clock() - (s.t + (self.offset or 0.0)), pos, cmd,
                              filtered=reflex.last_filtered, threshold=reflex.last_threshold,
                              event=bool(reflex.last_event), count=reflex.last_count,
-                             board=getattr(reflex, "last_board", None))
-            mismatch = getattr(reflex, "last_mismatch", None)
+                             board=optional(reflex, Reflex, "last_board"))
+            mismatch = optional(reflex, Reflex, "last_mismatch")
             if mismatch:
                 self.fault("board-mismatch", mismatch, "recorded; the twin's command is the one used")
             self.freshness(r)
@@ -417,7 +420,7 @@ class _Loop:
     def reflex_failed(self, s: Any, err: Exception) -> None:
         """The method raised in ``step()``: hold the fingers, record it, end the run (its state is
         unknown, so no later command of it is trusted)."""
-        name = getattr(self.reflex, "name", type(self.reflex).__name__)
+        name = self.reflex.name
         self.failed = f"method {name!r} raised in step() at sample seq {s.seq}: {type(err).__name__}: {err}"
         self.hold()
         self.fault("reflex-error", self.failed, "fingers held; the run ends (nothing more is sent)")
@@ -425,17 +428,16 @@ class _Loop:
     def freshness(self, r: SampleRecord) -> None:
         if r.age > self.watchdog_s:
             self.res.stale_samples += 1
-            if not self.stale:
-                self.stale = True
+            if not self.states.stale:
+                self.states.take(Age, "a sample older than the watchdog")
                 self.hold()
                 self.fault("stale", f"sample seq {r.sample.seq} was {r.age * 1e3:.0f} ms old when "
                            f"processed: the loop was frozen or fell behind", "fingers held; commands "
                            "wait for fresh samples")
-        elif self.stale:
-            self.stale = False
+        elif self.states.stale:
+            owed = self.states.take(Age, "a fresh sample").source is Age.STALE_OWED
             self.fault("stale-clear", f"samples fresh again ({r.age * 1e3:.1f} ms old)", "reflex resumed")
-            if self.held_back:
-                self.held_back = False
+            if owed:  # grip came while stale: send it now
                 self.deliver(r, resend=True)
 
     def command(self, r: SampleRecord, cmd: float) -> None:
@@ -452,13 +454,16 @@ class _Loop:
             self.fault("mpi-saturated", f"the reflex's command reached its ceiling {self.top:g} at "
                        f"t={r.sample.t:.3f} s", "it adds no grip after that; later slips cannot be answered")
         if not any(g > 0.0 for g in rises):
-            r.note = "no rise" if self.risen else "at start"  # nothing to add: the fingers stay held
+            r.note = "at start" if self.states[Rise] is Rise.AT_START else "no rise"  # the fingers stay held
             return
-        self.risen = True
+        if self.states[Rise] is Rise.AT_START:
+            self.states.take(Rise, "the command first rises")
         for i, g in enumerate(rises):
             self.owed[i] += g
-        if self.stale:
-            r.note, self.held_back = "stale", True
+        if self.states.stale:
+            r.note = "stale"
+            if self.states[Age] is Age.STALE:
+                self.states.take(Age, "grip comes while stale")
             return
         self.deliver(r)
 
@@ -486,10 +491,10 @@ class _Loop:
                 except DeviceError as err:
                     if r is not None:
                         r.note = "hand-port"
-                    if self.hand_ok:
+                    if self.states.hand_up:
+                        self.states.take(HandPort, "a CLOSE fails on the port")
                         self.fault("hand-port", str(err), "fingers keep what they hold; the grip is sent "
                                    "when the port is back")
-                    self.hand_ok = False
                     return
                 self.res.closes += 1
             self.until[i] = end
@@ -502,8 +507,8 @@ class _Loop:
             sent = True
         if not sent:
             return
-        if not self.hand_ok:
-            self.hand_ok = True
+        if not self.states.hand_up:
+            self.states.take(HandPort, "a CLOSE goes out")
             self.fault("hand-port-restored", "hand port is back", "commands resumed")
         if resend or r is None:
             return
@@ -525,13 +530,14 @@ class _Loop:
                     self.hand.hold(fingers)
             except (DeviceError, ParameterError) as err:
                 self.unstopped.add(i)
-                if not self.stop_failed:
-                    self.stop_failed = True
+                if self.states[StopRetry] is StopRetry.SENT:
+                    self.states.take(StopRetry, "the STOP ending a closing fails")
                     names = ", ".join(f.name.lower() for f in fingers)
                     self.fault("stop-failed", f"{err}: the closing of {names} did not end; they may close "
                                f"to their end stops", "the STOP that ends a closing is retried")
                 continue
-            self.stop_failed = False
+            if self.states[StopRetry] is StopRetry.FAILING:
+                self.states.take(StopRetry, "a STOP ending a closing goes out")
             self.unstopped.discard(i)
             self.until[i] = None
             self.res.stops += 1
@@ -558,26 +564,27 @@ class _Loop:
     def watchdog(self, got: bool) -> None:
         now = self.clock()
         if got:
-            if self.no_data:
-                self.no_data = False
+            if self.states.silent:
+                self.states.take(Arrival, "samples again")
                 self.fault("watchdog-clear", f"samples resumed after {now - self.last_valid:.3f} s",
                            "reflex resumed")
-                if any(g > 0.0 for g in self.owed) and not self.stale:
+                if any(g > 0.0 for g in self.owed) and not self.states.stale:
                     self.deliver(None)  # the rest of a closing the hold cut short
             self.last_valid = now
-        elif not self.no_data and now - self.last_valid > self.watchdog_s:
-            self.no_data = True
+        elif not self.states.silent and now - self.last_valid > self.watchdog_s:
+            self.states.take(Arrival, "no valid sample for the watchdog time")
             self.hold()
             self.fault("watchdog", f"no valid DAQ sample for {(now - self.last_valid) * 1e3:.0f} ms",
                        "fingers held where they are; the hold is re-sent while it lasts")
-        if (self.no_data or self.stale) and now - self.last_hold >= self.watchdog_s:
+        held = self.states.silent or self.states.stale
+        if held and now - self.last_hold >= self.watchdog_s:
             self.hold()  # the i-Limb protocol has no acknowledgement: say it again
-        elif (not self.hand_ok and not (self.no_data or self.stale) and any(g > 0.0 for g in self.owed)
+        elif (not self.states.hand_up and not held and any(g > 0.0 for g in self.owed)
               and now - self.last_retry >= self.watchdog_s):
             self.last_retry = now
             self.deliver(None)  # grip owed since the hand port failed: try again
-        if not self.warned and self.processed == 0 and now - self.t0 >= _FIRST_FRAME_S:
-            self.warned = True
+        if self.states[FirstFrame] is FirstFrame.WAITING and self.processed == 0 and now - self.t0 >= _FIRST_FRAME_S:
+            self.states.take(FirstFrame, "no valid frame within a second of the start")
             self.fault("no-data", self.no_data_message(), "fingers held; still waiting")
         while self.guard_faults:
             self.emit(self.guard_faults.popleft())
@@ -586,7 +593,7 @@ class _Loop:
     def no_data_message(self) -> str:
         st = self.source_stats()
         got = st.get("garbage_bytes", 0) + st.get("crc_errors", 0)
-        port = getattr(self.source, "port_name", "the DAQ port")
+        port = optional(self.source, SampleSource, "port_name")
         if got:
             return (f"no valid DAQ frame within {_FIRST_FRAME_S:g} s of start, but {port} delivers bytes "
                     f"({st.get('garbage_bytes', 0)} garbage, {st.get('crc_errors', 0)} CRC errors): "
@@ -600,11 +607,12 @@ class _Loop:
             with self.lock:
                 self.hand.hold(self.fingers)
         except (DeviceError, ParameterError) as err:
-            if not self.hold_failed:
-                self.hold_failed = True
+            if self.states[HoldRetry] is HoldRetry.SENT:
+                self.states.take(HoldRetry, "a hold fails")
                 self.fault("hold-failed", str(err), "hand keeps its last command; the hold is retried")
             return
-        self.hold_failed = False
+        if self.states[HoldRetry] is HoldRetry.FAILING:
+            self.states.take(HoldRetry, "a hold goes out")
         self.res.holds_sent += 1
         for i, until in enumerate(self.until):  # a closing cut short: its rest is owed
             if until is not None:
@@ -616,10 +624,8 @@ class _Loop:
                 self.until[i] = None
 
     def source_stats(self) -> dict[str, int]:
-        st = getattr(self.source, "stats", None)
-        if st is None:
-            return {}
-        return dict(st.to_dict()) if hasattr(st, "to_dict") else dict(vars(st))
+        st = optional(self.source, SampleSource, "stats")
+        return {} if st is None else dict(st.to_dict())
 
     def housekeeping(self, now: float) -> None:
         if now >= self.next_counters:
@@ -636,7 +642,7 @@ class _Loop:
     def stall_check(self, now: float) -> None:
         """Fingers the hand newly reports stalled (optional ``Hand.stalled()``): a fault each, and
         the rest of a closing in progress is not counted as grip."""
-        report: Callable[[], Any] | None = getattr(self.hand, "stalled", None)
+        report: Callable[[], Any] | None = optional(self.hand, Hand, "stalled")
         if not callable(report):
             return
         try:
@@ -709,7 +715,7 @@ class _Loop:
             self.sink.recorder.add_metadata("run_summary", res.summary_metadata())
         rec = self.sink.recorder
         if rec is not None and rec.error is not None and res.recording_error is None:
-            res.recording_error = f"{getattr(rec, 'path', 'recording')}: {rec.error}"
+            res.recording_error = f"{optional(rec, RunRecorder, 'path')}: {rec.error}"
         return res
 
 
@@ -736,7 +742,7 @@ class _Guard(threading.Thread):
             self.holding = True
             ok = loop.lock.acquire(timeout=loop.watchdog_s)
             try:
-                if ok and hasattr(loop.hand, "hold"):
+                if ok:
                     loop.hand.hold(loop.fingers)
                     action = "fingers held by the guard"
                 else:
