@@ -36,14 +36,26 @@ __all__ = ["Arrival", "Age", "HandPort", "HoldRetry", "StopRetry", "Rise", "Firs
 
 
 class Arrival(Enum):
-    """Whether valid DAQ samples arrive (the no-data watchdog)."""
+    """Whether valid DAQ samples arrive (the no-data watchdog).
+
+    Examples
+    --------
+    >>> Arrival.SILENT.value
+    'silent'
+    """
 
     RECEIVING = "receiving"
     SILENT = "silent"
 
 
 class Age(Enum):
-    """Whether the samples the reflex processes are fresh (the staleness check)."""
+    """Whether the samples the reflex processes are fresh (the staleness check).
+
+    Examples
+    --------
+    >>> Age.STALE_OWED.value
+    'stale, grip owed'
+    """
 
     FRESH = "fresh"
     STALE = "stale"
@@ -51,35 +63,65 @@ class Age(Enum):
 
 
 class HandPort(Enum):
-    """Whether the hand's port takes a CLOSE."""
+    """Whether the hand's port takes a CLOSE.
+
+    Examples
+    --------
+    >>> HandPort.DOWN.value
+    'down'
+    """
 
     UP = "up"
     DOWN = "down"
 
 
 class HoldRetry(Enum):
-    """Whether the last hold (the watchdog's, the staleness check's) reached the hand."""
+    """Whether the last hold (the watchdog's, the staleness check's) reached the hand.
+
+    Examples
+    --------
+    >>> HoldRetry.FAILING.value
+    'failing'
+    """
 
     SENT = "sent"
     FAILING = "failing"
 
 
 class StopRetry(Enum):
-    """Whether the last STOP that ends a closing reached the hand."""
+    """Whether the last STOP that ends a closing reached the hand.
+
+    Examples
+    --------
+    >>> StopRetry.FAILING.value
+    'failing'
+    """
 
     SENT = "sent"
     FAILING = "failing"
 
 
 class Rise(Enum):
-    """Whether the reflex's command has risen above its start (a command note only)."""
+    """Whether the reflex's command has risen above its start (a command note only).
+
+    Examples
+    --------
+    >>> Rise.RISEN.value
+    'risen'
+    """
 
     AT_START = "at start"
     RISEN = "risen"
 
 
 class FirstFrame(Enum):
-    """Whether the missing first frame has been warned about."""
+    """Whether the missing first frame has been warned about.
+
+    Examples
+    --------
+    >>> FirstFrame.WARNED.value
+    'warned'
+    """
 
     WAITING = "waiting"
     WARNED = "warned"
