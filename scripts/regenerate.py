@@ -96,6 +96,8 @@ STEPS: list[tuple[str, tuple[str, ...], list[str]]] = [
     ("speed table", ("speed table",), [sys.executable, str(SCRIPTS / "speed_table.py"), "--write",
                                        "--reproduce-timing", "{out}/timing.json",
                                        "--study-timing", "{out}-study/timing.json"]),
+    ("contracts and loop states tables", ("contracts table", "loop states table"),
+     [sys.executable, str(SCRIPTS / "contract_tables.py"), "--write"]),
     ("test tiers", ("test tiers",), [sys.executable, str(SCRIPTS / "tier_times.py"), "--write"]),
 ]
 

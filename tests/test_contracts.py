@@ -141,7 +141,7 @@ def test_a_reflex_without_a_member_the_loop_reads_is_refused_before_anything_is_
 
 def test_docs_runtime_lists_the_contracts_the_loop_uses():
     text = (Path(__file__).resolve().parents[1] / "docs" / "runtime.md").read_text(encoding="utf-8")
-    begin, end = "<!-- CONTRACTS begins -->\n", "\n<!-- CONTRACTS ends -->"
+    begin, end = "<!-- contracts table begins -->\n", "\n<!-- contracts table ends -->"
     assert begin in text and end in text
     assert text.split(begin, 1)[1].split(end, 1)[0].strip() == contract_markdown()
 

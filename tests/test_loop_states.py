@@ -166,6 +166,6 @@ def test_a_transition_the_table_does_not_list_is_refused():
 
 def test_docs_runtime_shows_the_table_the_loop_runs():
     text = (Path(__file__).resolve().parents[1] / "docs" / "runtime.md").read_text(encoding="utf-8")
-    begin, end = "<!-- LOOP_STATES begins -->\n", "\n<!-- LOOP_STATES ends -->"
+    begin, end = "<!-- loop states table begins -->\n", "\n<!-- loop states table ends -->"
     assert begin in text and end in text
     assert text.split(begin, 1)[1].split(end, 1)[0].strip() == states_markdown()
