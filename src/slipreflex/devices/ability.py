@@ -2,7 +2,9 @@
 
 Written from the hand's published interface control document (the Ability Hand ICD,
 sections 3.3-3.5: extended API frames, position data, touch sensor data, checksums,
-PPP byte stuffing); nothing here depends on PSYONIC's own Python wrapper.
+PPP byte stuffing); nothing here depends on PSYONIC's own Python wrapper. The frames are
+encoded and decoded in :mod:`slipreflex.devices.ability_wire`; every name of it is importable
+from here too.
 
 Frames
     Every frame is byte-stuffed (ICD 3.5.5): it starts and ends with 0x7E, and a 0x7E or
