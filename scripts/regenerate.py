@@ -103,6 +103,8 @@ STEPS: list[Step] = [
     Step("benchmark tables", ("benchmark table", "operating points", "ranking", "benchmark summary", "vs-sim table",
                               "chain rule", "k sensitivity", "why"),
          [sys.executable, str(SCRIPTS / "benchmark_table.py"), "--write"]),
+    Step("contracts and loop states tables", ("contracts table", "loop states table"),
+         [sys.executable, str(SCRIPTS / "contract_tables.py"), "--write"]),
     Step("limits table", ("limits table",), [sys.executable, str(SCRIPTS / "limits_table.py"), "--write"]),
     Step("claims over five master seeds", ("claims seeds table",),
          [sys.executable, str(SCRIPTS / "claims_seeds.py"), "--jobs", "{jobs}", "--write"]),

@@ -258,7 +258,7 @@ def test_the_loop_gives_up_the_capability_it_was_given_for_the_scheduler():
 
     code = textwrap.dedent("""
         import os
-        from slipreflex import runtime
+        from slipreflex import privileges, runtime
         print(runtime.drop_capabilities())          # as root: says so, keeps its rights
         try:
             os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(5))
@@ -267,7 +267,7 @@ def test_the_loop_gives_up_the_capability_it_was_given_for_the_scheduler():
         policy = os.sched_getscheduler(0)
         os.geteuid = lambda: 1000                   # the path of a user with CAP_SYS_NICE
         print(runtime.drop_capabilities())
-        print(runtime._capabilities(), os.sched_getscheduler(0) == policy)
+        print(privileges._capabilities(), os.sched_getscheduler(0) == policy)
     """)
     if not sys.platform.startswith("linux") or os.geteuid() != 0:
         pytest.skip("needs Linux and root to hand a process capabilities")

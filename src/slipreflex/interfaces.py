@@ -16,16 +16,18 @@ Examples
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal, Protocol, runtime_checkable
 
 import numpy as np
 
-from .hardware import Finger
+from .hardware import FINGER_MAX, TACTILE_SHAPE, Finger
 
 __all__ = ["DaqSample", "SampleSource", "TactileSample", "TactileSource", "Hand", "Reflex", "CompiledReflex",
-           "InputKind", "GraspResult", "Rig"]
+           "InputKind", "GraspResult", "Rig", "RunRecorder", "Member", "CONTRACTS", "optional", "missing",
+           "contract_markdown"]
 
 #: What a reflex reads: the slip sensor (one float per sample) or the 4 x 4
 #: tactile array (one ``(4, 4)`` float array of newtons per sample).
@@ -70,7 +72,8 @@ class SampleSource(Protocol):
 
     ``read(timeout)`` returns the samples that arrived since the last call
     (possibly none after ``timeout`` seconds); it never blocks longer than
-    ``timeout``.
+    ``timeout``. Optional members (``last_arrival``, ``stats``, ``drop_buffered()``,
+    ``port_name``) are declared with their defaults in :data:`CONTRACTS`.
 
     Examples
     --------
@@ -156,10 +159,10 @@ class Hand(Protocol):
     (:mod:`slipreflex.grip`); where ``positions`` reports a finger, the loops
     use it as the reflex's measured position and its start.
 
-    Two optional methods the real-time loop uses where a hand has them:
-    ``reflex_running(bool)`` (the driver's guard: no position frame while a reflex
-    runs) and ``stalled()`` (the fingers the hand reports stalled: a fault, and grip
-    sent to them is not counted as added).
+    Optional members (:data:`CONTRACTS` declares them with their defaults; the loop
+    reads them through :func:`optional`): ``reflex_running(bool)`` (the driver's guard:
+    no position frame while a reflex runs), ``stalled()`` (the fingers the hand reports
+    stalled: a fault, and grip sent to them is not counted as added) and ``close()``.
 
     Examples
     --------
@@ -367,3 +370,220 @@ class Rig(Protocol):
     def grasp(self, force: float = ...) -> GraspResult: ...
 
     def perturb(self, what: Any, at: float | None = None) -> None: ...
+
+
+@runtime_checkable
+class RunRecorder(Protocol):
+    """What the real-time loop writes its recording through (:class:`slipreflex.recording.Recorder`).
+
+    ``write(topic, message, ns)`` records one message and returns False once the
+    recording has failed (``error`` then says why, and the loop goes on unrecorded);
+    ``maybe_flush()`` flushes at most every so often; ``add_metadata(name, fields)``
+    adds a metadata record (the start, the run's summary).
+
+    Examples
+    --------
+    >>> class Nowhere:
+    ...     error = None
+    ...     def write(self, topic, message, ns): return True
+    ...     def maybe_flush(self): pass
+    ...     def add_metadata(self, name, fields): pass
+    >>> isinstance(Nowhere(), RunRecorder)
+    True
+    """
+
+    error: Any
+
+    def write(self, topic: str, message: dict[str, Any], ns: int) -> bool: ...
+
+    def maybe_flush(self) -> None: ...
+
+    def add_metadata(self, name: str, fields: dict[str, str]) -> None: ...
+
+
+@dataclass(frozen=True)
+class Member:
+    """One member of a protocol as its users read it: required, or optional with its default.
+
+    Parameters
+    ----------
+    name : str
+        The attribute; a dotted name (``params.p0``) is a field of an optional attribute.
+    required : bool
+        Every implementation has it (the loop refuses, before anything is sent, an object
+        without the required members it uses).
+    default : object
+        What an optional member is taken to be where an implementation has none.
+    kind : {"method", "value"}
+        Called, or read.
+    doc : str
+        What it is and what the loop does with it.
+
+    Examples
+    --------
+    >>> [m.name for m in CONTRACTS[Hand] if not m.required]
+    ['reflex_running', 'stalled', 'close']
+    """
+
+    name: str
+    required: bool
+    default: Any = None
+    kind: Literal["method", "value"] = "method"
+    doc: str = ""
+
+
+def _required(name: str, doc: str, kind: Literal["method", "value"] = "method") -> Member:
+    return Member(name, True, None, kind, doc)
+
+
+#: Every member the real-time loop, the conformance checkers and the registries use of each
+#: protocol: the required ones, and the optional ones with the default an implementation
+#: without them gets (:func:`optional` reads those; nothing else probes).
+CONTRACTS: dict[type, tuple[Member, ...]] = {
+    SampleSource: (
+        _required("read", "`read(timeout)`: the samples that arrived since the last call; never blocks longer"),
+        _required("close", "`close()`: releases the port"),
+        Member("last_arrival", False, math.nan, "value",
+               "clock time (`perf_counter`) at which the last read's bytes arrived; without it the loop "
+               "takes its own clock when `read` returns"),
+        Member("stats", False, None, "value",
+               "the source's counters, an object with `to_dict()` (`crc_errors`, `frames_lost`, "
+               "`resets`, ...): recorded on `/stats`, returned as `RunResult.daq_stats`, increases become "
+               "fault events, a counted reset re-anchors the board clock"),
+        Member("drop_buffered", False, None, "method",
+               "`drop_buffered() -> int`: drops the frames buffered during the set-up, called once just "
+               "before the clock starts; without it nothing is dropped"),
+        Member("port_name", False, "the DAQ port", "value", "how messages name the port"),
+    ),
+    TactileSource: (
+        _required("read_frames", "`read_frames(timeout)`: the frames that arrived since the last call"),
+        _required("close", "`close()`: releases the port"),
+        _required("shape", "the shape of every frame", "value"),
+        _required("fs", "the rate (Hz) at which frames come", "value"),
+        Member("last_arrival", False, math.nan, "value", "as a sample source's"),
+        Member("drop_buffered", False, None, "method",
+               "as a sample source's (a source that reads on its own thread queues frames during the set-up)"),
+        Member("port_name", False, "the tactile source", "value", "how messages name the port"),
+    ),
+    Hand: (
+        _required("set_positions", "`set_positions(targets)`: grasp routines only, never while a reflex runs"),
+        _required("close_fingers", "`close_fingers(fingers, speed)`: CLOSE, until `hold`"),
+        _required("hold", "`hold(fingers)`: STOP where they are; never opens"),
+        _required("positions", "`positions()`: measured positions; `{}` for a hand that reports none"),
+        Member("reflex_running", False, None, "method",
+               "`reflex_running(bool)`: the driver's own guard, switched on for the run and off after it "
+               "(the i-Limb then refuses anything that could open a finger); without it the loop's rule "
+               "(CLOSE and STOP only) is the only guard"),
+        Member("stalled", False, None, "method",
+               "`stalled()`: the fingers the hand reports stalled; each is a `finger-stalled` fault and grip "
+               "sent to it is not counted; without it no finger is ever stalled"),
+        Member("close", False, None, "method",
+               "`close()`: releases the port; a registered hand's driver (`HandSpec.open`) has it"),
+    ),
+    Reflex: (
+        *(_required(n, f"see `Reflex.{n}`", "value") for n in
+          ("name", "input_kind", "fs", "last_event", "last_filtered", "last_threshold", "last_count")),
+        _required("step", "`step(sample, position=None)`: the new command or None"),
+        _required("reset", "`reset()`: the initial state, bit for bit"),
+        Member("command", False, None, "value",
+               "the command before the first step: where the rises the loop sends as grip are counted from"),
+        Member("params.p0", False, None, "value", "the start command where there is no `command`"),
+        Member("params.hi", False, float(FINGER_MAX), "value",
+               "the command's ceiling: from there on it adds no grip (`mpi-saturated`)"),
+        Member("params.shape", False, TACTILE_SHAPE, "value", "a tactile reflex's frame shape"),
+        Member("finger_offsets", False, None, "value",
+               "`{finger: units}` added to the command for that finger (preset `authors-gui`: middle + 20)"),
+        Member("last_board", False, None, "value",
+               "a board twin's own output for the last sample (recorded on `/board/state`)"),
+        Member("last_mismatch", False, None, "value",
+               "why the board and its twin disagreed on the last sample (a `board-mismatch` fault)"),
+        Member("compiled", False, None, "method",
+               "`compiled() -> (step, S, P)` (`CompiledReflex`): the compiled closed loop runs it"),
+    ),
+    RunRecorder: (
+        _required("write", "`write(topic, message, ns) -> bool`"),
+        _required("error", "why the recording failed, or None", "value"),
+        _required("maybe_flush", "`maybe_flush()`"),
+        _required("add_metadata", "`add_metadata(name, fields)`: the start and the run's summary"),
+        Member("path", False, "recording", "value", "how messages name the recording"),
+    ),
+}
+
+_OPTIONAL: dict[type, dict[str, Member]] = {
+    protocol: {m.name: m for m in members if not m.required} for protocol, members in CONTRACTS.items()}
+_ABSENT = object()
+
+
+def optional(obj: Any, protocol: type, name: str) -> Any:
+    """An optional member of ``obj`` as ``protocol`` declares it: its value, or the declared default.
+
+    The one way the loop reads what an implementation may lack; a name the protocol does not
+    declare optional is a programming error (:class:`KeyError`), never a silent default.
+
+    Examples
+    --------
+    >>> class Still:
+    ...     def read(self, timeout): return []
+    ...     def close(self): pass
+    >>> optional(Still(), SampleSource, "port_name")
+    'the DAQ port'
+    >>> optional(Still(), SampleSource, "colour")
+    Traceback (most recent call last):
+    ...
+    KeyError: "SampleSource declares no optional member 'colour'"
+    """
+    member = _OPTIONAL[protocol].get(name)
+    if member is None:
+        raise KeyError(f"{protocol.__name__} declares no optional member {name!r}")
+    if "." not in name:
+        return getattr(obj, name, member.default)
+    value = obj
+    for part in name.split("."):
+        value = getattr(value, part, _ABSENT)
+        if value is _ABSENT:
+            return member.default
+    return value
+
+
+def missing(obj: Any, protocol: type, names: Iterable[str] | None = None) -> list[str]:
+    """The required members of ``protocol`` (or of ``names`` among them) that ``obj`` lacks.
+
+    A method counts as present when it is callable.
+
+    Examples
+    --------
+    >>> class Mute:
+    ...     def hold(self, fingers): pass
+    >>> missing(Mute(), Hand, ("close_fingers", "hold", "positions"))
+    ['close_fingers', 'positions']
+    """
+    members = [m for m in CONTRACTS[protocol] if m.required]
+    if names is not None:
+        wanted = tuple(names)
+        unknown = set(wanted) - {m.name for m in members}
+        if unknown:
+            raise KeyError(f"{protocol.__name__} requires no {', '.join(sorted(unknown))}")
+        members = [m for m in members if m.name in wanted]
+    out = []
+    for m in members:
+        value = getattr(obj, m.name, _ABSENT)
+        if value is _ABSENT or (m.kind == "method" and not callable(value)):
+            out.append(m.name)
+    return out
+
+
+def contract_markdown() -> str:
+    """The contracts as the table docs/runtime.md shows (a test keeps the two the same).
+
+    Examples
+    --------
+    >>> contract_markdown().splitlines()[0]
+    '| protocol | member | required | default | what |'
+    """
+    rows = ["| protocol | member | required | default | what |", "| --- | --- | --- | --- | --- |"]
+    for protocol, members in CONTRACTS.items():
+        for m in members:
+            default = "" if m.required else f"`{m.default!r}`"
+            rows.append(f"| `{protocol.__name__}` | `{m.name}` | {'yes' if m.required else 'no'} | {default} "
+                        f"| {m.doc} |")
+    return "\n".join(rows)

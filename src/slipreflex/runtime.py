@@ -64,26 +64,25 @@ Examples
 from __future__ import annotations
 
 import collections
-import copy
-import ctypes
 import gc
 import json
 import math
-import os
-import sys
 import threading
 import time
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from .errors import DeviceError, ParameterError
 from .grip import FINGER_SPEED_UNITS_S, TRAVEL, Grip, span
-from .hardware import FINGER_MAX, FINGER_MIN, SLIP_FINGER, THUMB_ROTATOR_MAX, TRIPOD, Finger
-from .interfaces import DaqSample, Hand, Reflex, SampleSource
-from .validation import number
+from .hardware import FINGER_MAX, SLIP_FINGER, TRIPOD, Finger
+from .interfaces import DaqSample, Hand, Reflex, RunRecorder, SampleSource, missing, optional
+from .loop_results import Fault, RunResult, SampleRecord, print_fault
+from .loop_sink import _Sink, tactile_message
+from .loop_start import _source_for, _warm_up, finger_offsets, reflex_start, safe_start, start_positions
+from .loop_states import Age, Arrival, FirstFrame, HandPort, HoldRetry, LoopStates, Rise, StopRetry
+from .privileges import drop_capabilities, realtime_priority
 
 __all__ = ["Fault", "SampleRecord", "RunResult", "run_loop", "print_fault", "realtime_priority",
            "tactile_message", "drop_capabilities",
@@ -98,6 +97,9 @@ WATCHDOG_MAX_S: float = 0.5
 #: How fast (s per s) the estimate of a frame's arrival may follow the board's clock drifting
 #: behind the PC's; a crystal is within 1e-4, so a real stall is never absorbed quickly.
 _CLOCK_DRIFT = 1e-3
+#: What the loop reads of every reflex (run_loop refuses one without them, before anything is sent).
+_LOOP_READS_OF_REFLEX = ("name", "input_kind", "step", "last_event", "last_filtered", "last_threshold",
+                         "last_count")
 #: A valid frame should arrive within this many seconds of the start (else a warning).
 _FIRST_FRAME_S = 1.0
 #: Shortest interval (s) between two fault events of the same DAQ counter.
@@ -115,479 +117,6 @@ _COUNTER_FAULTS: dict[str, tuple[str, str]] = {
     "reconnects": ("daq-port-restored", "DAQ port reopened"),
     "frames_discarded": ("daq-discarded", "frames discarded while the port reopened"),
 }
-
-
-@dataclass(frozen=True, slots=True)
-class Fault:
-    """One fault seen by the loop.
-
-    Attributes
-    ----------
-    time : float
-        Seconds since the run started.
-    kind : str
-        ``"watchdog"``, ``"watchdog-clear"``, ``"stale"``, ``"stale-clear"``,
-        ``"loop-stalled"``, ``"no-data"``, ``"daq-port"``, ``"daq-port-restored"``,
-        ``"daq-crc"``, ``"daq-truncated"``, ``"daq-invalid"``, ``"daq-garbage"``,
-        ``"daq-gap"``, ``"daq-duplicate"``, ``"daq-reordered"``, ``"daq-reset"``,
-        ``"daq-discarded"``, ``"hand-port"``, ``"hand-port-restored"``,
-        ``"command-rejected"``, ``"hold-failed"``, ``"stop-failed"``, ``"mpi-saturated"``,
-        ``"recording"`` or
-        ``"board-mismatch"`` (``run --board-reflex``: the board's chain output differs
-        from its Python twin's on the same sample).
-    message : str
-        What happened, naming the port or file.
-    action : str
-        What the loop did about it.
-
-    Examples
-    --------
-    >>> Fault(0.5, "watchdog", "no valid sample for 100 ms", "fingers held").kind
-    'watchdog'
-    """
-
-    time: float
-    kind: str
-    message: str
-    action: str
-
-    def to_dict(self) -> dict[str, Any]:
-        """Fields as a dict (the /faults message).
-
-        Examples
-        --------
-        >>> Fault(1.0, "k", "m", "a").to_dict()["action"]
-        'a'
-        """
-        return {"time": self.time, "kind": self.kind, "message": self.message, "action": self.action}
-
-
-@dataclass(slots=True)
-class SampleRecord:
-    """What the loop did with one sample (the typed record of the *process* step).
-
-    Attributes
-    ----------
-    sample : DaqSample
-        The decoded sample.
-    arrival : float
-        Clock time at which its bytes were read from the port.
-    age : float
-        Seconds since the frame arrived, as its board time places it, when the
-        reflex processed it (large for a backlog).
-    position : float or None
-        Slip-finger position given to the reflex (in the reflex's frame).
-    command : float or None
-        The reflex's command, when this sample completed a window.
-    grip : dict of Finger to float or None
-        The grip (units) the command adds to each finger: how far it rose.
-    filtered, threshold : float or None
-    event : bool
-    count : int or None
-        The window's spike count, when this sample completed a window.
-    sent : bool
-        Whether the hand was told to close (or to close longer) for it.
-    note : str
-        Why a command was not sent: ``"at start"`` (no rise yet), ``"no rise"``, ``"stale"``,
-        ``"rejected"``, ``"hand-port"``.
-    latency, frame_latency : float or None
-        Seconds from ``arrival`` (read) and from the frame's own arrival to the write.
-    board : dict or None
-        With a board that runs the reflex (``slipreflex.board.CheckedBoardReflex``):
-        the board's own output for this sample and whether the twin agreed.
-
-    Examples
-    --------
-    >>> r = SampleRecord(DaqSample(0, 0.0, 0.4, None, 0), arrival=1.0, age=0.001)
-    >>> r.sent, r.command
-    (False, None)
-    """
-
-    sample: DaqSample
-    arrival: float
-    age: float
-    position: float | None = None
-    command: float | None = None
-    grip: dict[Finger, float] | None = None
-    filtered: float | None = None
-    threshold: float | None = None
-    event: bool = False
-    count: int | None = None
-    sent: bool = False
-    note: str = ""
-    latency: float | None = None
-    frame_latency: float | None = None
-    board: dict[str, Any] | None = None
-
-
-def _percentiles_ms(x: np.ndarray) -> dict[str, float]:
-    if x.size == 0:
-        return {"p50": math.nan, "p99": math.nan, "max": math.nan}
-    ms = x * 1e3
-    return {"p50": float(np.percentile(ms, 50)), "p99": float(np.percentile(ms, 99)),
-            "max": float(ms.max())}
-
-
-@dataclass
-class RunResult:
-    """What a run did.
-
-    Attributes
-    ----------
-    samples, events, windows, commands : int
-        Samples processed, spikes, windows and reflex commands.
-    commands_sent : int
-        Commands the hand driver accepted and wrote.
-    latencies : numpy.ndarray
-        Seconds from reading the sample's bytes to the command written, per sent command.
-    frame_latencies : numpy.ndarray
-        Seconds from the frame's own arrival (its board time, anchored to the
-        earliest-arriving frames) to the command written, per sent command.
-    faults : list of Fault
-    daq_stats : dict
-        The source's counters at the end (``seq_gaps``, ``crc_errors``, ...), if it has any.
-    duration : float
-        Seconds the loop ran.
-    interrupted : bool
-        True if stopped by Ctrl-C.
-    recording_error : str or None
-        Why the recording stopped early, if it did.
-    start : dict
-        Position (finger name -> units) each finger held at start, after the
-        safe start's STOP: measured where the hand reports it, else ``p0``
-        (bookkeeping only: the loop sends no positions).
-    initial_command : str
-        What the loop sent first (the STOP of the safe start).
-    holds_sent : int
-        Holds (STOP) sent by the watchdog, its re-sends and the stall guard.
-    stale_samples : int
-        Samples older than the watchdog when processed (their commands were held back).
-    dropped_at_start : int
-        Frames the source buffered while the run set up (warm-up, safe start), dropped
-        before the clock started (the source's optional ``drop_buffered()``).
-    saturated_at : float or None
-        Board time (s) at which the reflex's command first reached its ceiling
-        (``ceiling``): from then on it adds no grip.
-    saturated_windows : int
-        Windows with spikes after that: slips the command could not answer.
-    ceiling : float
-        The reflex's command ceiling (``params.hi``; 500 when it declares none).
-    grip_added : dict
-        Grip (finger name -> units) the loop told each finger to add.
-    closes, stops : int
-        CLOSE commands sent, and the STOPs that ended a closing.
-    grip_unknown : list of str
-        Fingers whose closing's STOP never reached the hand (a lost port): their grip is at
-        least ``grip_added`` and may be up to their end stop.
-    stalled : list of str
-        Fingers the hand reported stalled (it ignores closing until opened): grip sent to
-        them afterwards is not counted in ``grip_added``.
-    error : str or None
-        Why the run ended early: the method raised in ``step()`` (fingers held first).
-
-    Examples
-    --------
-    >>> r = RunResult(latencies=np.array([1e-4, 2e-4, 3e-4]))
-    >>> {k: round(v, 3) for k, v in r.latency_ms().items()}
-    {'p50': 0.2, 'p99': 0.298, 'max': 0.3}
-    """
-
-    samples: int = 0
-    events: int = 0
-    windows: int = 0
-    commands: int = 0
-    commands_sent: int = 0
-    latencies: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    frame_latencies: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    faults: list[Fault] = field(default_factory=list)
-    daq_stats: dict[str, int] = field(default_factory=dict)
-    duration: float = 0.0
-    interrupted: bool = False
-    recording_error: str | None = None
-    start: dict[str, float] = field(default_factory=dict)
-    initial_command: str = ""
-    holds_sent: int = 0
-    stale_samples: int = 0
-    dropped_at_start: int = 0
-    saturated_at: float | None = None
-    saturated_windows: int = 0
-    ceiling: float = float(FINGER_MAX)
-    grip_added: dict[str, float] = field(default_factory=dict)
-    closes: int = 0
-    stops: int = 0
-    grip_unknown: list[str] = field(default_factory=list)
-    stalled: list[str] = field(default_factory=list)
-    error: str | None = None
-
-    def latency_ms(self, since: str = "read") -> dict[str, float]:
-        """p50, p99 and max of the command latency in milliseconds (NaN if none).
-
-        Parameters
-        ----------
-        since : {"read", "frame"}
-            From reading the bytes, or from the frame's own arrival.
-
-        Examples
-        --------
-        >>> RunResult().latency_ms()["p99"]
-        nan
-        """
-        if since not in ("read", "frame"):
-            raise ParameterError(f"latency_ms: since must be 'read' or 'frame', got {since!r}")
-        return _percentiles_ms(self.latencies if since == "read" else self.frame_latencies)
-
-    def summary(self) -> str:
-        """A few human-readable lines for the end of a run.
-
-        Examples
-        --------
-        >>> print(RunResult(samples=3).summary().splitlines()[0])
-        samples 3, events 0, windows 0, commands 0 (0 sent) in 0.0 s
-        """
-        lines = [f"samples {self.samples}, events {self.events}, windows {self.windows}, "
-                 f"commands {self.commands} ({self.commands_sent} sent) in {self.duration:.1f} s"]
-        for since, what in (("read", "sample read"), ("frame", "frame arrival")):
-            lat = self.latency_ms(since)
-            lines.append(f"latency {what}->command: p50 {lat['p50']:.3f} ms, p99 {lat['p99']:.3f} ms, "
-                         f"max {lat['max']:.3f} ms (n={self.latencies.size})")
-        if self.daq_stats:
-            d = self.daq_stats
-            lines.append("daq: " + ", ".join(f"{k} {d[k]}" for k in (
-                "frames", "seq_gaps", "frames_lost", "crc_errors", "truncated", "resyncs",
-                "garbage_bytes", "duplicates", "reordered", "resets", "disconnects", "reconnects",
-                "frames_discarded") if k in d))
-        if self.grip_added:
-            lines.append("grip added: " + ", ".join(f"{k} {'>= ' * (k in self.grip_unknown)}{v:.1f}"
-                                                     for k, v in self.grip_added.items())
-                         + f" units ({self.closes} closings)")
-        if self.grip_unknown:
-            lines.append(f"STOP never reached {', '.join(self.grip_unknown)}: they may have closed to their "
-                         f"end stops (grip at least as above)")
-        if self.stalled:
-            lines.append(f"stalled (the hand ignores closing until opened): {', '.join(self.stalled)}; "
-                         f"grip sent to them after the stall is not counted")
-        if self.error:
-            lines.append(f"ended early: {self.error}")
-        if self.saturated_at is not None:
-            lines.append(f"reflex command at its ceiling {self.ceiling:g} from t={self.saturated_at:.3f} s: it "
-                         f"adds no grip after that; {self.saturated_windows} later windows with spikes "
-                         f"added none")
-        kinds = collections.Counter(f.kind for f in self.faults)
-        lines.append("faults: " + (", ".join(f"{k} x{n}" for k, n in kinds.items()) or "none")
-                     + (f"; holds sent {self.holds_sent}" if self.holds_sent else "")
-                     + (f"; stale samples {self.stale_samples}" if self.stale_samples else "")
-                     + (f"; {self.dropped_at_start} frames from before the start dropped"
-                        if self.dropped_at_start else ""))
-        if self.recording_error:
-            lines.append(f"recording stopped early: {self.recording_error}")
-        return "\n".join(lines)
-
-    def summary_metadata(self) -> dict[str, str]:
-        """The summary as a metadata record (``run_summary`` in a recording).
-
-        Examples
-        --------
-        >>> RunResult(samples=2).summary_metadata()["samples"]
-        '2'
-        """
-        out = {"samples": self.samples, "commands": self.commands, "commands_sent": self.commands_sent,
-               "events": self.events, "duration_s": f"{self.duration:.3f}",
-               "faults": len(self.faults), "holds_sent": self.holds_sent,
-               "stale_samples": self.stale_samples, "dropped_at_start": self.dropped_at_start,
-               "saturated_at": "" if self.saturated_at is None else f"{self.saturated_at:.6f}",
-               "saturated_windows": self.saturated_windows, "ceiling": self.ceiling,
-               "grip_added": json.dumps(self.grip_added), "closes": self.closes, "stops": self.stops,
-               "grip_unknown": json.dumps(self.grip_unknown), "stalled": json.dumps(self.stalled),
-               "error": self.error or ""}
-        for since, key in (("read", "latency"), ("frame", "frame_latency")):
-            for q, v in self.latency_ms(since).items():
-                out[f"{key}_{q}_ms"] = f"{v:.4f}"
-        return {k: str(v) for k, v in out.items()}
-
-
-def _json_float(x: Any) -> float | None:
-    """JSON-safe float: NaN/inf/None -> None."""
-    if x is None:
-        return None
-    x = float(x)
-    return x if math.isfinite(x) else None
-
-
-def start_positions(p0: float | Mapping[Any, float], fingers: Sequence[Finger] = TRIPOD,
-                    *, where: str = "p0") -> dict[Finger, float]:
-    """Validate ``p0`` and give one start position per finger.
-
-    Parameters
-    ----------
-    p0 : float or mapping of Finger (or finger name) to float
-        One position for every finger, or one per finger (every finger of
-        ``fingers`` must be given). Positions are whole i-Limb units in the
-        finger's range (0..500).
-    fingers : sequence of Finger
-    where : str
-        Name used in error messages (e.g. ``"--p0"``).
-
-    Returns
-    -------
-    dict of Finger to float
-        The start position of every finger of ``fingers``, in that order.
-
-    Raises
-    ------
-    ParameterError
-        A missing or unknown finger, or a position that is not a whole
-        number in range; the message names ``where`` and the finger.
-
-    Examples
-    --------
-    >>> start_positions({"thumb": 149, "index": 147, "middle": 147})[Finger.THUMB]
-    149.0
-    >>> start_positions(600)
-    Traceback (most recent call last):
-    ...
-    slipreflex.errors.ParameterError: p0: THUMB must be a whole position in 0..500, got 600
-    """
-    fingers = tuple(Finger(f) for f in fingers)
-    if isinstance(p0, Mapping):
-        given: dict[Finger, Any] = {}
-        for k, v in p0.items():
-            try:
-                f = Finger[k.upper()] if isinstance(k, str) else Finger(k)
-                if f not in fingers:
-                    raise KeyError(k)
-            except (KeyError, ValueError):
-                raise ParameterError(f"{where}: finger {k!r} is not one of the grasping fingers "
-                                     f"(fingers: {', '.join(x.name.lower() for x in fingers)})") from None
-            given[f] = v
-        missing = [f.name.lower() for f in fingers if f not in given]
-        if missing:
-            raise ParameterError(f"{where}: no position for {', '.join(missing)} "
-                                 f"(give every finger, e.g. thumb=149,index=147,middle=147)")
-    else:
-        given = {f: p0 for f in fingers}
-    out: dict[Finger, float] = {}
-    for f in fingers:
-        v = given[f]
-        hi = THUMB_ROTATOR_MAX if f == Finger.THUMB_ROTATOR else FINGER_MAX
-        try:
-            v = number(f"{where}: {f.name}", v, lo=FINGER_MIN, hi=hi)
-        except ParameterError:
-            v = math.nan
-        if not v.is_integer():  # the i-Limb takes whole units
-            raise ParameterError(f"{where}: {f.name} must be a whole position in {FINGER_MIN}..{hi}, "
-                                 f"got {given[f]!r}")
-        out[f] = v
-    return out
-
-
-def safe_start(hand: Hand, p0: float | Mapping[Any, float],
-               fingers: Sequence[Finger] = TRIPOD) -> dict[Finger, float]:
-    """Hold the fingers where they are, then tell where each one holds.
-
-    The hand is told to STOP (``hand.hold(fingers)``): the fingers are never
-    moved to a value at start. Each finger's start position is the position
-    the hand reports for it where it measures its fingers, else its ``p0``.
-    The start is bookkeeping only (the reflex's frame, the recording): the
-    loop adds grip as closing time and never sends a position. The i-Limb
-    reports no positions over its serial protocol, so for it the start is
-    the ``p0`` given.
-
-    Parameters
-    ----------
-    hand : Hand
-    p0 : float or mapping
-        See :func:`start_positions`.
-    fingers : sequence of Finger
-
-    Returns
-    -------
-    dict of Finger to float
-        Start position per finger.
-
-    Raises
-    ------
-    ParameterError
-        A bad ``p0`` (before anything is sent).
-
-    Examples
-    --------
-    >>> class Hand:                        # a hand that measures its fingers
-    ...     def __init__(self): self.sent = []
-    ...     def set_positions(self, t): self.sent.append(t)
-    ...     def positions(self): return {Finger.THUMB: 149.0, Finger.INDEX: 147.0, Finger.MIDDLE: 147.0}
-    ...     def hold(self, fingers): self.sent.append("stop")
-    >>> h = Hand()
-    >>> safe_start(h, 500)[Finger.THUMB], h.sent
-    (149.0, ['stop'])
-    """
-    start = start_positions(p0, fingers)
-    hand.hold(tuple(start))
-    reported = hand.positions()
-    for f, v in reported.items():
-        if f in start and isinstance(v, (int, float)) and math.isfinite(v):
-            start[f] = float(v)
-    return start
-
-
-def finger_offsets(reflex: Any, fingers: Sequence[Finger] = TRIPOD) -> dict[Finger, float]:
-    """The per-finger offsets a reflex asks the hand to add to its command, checked.
-
-    A reflex may declare ``finger_offsets`` ({finger: units}; the authors' rig
-    code, preset ``authors-gui``, sends the middle finger the command + 20).
-    Offsets of fingers outside ``fingers`` are ignored, as in the simulator.
-
-    Parameters
-    ----------
-    reflex : Reflex
-    fingers : sequence of Finger
-
-    Returns
-    -------
-    dict of Finger to float
-        Offset (units) of each finger of ``fingers`` that has one; empty for most reflexes.
-
-    Raises
-    ------
-    ParameterError
-        An offset that is not a finite number (before anything is sent).
-
-    Examples
-    --------
-    >>> from slipreflex.chain import SlipReflex
-    >>> finger_offsets(SlipReflex.from_preset("authors-gui", p0=147.0))
-    {<Finger.MIDDLE: 2>: 20.0}
-    >>> finger_offsets(SlipReflex())
-    {}
-    """
-    out: dict[Finger, float] = {}
-    for k, v in (getattr(reflex, "finger_offsets", None) or {}).items():
-        f = Finger(k)
-        if f not in fingers:
-            continue
-        if not (isinstance(v, (int, float)) and math.isfinite(v)):
-            raise ParameterError(f"run_loop: reflex finger_offsets[{f.name.lower()}] must be a finite "
-                                 f"number, got {v!r}")
-        out[f] = float(v)
-    return out
-
-
-def reflex_start(reflex: Any) -> float | None:
-    """Where a reflex's command starts: its ``command`` before the first step, else its
-    ``params.p0`` (a board twin, a tactile method), else None (the loop then takes the
-    measured grasp). Rises above it are the grip the loop adds.
-
-    Examples
-    --------
-    >>> from slipreflex import methods
-    >>> reflex_start(methods.make("dath", p0=148.0)), reflex_start(methods.make("dath-board", p0=148.0))
-    (148.0, 148.0)
-    >>> reflex_start(object()) is None
-    True
-    """
-    for x in (getattr(reflex, "command", None), getattr(getattr(reflex, "params", None), "p0", None)):
-        if isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x):
-            return float(x)
-    return None
 
 
 def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
@@ -670,6 +199,9 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
     >>> [f.kind for f in r.faults], h.held >= 2      # the safe start's STOP, then the watchdog's
     (['watchdog'], True)
     """
+    lacks = missing(reflex, Reflex, _LOOP_READS_OF_REFLEX)
+    if lacks:
+        raise ParameterError(f"run_loop: the reflex has no {', '.join(lacks)} (slipreflex.interfaces.Reflex)")
     source = _source_for(source, reflex)
     if not WATCHDOG_MIN_S <= watchdog <= WATCHDOG_MAX_S:
         raise ParameterError(f"run_loop: watchdog must be in {WATCHDOG_MIN_S:g}..{WATCHDOG_MAX_S:g} s, "
@@ -678,9 +210,9 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
         raise ParameterError(f"run_loop: poll must be in (0, watchdog / 2], got {poll!r}")
     if duration is not None and not (math.isfinite(duration) and duration > 0):
         raise ParameterError(f"run_loop: duration must be > 0 s, got {duration!r}")
-    missing = [m for m in ("close_fingers", "hold", "positions") if not callable(getattr(hand, m, None))]
-    if missing:
-        raise ParameterError(f"run_loop: the hand has no {', '.join(missing)}: a reflex adds grip only by "
+    lacks = missing(hand, Hand, ("close_fingers", "hold", "positions"))
+    if lacks:
+        raise ParameterError(f"run_loop: the hand has no {', '.join(lacks)}: a reflex adds grip only by "
                              f"closing and holding (slipreflex.interfaces.Hand)")
     fingers = tuple(Finger(f) for f in fingers)
     ref0 = reflex_start(reflex)
@@ -694,7 +226,7 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
         start, start_error = safe_start(hand, given, fingers), None
     except DeviceError as err:  # the STOP did not go out: the fingers stay as the grasp left them
         start, start_error = given, err
-    drop_buffered = getattr(source, "drop_buffered", None)   # optional in the SampleSource protocol
+    drop_buffered = optional(source, SampleSource, "drop_buffered")
     dropped = drop_buffered() if drop_buffered is not None else 0
     loop = _Loop(source, hand, reflex, start=start,
                  ref0=float(ref0) if ref_ok else start.get(SLIP_FINGER, next(iter(start.values()))),
@@ -705,7 +237,7 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
         loop.fault("hold-failed", f"safe start: {start_error}", "fingers stay where the grasp left them; "
                    "the watchdog holds again if samples stop")
     loop.res.dropped_at_start = dropped
-    guard_on = getattr(hand, "reflex_running", None)
+    guard_on = optional(hand, Hand, "reflex_running")
     if callable(guard_on):
         guard_on(True)
     try:
@@ -713,144 +245,6 @@ def run_loop(source: SampleSource, hand: Hand, reflex: Reflex, *,
     finally:
         if callable(guard_on):
             guard_on(False)
-
-
-class _FrameReader:
-    """A :class:`~slipreflex.interfaces.TactileSource` as the loop reads a source."""
-
-    def __init__(self, source: Any) -> None:
-        self.tactile = source
-        self.port_name = getattr(source, "port_name", "the tactile source")
-
-    @property
-    def last_arrival(self) -> float:
-        return getattr(self.tactile, "last_arrival", math.nan)
-
-    def read(self, timeout: float) -> list[Any]:
-        return self.tactile.read_frames(timeout)
-
-    def drop_buffered(self) -> int:
-        # a source that reads on its own thread (the Ability Hand's pump) queues frames during the set-up
-        drop: Any = getattr(self.tactile, "drop_buffered", None)
-        return int(drop()) if drop is not None else 0
-
-    def close(self) -> None:
-        self.tactile.close()
-
-
-def _source_for(source: Any, reflex: Any) -> Any:
-    """The source the loop reads for this reflex's input (a one-line error if it has none)."""
-    kind = getattr(reflex, "input_kind", "slip")
-    name = getattr(reflex, "name", reflex)
-    if kind == "tactile":
-        if not callable(getattr(source, "read_frames", None)):
-            raise ParameterError(f"run_loop: reflex {name!r} reads tactile frames, but the source gives "
-                                 f"none (a TactileSource, e.g. the Ability Hand's touch sites)")
-        return _FrameReader(source)
-    if kind != "slip" or not callable(getattr(source, "read", None)):
-        raise ParameterError(f"run_loop: reflex {name!r} reads {kind!r}, but the source gives "
-                             f"slip-sensor samples only")
-    return source
-
-
-def _warm_up(reflex: Any) -> None:
-    """Step a copy once, so that what the first step loads or compiles (about 0.3 s for the
-    chain) happens before the clock starts, not on the first real sample (a stall that the
-    staleness check and the stall guard would rightly report). The reflex itself is untouched."""
-    try:
-        twin = copy.deepcopy(reflex)
-    except Exception:  # noqa: BLE001 - a reflex that cannot be copied is simply not warmed up
-        return
-    shape = getattr(getattr(reflex, "params", None), "shape", (4, 4))
-    try:
-        twin.step(0.0 if getattr(reflex, "input_kind", "slip") == "slip" else np.zeros(shape), None)
-    except Exception as err:  # noqa: BLE001 - a method that cannot take one sample is refused, nothing sent
-        name = getattr(reflex, "name", type(reflex).__name__)
-        raise ParameterError(f"run_loop: method {name!r} raised in step() on a warm-up sample "
-                             f"({type(err).__name__}: {err}); nothing was sent to the hand") from None
-
-
-class _Sink:
-    """The loop's side of the recorder: never raises; its failure is reported once."""
-
-    def __init__(self, recorder: Any, t0: float, on_fail: Callable[[str], None],
-                 taps: Sequence[Any] = ()) -> None:
-        self.recorder = recorder
-        self.ok = recorder is not None
-        self.taps = tuple(taps)
-        self.t0 = t0
-        self.wall0 = time.time_ns()
-        self.on_fail = on_fail
-        self.error: str | None = None
-
-    def write(self, topic: str, msg: dict[str, Any], t: float) -> None:
-        ns = self.wall0 + int((t - self.t0) * 1e9)
-        if self.ok and not self.recorder.write(topic, msg, ns):
-            self.check()
-        for tap in self.taps:
-            tap.put(topic, msg, ns)
-
-    def check(self) -> None:
-        if self.ok and self.recorder.error is not None:
-            self.ok = False
-            self.error = f"{getattr(self.recorder, 'path', 'recording')}: {self.recorder.error}"
-            self.on_fail(self.error)
-
-    def samples(self, records: list[SampleRecord], finger_names: list[str], last_flow: int | None) -> int | None:
-        if not (self.ok or self.taps):
-            return last_flow
-        for r in records:
-            s, arr = r.sample, r.arrival
-            frame = getattr(s, "frame", None)
-            if frame is not None:  # a tactile source's frame, flat
-                self.write("/tactile/frames", tactile_message(s, r.position), arr)
-                self._chain(r, finger_names)
-                continue
-            self.write("/daq/samples", {"seq": s.seq, "t": s.t, "slip_volts": s.slip_volts,
-                                        "flow_pulses": s.flow_pulses, "arrival": arr - self.t0,
-                                        "position": _json_float(r.position)}, arr)
-            if s.accel_g is not None:
-                ax, ay, az = s.accel_g
-                self.write("/daq/imu", {"seq": s.seq, "t": s.t, "ax": ax, "ay": ay, "az": az}, arr)
-            if s.flow_pulses != last_flow:
-                self.write("/daq/flow", {"seq": s.seq, "t": s.t, "pulses": s.flow_pulses}, arr)
-            last_flow = s.flow_pulses
-            self._chain(r, finger_names)
-        return last_flow
-
-    def _chain(self, r: SampleRecord, finger_names: list[str]) -> None:
-        """What the reflex did with one sample or frame: state, spikes, windows, commands."""
-        s, arr = r.sample, r.arrival
-        self.write("/chain/state", {"seq": s.seq, "t": s.t, "filtered": _json_float(r.filtered),
-                                    "threshold": _json_float(r.threshold) or 0.0, "event": r.event}, arr)
-        if r.event:
-            self.write("/chain/events", {"seq": s.seq, "t": s.t}, arr)
-        if r.count is not None:
-            self.write("/chain/windows", {"seq": s.seq, "t": s.t, "count": int(r.count)}, arr)
-        if r.board is not None:
-            self.write("/board/state", {"seq": s.seq, "t": s.t, **r.board}, arr)
-        if r.command is not None:
-            grip = {f.name.lower(): _json_float(v) for f, v in (r.grip or {}).items()}
-            self.write("/hand/commands", {"seq": s.seq, "t": s.t, "target": float(r.command),
-                                          "fingers": finger_names, "targets": {}, "grip": grip,
-                                          "sent": r.sent, "note": r.note, "latency": r.latency,
-                                          "frame_latency": r.frame_latency}, arr)
-            self.write("/hand/grip", {"seq": s.seq, "t": s.t, "sent": r.sent, **grip}, arr)
-
-
-def tactile_message(s: Any, position: float | None = None) -> dict[str, Any]:
-    """A tactile frame as its ``/tactile/frames`` message: flat fields, one per taxel.
-
-    Examples
-    --------
-    >>> from slipreflex.interfaces import TactileSample
-    >>> m = tactile_message(TactileSample(3, 0.5, np.array([[0.25, 0.5], [0.0, 1.0]])))
-    >>> m["total"], m["peak"], m["taxel_3"], m["position"]
-    (1.75, 1.0, 1.0, None)
-    """
-    flat = np.asarray(s.frame, dtype=np.float64).reshape(-1)
-    return {"seq": s.seq, "t": s.t, "total": float(flat.sum()), "peak": float(flat.max(initial=0.0)),
-            "position": _json_float(position), **{f"taxel_{k}": float(v) for k, v in enumerate(flat)}}
 
 
 class _Loop:
@@ -861,7 +255,7 @@ class _Loop:
                  stop: threading.Event | None, on_fault: Callable[[Fault], None] | None,
                  stats_interval: float, clock: Callable[[], float], taps: Sequence[Any] = ()) -> None:
         self.source, self.hand, self.reflex = source, hand, reflex
-        self.slip = getattr(reflex, "input_kind", "slip") == "slip"  # else a tactile frame per step
+        self.slip = reflex.input_kind == "slip"  # else a tactile frame per step
         self.fingers = tuple(start)
         self.finger_names = [f.name.lower() for f in self.fingers]
         self.start = start
@@ -875,7 +269,7 @@ class _Loop:
         self.until: list[float | None] = [None] * len(self.grip.groups)  # clock time each closing ends
         self.begun: list[float | None] = [None] * len(self.grip.groups)  # clock time each closing began
         self.unstopped: set[int] = set()  # groups whose ending STOP never reached the hand
-        hi = getattr(getattr(reflex, "params", None), "hi", FINGER_MAX)
+        hi = optional(reflex, Reflex, "params.hi")
         self.ceiling = float(hi) if isinstance(hi, (int, float)) and math.isfinite(hi) else float(FINGER_MAX)
         self.top = min(self.ceiling, self.grip.ceiling)  # the command is clipped here before it is grip
         self.failed: str | None = None  # the reflex raised: the run ends, fingers held
@@ -897,10 +291,7 @@ class _Loop:
         self.anchor_resets = 0  # the source's reset counter at the last re-anchoring
         self.last_valid = self.t0
         self.last_hold = self.last_retry = -math.inf
-        self.no_data = self.stale = self.risen = self.hold_failed = self.warned = False
-        self.hand_ok = True
-        self.held_back = False  # grip came while stale: send it when fresh
-        self.stop_failed = False
+        self.states = LoopStates()  # the link and watchdog states (slipreflex.loop_states)
         self.processed = 0
         self.last_flow: int | None = None
         self.counters: dict[str, int] = {}
@@ -908,7 +299,7 @@ class _Loop:
         self.counter_emitted: dict[str, float] = {}
         self.next_stats = self.t0 + stats_interval
         self.next_counters = self.t0
-        if recorder is not None and hasattr(recorder, "add_metadata"):
+        if recorder is not None:
             recorder.add_metadata("start", {"p0": json.dumps(self.res.start), "reflex_start": repr(ref0),
                                             "initial_command": self.res.initial_command,
                                             "finger_offsets": json.dumps({f.name.lower(): v for f, v
@@ -969,7 +360,7 @@ class _Loop:
             return [], math.nan
         if not samples:
             return samples, math.nan
-        arrival = getattr(self.source, "last_arrival", math.nan)
+        arrival = optional(self.source, SampleSource, "last_arrival")
         if not (isinstance(arrival, float) and math.isfinite(arrival)):
             arrival = self.clock()
         self.anchor(samples[-1].t, arrival)
@@ -990,8 +381,7 @@ class _Loop:
         """Whether the source counted a board reset since the last re-anchoring. A source
         without counters cannot tell a reset from a backlog, so any old frame counts as one;
         with counters, a backlog read in pieces keeps its age (it is stale, not a reset)."""
-        st = getattr(self.source, "stats", None)
-        if st is None:
+        if optional(self.source, SampleSource, "stats") is None:
             return True
         resets = int(self.source_stats().get("resets", 0))
         restarted, self.anchor_resets = resets > self.anchor_resets, resets
@@ -1016,8 +406,8 @@ class _Loop:
             r = SampleRecord(s, arrival, self.clock() - (s.t + (self.offset or 0.0)), pos, cmd,
                              filtered=reflex.last_filtered, threshold=reflex.last_threshold,
                              event=bool(reflex.last_event), count=reflex.last_count,
-                             board=getattr(reflex, "last_board", None))
-            mismatch = getattr(reflex, "last_mismatch", None)
+                             board=optional(reflex, Reflex, "last_board"))
+            mismatch = optional(reflex, Reflex, "last_mismatch")
             if mismatch:
                 self.fault("board-mismatch", mismatch, "recorded; the twin's command is the one used")
             self.freshness(r)
@@ -1030,7 +420,7 @@ class _Loop:
     def reflex_failed(self, s: Any, err: Exception) -> None:
         """The method raised in ``step()``: hold the fingers, record it, end the run (its state is
         unknown, so no later command of it is trusted)."""
-        name = getattr(self.reflex, "name", type(self.reflex).__name__)
+        name = self.reflex.name
         self.failed = f"method {name!r} raised in step() at sample seq {s.seq}: {type(err).__name__}: {err}"
         self.hold()
         self.fault("reflex-error", self.failed, "fingers held; the run ends (nothing more is sent)")
@@ -1038,17 +428,16 @@ class _Loop:
     def freshness(self, r: SampleRecord) -> None:
         if r.age > self.watchdog_s:
             self.res.stale_samples += 1
-            if not self.stale:
-                self.stale = True
+            if not self.states.stale:
+                self.states.take(Age, "a sample older than the watchdog")
                 self.hold()
                 self.fault("stale", f"sample seq {r.sample.seq} was {r.age * 1e3:.0f} ms old when "
                            f"processed: the loop was frozen or fell behind", "fingers held; commands "
                            "wait for fresh samples")
-        elif self.stale:
-            self.stale = False
+        elif self.states.stale:
+            owed = self.states.take(Age, "a fresh sample").source is Age.STALE_OWED
             self.fault("stale-clear", f"samples fresh again ({r.age * 1e3:.1f} ms old)", "reflex resumed")
-            if self.held_back:
-                self.held_back = False
+            if owed:  # grip came while stale: send it now
                 self.deliver(r, resend=True)
 
     def command(self, r: SampleRecord, cmd: float) -> None:
@@ -1065,13 +454,16 @@ class _Loop:
             self.fault("mpi-saturated", f"the reflex's command reached its ceiling {self.top:g} at "
                        f"t={r.sample.t:.3f} s", "it adds no grip after that; later slips cannot be answered")
         if not any(g > 0.0 for g in rises):
-            r.note = "no rise" if self.risen else "at start"  # nothing to add: the fingers stay held
+            r.note = "at start" if self.states[Rise] is Rise.AT_START else "no rise"  # the fingers stay held
             return
-        self.risen = True
+        if self.states[Rise] is Rise.AT_START:
+            self.states.take(Rise, "the command first rises")
         for i, g in enumerate(rises):
             self.owed[i] += g
-        if self.stale:
-            r.note, self.held_back = "stale", True
+        if self.states.stale:
+            r.note = "stale"
+            if self.states[Age] is Age.STALE:
+                self.states.take(Age, "grip comes while stale")
             return
         self.deliver(r)
 
@@ -1099,10 +491,10 @@ class _Loop:
                 except DeviceError as err:
                     if r is not None:
                         r.note = "hand-port"
-                    if self.hand_ok:
+                    if self.states.hand_up:
+                        self.states.take(HandPort, "a CLOSE fails on the port")
                         self.fault("hand-port", str(err), "fingers keep what they hold; the grip is sent "
                                    "when the port is back")
-                    self.hand_ok = False
                     return
                 self.res.closes += 1
             self.until[i] = end
@@ -1115,8 +507,8 @@ class _Loop:
             sent = True
         if not sent:
             return
-        if not self.hand_ok:
-            self.hand_ok = True
+        if not self.states.hand_up:
+            self.states.take(HandPort, "a CLOSE goes out")
             self.fault("hand-port-restored", "hand port is back", "commands resumed")
         if resend or r is None:
             return
@@ -1138,13 +530,14 @@ class _Loop:
                     self.hand.hold(fingers)
             except (DeviceError, ParameterError) as err:
                 self.unstopped.add(i)
-                if not self.stop_failed:
-                    self.stop_failed = True
+                if self.states[StopRetry] is StopRetry.SENT:
+                    self.states.take(StopRetry, "the STOP ending a closing fails")
                     names = ", ".join(f.name.lower() for f in fingers)
                     self.fault("stop-failed", f"{err}: the closing of {names} did not end; they may close "
                                f"to their end stops", "the STOP that ends a closing is retried")
                 continue
-            self.stop_failed = False
+            if self.states[StopRetry] is StopRetry.FAILING:
+                self.states.take(StopRetry, "a STOP ending a closing goes out")
             self.unstopped.discard(i)
             self.until[i] = None
             self.res.stops += 1
@@ -1171,26 +564,27 @@ class _Loop:
     def watchdog(self, got: bool) -> None:
         now = self.clock()
         if got:
-            if self.no_data:
-                self.no_data = False
+            if self.states.silent:
+                self.states.take(Arrival, "samples again")
                 self.fault("watchdog-clear", f"samples resumed after {now - self.last_valid:.3f} s",
                            "reflex resumed")
-                if any(g > 0.0 for g in self.owed) and not self.stale:
+                if any(g > 0.0 for g in self.owed) and not self.states.stale:
                     self.deliver(None)  # the rest of a closing the hold cut short
             self.last_valid = now
-        elif not self.no_data and now - self.last_valid > self.watchdog_s:
-            self.no_data = True
+        elif not self.states.silent and now - self.last_valid > self.watchdog_s:
+            self.states.take(Arrival, "no valid sample for the watchdog time")
             self.hold()
             self.fault("watchdog", f"no valid DAQ sample for {(now - self.last_valid) * 1e3:.0f} ms",
                        "fingers held where they are; the hold is re-sent while it lasts")
-        if (self.no_data or self.stale) and now - self.last_hold >= self.watchdog_s:
+        held = self.states.silent or self.states.stale
+        if held and now - self.last_hold >= self.watchdog_s:
             self.hold()  # the i-Limb protocol has no acknowledgement: say it again
-        elif (not self.hand_ok and not (self.no_data or self.stale) and any(g > 0.0 for g in self.owed)
+        elif (not self.states.hand_up and not held and any(g > 0.0 for g in self.owed)
               and now - self.last_retry >= self.watchdog_s):
             self.last_retry = now
             self.deliver(None)  # grip owed since the hand port failed: try again
-        if not self.warned and self.processed == 0 and now - self.t0 >= _FIRST_FRAME_S:
-            self.warned = True
+        if self.states[FirstFrame] is FirstFrame.WAITING and self.processed == 0 and now - self.t0 >= _FIRST_FRAME_S:
+            self.states.take(FirstFrame, "no valid frame within a second of the start")
             self.fault("no-data", self.no_data_message(), "fingers held; still waiting")
         while self.guard_faults:
             self.emit(self.guard_faults.popleft())
@@ -1199,7 +593,7 @@ class _Loop:
     def no_data_message(self) -> str:
         st = self.source_stats()
         got = st.get("garbage_bytes", 0) + st.get("crc_errors", 0)
-        port = getattr(self.source, "port_name", "the DAQ port")
+        port = optional(self.source, SampleSource, "port_name")
         if got:
             return (f"no valid DAQ frame within {_FIRST_FRAME_S:g} s of start, but {port} delivers bytes "
                     f"({st.get('garbage_bytes', 0)} garbage, {st.get('crc_errors', 0)} CRC errors): "
@@ -1213,11 +607,12 @@ class _Loop:
             with self.lock:
                 self.hand.hold(self.fingers)
         except (DeviceError, ParameterError) as err:
-            if not self.hold_failed:
-                self.hold_failed = True
+            if self.states[HoldRetry] is HoldRetry.SENT:
+                self.states.take(HoldRetry, "a hold fails")
                 self.fault("hold-failed", str(err), "hand keeps its last command; the hold is retried")
             return
-        self.hold_failed = False
+        if self.states[HoldRetry] is HoldRetry.FAILING:
+            self.states.take(HoldRetry, "a hold goes out")
         self.res.holds_sent += 1
         for i, until in enumerate(self.until):  # a closing cut short: its rest is owed
             if until is not None:
@@ -1229,10 +624,8 @@ class _Loop:
                 self.until[i] = None
 
     def source_stats(self) -> dict[str, int]:
-        st = getattr(self.source, "stats", None)
-        if st is None:
-            return {}
-        return dict(st.to_dict()) if hasattr(st, "to_dict") else dict(vars(st))
+        st = optional(self.source, SampleSource, "stats")
+        return {} if st is None else dict(st.to_dict())
 
     def housekeeping(self, now: float) -> None:
         if now >= self.next_counters:
@@ -1249,7 +642,7 @@ class _Loop:
     def stall_check(self, now: float) -> None:
         """Fingers the hand newly reports stalled (optional ``Hand.stalled()``): a fault each, and
         the rest of a closing in progress is not counted as grip."""
-        report: Callable[[], Any] | None = getattr(self.hand, "stalled", None)
+        report: Callable[[], Any] | None = optional(self.hand, Hand, "stalled")
         if not callable(report):
             return
         try:
@@ -1322,7 +715,7 @@ class _Loop:
             self.sink.recorder.add_metadata("run_summary", res.summary_metadata())
         rec = self.sink.recorder
         if rec is not None and rec.error is not None and res.recording_error is None:
-            res.recording_error = f"{getattr(rec, 'path', 'recording')}: {rec.error}"
+            res.recording_error = f"{optional(rec, RunRecorder, 'path')}: {rec.error}"
         return res
 
 
@@ -1349,7 +742,7 @@ class _Guard(threading.Thread):
             self.holding = True
             ok = loop.lock.acquire(timeout=loop.watchdog_s)
             try:
-                if ok and hasattr(loop.hand, "hold"):
+                if ok:
                     loop.hand.hold(loop.fingers)
                     action = "fingers held by the guard"
                 else:
@@ -1365,111 +758,3 @@ class _Guard(threading.Thread):
     def close(self) -> None:
         self.closing.set()
         self.join(timeout=1.0)
-
-
-def print_fault(fault: Fault, file: Any = None) -> None:
-    """Print a fault as one line on stderr (the CLI's ``on_fault``).
-
-    Examples
-    --------
-    >>> import io; buf = io.StringIO()
-    >>> print_fault(Fault(1.25, "watchdog", "no sample", "held"), file=buf); buf.getvalue()
-    '[   1.250 s] watchdog: no sample -> held\\n'
-    """
-    print(f"[{fault.time:8.3f} s] {fault.kind}: {fault.message} -> {fault.action}",
-          file=file if file is not None else sys.stderr, flush=True)
-
-
-
-def realtime_priority(priority: int = 50) -> str:
-    """Ask the OS to run this process under SCHED_FIFO real-time scheduling.
-
-    On Linux with an ``rtprio`` limit of at least ``priority`` or
-    ``CAP_SYS_NICE`` (root works too, but is not needed: docs/runtime.md,
-    "Privileges") the loop then preempts ordinary processes, which keeps its
-    latency low on a busy machine. The loop blocks in ``select`` between
-    samples, so it does not starve anything. Call :func:`drop_capabilities`
-    afterwards: the policy stays, the capability is no longer needed.
-
-    Parameters
-    ----------
-    priority : int
-        SCHED_FIFO priority, 1..99.
-
-    Returns
-    -------
-    str
-        What happened, for the user (never raises).
-
-    Examples
-    --------
-    >>> isinstance(realtime_priority.__doc__, str)
-    True
-    """
-    if not hasattr(os, "sched_setscheduler"):
-        return "real-time scheduling not available on this platform; running at normal priority"
-    try:
-        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
-    except (OSError, ValueError) as err:
-        return f"could not get SCHED_FIFO ({err}); running at normal priority"
-    return f"running under SCHED_FIFO priority {priority}"
-
-
-#: Linux capability numbers named in messages (linux/capability.h).
-_CAP_NAMES = {23: "CAP_SYS_NICE", 1: "CAP_DAC_OVERRIDE", 21: "CAP_SYS_ADMIN", 7: "CAP_SETUID"}
-
-
-def _capabilities() -> tuple[int, int]:
-    """The effective and permitted capability masks of this process (Linux; 0, 0 elsewhere)."""
-    try:
-        with open("/proc/self/status", encoding="ascii") as fh:
-            fields = dict(line.split(":", 1) for line in fh if line.startswith("Cap"))
-        return int(fields["CapEff"], 16), int(fields["CapPrm"], 16)
-    except (OSError, KeyError, ValueError):
-        return 0, 0
-
-
-def drop_capabilities() -> str:
-    """Give up every Linux capability this process holds; the scheduling policy already set stays.
-
-    ``run --realtime`` started with ``CAP_SYS_NICE`` (an ambient capability, a
-    file capability) needs it only for the one ``sched_setscheduler`` call; the
-    serial ports need the ``dialout`` group, not a capability. So after
-    :func:`realtime_priority` the effective, permitted and inheritable sets are
-    cleared (``capset(2)``; the ambient set follows). A process running as root
-    keeps its rights (dropping them could leave it unable to finish its
-    recording in a user's folder); the message then says to use
-    ``CAP_SYS_NICE`` or an ``rtprio`` limit instead.
-
-    Returns
-    -------
-    str
-        What happened, for the user, or ``""`` when nothing was held (never raises).
-
-    Examples
-    --------
-    >>> isinstance(drop_capabilities.__doc__, str)
-    True
-    """
-    if not sys.platform.startswith("linux"):
-        return ""
-    if os.geteuid() == 0:
-        return ("root: not needed, its rights are kept; give the user CAP_SYS_NICE or an rtprio "
-                "limit instead (docs/runtime.md, Privileges)")
-    eff, prm = _capabilities()
-    if not (eff or prm):
-        return ""
-
-    held = [name for bit, name in _CAP_NAMES.items() if (eff | prm) >> bit & 1]
-    header = (ctypes.c_uint32 * 2)(0x20080522, 0)   # _LINUX_CAPABILITY_VERSION_3, this process
-    data = (ctypes.c_uint32 * 6)()                  # effective, permitted, inheritable: none (2 words)
-    try:
-        libc = ctypes.CDLL(None, use_errno=True)
-        if libc.capset(header, data) != 0:
-            return f"could not drop capabilities: {os.strerror(ctypes.get_errno())}"
-    except (OSError, AttributeError) as err:
-        return f"could not drop capabilities: {err}"
-    eff, prm = _capabilities()
-    if eff or prm:
-        return f"could not drop capabilities (still held: {eff:#x})"
-    return "gave up capabilities " + (", ".join(held) or "held") + " (the scheduling policy stays)"

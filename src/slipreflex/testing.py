@@ -16,9 +16,15 @@ slip) and checks the :class:`slipreflex.interfaces.Reflex` contract:
   :class:`~slipreflex.errors.DataError` (any other exception fails), it never
   yields a command below the hand's measured position or the last command (a
   fault never opens the hand), and the reflex still answers the slip after it;
+* the optional members the real-time loop reads (``command``, ``params.p0``, ``params.hi``,
+  ``finger_offsets``, ``last_board``, ``last_mismatch``), where the reflex has them, of the
+  kind :data:`slipreflex.interfaces.CONTRACTS` declares;
 * a :class:`~slipreflex.interfaces.CompiledReflex`: ``compiled()`` returns the
   live state, and its step on that state gives ``step``'s commands and
   diagnostics bit for bit (what the compiled closed loop relies on).
+
+:func:`check_hand` and :func:`check_source` (from :mod:`slipreflex.contract_checks`) check a
+hand and a sample source the same way.
 
 :func:`reflex_for_check` builds any registered method ready for the check
 (thresholds of calibrated methods from the synthetic rest recording, by the
@@ -47,28 +53,20 @@ import numpy as np
 from . import experiment_specs, methods
 from . import hardware as hw
 from .baselines import REST_K, rest_statistic
+from .contract_checks import ContractError, check_hand, check_reflex_members, check_source
 from .errors import DataError
 from .experiments import Cell, ReproduceConfig, run_trial, trial_seed
 from .interfaces import Reflex
 from .thresholds import calibrate
 
-__all__ = ["ContractError", "CheckReport", "check_reflex", "check_method", "synthetic_input",
+__all__ = ["ContractError", "CheckReport", "check_reflex", "check_method", "synthetic_input", "check_hand",
+           "check_source",
            "reflex_for_check", "check_experiment"]
 
 #: Synthetic trial: seconds of rest, then seconds of slip.
 REST_S, SLIP_S = 1.0, 1.0
 #: Grasp position the checked reflexes start from (finger units).
 CHECK_P0: float = 100.0
-
-
-class ContractError(AssertionError):
-    """A reflex breaks the :class:`~slipreflex.interfaces.Reflex` contract; the message says how.
-
-    Examples
-    --------
-    >>> issubclass(ContractError, AssertionError)
-    True
-    """
 
 
 @dataclass(frozen=True)
@@ -323,9 +321,10 @@ def check_reflex(reflex: Any, *, shape: tuple[int, ...] | None = None, seed: int
     >>> check_reflex(Opens())
     Traceback (most recent call last):
     ...
-    slipreflex.testing.ContractError: Opens (opens): a non-finite sample produced the command 0.0, below ...
+    slipreflex.contract_checks.ContractError: Opens (opens): a non-finite sample produced the command 0.0, below ...
     """
     _check_attributes(reflex)
+    check_reflex_members(reflex)
     if shape is None:
         shape = tuple(getattr(getattr(reflex, "params", None), "shape", hw.TACTILE_SHAPE))
     x, k_rest = synthetic_input(reflex.input_kind, float(reflex.fs), shape=shape, seed=seed)
@@ -343,6 +342,7 @@ def check_reflex(reflex: Any, *, shape: tuple[int, ...] | None = None, seed: int
     twin.reset()
     if _run(twin, x) != first:
         _fail(reflex, "a copy of the fresh reflex gives other bits on the same input")
+    check_reflex_members(reflex)  # the optional members the loop reads, after a run
     _check_compiled(reflex, x, first)
     _check_non_finite(reflex, x, k_rest // 2, k_rest, first)
     reflex.reset()
