@@ -9,11 +9,12 @@ Usage::
 Runs the reproduction grid (same seeds) on the nominal plant of :mod:`slipreflex.sim.uncertain`
 (``plant_from_values({})``: the built-in plant, bit for bit) and on the plant with NAME set to
 VALUE (or, for the name of a physics term or group of :mod:`slipreflex.sim.terms` and no
-VALUE, with its constants at their "absent" values), and prints each cell's mean response and total controller time and its success rate
-side by side. The changed plant's pads are calibrated again to the nominal plant's observed
-open-loop first slip (:meth:`slipreflex.sim.uncertain.Plant.calibrated`, a minute or two), so a
-constant that moves the grasp's capacity does not silently move the first slip too;
-``--no-recalibrate`` keeps the nominal pad friction. The constants' names: ``python -c "from
+VALUE, with its constants at their "absent" values), and prints each cell's mean response and
+total controller time and its success rate side by side. The changed plant's pads are
+calibrated again to the nominal plant's observed open-loop first slip
+(:meth:`slipreflex.sim.uncertain.Plant.calibrated`, a minute or two), so a constant that
+moves the grasp's capacity does not silently move the first slip too; ``--no-recalibrate``
+keeps the nominal pad friction. The constants' names: ``python -c "from
 slipreflex.sim.uncertain import UNCERTAIN; print(list(UNCERTAIN))"``. This is how the closing
 notes say which physics decided a claim's change.
 """

@@ -8,8 +8,15 @@ from pathlib import Path
 import pytest
 
 from slipreflex.errors import ParameterError
-from slipreflex.sim.terms import (GROUPS, PHYSICS_TERMS, SWITCHES, VERDICT_SWITCHES, PhysicsTerm, absent_values,
-                                  markdown_table)
+from slipreflex.sim.terms import (
+    GROUPS,
+    PHYSICS_TERMS,
+    SWITCHES,
+    VERDICT_SWITCHES,
+    PhysicsTerm,
+    absent_values,
+    markdown_table,
+)
 from slipreflex.sim.uncertain import UNCERTAIN, plant_from_values
 
 ROOT = Path(__file__).resolve().parents[1]
