@@ -14,6 +14,7 @@ nominal value, then with all of them. Per run it prints, from the perturbation t
   fall-out do not dominate);
 * when the bottle first slips and whether it falls.
 
+The terms and their "absent" values are :mod:`slipreflex.sim.terms`' table (its ``VERDICT_SWITCHES``).
 Terms: ``grip`` (the bounded grip: wall softening and the motor's torque-speed line), ``roll`` (the fingertip's
 roll and the gap's opening), ``events`` (the pads' micro-slip events), ``incipient`` (the Cattaneo-Mindlin
 redistribution of incipient slip), ``motor`` (the digits' motor vibration; in an open loop the digits move only

@@ -83,3 +83,16 @@ def test_the_physics_scripts_build_their_plants_from_the_table():
         assert set(runs["base"]) - set(runs[name]) == set(absent_values(name))
     claims = _script("term_claims")
     assert not hasattr(claims, "TERMS")     # no private copy of the absent values
+
+
+def test_the_ablation_switches_a_term_off_by_its_name(capsys):
+    import argparse
+
+    ablation = _script("ablation")
+    ap = argparse.ArgumentParser(prog="ablation")
+    assert ablation._changed(ap, "tilt", None) == {"drop_eccentricity": 0.0}
+    assert ablation._changed(ap, "hand_latency", 0.02) == {"hand_latency": 0.02}
+    for name, value in (("nope", None), ("nope", 1.0)):
+        with pytest.raises(SystemExit) as stop:
+            ablation._changed(ap, name, value)
+        assert stop.value.code == 2 and "'nope'" in capsys.readouterr().err
