@@ -121,9 +121,9 @@ def _string(b):
 
 
 def _mcap(chunks):
-    from slipreflex import recording
+    from slipreflex.recording import reader
     header = _string(b"") + _string(b"bomb")
-    return recording._MAGIC + bytes([1]) + struct.pack("<Q", len(header)) + header + b"".join(chunks)
+    return reader._MAGIC + bytes([1]) + struct.pack("<Q", len(header)) + header + b"".join(chunks)
 
 
 def bomb():

@@ -14,6 +14,7 @@ nominal value, then with all of them. Per run it prints, from the perturbation t
   fall-out do not dominate);
 * when the bottle first slips and whether it falls.
 
+The terms and their "absent" values are :mod:`slipreflex.sim.terms`' table (its ``VERDICT_SWITCHES``).
 Terms: ``grip`` (the bounded grip: wall softening and the motor's torque-speed line), ``roll`` (the fingertip's
 roll and the gap's opening), ``events`` (the pads' micro-slip events), ``incipient`` (the Cattaneo-Mindlin
 redistribution of incipient slip), ``motor`` (the digits' motor vibration; in an open loop the digits move only
@@ -28,7 +29,6 @@ Run: ``python scripts/physics_terms.py [--figure physics_terms.png] [--bottles T
 from __future__ import annotations
 
 import argparse
-import dataclasses
 
 import numpy as np
 
@@ -36,43 +36,27 @@ from slipreflex import hardware as hw
 from slipreflex.baselines import rest_threshold
 from slipreflex.baselines.nmsd import nmsd_detections, nmsd_statistic
 from slipreflex.baselines.swt import swt_on, swt_statistic
-from slipreflex.sim import PAPER_DROP, PAPER_POUR, HandParams, Rig, SlipSensorParams, TactileParams
-from slipreflex.sim.objects import BOTTLES
+from slipreflex.sim import PAPER_DROP, PAPER_POUR
+from slipreflex.sim.terms import VERDICT_SWITCHES, absent_values
+from slipreflex.sim.uncertain import plant_from_values
 
 REST_S = 4.0
 
 
-def plants() -> dict[str, dict]:
-    """Keyword sets for Rig: the base (every term absent), each term alone, all terms."""
-    absent_hand = {"motor_droop": 0.0, "spot_travel_per_unit_m": 0.0, "motor_vibration_n": 0.0}
-    absent_bottle = {"wall_softening": 0.0, "shoulder_slope": 0.0, "drop_eccentricity_m": 0.0}
-    absent_sensor = {"gap_dent_fraction": 0.0}
-    absent_tac = {"slip_events": 0.0, "incipient_slip": 0.0}
-    terms = {
-        "base": {},
-        "grip": {"hand": {"motor_droop": HandParams().motor_droop}, "bottle": {"wall_softening":
-                                                                                BOTTLES["TR"].wall_softening}},
-        "roll": {"hand": {"spot_travel_per_unit_m": HandParams().spot_travel_per_unit_m},
-                 "sensor": {"gap_dent_fraction": SlipSensorParams().gap_dent_fraction}},
-        "events": {"tactile": {"slip_events": TactileParams().slip_events}},
-        "incipient": {"tactile": {"incipient_slip": TactileParams().incipient_slip}},
-        "motor": {"hand": {"motor_vibration_n": HandParams().motor_vibration_n}},
-        "shoulder": {"bottle": {"shoulder_slope": BOTTLES["TR"].shoulder_slope}},
-        "tilt": {"bottle": {"drop_eccentricity_m": BOTTLES["TR"].drop_eccentricity_m}},
-    }
-    out = {}
-    for name, on in terms.items():
-        out[name] = {"hand": {**absent_hand, **on.get("hand", {})}, "bottle": {**absent_bottle, **on.get("bottle", {})},
-                     "sensor": {**absent_sensor, **on.get("sensor", {})},
-                     "tactile": {**absent_tac, **on.get("tactile", {})}}
-    out["all"] = {"hand": {}, "bottle": {}, "sensor": {}, "tactile": {}}
+def plants() -> dict[str, dict[str, float]]:
+    """Uncertain-constant values per run (:mod:`slipreflex.sim.terms`): the base (every term absent), each
+    term alone, all terms (the nominal plant)."""
+    base = absent_values()
+    out: dict[str, dict[str, float]] = {"base": base}
+    for name in VERDICT_SWITCHES:
+        on = absent_values(name)
+        out[name] = {k: v for k, v in base.items() if k not in on}
+    out["all"] = {}
     return out
 
 
-def run(bottle: str, what: str, kw: dict, seed: int = 0) -> dict:
-    b = dataclasses.replace(BOTTLES[bottle], **kw["bottle"])
-    rig = Rig(b, seed=seed, hand=HandParams(**kw["hand"]), slip_sensor=SlipSensorParams(**kw["sensor"]),
-              tactile=TactileParams(**kw["tactile"]))
+def run(bottle: str, what: str, values: dict[str, float], seed: int = 0) -> dict:
+    rig = plant_from_values(values).rig(bottle, seed=seed)
     rig.grasp()
     sn = rig.tactile_sampler(hw.NMSD_FS, keep=True)
     ss = rig.tactile_sampler(hw.SWT_FS, keep=True)
@@ -127,8 +111,8 @@ def main() -> int:
     print(lines[0])
     for b in args.bottles.split(","):
         for what in ("pour", "drop"):
-            for name, kw in ps.items():
-                r = run(b, what, kw, args.seed)
+            for name, values in ps.items():
+                r = run(b, what, values, args.seed)
                 traces[(b, what, name)] = r
                 lines.append(f"{b:6} {what:5} {name:10} {r['onset']:8.3f} {str(r['fallen']):>6} "
                              f"{r['nmsd_ratio']:9.2f} {r['nmsd_n']:8d} {r['swt_ratio']:8.2f} {r['swt_on']:7d} "

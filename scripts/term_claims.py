@@ -1,7 +1,7 @@
 """Which physics term moved which claim: the default reproduction with each term switched off in turn.
 
 Runs the default reproduction grid (same master seed and trials per cell as ``slipreflex reproduce``) on the
-nominal plant and on the plant with one term at its "absent" value (the uncertain table's lower bound), its pads
+nominal plant and on the plant with one term at its "absent" value (:mod:`slipreflex.sim.terms`), its pads
 calibrated again to the observed open-loop first slip (:meth:`slipreflex.sim.uncertain.Plant.calibrated`, as the
 ablation does: a term that moves the grasp's capacity must not move the first slip), judges the paper's claims on
 each (:func:`slipreflex.analysis.claims.judge_run`) and prints the verdict classes side by side, with the numbers
@@ -20,18 +20,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-#: Each term and the uncertain constants that switch it off (their "absent" values).
-TERMS: dict[str, dict[str, float]] = {
-    "grip": {"wall_softening": 0.0, "motor_droop": 0.0},
-    "roll": {"spot_travel_per_unit": 0.0, "gap_dent_fraction": 0.0},
-    "spot": {"spot_travel_per_unit": 0.0},
-    "gap": {"gap_dent_fraction": 0.0},
-    "events": {"slip_events": 0.0},
-    "incipient": {"incipient_slip": 0.0},
-    "motor": {"motor_vibration": 0.0},
-    "shoulder": {"shoulder_slope": 0.0},
-    "tilt": {"drop_eccentricity": 0.0},
-}
+from slipreflex.sim.terms import SWITCHES, VERDICT_SWITCHES, absent_values
 
 
 def decidable(folder: str, claims: tuple[int, ...] = (4, 5, 7)) -> list[str]:
@@ -83,14 +72,18 @@ def _write(marker: str, lines: list[str]) -> int:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--jobs", type=int, default=2)
-    ap.add_argument("--terms", default="grip,roll,events,incipient,motor,shoulder,tilt",
-                    help=f"comma-separated, of: {', '.join(TERMS)} (spot and gap: the two halves of roll)")
+    ap.add_argument("--terms", default=",".join(VERDICT_SWITCHES),
+                    help=f"comma-separated, of: {', '.join(SWITCHES)} (slipreflex.sim.terms; spot and gap: the "
+                         "two halves of roll)")
     ap.add_argument("--study", default=None, help="a study's output folder: where claims 4, 5, 7 become testable")
     ap.add_argument("--write", action="store_true", help="put the table between docs/study.md's markers")
     args = ap.parse_args()
     if args.study:
         found = decidable(args.study)
         return _write("study decidable", found) if args.write else 0
+    unknown = [x for x in args.terms.split(",") if x not in SWITCHES]
+    if unknown:
+        ap.error(f"--terms: unknown term {unknown[0]!r} (known: {', '.join(SWITCHES)})")
 
     from slipreflex.analysis.claims import judge_run
     from slipreflex.experiments import ReproduceConfig, run_reproduce
@@ -98,7 +91,7 @@ def main() -> int:
 
     runs = {}
     for label in ("all", *args.terms.split(",")):
-        values = {} if label == "all" else TERMS[label]
+        values = {} if label == "all" else absent_values(label)
         plant = plant_from_values(values)
         if values:
             plant = plant.calibrated()

@@ -20,7 +20,8 @@ from slipreflex import hardware as hw
 from slipreflex.cli import main
 from slipreflex.devices import wire
 from slipreflex.devices.daq import SerialDaq
-from slipreflex.recording import METADATA_NAME, Recorder, read_recording, replay
+from slipreflex.recording import METADATA_NAME, Recorder, read_recording
+from slipreflex.replay import replay
 from slipreflex.runtime import run_loop
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -12,10 +12,9 @@ import lz4.frame
 import pytest
 import zstandard
 
-from slipreflex import recording
 from slipreflex.cli import main
 from slipreflex.errors import DataError
-from slipreflex.recording import read_recording
+from slipreflex.recording import read_recording, reader
 from slipreflex.validation import LIMITS
 
 
@@ -47,7 +46,7 @@ def _zeros_zstd(n: int) -> bytes:
 
 def _write(tmp_path, name, *records) -> str:
     p = tmp_path / name
-    p.write_bytes(recording._MAGIC + _header() + b"".join(records))
+    p.write_bytes(reader._MAGIC + _header() + b"".join(records))
     return str(p)
 
 
@@ -104,8 +103,8 @@ def test_the_resync_looks_at_each_candidate_in_constant_time(tmp_path, monkeypat
         filler[q + 1:q + 9] = struct.pack("<Q", n - q - 64)
     path = _write(tmp_path, "resync.mcap", _record(0x7F, b"x"), bytes(filler))
     calls = []
-    real = recording._chunk_records
-    monkeypatch.setattr(recording, "_chunk_records", lambda *a: calls.append(a[1]) or real(*a))
+    real = reader._chunk_records
+    monkeypatch.setattr(reader, "_chunk_records", lambda *a: calls.append(a[1]) or real(*a))
     rec = read_recording(path)
     assert rec.damaged and not rec.messages
     assert len(calls) <= 1

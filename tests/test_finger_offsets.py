@@ -13,7 +13,8 @@ from slipreflex.devices.simrig import SimRig
 from slipreflex.errors import ParameterError
 from slipreflex.hardware import DAQ_PERIOD_S, FINGER_MAX, TRIPOD, Finger
 from slipreflex.interfaces import DaqSample
-from slipreflex.recording import METADATA_NAME, Recorder, read_recording, replay
+from slipreflex.recording import METADATA_NAME, Recorder, read_recording
+from slipreflex.replay import replay
 from slipreflex.runtime import run_loop
 from test_safe_start import _RigSource
 

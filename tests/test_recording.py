@@ -158,7 +158,7 @@ def test_sigkilled_run_leaves_a_recording_that_replays(tmp_path):
     """End to end: `slipreflex run` on the virtual rig, killed with SIGKILL mid-run."""
     from slipreflex.devices.simrig import SimRig
     from slipreflex.devices.virtual import VirtualDevices
-    from slipreflex.recording import replay
+    from slipreflex.replay import replay
 
     sim = SimRig("TR", seed=2)
     p0 = sim.grasp().position
@@ -228,3 +228,31 @@ def test_reading_something_that_is_not_a_recording(tmp_path, capsys):
     assert "no chain parameters" in capsys.readouterr().err
     assert main(["export", str(plain)]) == 2
     assert "no slip-sensor samples" in capsys.readouterr().err
+
+
+def test_the_recording_package_imports_nothing_of_the_chain_or_the_board():
+    """The file format sits below the chain: replay, which needs the chain and the board's twin, is above it."""
+    from test_imports import _graph
+
+    edges = _graph()
+    seen, todo = set(), [m for m in edges if m == "slipreflex.recording" or m.startswith("slipreflex.recording.")]
+    assert "slipreflex.recording.format" in todo and "slipreflex.recording.reader" in todo
+    while todo:
+        module = todo.pop()
+        if module not in seen:
+            seen.add(module)
+            todo.extend(edges.get(module, {}))
+    above = sorted(m for m in seen if m.split(".")[1] in ("chain", "board", "replay", "runtime", "sim"))
+    assert not above, f"the recording package reaches {above}"
+    assert "slipreflex.recording" in _graph()["slipreflex.replay"]     # the check sees a real edge
+
+
+def test_every_public_name_is_importable_from_the_package():
+    import slipreflex.recording as recording
+    from slipreflex.recording import export, format, reader, recover, writer
+
+    for module in (export, format, reader, recover, writer):
+        for name in module.__all__:
+            assert getattr(recording, name) is getattr(module, name), (module.__name__, name)
+            assert name in recording.__all__, name
+    assert recording.RecordingError.__module__ == "slipreflex.recording"

@@ -19,7 +19,8 @@ from conftest import reap_child
 from slipreflex.chain import ReflexParams, SlipReflex
 from slipreflex.cli import main
 from slipreflex.errors import DataError
-from slipreflex.recording import METADATA_NAME, PLANNED_SAMPLES, Recorder, read_recording, recover_recording, replay
+from slipreflex.recording import METADATA_NAME, PLANNED_SAMPLES, Recorder, read_recording, recover_recording
+from slipreflex.replay import replay
 from test_recording import _CHILD
 
 N = 2000

@@ -23,7 +23,8 @@ from slipreflex.devices.daq import SerialDaq
 from slipreflex.devices.ilimb import ILimb, PacketParser
 from slipreflex.devices.virtual import VirtualDevices
 from slipreflex.interfaces import DaqSample
-from slipreflex.recording import METADATA_NAME, Recorder, read_recording, replay
+from slipreflex.recording import METADATA_NAME, Recorder, read_recording
+from slipreflex.replay import replay
 from slipreflex.runtime import run_loop
 
 P0 = 150.0

@@ -23,7 +23,8 @@ import numpy as np
 from ..errors import DataError, ParameterError
 from ..hardware import SLIP_FINGER
 from ..methods import MethodContext, applicable, make
-from ..recording import METADATA_NAME, TOPICS, read_recording, replay
+from ..recording import METADATA_NAME, TOPICS, read_recording
+from ..replay import replay
 from ._live import add_live_arguments, check_live_arguments, close_taps, open_taps
 
 NAME = "replay"

@@ -23,7 +23,8 @@ from ..csvfiles import read_preamble, read_slip_csv
 from ..errors import ParameterError
 from ..neuro import events as ev
 from ..neuro.events import FORMATS, sensor_size, write_events
-from ..recording import chain_params_of, read_recording
+from ..recording import read_recording
+from ..replay import chain_params_of
 
 NAME = "spikes"
 HELP = "write spikes as AEDAT4, tonic's events_struct (.npy) or NIR event data"
