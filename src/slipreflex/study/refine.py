@@ -106,13 +106,13 @@ def boundary(pilot: np.ndarray, holds: np.ndarray, points: np.ndarray, k: int = 
     >>> boundary(pilot, np.array([[1], [1], [0], [0]], bool), np.array([[0.0], [0.5], [1.0]]), k=2)
     array([False,  True, False])
     """
-    from scipy.spatial import cKDTree  # deferred: heavy (scipy.spatial)
+    from scipy.spatial import KDTree  # deferred: heavy (scipy.spatial)
 
     k = min(int(k), len(pilot))
-    _, idx = cKDTree(pilot).query(points, k=k)
+    _, idx = KDTree(pilot).query(points, k=k)
     idx = np.asarray(idx).reshape(len(points), k)
-    h = np.asarray(holds, dtype=bool)[idx]            # (m, k, c)
-    return (h.any(axis=1) & ~h.all(axis=1)).any(axis=1)
+    h = np.asarray(holds, dtype=np.int8)[idx]            # (m, k, c)
+    return np.asarray((h.max(axis=1) - h.min(axis=1)).max(axis=1) > 0)
 
 
 @dataclass(frozen=True)
@@ -198,10 +198,10 @@ def make_plan(pilot: np.ndarray, holds: np.ndarray, n: int, seed: int, *, skip: 
     n1, d = pilot.shape
     if n1 < 1:
         raise ParameterError("refinement needs at least one pilot plant")
-    skip = n1 if skip is None else int(skip)
+    first = n1 if skip is None else int(skip)
     if n_candidates is None:
         n_candidates = max(MIN_CANDIDATES, 2 ** math.ceil(math.log2(16 * (n1 + n))))
-    cand = candidates(d, n_candidates, skip, seed)
+    cand = candidates(d, n_candidates, first, seed)
     stratum = boundary(pilot, holds, cand, k).astype(int)
     weights = np.bincount(stratum, minlength=2) / len(cand)
     own = boundary(pilot, holds, pilot, k + 1).astype(int)   # a pilot plant's neighbours, itself included
