@@ -378,13 +378,15 @@ def _calibrated(plant: Any, table: Mapping) -> tuple[Any, dict[str, Any]]:
     c = table["first_slip_ml"]
     kw = plant.rig_kwargs()
     cals = {}
+    memo: dict = {}   # the bottles' shared open-loop pours (TR and DK differ only in their surface)
     for name, bottle in plant.bottles.items():
         try:
-            cals[name] = calibrate_bottle(bottle, plant.first_slip_ml, rig_kwargs=kw, seeds=CALIBRATION_SEEDS)
+            cals[name] = calibrate_bottle(bottle, plant.first_slip_ml, rig_kwargs=kw, seeds=CALIBRATION_SEEDS,
+                                          memo=memo)
         except ParameterError:
             try:
                 cals[name] = calibrate_bottle(bottle, plant.first_slip_ml, rig_kwargs=kw, seeds=DEFAULT_SEEDS,
-                                              band_ml=(c.low, c.high))
+                                              band_ml=(c.low, c.high), memo=memo)
             except ParameterError as err:   # no friction meets the paper's observed fact: counted apart
                 return plant, {"calibration_note": "", "rejected": f"{err}"}
     plant = replace(plant, bottles=MappingProxyType({n: k.bottle for n, k in cals.items()}))
