@@ -56,6 +56,14 @@ def test_boundary_marks_where_neighbours_disagree():
     assert not edge[far].any() and 0.05 < edge.mean() < 0.8
 
 
+@pytest.mark.parametrize("n", [4, 5, 9, 33])
+def test_plan_has_exactly_the_plants_asked_for(n):
+    pilot = candidates(3, 16, 0, seed=2)
+    plan = make_plan(pilot, (pilot[:, :1] < 0.1), n, seed=2, n_candidates=512)
+    assert len(plan.points) == n and len(set(map(tuple, plan.points))) == n
+    assert all((plan.strata == h).sum() >= 2 for h in (0, 1) if plan.weights[h] > 0)
+
+
 def test_plan_is_deterministic_and_spends_more_on_the_boundary():
     pilot = candidates(3, 32, 0, seed=5)
     a = make_plan(pilot, _box(pilot)[:, None], 40, seed=5, n_candidates=2048)

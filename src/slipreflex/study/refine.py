@@ -142,22 +142,26 @@ class RefinePlan:
 
 
 def _allocation(weights: np.ndarray, spread: np.ndarray, available: np.ndarray, n: int) -> np.ndarray:
-    """Neyman's allocation of ``n`` plants, at least 2 per stratum with candidates, within what is available."""
+    """Neyman's allocation of exactly ``n`` plants, at least 2 per stratum with candidates, within what is
+    available (rounded to the nearest counts, the largest shortfall first).
+
+    Examples
+    --------
+    >>> _allocation(np.array([0.99, 0.01]), np.array([0.5, 0.5]), np.array([990, 10]), 8).tolist()
+    [6, 2]
+    """
     live = available > 0
-    want = np.where(live, weights * np.maximum(spread, SPREAD_FLOOR), 0.0)
-    alloc = np.where(live, np.minimum(2, available), 0).astype(int)
-    left = n - int(alloc.sum())
-    if left < 0:
+    if n < 2 * int(live.sum()):
         raise ParameterError(f"--refine {n}: too few for 2 plants in each of {int(live.sum())} strata")
-    share = want / want.sum() * n if want.sum() > 0 else np.zeros_like(want)
-    extra = np.clip(np.floor(share) - alloc, 0, None).astype(int)
-    extra = np.minimum(extra, available - alloc)
-    alloc += extra
-    order = np.argsort(-(share - np.floor(share)), kind="stable")   # the largest remainders first
-    while alloc.sum() < n and (alloc < available).any():
-        for h in order:
-            if alloc.sum() < n and alloc[h] < available[h]:
-                alloc[h] += 1
+    want = np.where(live, weights * np.maximum(spread, SPREAD_FLOOR), 0.0)
+    share = want / want.sum() * n
+    alloc = np.where(live, np.minimum(np.maximum(2, np.floor(share)), available), 0).astype(int)
+    while alloc.sum() > n:
+        over = np.where(alloc > 2, alloc - share, -np.inf)
+        alloc[int(np.argmax(over))] -= 1
+    while alloc.sum() < n:
+        short = np.where(alloc < available, share - alloc, -np.inf)
+        alloc[int(np.argmax(short))] += 1
     return alloc
 
 
