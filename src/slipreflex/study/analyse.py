@@ -54,6 +54,7 @@ from ..analysis.claims import (
 )
 from ..paths import new_file
 from .design import varying
+from .refine import ratio_estimate
 from .runner import _arrow_table
 
 __all__ = ["wilson", "plant_table", "pooled_scan", "claim_fractions", "refinement", "deciders", "reaches", "FDR",
@@ -249,8 +250,6 @@ def claim_fractions(plants: Sequence[Mapping[str, Any]], scan: Any = None,
 
 def _refined(plants: Sequence[Mapping[str, Any]], claim: int, refined: Any) -> tuple[float, float, float]:
     """The two-phase stratified estimate of where ``claim`` holds, over the second-stage plants."""
-    from .refine import ratio_estimate
-
     strata, weights, n_candidates = refined
     second = [p for p in plants if int(p["plant"]) in strata]
     accepted = [not p.get("error") and not p.get("rejected") for p in second]

@@ -64,7 +64,8 @@ from ..paths import new_file
 from ..progress import Progress
 from ..thresholds import calibrate
 from ..validation import within
-from .design import DESIGNS, draw_design
+from .design import DESIGNS, draw_design, unit_design, values_at, varying
+from .refine import make_plan
 
 __all__ = ["StudyConfig", "PlantOutcome", "run_plant", "run_study", "StudyRun", "PARTS_DIR", "STUDY_SCAN_BASE",
            "scan_seed_base", "read_parts", "part_path", "DEFAULT_PLANTS", "DEFAULT_TRIALS", "probe_scheduler",
@@ -269,8 +270,6 @@ class StudyConfig:
         >>> len(cfg.refine_plan(parts).points)
         4
         """
-        from .design import unit_design, varying
-        from .refine import make_plan
 
         missing = [i for i in range(self.plants) if i not in parts]
         if missing:
@@ -294,8 +293,6 @@ class StudyConfig:
         >>> StudyConfig(plants=2).refine_values({})
         {}
         """
-        from .design import values_at
-
         if not self.refine:
             return {}
         vals = values_at(self.table, self.refine_plan(parts).points)
