@@ -37,7 +37,7 @@ from ..experiments import BOTTLE_NAMES, EXPERIMENTS
 from ..experiments import DEFAULT_SEED as seed
 from ..paths import OutputSet
 from ..study import DEFAULT_PLANTS, DEFAULT_TRIALS, DESIGNS, StudyConfig, read_parts, run_study
-from ..study.analyse import claim_fractions, plant_table, pooled_scan, sensitivity, write_outputs
+from ..study.analyse import claim_fractions, plant_table, pooled_scan, refinement, sensitivity, write_outputs
 from ..study.runner import probe_scheduler
 from ..validation import within
 
@@ -71,6 +71,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     """Options of ``slipreflex study``."""
     p.add_argument("--plants", type=int, default=DEFAULT_PLANTS,
                    help=f"plants to draw (default {DEFAULT_PLANTS}; saltelli rounds up to B(D+2))")
+    p.add_argument("--refine", type=int, default=0, metavar="N",
+                   help="after the --plants pilot, N more plants where a claim's class changes between "
+                        "neighbours, and a stratified estimate of each claim's fraction (default 0: none; "
+                        "sobol design only)")
     p.add_argument("--design", choices=DESIGNS, default="sobol", help="design over the constants (default sobol)")
     p.add_argument("--trials", type=int, default=DEFAULT_TRIALS,
                    help=f"trials per bottle, experiment and method on each plant (default {DEFAULT_TRIALS})")
@@ -131,7 +135,7 @@ def run(args: argparse.Namespace) -> int:
         within("jobs", args.workers, "--workers")
     config = StudyConfig(plants=args.plants, design=args.design, trials=args.trials, bottles=tuple(args.bottles),
                          methods=tuple(args.methods), experiments=tuple(args.experiments), seed=args.seed,
-                         ranges=args.ranges, calibrate=not args.no_calibration)
+                         ranges=args.ranges, calibrate=not args.no_calibration, refine=args.refine)
     claimed: OutputSet | None = None
     if args.out.is_dir():   # a file of the user's where the study writes its tables: refused before any work
         claimed = OutputSet(args.out, NAME)
@@ -168,7 +172,7 @@ def run(args: argparse.Namespace) -> int:
 
     sens = sensitivity(plants, result.config.table, design=result.config.design, seed=result.config.seed)
     print("claim  class             holds (95% CI)     the paper says (decided by)")
-    for r in claim_fractions(plants, pooled_scan(result.parts), sens):
+    for r in claim_fractions(plants, pooled_scan(result.parts), sens, refinement(result)):
         ci = f"{100 * r['low']:.0f}-{100 * r['high']:.0f}%" if r["plants"] else "-"
         frac = f"{100 * r['value']:.0f}%" if r["plants"] else "-"
         dec = f" (decided by {r['decided_by']})" if r["verdict"] == DEPENDS_PLANT and r["decided_by"] else ""

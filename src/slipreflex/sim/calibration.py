@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from typing import Any
 
 import numpy as np
@@ -346,7 +346,8 @@ def _search(f, lo, hi, target: float, tol: float):
 def calibrate_bottle(bottle: Bottle, target_ml: float = PAPER_FIRST_SLIP_ML, *,
                      rig_kwargs: dict[str, Any] | None = None, seeds=CALIBRATION_SEEDS, pour: Pour = PAPER_POUR,
                      grasp_force: float = hw.CONTACT_FORCE_N, tol_ml: float = 1.0,
-                     band_ml: tuple[float, float] | None = None, observed: bool = True) -> Calibration:
+                     band_ml: tuple[float, float] | None = None, observed: bool = True,
+                     memo: dict | None = None) -> Calibration:
     """Calibrate the pads' static friction so that the observed open-loop first pour slip comes at ``target_ml``.
 
     The first slip calibrated is the one the paper's instruments saw
@@ -369,6 +370,12 @@ def calibrate_bottle(bottle: Bottle, target_ml: float = PAPER_FIRST_SLIP_ML, *,
     still meet the paper's fact, e.g. its "about 200 ml" read as 170-230 ml)
     the edge of the jump nearest the target within the band is taken, a
     little inside its step, and :attr:`Calibration.note` says so.
+
+    ``memo``: a dict shared by the calibrations of one plant's bottles. An open-loop pour's first
+    slip does not depend on the bottle's name or surface (the surface only feeds the slip
+    sensor's track, which no state and no accelerometer or flow reading depends on), so bottles
+    that differ only there (TR and DK: one polymer, one finish) share their pours: the same
+    numbers, one computation.
 
     Raises
     ------
@@ -397,8 +404,14 @@ def calibrate_bottle(bottle: Bottle, target_ml: float = PAPER_FIRST_SLIP_ML, *,
     seen: dict[float, FirstSlip] = {}
 
     def f(mu: float) -> float:   # a bottle that does not slip during the pour counts as twice its volume
-        s = seen[mu] = first_slip(with_mu(mu), rig_kwargs=rig_kwargs, seeds=seeds, pour=pour,
-                                  grasp_force=grasp_force)
+        b = with_mu(mu)
+        key = (_mechanics(b), repr(rig_kwargs), repr(tuple(seeds)), repr(pour), repr(grasp_force))
+        if memo is not None and key in memo:
+            s = seen[mu] = memo[key]
+        else:
+            s = seen[mu] = first_slip(b, rig_kwargs=rig_kwargs, seeds=seeds, pour=pour, grasp_force=grasp_force)
+            if memo is not None:
+                memo[key] = s
         v = s.observed_ml if observed else s.true_ml
         return pour.volume_ml * 2 if math.isnan(v) else v
 
@@ -410,6 +423,11 @@ def calibrate_bottle(bottle: Bottle, target_ml: float = PAPER_FIRST_SLIP_ML, *,
     b = with_mu(best[0])
     return Calibration(b, best[1], float(target_ml), b.mu_s, b.mu_k, static_capacity(b, 1.0), note,
                        seen[best[0]].true_ml)
+
+
+def _mechanics(bottle: Bottle) -> str:
+    """Every field of ``bottle`` an open-loop pour's first slip depends on (all but its name and surface)."""
+    return repr([(f.name, getattr(bottle, f.name)) for f in fields(bottle) if f.name not in ("name", "surface")])
 
 
 def _across_jump(f, lo, hi, target: float, band_ml, name: str) -> tuple[tuple[float, float], str]:

@@ -21,6 +21,7 @@ Examples
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -35,6 +36,12 @@ __all__ = ["TRACK_DX", "texture", "Track", "opr5005_volts"]
 #: Spatial sampling of textures and tracks (m): 5 um, 8 samples per period of
 #: the finest default texture wavelength (40 um).
 TRACK_DX: float = 5e-6
+
+#: Tracks kept by :meth:`Track.build` (least recently used dropped first). A study builds the
+#: same track many times: every rig of a calibration search has the same seed and sensor, and
+#: every method of a trial cell the same trial seed; a default track is ~26,000 floats (210 kB).
+TRACK_CACHE_SIZE: int = 48
+_TRACKS: OrderedDict = OrderedDict()
 
 
 def texture(n: int, dx: float, exponent: float, min_wavelength: float, max_wavelength: float,
@@ -177,8 +184,38 @@ class Track:
         Returns
         -------
         Track
+            Its ``rho`` may be shared with other tracks built from the same inputs: read it, never
+            write it.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from slipreflex.sim import SURFACES
+        >>> r1, r2 = np.random.default_rng(5), np.random.default_rng(5)
+        >>> a = Track.build([(SURFACES["white"], 0.01)], r1)
+        >>> b = Track.build([(SURFACES["white"], 0.01)], r2)   # the same track, from the cache
+        >>> a.rho is b.rho, r1.random() == r2.random()           # and the generators end alike
+        (True, True)
         """
         sensor = sensor or SlipSensorParams()
+        # the key holds every input, the generator's whole state included, so a hit returns the same
+        # bits a build would, and leaves the generator where a build would have left it
+        key = (repr(list(layout)), float(lead), repr(sensor), float(dx), repr(rng.bit_generator.state))
+        hit = _TRACKS.get(key)
+        if hit is not None:
+            _TRACKS.move_to_end(key)
+            track, after = hit
+            rng.bit_generator.state = after
+            return track
+        track = cls._build(layout, rng, lead=lead, sensor=sensor, dx=dx)
+        _TRACKS[key] = (track, rng.bit_generator.state)
+        while len(_TRACKS) > TRACK_CACHE_SIZE:
+            _TRACKS.popitem(last=False)
+        return track
+
+    @classmethod
+    def _build(cls, layout: Sequence[tuple[Surface, float]], rng: np.random.Generator, *,
+               lead: float, sensor: SlipSensorParams, dx: float) -> Track:
         total = lead + sum(length for _, length in layout)
         n = int(np.ceil(total / dx)) + 2
         pos = np.arange(n) * dx - lead

@@ -54,10 +54,11 @@ from ..analysis.claims import (
 )
 from ..paths import new_file
 from .design import varying
+from .refine import ratio_estimate
 from .runner import _arrow_table
 
-__all__ = ["wilson", "plant_table", "pooled_scan", "claim_fractions", "deciders", "reaches", "FDR", "sensitivity",
-           "top_constants", "write_outputs",
+__all__ = ["wilson", "plant_table", "pooled_scan", "claim_fractions", "refinement", "deciders", "reaches", "FDR",
+           "sensitivity", "top_constants", "write_outputs",
            "study_markdown", "CLAIMS_COLUMNS", "SENSITIVITY_COLUMNS", "Z95"]
 
 #: Normal quantile of the 95 % intervals.
@@ -204,13 +205,17 @@ def deciders(sens: Sequence[Mapping[str, Any]], claim: int, k: int = 3) -> str:
 
 
 def claim_fractions(plants: Sequence[Mapping[str, Any]], scan: Any = None,
-                    sens: Sequence[Mapping[str, Any]] = ()) -> list[dict[str, Any]]:
+                    sens: Sequence[Mapping[str, Any]] = (), refined: Any = None) -> list[dict[str, Any]]:
     """Per claim: the study's class and reason, the fraction of plants where it holds (Wilson), class counts.
 
     Plants with an error, or rejected for an observed first slip outside the paper's band,
     are counted apart. ``scan``: the pooled scans (:func:`pooled_scan`) judge claims 1-2.
     ``sens``: the sensitivity rows (:func:`sensitivity`) that name what decides a claim
     that depends on the plant.
+    ``refined``: a refined study's second stage, ``(strata, weights, n_candidates)`` with
+    ``strata`` mapping each second-stage plant to its stratum; ``value``, ``low`` and ``high``
+    are then the two-phase stratified estimate over those plants and its interval
+    (:func:`slipreflex.study.refine.ratio_estimate`), the class counts stay over every plant.
 
     Examples
     --------
@@ -226,7 +231,7 @@ def claim_fractions(plants: Sequence[Mapping[str, Any]], scan: Any = None,
         v = [p.get(f"claim_{c.number}", NOT_DECIDABLE) for p in ok]
         why = [str(p.get(f"reason_{c.number}", "")) for p in ok]
         k = v.count(HOLDS)
-        frac, lo, hi = proportion_interval(k, len(v))
+        frac, lo, hi = proportion_interval(k, len(v)) if refined is None else _refined(plants, c.number, refined)
         dec = deciders(sens, c.number)
         verdict, reason = _study_verdict(c, v, why, dec)
         criterion, qualifier = "the class on every plant; holds on some and fails on others: depends on the plant", ""
@@ -241,6 +246,17 @@ def claim_fractions(plants: Sequence[Mapping[str, Any]], scan: Any = None,
                     "rejected": sum(bool(p.get("rejected")) and not p.get("error") for p in plants),
                     "decided_by": dec, **{x.replace("-", "_"): v.count(x) for x in VERDICTS}})
     return out
+
+
+def _refined(plants: Sequence[Mapping[str, Any]], claim: int, refined: Any) -> tuple[float, float, float]:
+    """The two-phase stratified estimate of where ``claim`` holds, over the second-stage plants."""
+    strata, weights, n_candidates = refined
+    second = [p for p in plants if int(p["plant"]) in strata]
+    accepted = [not p.get("error") and not p.get("rejected") for p in second]
+    holds = [a and p.get(f"claim_{claim}") == HOLDS for a, p in zip(accepted, second)]
+    est, _, lo, hi = ratio_estimate(holds, accepted, [strata[int(p["plant"])] for p in second], weights,
+                                    n_candidates)
+    return est, lo, hi
 
 
 def _sobol(plants: Sequence[Mapping[str, Any]], names: list[str], table: Mapping, claim: int,
@@ -459,7 +475,7 @@ def write_outputs(run: Any, *, figures: bool = True, command: str | None = None)
     table = run.config.table
     sens = sensitivity(plants, table, design=run.config.design, seed=run.config.seed)
     paths["sensitivity"] = _write_csv(out / "sensitivity.csv", sens, SENSITIVITY_COLUMNS)
-    fractions = claim_fractions(plants, pooled_scan(run.parts), sens)
+    fractions = claim_fractions(plants, pooled_scan(run.parts), sens, refinement(run))
     paths["claims"] = _write_csv(out / "claims.csv", fractions, CLAIMS_COLUMNS)
     figs: list[tuple[str, str]] = []
     if figures:
@@ -476,6 +492,23 @@ def write_outputs(run: Any, *, figures: bool = True, command: str | None = None)
     paths["study_md"] = out / "study.md"
     paths["study_md"].write_text(study_markdown(run, plants, fractions, sens, figs, command))
     return paths
+
+
+def refinement(run: Any) -> Any:
+    """``claim_fractions``' ``refined`` argument for a finished refined study (None otherwise).
+
+    Examples
+    --------
+    >>> from slipreflex.study import StudyConfig, StudyRun
+    >>> refinement(StudyRun(StudyConfig(plants=1), Path("o"), {}, [], 0.0, "serial")) is None
+    True
+    """
+    cfg = run.config
+    if not cfg.refine or not run.complete:
+        return None
+    plan = cfg.refine_plan(run.parts)
+    strata = {cfg.plants + j: int(h) for j, h in enumerate(plan.strata)}
+    return strata, plan.weights, plan.n_candidates
 
 
 def _pct(x: float) -> str:
@@ -510,6 +543,10 @@ def study_markdown(run: Any, plants: Sequence[Mapping[str, Any]], fractions: Seq
               f"{sum(bool(p.get('rejected')) for p in plants)} rejected: their calibrated observed first slip "
               "left the paper's band (counted apart).", ""]
     lines += _calibration_lines(plants, cfg.table) if cfg.calibrate else []
+    if cfg.refine:
+        lines += [f"Refined: the first {cfg.plants} plants (the pilot) drew the strata, {cfg.refine} more were "
+                  "sampled within them; a claim's holds and interval are the two-phase stratified estimate over "
+                  "those (slipreflex.study.refine), its class counts are over every plant.", ""]
     lines += ["## Claims", "",
               "Class: the study's (fails-definition, fails-paper and not-decidable when most plants say so, for "
               "a reason no plant changes; otherwise holds on every plant: holds; fails on every plant: "

@@ -35,7 +35,7 @@ import numpy as np
 
 from ..errors import ParameterError
 
-__all__ = ["DESIGNS", "varying", "unit_design", "design_size", "draw_design"]
+__all__ = ["DESIGNS", "varying", "unit_design", "design_size", "draw_design", "values_at"]
 
 #: Design kinds ``slipreflex study --design`` accepts.
 DESIGNS: tuple[str, ...] = ("sobol", "lhs", "saltelli")
@@ -119,10 +119,22 @@ def draw_design(table: Mapping, n: int, kind: str = "sobol", seed: int = 0) -> l
     >>> draw_design(UNCERTAIN, 2, seed=3)[1] != draw_design(UNCERTAIN, 2, seed=4)[1]
     True
     """
+    return values_at(table, unit_design(kind, n, len(varying(table)), seed))
+
+
+def values_at(table: Mapping, points: np.ndarray) -> list[dict[str, float]]:
+    """The plants at ``points`` of the unit cube (one coordinate per :func:`varying` constant).
+
+    Examples
+    --------
+    >>> from slipreflex.sim.uncertain import UNCERTAIN
+    >>> u = unit_design("sobol", 2, len(varying(UNCERTAIN)), seed=3)
+    >>> values_at(UNCERTAIN, u) == draw_design(UNCERTAIN, 2, seed=3)
+    True
+    """
     names = varying(table)
-    u = unit_design(kind, n, len(names), seed)
     out = []
-    for row in u:
+    for row in points:
         vals = {k: float(c.low) for k, c in table.items()}   # a fixed constant: its one value
         for k, x in zip(names, row):
             vals[k] = table[k].value_at(float(x))

@@ -56,7 +56,7 @@ from typing import Any
 import numpy as np
 
 from .. import __version__, methods
-from ..analysis.claims import judge
+from ..analysis.claims import CLAIMS, judge
 from ..errors import ParameterError
 from ..experiments import BOTTLE_NAMES, DEFAULT_SEED, EXPERIMENTS, ReproduceConfig, run_trial
 from ..interrupts import signals_ignored
@@ -64,7 +64,8 @@ from ..paths import new_file
 from ..progress import Progress
 from ..thresholds import calibrate
 from ..validation import within
-from .design import DESIGNS, draw_design
+from .design import DESIGNS, draw_design, unit_design, values_at, varying
+from .refine import make_plan
 
 __all__ = ["StudyConfig", "PlantOutcome", "run_plant", "run_study", "StudyRun", "PARTS_DIR", "STUDY_SCAN_BASE",
            "scan_seed_base", "read_parts", "part_path", "DEFAULT_PLANTS", "DEFAULT_TRIALS", "probe_scheduler",
@@ -126,6 +127,10 @@ class StudyConfig:
         The simulator's stepping (:data:`slipreflex.sim.rig.STEPPINGS`; default: this process's,
         ``SLIPREFLEX_STEPPING`` or adaptive). Every plant runs with it wherever it runs (a remote
         worker's own environment does not decide), and it is part of the fingerprint.
+    refine : int
+        Second-stage plants (``--refine``; 0: none): after the ``plants`` pilot, plants where a
+        claim's class changes between neighbours, and a two-phase stratified estimate of each
+        claim's holding fraction (:mod:`slipreflex.study.refine`; ``design="sobol"`` only).
 
     Examples
     --------
@@ -147,6 +152,7 @@ class StudyConfig:
     scan: bool = True
     scan_seeds: int = 4
     stepping: str = field(default_factory=lambda: _stepping_default())
+    refine: int = 0
     _table: Any = field(default=None, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -159,6 +165,13 @@ class StudyConfig:
             raise ParameterError(f"stepping: unknown {self.stepping!r} (known: {', '.join(STEPPINGS)})")
 
         object.__setattr__(self, "plants", within("plants", self.plants))
+        if isinstance(self.refine, bool) or not isinstance(self.refine, int) or self.refine < 0:
+            raise ParameterError(f"refine must be an integer >= 0, got {self.refine!r}")
+        if self.refine and self.design != "sobol":
+            raise ParameterError(f"refine: needs design 'sobol' (the refinement continues its sequence), "
+                                 f"got {self.design!r}")
+        if self.refine:
+            within("plants", self.plants + self.refine, "--plants + --refine")
         if isinstance(self.scan_seeds, bool) or not isinstance(self.scan_seeds, int) or self.scan_seeds < 1:
             raise ParameterError(f"scan_seeds must be an integer >= 1, got {self.scan_seeds!r}")
         if self.ranges is not None:
@@ -227,6 +240,8 @@ class StudyConfig:
                "stepping": self.stepping,
                "grid": {f.name: repr(getattr(rc, f.name)) for f in dataclasses.fields(rc) if f.name != "plant"},
                "table": {k: [c.low, c.high, c.nominal, c.distribution] for k, c in self.table.items()}}
+        if self.refine:   # absent when 0: an unrefined study keeps the fingerprint it always had
+            doc["refine"] = self.refine
         return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()[:20]
 
     def to_dict(self) -> dict[str, Any]:
@@ -238,7 +253,50 @@ class StudyConfig:
         1
         """
         return {f.name: (list(v) if isinstance(v := getattr(self, f.name), tuple) else v)
-                for f in dataclasses.fields(self) if f.init}
+                for f in dataclasses.fields(self) if f.init and (f.name != "refine" or self.refine)}
+
+    def refine_plan(self, parts: Mapping[int, tuple[dict, list]]):
+        """The second stage, decided by the pilot's parts (every pilot plant must be finished).
+
+        Returns
+        -------
+        slipreflex.study.refine.RefinePlan
+
+        Examples
+        --------
+        >>> cfg = StudyConfig(plants=4, refine=4)
+        >>> parts = {i: ({"error": "", "claims": [[2, "holds" if i % 2 else "unresolved", ""]]}, [])
+        ...          for i in range(4)}
+        >>> len(cfg.refine_plan(parts).points)
+        4
+        """
+
+        missing = [i for i in range(self.plants) if i not in parts]
+        if missing:
+            raise ParameterError(f"refine: pilot plants {missing[:5]} not finished")
+        holds = np.zeros((self.plants, len(CLAIMS)), dtype=bool)
+        col = {c.number: j for j, c in enumerate(CLAIMS)}
+        for i in range(self.plants):
+            meta = parts[i][0]
+            if meta.get("error") or (meta.get("calibration") or {}).get("rejected"):
+                continue
+            for num, verdict, *_ in meta.get("claims", []):
+                holds[i, col[int(num)]] = verdict == "holds"
+        pilot = unit_design("sobol", self.plants, len(varying(self.table)), self.seed)
+        return make_plan(pilot, holds, self.refine, self.seed)
+
+    def refine_values(self, parts: Mapping[int, tuple[dict, list]]) -> dict[int, dict[str, float]]:
+        """The second stage's plants by index (``plants`` onwards), decided by the pilot's parts.
+
+        Examples
+        --------
+        >>> StudyConfig(plants=2).refine_values({})
+        {}
+        """
+        if not self.refine:
+            return {}
+        vals = values_at(self.table, self.refine_plan(parts).points)
+        return {self.plants + j: v for j, v in enumerate(vals)}
 
 
 @dataclass(frozen=True)
@@ -317,13 +375,15 @@ def _calibrated(plant: Any, table: Mapping) -> tuple[Any, dict[str, Any]]:
     c = table["first_slip_ml"]
     kw = plant.rig_kwargs()
     cals = {}
+    memo: dict = {}   # the bottles' shared open-loop pours (TR and DK differ only in their surface)
     for name, bottle in plant.bottles.items():
         try:
-            cals[name] = calibrate_bottle(bottle, plant.first_slip_ml, rig_kwargs=kw, seeds=CALIBRATION_SEEDS)
+            cals[name] = calibrate_bottle(bottle, plant.first_slip_ml, rig_kwargs=kw, seeds=CALIBRATION_SEEDS,
+                                          memo=memo)
         except ParameterError:
             try:
                 cals[name] = calibrate_bottle(bottle, plant.first_slip_ml, rig_kwargs=kw, seeds=DEFAULT_SEEDS,
-                                              band_ml=(c.low, c.high))
+                                              band_ml=(c.low, c.high), memo=memo)
             except ParameterError as err:   # no friction meets the paper's observed fact: counted apart
                 return plant, {"calibration_note": "", "rejected": f"{err}"}
     plant = replace(plant, bottles=MappingProxyType({n: k.bottle for n, k in cals.items()}))
@@ -488,7 +548,7 @@ class StudyRun:
         >>> StudyRun(StudyConfig(plants=1), Path("o"), {0: ({}, [])}, [], 0.0, "serial").complete
         True
         """
-        return len(self.parts) == len(self.config.plant_values())
+        return len(self.parts) == len(self.config.plant_values()) + self.config.refine
 
 
 class _Progress:
@@ -742,10 +802,9 @@ def run_study(config: StudyConfig, out: str | Path, *, workers: int | None = Non
     created = _check_out(out, config)
     t0 = time.perf_counter()
     fp = config.fingerprint()
-    plants = config.plant_values()
+    plants = dict(enumerate(config.plant_values()))
     have = set(read_parts(out, fp))
-    todo = [i for i in range(len(plants)) if i not in have]
-    bar = _Progress(len(plants), config.trials_per_plant, len(have), progress)
+    bar = _Progress(len(plants) + config.refine, config.trials_per_plant, len(have), progress)
     computed: list[int] = []
 
     def finished(o: PlantOutcome) -> None:
@@ -756,12 +815,20 @@ def run_study(config: StudyConfig, out: str | Path, *, workers: int | None = Non
             on_plant(o)
 
     where = "serial"
-    try:
+
+    def stage(values: Mapping[int, dict]) -> None:
+        nonlocal where
+        todo = [i for i in sorted(values) if i not in have]
         if todo and (workers != 0 or scheduler):
-            where = _run_dask(todo, plants, config, workers, scheduler, finished, fp, dashboard)
+            where = _run_dask(todo, values, config, workers, scheduler, finished, fp, dashboard)
         else:
             for i in todo:
-                finished(run_plant(i, plants[i], config))
+                finished(run_plant(i, values[i], config))
+
+    try:
+        stage(plants)
+        if config.refine:   # the second stage is decided by the finished pilot
+            stage(config.refine_values(read_parts(out, fp)))
     except BaseException:
         if created and not computed and not have:   # a failed start leaves no lock on --out
             (out / "study.json").unlink(missing_ok=True)
@@ -781,7 +848,7 @@ _QUIET_LOGGERS: tuple[str, ...] = ("distributed", "tornado", "asyncio")
 _STOP_CLOSE_S: float = 3.0
 
 
-def _run_dask(todo: list[int], plants: list[dict], config: StudyConfig, workers: int | None,
+def _run_dask(todo: list[int], plants: Mapping[int, dict], config: StudyConfig, workers: int | None,
               scheduler: str | None, finished: Callable[[PlantOutcome], None], fp: str,
               dashboard: str | None = None) -> str:
 
