@@ -25,7 +25,6 @@ import statistics
 import time
 
 import numpy as np
-
 from machine import describe  # benchmarks/machine.py: run as python benchmarks/NAME.py
 
 
@@ -40,7 +39,7 @@ def _frames(n: int, fs: float) -> np.ndarray:
 
 
 def _reflexes():
-    from slipreflex.baselines import NMSD, SWTSD
+    from slipreflex.methods.baselines import NMSD, SWTSD
 
     return (("NMSD", lambda: NMSD(threshold=40.0, speed=500.0, p0=100.0)),
             ("SWT-SD", lambda: SWTSD(threshold=0.03, speed=500.0, p0=100.0)))

@@ -5,7 +5,7 @@ and the variants (authors-gui, dath-event), the batch chain's throughput
 (filter + encode + windows + MPI) over a long array, and scipy.signal.sosfilt on
 the same array for scale. Checks on the way that the batch result equals the
 streaming one bit for bit. Both run the same compiled step
-(slipreflex.chain._kernels.chain_step) over a state vector.
+(slipreflex.methods.chain._kernels.chain_step) over a state vector.
 
 Run: python benchmarks/bench_chain.py [--samples N] [--repeats R]
 """
@@ -17,7 +17,6 @@ import statistics
 import time
 
 import numpy as np
-
 from machine import describe  # benchmarks/machine.py: run as python benchmarks/NAME.py
 
 

@@ -27,9 +27,9 @@ import time
 import numpy as np
 from numba import njit
 
-from slipreflex import hardware as hw
 from slipreflex import methods
-from slipreflex.experiments import ReproduceConfig, calibrate, method_context, trial_seed
+from slipreflex.core import hardware as hw
+from slipreflex.reproduce.experiments import ReproduceConfig, calibrate, method_context, trial_seed
 from slipreflex.sim import PAPER_POUR, Rig, run_closed_loop, simulate_open_loop
 from slipreflex.sim.variations import VariationSpread, trial_rig
 

@@ -23,7 +23,7 @@ import time
 
 import numpy as np
 
-from slipreflex import hardware as hw
+from slipreflex.core import hardware as hw
 from slipreflex.sim import PAPER_POUR, Rig
 from slipreflex.sim import kernel as K
 

@@ -27,7 +27,7 @@ def main() -> None:
     ap.add_argument("--no-warmup", action="store_true", help="measure the first (possibly cold) run too")
     args = ap.parse_args()
 
-    from slipreflex.experiments import TRIAL_SIM_SPEED, ReproduceConfig, run_reproduce, write_outputs
+    from slipreflex.reproduce.experiments import TRIAL_SIM_SPEED, ReproduceConfig, run_reproduce, write_outputs
 
     config = ReproduceConfig(trials=args.trials)
     jobs = args.jobs or os.cpu_count() or 1

@@ -63,7 +63,7 @@ def live_client(url: str, seconds: float) -> int:
     from websockets.exceptions import ConnectionClosed
     from websockets.sync.client import connect
 
-    from slipreflex.live import WS_SUBPROTOCOLS
+    from slipreflex.rig.live import WS_SUBPROTOCOLS
 
     n, channels = 0, {}
     with connect(url, subprotocols=list(WS_SUBPROTOCOLS)) as ws:
@@ -126,13 +126,13 @@ def main(argv: list[str] | None = None) -> int:
     if args.client:
         return live_client(args.client, args.duration + 30)
 
-    from slipreflex.chain import SlipReflex
     from slipreflex.commands.run import parse_p0
-    from slipreflex.devices.daq import SerialDaq
-    from slipreflex.devices.ilimb import ILimb
-    from slipreflex.hardware import SLIP_FINGER
-    from slipreflex.recording import METADATA_NAME, Recorder
-    from slipreflex.runtime import realtime_priority, run_loop
+    from slipreflex.core.hardware import SLIP_FINGER
+    from slipreflex.files.recording import METADATA_NAME, Recorder
+    from slipreflex.methods.chain import SlipReflex
+    from slipreflex.rig.devices.daq import SerialDaq
+    from slipreflex.rig.devices.ilimb import ILimb
+    from slipreflex.rig.runtime import realtime_priority, run_loop
 
     schedule = args.schedule
     if schedule is None:
@@ -150,7 +150,7 @@ def main(argv: list[str] | None = None) -> int:
             note = realtime_priority() if args.realtime else "normal priority"
             taps, client = [], None
             if args.live:
-                from slipreflex.live import RUN_TOPICS, LiveView
+                from slipreflex.rig.live import RUN_TOPICS, LiveView
 
                 taps = [LiveView(("127.0.0.1", 0), RUN_TOPICS).start()]
                 client = subprocess.Popen([sys.executable, __file__, "--client", taps[0].url,

@@ -23,7 +23,7 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 
 import slipreflex
-from slipreflex import hardware as hw
+from slipreflex.core import hardware as hw
 from slipreflex.sim import PAPER_DROP, PAPER_POUR, Rig, run_closed_loop, simulate_open_loop
 
 
@@ -59,7 +59,7 @@ def trial(args: tuple[str, str, str, int]) -> float:
     g = rig.grasp()
     p0 = g.positions[hw.SLIP_FINGER]
     if method == "nmsd":
-        from slipreflex.baselines import NMSD, rest_threshold
+        from slipreflex.methods.baselines import NMSD, rest_threshold
 
         s = rig.tactile_sampler(hw.NMSD_FS, keep=True)
         rig.advance(0.5)

@@ -6,7 +6,7 @@ same trial seeds, so trial k of a bottle and experiment is the same rig for ever
 1. Same input (open loop): for every drop and pour trial, the slip-sensor volts the
    float DATH (and fixed) chain saw in its closed-loop run are fed again, offline, to the
    float chain (``run_chain`` at the DAQ's 333.33 Hz) and to the board's twin
-   (``slipreflex.board.run_board_chain`` on the ADC counts those volts are). Reported:
+   (``slipreflex.methods.board.run_board_chain`` on the ADC counts those volts are). Reported:
    samples whose spike differs, total spikes, windows whose command differs, and the
    first command increase after the perturbation (time difference, board - float).
 2. Closed loop: ``reproduce`` with the methods dath, dath-board, fixed and fixed-board;
@@ -28,9 +28,9 @@ import numpy as np
 
 def _open_loop_trial(cell, config, dath: bool):
     """The volts a float chain saw in its closed-loop trial, and the perturbation time."""
-    from slipreflex import hardware as hw
     from slipreflex import methods
-    from slipreflex.experiments import method_context
+    from slipreflex.core import hardware as hw
+    from slipreflex.reproduce.experiments import method_context
     from slipreflex.sim import Rig, run_closed_loop
 
     rig = Rig(cell.bottle, seed=cell.seed)
@@ -50,8 +50,10 @@ def _first_rise_ms(t_end: np.ndarray, commands: np.ndarray, p0: float, t_pert: f
 
 def open_loop(config) -> dict[str, dict[str, float]]:
     """Comparison 1 for DATH and fixed: totals over the grid."""
-    from slipreflex import board, hardware as hw, run_chain
-    from slipreflex.experiments import Cell, trial_seed
+    from slipreflex import run_chain
+    from slipreflex.core import hardware as hw
+    from slipreflex.methods import board
+    from slipreflex.reproduce.experiments import Cell, trial_seed
 
     out = {}
     for dath in (True, False):
@@ -95,7 +97,7 @@ def closed_loop(config, jobs: int) -> dict[str, dict[str, float]]:
     """Comparison 2: per method pair, paired differences of response and total times."""
     import dataclasses
 
-    from slipreflex.experiments import run_reproduce
+    from slipreflex.reproduce.experiments import run_reproduce
 
     cfg = dataclasses.replace(config, methods=("dath", "dath-board", "fixed", "fixed-board"))
     rows = run_reproduce(cfg, jobs=jobs, progress=False, plots=False).rows
@@ -132,7 +134,7 @@ def closed_loop(config, jobs: int) -> dict[str, dict[str, float]]:
 
 
 def main() -> int:
-    from slipreflex.experiments import ReproduceConfig
+    from slipreflex.reproduce.experiments import ReproduceConfig
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--trials", type=int, default=10, help="trials per bottle and experiment (10)")

@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the tests' harnesses
-import slipreflex.grip as _G  # noqa: E402
+import slipreflex.core.grip as _G  # noqa: E402
 
 if not hasattr(_G, "TRAVEL"):  # the tests' helpers import it; the old tree has no such name
     _G.TRAVEL = 500.0
@@ -45,7 +45,7 @@ def grip(method, p0):
 
 def plugin(kind):
     import test_one_grip_rule as g
-    from slipreflex.hardware import Finger
+    from slipreflex.core.hardware import Finger
     p = {"1e9": g._Plugin(1e9), "start-1e6": g._Plugin(600.0, start=-1e6),
          "offset-1e7": g._Plugin(149.0, offsets={Finger.MIDDLE: 1e7}), "nan": g._Plugin(math.nan)}[kind]
     res = g._plugin_run(p)
@@ -83,10 +83,10 @@ def lost_port():
 
 
 def ability_silence():
-    from slipreflex.devices.simrig import SimRig
-    from slipreflex.devices.virtual import VirtualDevices
-    from slipreflex.hands import open_hand
-    from slipreflex.hardware import FINGER_SPEED_UNITS_S, Finger
+    from slipreflex.core.hardware import FINGER_SPEED_UNITS_S, Finger
+    from slipreflex.rig.devices.simrig import SimRig
+    from slipreflex.rig.devices.virtual import VirtualDevices
+    from slipreflex.rig.hands import open_hand
     rig = SimRig("TR", seed=3)
     rig.grasp()
     with tempfile.TemporaryDirectory() as d, VirtualDevices(rig, hand_type="ability", link_dir=d) as dev:
@@ -121,7 +121,7 @@ def _string(b):
 
 
 def _mcap(chunks):
-    from slipreflex.recording import reader
+    from slipreflex.files.recording import reader
     header = _string(b"") + _string(b"bomb")
     return reader._MAGIC + bytes([1]) + struct.pack("<Q", len(header)) + header + b"".join(chunks)
 
@@ -159,7 +159,7 @@ def resync():
     Path(p).write_bytes(_mcap([bytes([0x7F]) + struct.pack("<Q", 1) + b"x", bytes(filler)]))
     t0 = time.perf_counter()
     try:
-        code = f"from slipreflex.recording import read_recording; read_recording({p!r})"
+        code = f"from slipreflex.files.recording import read_recording; read_recording({p!r})"
         subprocess.run([sys.executable, "-c", code], timeout=120, capture_output=True)
         return f"4 MB crafted file read in {time.perf_counter() - t0:.1f} s"
     except subprocess.TimeoutExpired:
@@ -270,8 +270,8 @@ def calibrate_fig():
 
 
 def manifest_fail():
-    from slipreflex import paths
-    from slipreflex.paths import MANIFEST, OutputSet
+    from slipreflex.files import paths
+    from slipreflex.files.paths import MANIFEST, OutputSet
     d = Path(tempfile.mkdtemp())
 
     def put(text):
@@ -300,7 +300,7 @@ def manifest_fail():
 
 
 def lock():
-    from slipreflex.paths import OutputSet
+    from slipreflex.files.paths import OutputSet
     if not hasattr(OutputSet, "claim"):
         return "no lock: two commits into one folder interleave"
     import multiprocessing

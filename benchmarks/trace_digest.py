@@ -19,9 +19,9 @@ import hashlib
 import numpy as np
 from bench_closed_loop import Never
 
-from slipreflex import hardware as hw
 from slipreflex import methods
-from slipreflex.experiments import ReproduceConfig, calibrate, method_context, trial_seed
+from slipreflex.core import hardware as hw
+from slipreflex.reproduce.experiments import ReproduceConfig, calibrate, method_context, trial_seed
 from slipreflex.sim import PAPER_POUR, Rig, run_closed_loop, simulate_open_loop
 from slipreflex.sim import kernel as K
 from slipreflex.sim.variations import trial_rig

@@ -22,8 +22,8 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
-from slipreflex.hands import HANDS, HandSpec
-from slipreflex.hardware import FINGER_MAX, TRIPOD, Finger
+from slipreflex.core.hardware import FINGER_MAX, TRIPOD, Finger
+from slipreflex.rig.hands import HANDS, HandSpec
 
 
 class TwinHand:

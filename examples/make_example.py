@@ -9,8 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
-from slipreflex.csvfiles import write_columns
-from slipreflex.hardware import ADC_LSB, DAQ_FS
+from slipreflex.core.hardware import ADC_LSB, DAQ_FS
+from slipreflex.files.csvfiles import write_columns
 
 
 def main() -> None:

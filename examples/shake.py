@@ -23,8 +23,8 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from slipreflex.errors import ParameterError
-from slipreflex.experiment_specs import EXPERIMENTS, ExperimentSpec
+from slipreflex.core.errors import ParameterError
+from slipreflex.core.experiment_specs import EXPERIMENTS, ExperimentSpec
 from slipreflex.sim import kernel as K
 from slipreflex.sim.loads import LOAD_KINDS, LoadKind
 

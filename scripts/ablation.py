@@ -52,7 +52,7 @@ def main() -> None:
     args = ap.parse_args()
     changed = _changed(ap, args.name, args.value)
 
-    from slipreflex.experiments import ReproduceConfig, run_reproduce
+    from slipreflex.reproduce.experiments import ReproduceConfig, run_reproduce
     from slipreflex.sim.uncertain import plant_from_values
 
     runs = {}

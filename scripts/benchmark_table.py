@@ -61,9 +61,9 @@ def paper_k(seed: int = 1, seconds: float = 2.0) -> float:
 def _rest_sd(seed: int, seconds: float) -> tuple[float, float]:
     import numpy as np
 
-    from slipreflex import hardware as hw
-    from slipreflex.chain import lowpass
-    from slipreflex.chain.params import DEFAULT_THRESHOLD
+    from slipreflex.core import hardware as hw
+    from slipreflex.methods.chain import lowpass
+    from slipreflex.methods.chain.params import DEFAULT_THRESHOLD
     from slipreflex.sim import Rig, simulate_open_loop
 
     rig = Rig("TR", seed=seed)
@@ -116,11 +116,11 @@ def why(trials) -> str:
     import numpy as np
 
     from slipreflex import methods
-    from slipreflex.baselines import nmsd_statistic
     from slipreflex.benchmark import BenchmarkConfig, run_benchmark, run_trial
     from slipreflex.benchmark.report import summarize
-    from slipreflex.chain.builders import build_preset
     from slipreflex.methods import AUTHORS_GUI
+    from slipreflex.methods.baselines import nmsd_statistic
+    from slipreflex.methods.chain.builders import build_preset
 
     def build(p0, context, **params):
         return build_preset(AUTHORS_GUI, "authors-gui-no-reset", {}, p0, context, **{**params, "acc_reset": None})

@@ -8,7 +8,7 @@ Usage::
 
 Runs ``slipreflex reproduce``'s grid (in process, no figures) once per master seed, with the
 replicate grids ``reproduce`` adds where one run's trials leave a claim unresolved
-(:func:`slipreflex.replication.replicate_undecided`), judges the claims of each run
+(:func:`slipreflex.reproduce.replication.replicate_undecided`), judges the claims of each run
 (:func:`slipreflex.analysis.outputs.judged_claims`, the scan ensemble from that seed) and
 prints one row per claim with its verdict on every seed, then whether the classes agree on
 all of them. This is how docs/reproduce.md states that the default run's classes do not
@@ -30,8 +30,8 @@ BEGIN, END = "<!-- claims seeds table begins -->", "<!-- claims seeds table ends
 def main(argv: list[str] | None = None) -> int:
     from slipreflex.analysis.claims import CLAIMS
     from slipreflex.analysis.outputs import judged_claims
-    from slipreflex.experiments import DEFAULT_SEED, ReproduceConfig, run_reproduce
-    from slipreflex.replication import replicate_undecided
+    from slipreflex.reproduce.experiments import DEFAULT_SEED, ReproduceConfig, run_reproduce
+    from slipreflex.reproduce.replication import replicate_undecided
 
     ap = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     ap.add_argument("--seeds", default=f"{DEFAULT_SEED},1,2,3,4")

@@ -1,5 +1,5 @@
-"""Put the device contracts (``slipreflex.interfaces.CONTRACTS``) and the real-time loop's states
-(``slipreflex.loop_states``) into docs/runtime.md.
+"""Put the device contracts (``slipreflex.core.interfaces.CONTRACTS``) and the real-time loop's states
+(``slipreflex.rig.loop_states``) into docs/runtime.md.
 
 Usage::
 
@@ -23,8 +23,8 @@ def main(argv: list[str]) -> int:
     sys.path.insert(0, str(ROOT / "scripts"))
     from splice_report import write_marked
 
-    from slipreflex.interfaces import contract_markdown
-    from slipreflex.loop_states import states_markdown
+    from slipreflex.core.interfaces import contract_markdown
+    from slipreflex.rig.loop_states import states_markdown
 
     status = 0
     for name, table in (("contracts table", contract_markdown()), ("loop states table", states_markdown())):

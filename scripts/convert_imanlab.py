@@ -91,7 +91,7 @@ def convert_trial(folder: Path, out: Path, commit: str) -> dict[str, object]:
         "dropped": str(int(float(meta["dropped"]))),
         "peak_speed_m_s": f"{speed:.3f}",
     }
-    from slipreflex.csvfiles import write_columns
+    from slipreflex.files.csvfiles import write_columns
 
     write_columns(out / f"{name}.csv", columns, preamble=preamble)
     v = np.hypot(rs[:, rs_head.index("v_x")], rs[:, rs_head.index("v_y")])

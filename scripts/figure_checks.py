@@ -21,9 +21,10 @@ import numpy as np
 
 def dath_trial(experiment: str, bottle: str, trial: int):
     """One DATH trial on the nominal plant: (trace, grasp position p0, perturbation time)."""
-    from slipreflex import experiment_specs, methods
-    from slipreflex.experiments import ReproduceConfig, method_context, trial_seed
-    from slipreflex.hardware import SLIP_FINGER
+    from slipreflex import methods
+    from slipreflex.core import experiment_specs
+    from slipreflex.core.hardware import SLIP_FINGER
+    from slipreflex.reproduce.experiments import ReproduceConfig, method_context, trial_seed
     from slipreflex.sim import run_closed_loop
     from slipreflex.sim.variations import VariationSpread, grasped_rig
 

@@ -4,7 +4,7 @@ Panels after the paper's Fig. 10: the slip signal (raw, filtered, the threshold 
 the spikes and each window's spike count, the MPI command with the grip it adds to each
 finger, then the simulated rig's truth (``virtual-rig --live``), the IMU, the touch of a
 tactile method and the faults.
-Every series is a path into a topic of :data:`slipreflex.recording.TOPICS`; the layout is
+Every series is a path into a topic of :data:`slipreflex.files.recording.TOPICS`; the layout is
 built with the layout types foxglove-sdk ships (``foxglove.layouts``).
 
 Usage::

@@ -1,4 +1,4 @@
-"""Put the table of plausible ranges (``slipreflex.validation.LIMITS``) into docs/runtime.md.
+"""Put the table of plausible ranges (``slipreflex.core.validation.LIMITS``) into docs/runtime.md.
 
 Usage::
 
@@ -22,7 +22,7 @@ def main(argv: list[str]) -> int:
     sys.path.insert(0, str(ROOT / "scripts"))
     from splice_report import write_marked
 
-    from slipreflex.validation import limits_markdown
+    from slipreflex.core.validation import limits_markdown
 
     table = limits_markdown()
     print(table)

@@ -32,10 +32,10 @@ import argparse
 
 import numpy as np
 
-from slipreflex import hardware as hw
-from slipreflex.baselines import rest_threshold
-from slipreflex.baselines.nmsd import nmsd_detections, nmsd_statistic
-from slipreflex.baselines.swt import swt_on, swt_statistic
+from slipreflex.core import hardware as hw
+from slipreflex.methods.baselines import rest_threshold
+from slipreflex.methods.baselines.nmsd import nmsd_detections, nmsd_statistic
+from slipreflex.methods.baselines.swt import swt_on, swt_statistic
 from slipreflex.sim import PAPER_DROP, PAPER_POUR
 from slipreflex.sim.terms import VERDICT_SWITCHES, absent_values
 from slipreflex.sim.uncertain import plant_from_values

@@ -20,7 +20,7 @@ import math
 
 import numpy as np
 
-from slipreflex import hardware as hw
+from slipreflex.core import hardware as hw
 from slipreflex.sim import BOTTLES, PAPER_POUR, Rig, WaterParams, simulate_open_loop
 from slipreflex.sim import kernel as K
 from slipreflex.sim.objects import WATER_DENSITY

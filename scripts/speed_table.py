@@ -206,7 +206,7 @@ ROWS: list[tuple[str, str, str, list[str], Callable[[str], str]]] = [
 
 def reproduce_row(timing: dict[str, float]) -> tuple[str, str, str, str]:
     """The default reproduction's row, from its timing."""
-    from slipreflex.experiments import ReproduceConfig
+    from slipreflex.reproduce.experiments import ReproduceConfig
 
     return ("`slipreflex reproduce`, the default grid, 2 cores",
             whole_run(f"{len(ReproduceConfig().cells())} trials, start-up to report", timing), "<= 30 s",

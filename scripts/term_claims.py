@@ -86,7 +86,7 @@ def main() -> int:
         ap.error(f"--terms: unknown term {unknown[0]!r} (known: {', '.join(SWITCHES)})")
 
     from slipreflex.analysis.claims import judge_run
-    from slipreflex.experiments import ReproduceConfig, run_reproduce
+    from slipreflex.reproduce.experiments import ReproduceConfig, run_reproduce
     from slipreflex.sim.uncertain import plant_from_values
 
     runs = {}

@@ -18,7 +18,7 @@ import math
 import statistics
 
 from slipreflex import methods
-from slipreflex.baselines.swt import SWT_PERSIST, SWT_PERSISTENCE, SWT_PERSISTENCE_DEFAULT
+from slipreflex.methods.baselines.swt import SWT_PERSIST, SWT_PERSISTENCE, SWT_PERSISTENCE_DEFAULT
 
 #: The default, the threshold's k either side, and every other reading of SWT-SD's persistence rule.
 SETTINGS = ((f"default (k = 5, {SWT_PERSISTENCE_DEFAULT}: persist {SWT_PERSIST})", {}),
@@ -51,7 +51,7 @@ def main() -> int:
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--write", action="store_true", help="put the table between docs/reproduce.md's markers")
     args = ap.parse_args()
-    from slipreflex.experiments import ReproduceConfig, run_reproduce
+    from slipreflex.reproduce.experiments import ReproduceConfig, run_reproduce
 
     lines = ["| setting | method | drop: slips answered | drop: median response ms | pour: success | "
              "pour: median response ms | median total (closing) ms | slips the accelerometer found in pours |",

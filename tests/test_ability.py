@@ -9,13 +9,13 @@ import numpy as np
 import pytest
 import serial
 
-from slipreflex.devices import ability as ab
-from slipreflex.devices.simrig import SimRig
-from slipreflex.devices.virtual import VirtualDevices
-from slipreflex.errors import DataError, DeviceError, ParameterError
-from slipreflex.hands import get_hand, open_hand
-from slipreflex.hardware import Finger
-from slipreflex.interfaces import Hand, TactileSource
+from slipreflex.core.errors import DataError, DeviceError, ParameterError
+from slipreflex.core.hardware import Finger
+from slipreflex.core.interfaces import Hand, TactileSource
+from slipreflex.rig.devices import ability as ab
+from slipreflex.rig.devices.simrig import SimRig
+from slipreflex.rig.devices.virtual import VirtualDevices
+from slipreflex.rig.hands import get_hand, open_hand
 
 
 def test_frames_follow_the_icd_byte_for_byte():
@@ -95,7 +95,7 @@ def _rest_threshold(dev, seconds=1.0):
     """NMSD's threshold from the virtual hand's touch sites at rest, as a lab calibrates it."""
     import time
 
-    from slipreflex.baselines import rest_threshold
+    from slipreflex.methods.baselines import rest_threshold
 
     frames = []
     with open_hand("ability", dev.hand_path, fs=260.0) as hand:
@@ -119,7 +119,7 @@ def _drop_after(dev, commands, timeout=30.0):
 def test_run_nmsd_on_the_ability_hands_touch_sensors_over_the_virtual_hand(tmp_path, capsys):
     """``run --hand-type ability --method nmsd``: no DAQ, the fingertip is the tactile source."""
     from slipreflex.cli import main
-    from slipreflex.recording import read_recording
+    from slipreflex.files.recording import read_recording
     from slipreflex.sim import Drop
 
     path = tmp_path / "nmsd.mcap"
@@ -153,7 +153,7 @@ def test_run_nmsd_on_the_ability_hands_touch_sensors_over_the_virtual_hand(tmp_p
 def test_run_dath_with_the_daq_and_the_ability_hand(tmp_path, capsys):
     """``run --hand-type ability``: the slip sensor on the DAQ, the commands to the Ability Hand."""
     from slipreflex.cli import main
-    from slipreflex.recording import read_recording
+    from slipreflex.files.recording import read_recording
 
     path = tmp_path / "ab.mcap"
     from slipreflex.methods import make
@@ -184,7 +184,7 @@ def test_run_dath_with_the_daq_and_the_ability_hand(tmp_path, capsys):
 
 
 def test_while_a_reflex_runs_the_driver_refuses_a_position_that_would_open():
-    from slipreflex.devices.ability import AbilityHand
+    from slipreflex.rig.devices.ability import AbilityHand
 
     class Port:  # the hand's side, in memory: replies to every frame with the grasp
         def __init__(self):

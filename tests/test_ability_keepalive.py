@@ -9,12 +9,12 @@ import time
 import numpy as np
 import pytest
 
-from slipreflex.devices import ability as ab
-from slipreflex.devices.simrig import SimRig
-from slipreflex.devices.virtual import VirtualDevices
-from slipreflex.errors import ParameterError
-from slipreflex.hands import open_hand
-from slipreflex.hardware import FINGER_SPEED_UNITS_S, Finger
+from slipreflex.core.errors import ParameterError
+from slipreflex.core.hardware import FINGER_SPEED_UNITS_S, Finger
+from slipreflex.rig.devices import ability as ab
+from slipreflex.rig.devices.simrig import SimRig
+from slipreflex.rig.devices.virtual import VirtualDevices
+from slipreflex.rig.hands import open_hand
 
 
 class _Rig:
@@ -96,8 +96,8 @@ def test_the_driver_keeps_the_hand_in_api_mode_and_its_positions_live_without_be
 
 @pytest.mark.slow
 def test_a_stalled_finger_is_a_fault_and_grip_sent_to_it_is_not_counted(tmp_path):
-    from slipreflex.interfaces import DaqSample
-    from slipreflex.runtime import run_loop
+    from slipreflex.core.interfaces import DaqSample
+    from slipreflex.rig.runtime import run_loop
 
     dev, grasp = _devices(tmp_path)
 

@@ -20,7 +20,7 @@ from slipreflex.analysis.report import (
     write_csv,
 )
 from slipreflex.analysis.trial import RESULT_COLUMNS, TrialStreams, analyse_trial
-from slipreflex.errors import DataError, ParameterError
+from slipreflex.core.errors import DataError, ParameterError
 
 FS = 333.0
 

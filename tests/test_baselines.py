@@ -5,7 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from slipreflex.baselines import (
+from slipreflex.core.errors import DataError, ParameterError
+from slipreflex.core.hardware import NMSD_FS, SWT_FS
+from slipreflex.core.interfaces import Reflex
+from slipreflex.methods.baselines import (
     NMSD,
     SWTSD,
     ClosingParams,
@@ -20,9 +23,6 @@ from slipreflex.baselines import (
     swt_on,
     swt_statistic,
 )
-from slipreflex.errors import DataError, ParameterError
-from slipreflex.hardware import NMSD_FS, SWT_FS
-from slipreflex.interfaces import Reflex
 
 
 def _synthetic(fs: float, seconds: float, seed: int, noise: float = 0.005) -> np.ndarray:

@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 from numba import njit
 
-from slipreflex.baselines import NMSD, SWTSD, Closer, ClosingParams, nmsd_detections, rest_threshold
-from slipreflex.baselines import _kernels as K
-from slipreflex.baselines import _layout as L
-from slipreflex.errors import DataError
-from slipreflex.hardware import NMSD_FS, SWT_FS
-from slipreflex.interfaces import CompiledReflex
+from slipreflex.core.errors import DataError
+from slipreflex.core.hardware import NMSD_FS, SWT_FS
+from slipreflex.core.interfaces import CompiledReflex
+from slipreflex.methods.baselines import NMSD, SWTSD, Closer, ClosingParams, nmsd_detections, rest_threshold
+from slipreflex.methods.baselines import _kernels as K
+from slipreflex.methods.baselines import _layout as L
 
 
 @njit

@@ -20,7 +20,7 @@ from slipreflex.benchmark import (
 from slipreflex.benchmark.run import applicable, reduce_channels, to_rate
 from slipreflex.benchmark.trials import Layout
 from slipreflex.cli import main
-from slipreflex.errors import DataError, ParameterError
+from slipreflex.core.errors import DataError, ParameterError
 
 REST_K = ("--protocol", "rest-k")     # the earlier per-trial rule
 

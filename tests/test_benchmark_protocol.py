@@ -16,8 +16,8 @@ from slipreflex.benchmark.evaluate import evaluate
 from slipreflex.benchmark.protocol import ProtocolConfig, chance, choose_index, folds, poisson_rate_ci, roc_auc, wilson
 from slipreflex.benchmark.sweep import Sweep, alarm_time, episode_starts, score_at
 from slipreflex.cli import main
-from slipreflex.errors import DataError, ParameterError
-from slipreflex.validation import LIMITS
+from slipreflex.core.errors import DataError, ParameterError
+from slipreflex.core.validation import LIMITS
 
 OPTICAL_FS = 1000.0 / 3.0
 

@@ -1,4 +1,4 @@
-"""The fixed-point reflex: C core (firmware/reflex/) and Python twin (slipreflex.board).
+"""The fixed-point reflex: C core (firmware/reflex/) and Python twin (slipreflex.methods.board).
 
 Bit-exactness by shared vectors (tests/data/board/vectors.txt) and random signals,
 the negative control (a core built with truncation instead of rounding), and the
@@ -18,9 +18,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from slipreflex import board, encode_trace, hardware, lowpass, mpi, run_chain
-from slipreflex.errors import DataError, ParameterError
-from slipreflex.interfaces import Reflex
+from slipreflex import encode_trace, lowpass, mpi, run_chain
+from slipreflex.core import hardware
+from slipreflex.core.errors import DataError, ParameterError
+from slipreflex.core.interfaces import Reflex
+from slipreflex.methods import board
 
 ROOT = Path(__file__).resolve().parents[1]
 FIRMWARE = ROOT / "firmware"
@@ -188,7 +190,7 @@ def test_documented_constants():
     assert abs(p.theta0 / 2**16 * hardware.ADC_LSB - 0.008) < 1e-7
     g, a1, a2 = p.g, p.a1, p.a2
     assert 4 * g == 2**board.COEF_Q + a1 + a2          # DC gain exactly one
-    from slipreflex.chain.filters import _design
+    from slipreflex.methods.chain.filters import _design
     sos, _ = _design(hardware.DAQ_FS, 10.0)
     assert abs(a1 / 2**24 - sos[0, 4]) <= 0.5 / 2**24
     assert abs(a2 / 2**24 - sos[0, 5]) <= 2.5 / 2**24
@@ -326,7 +328,7 @@ def test_bad_input_is_named():
 @pytest.mark.slow
 def test_board_methods_run_in_reproduce_beside_the_float_chain():
     from slipreflex import methods
-    from slipreflex.experiments import ReproduceConfig, run_reproduce
+    from slipreflex.reproduce.experiments import ReproduceConfig, run_reproduce
 
     assert {"dath-board", "fixed-board"} <= set(methods.names())
     assert "dath-board" not in methods.names(paper=True)

@@ -3,7 +3,7 @@
 The firmware built with the reflex on board (ATmega328P, version-2 frames) and the
 standalone ATmega2560 build (i-Limb CLOSE and STOP packets on UART1: grip only added)
 run in firmware/test/harness.c; firmware/test/check_board.py compares every frame and
-every hand packet with the Python twin (slipreflex.board) and checks the packets'
+every hand packet with the Python twin (slipreflex.methods.board) and checks the packets'
 latency and the closings' length; the wrong-rounding build is the negative control.
 Needs the same tools as tests/test_firmware.py (scripts/bootstrap.sh installs them).
 """
@@ -18,9 +18,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from slipreflex import board, hardware
 from slipreflex.cli import main as cli_main
-from slipreflex.devices import ilimb, wire
+from slipreflex.core import hardware
+from slipreflex.methods import board
+from slipreflex.rig.devices import ilimb, wire
 
 ROOT = Path(__file__).resolve().parents[1]
 FIRMWARE = ROOT / "firmware"
@@ -233,7 +234,7 @@ def test_mega_never_opens_on_simulated_drop_and_pour(tmp_path, tools):
     built with the grasp's p0: every byte on UART1 is in a CLOSE or a STOP packet, never
     an OPEN or a POSITION, and the packets are the twin's."""
     tools("make", "cc", "avr-gcc", "avr-libc", "simavr")
-    from slipreflex.experiments import ReproduceConfig, trial_seed
+    from slipreflex.reproduce.experiments import ReproduceConfig, trial_seed
     from slipreflex.sim import Rig, run_closed_loop
 
     config = ReproduceConfig()

@@ -15,14 +15,14 @@ from pathlib import Path
 import pytest
 import serial
 
-from slipreflex import board
-from slipreflex import hardware as hw
 from slipreflex.cli import main
-from slipreflex.devices import wire
-from slipreflex.devices.daq import SerialDaq
-from slipreflex.recording import METADATA_NAME, Recorder, read_recording
-from slipreflex.replay import replay
-from slipreflex.runtime import run_loop
+from slipreflex.core import hardware as hw
+from slipreflex.files.recording import METADATA_NAME, Recorder, read_recording
+from slipreflex.methods import board
+from slipreflex.rig.devices import wire
+from slipreflex.rig.devices.daq import SerialDaq
+from slipreflex.rig.replay import replay
+from slipreflex.rig.runtime import run_loop
 
 ROOT = Path(__file__).resolve().parents[1]
 FIRMWARE = ROOT / "firmware"

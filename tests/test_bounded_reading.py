@@ -13,9 +13,9 @@ import pytest
 import zstandard
 
 from slipreflex.cli import main
-from slipreflex.errors import DataError
-from slipreflex.recording import read_recording, reader
-from slipreflex.validation import LIMITS
+from slipreflex.core.errors import DataError
+from slipreflex.core.validation import LIMITS
+from slipreflex.files.recording import read_recording, reader
 
 
 def _string(s: bytes) -> bytes:

@@ -12,7 +12,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from slipreflex.errors import ParameterError
+from slipreflex.core.errors import ParameterError
 from slipreflex.sim.calibration import calibrate_bottle, first_slip_ml
 from slipreflex.sim.uncertain import nominal_values, plant_from_values
 from slipreflex.study import StudyConfig

@@ -147,9 +147,17 @@ def test_reset_restores_initial_state():
 @pytest.mark.parametrize("enc,ctl", list(itertools.product(ENCODERS, CONTROLLERS)))
 def test_staged_batch_equals_composed_step_sample_for_sample(enc, ctl):
     """run_chain's stage-by-stage fast path gives every output of stepping the composed chain."""
-    from slipreflex.chain import _kernels as K
-    from slipreflex.chain._layout import S_LAST_ACC, S_LAST_EVENT, S_LAST_THETA, S_LAST_X, S_M, init_state, pack_params
-    from slipreflex.chain.params import ReflexParams
+    from slipreflex.methods.chain import _kernels as K
+    from slipreflex.methods.chain._layout import (
+        S_LAST_ACC,
+        S_LAST_EVENT,
+        S_LAST_THETA,
+        S_LAST_X,
+        S_M,
+        init_state,
+        pack_params,
+    )
+    from slipreflex.methods.chain.params import ReflexParams
 
     for name in ("one", "sine-burst", "spikes", "random-3", "step"):
         raw = np.asarray(SIGNALS[name], dtype=float)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import slipreflex as sr
-from slipreflex.errors import DataError, ParameterError
+from slipreflex.core.errors import DataError, ParameterError
 
 
 @pytest.mark.parametrize("kwargs,name", [

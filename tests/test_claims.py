@@ -338,7 +338,7 @@ def test_contradictions_of_the_paper():
 @pytest.mark.slow
 def test_report_terminal_and_claims_csv_of_a_run(tmp_path):
     from slipreflex.analysis.outputs import write_outputs
-    from slipreflex.experiments import ReproduceConfig, run_reproduce
+    from slipreflex.reproduce.experiments import ReproduceConfig, run_reproduce
 
     res = run_reproduce(ReproduceConfig(trials=1, bottles=("TX",), methods=("dath",), experiments=("drop",)),
                         jobs=1, progress=False, plots=False)
@@ -356,7 +356,7 @@ def test_report_terminal_and_claims_csv_of_a_run(tmp_path):
 def test_claims_command_writes_the_run_s_claims_csv(tmp_path, capsys):
     from slipreflex.analysis.outputs import write_outputs
     from slipreflex.cli import main
-    from slipreflex.experiments import ReproduceConfig, run_reproduce
+    from slipreflex.reproduce.experiments import ReproduceConfig, run_reproduce
 
     cfg = ReproduceConfig(trials=1, bottles=("TX",), methods=("fixed", "dath"), experiments=("drop",))
     res = run_reproduce(cfg, jobs=1, progress=False, plots=False)

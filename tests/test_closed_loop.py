@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 from numba import njit
 
-from slipreflex import hardware as hw
 from slipreflex import methods
-from slipreflex.errors import ParameterError
-from slipreflex.experiments import ReproduceConfig, calibrate
-from slipreflex.hardware import Finger, HandCommand
-from slipreflex.interfaces import CompiledReflex
+from slipreflex.core import hardware as hw
+from slipreflex.core.errors import ParameterError
+from slipreflex.core.hardware import Finger, HandCommand
+from slipreflex.core.interfaces import CompiledReflex
+from slipreflex.reproduce.experiments import ReproduceConfig, calibrate
 from slipreflex.sim import PAPER_DROP, PAPER_POUR, Drop, Pour, Rig, closed, run_closed_loop
 
 SHORT_POUR = Pour(rate_l_min=1.0, volume_ml=150.0)
@@ -261,7 +261,7 @@ def test_the_loop_kernels_cache_goes_stale_when_the_physics_changes(tmp_path, mo
 
 def test_a_tactile_reflex_for_other_frames_fails_as_in_the_python_loop():
     """NMSD set up for a 7-channel sensor: both loops refuse the rig's 4 x 4 frames with the same error."""
-    from slipreflex.errors import DataError
+    from slipreflex.core.errors import DataError
 
     for compiled in (True, False):
         rig = Rig("TR")
@@ -411,7 +411,7 @@ def test_a_reflex_only_ever_closes_the_tripod_in_a_closed_loop_pour(method, monk
     the middle finger the reflex starts from): the reflex's command reaches the hand only as CLOSE
     and STOP (the grip-only rule, as runtime.run_loop sends it), in either loop, so no finger ever
     opens, whatever the command says."""
-    from slipreflex.experiments import trial_seed
+    from slipreflex.reproduce.experiments import trial_seed
     from slipreflex.sim.variations import grasped_rig
 
     def stops(trial):

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from slipreflex import methods
-from slipreflex.baselines import NMSD, SWTSD
-from slipreflex.chain import SlipReflex
-from slipreflex.interfaces import Reflex
+from slipreflex.core.interfaces import Reflex
+from slipreflex.methods.baselines import NMSD, SWTSD
+from slipreflex.methods.chain import SlipReflex
 from slipreflex.testing import ContractError, check_method, check_reflex, reflex_for_check
 
 

@@ -9,13 +9,9 @@ from pathlib import Path
 import pytest
 import serial
 
-from slipreflex.chain import SlipReflex
-from slipreflex.devices import wire
-from slipreflex.devices.daq import SerialDaq
-from slipreflex.errors import ParameterError
-from slipreflex.hands import open_hand
-from slipreflex.hardware import Finger
-from slipreflex.interfaces import (
+from slipreflex.core.errors import ParameterError
+from slipreflex.core.hardware import Finger
+from slipreflex.core.interfaces import (
     CONTRACTS,
     DaqSample,
     Hand,
@@ -25,7 +21,11 @@ from slipreflex.interfaces import (
     missing,
     optional,
 )
-from slipreflex.runtime import run_loop
+from slipreflex.methods.chain import SlipReflex
+from slipreflex.rig.devices import wire
+from slipreflex.rig.devices.daq import SerialDaq
+from slipreflex.rig.hands import open_hand
+from slipreflex.rig.runtime import run_loop
 from slipreflex.testing import ContractError, check_hand, check_reflex, check_source
 
 

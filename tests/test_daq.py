@@ -8,11 +8,11 @@ import time
 import pytest
 import serial
 
-from slipreflex import hardware as hw
-from slipreflex.devices import wire
-from slipreflex.devices.daq import DaqStats, SerialDaq
-from slipreflex.devices.virtual import PtyPort
-from slipreflex.errors import DeviceError
+from slipreflex.core import hardware as hw
+from slipreflex.core.errors import DeviceError
+from slipreflex.rig.devices import wire
+from slipreflex.rig.devices.daq import DaqStats, SerialDaq
+from slipreflex.rig.devices.virtual import PtyPort
 
 
 def _frames(seqs, adc=300):
@@ -129,7 +129,7 @@ def test_open_failure_names_the_port(tmp_path):
 
 
 def test_a_port_in_use_is_refused_with_a_clear_error():
-    from slipreflex.devices.ilimb import ILimb
+    from slipreflex.rig.devices.ilimb import ILimb
 
     port = PtyPort()
     first = SerialDaq(port.path)

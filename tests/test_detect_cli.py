@@ -9,7 +9,7 @@ import pytest
 
 import slipreflex as sr
 from slipreflex.cli import main
-from slipreflex.csvfiles import read_slip_csv
+from slipreflex.files.csvfiles import read_slip_csv
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "slip_example.csv"
 
@@ -98,9 +98,9 @@ def test_detect_on_an_export_reruns_the_run_with_its_p0_and_chain(tmp_path, caps
     """Issue 11 item 16: an export's header carries p0 and the chain (docs/runtime.md); detect uses them."""
     import json
 
-    from slipreflex.chain import ReflexParams
-    from slipreflex.csvfiles import write_columns
-    from slipreflex.recording import EXPORT_FORMAT
+    from slipreflex.files.csvfiles import write_columns
+    from slipreflex.files.recording import EXPORT_FORMAT
+    from slipreflex.methods.chain import ReflexParams
     rng = np.random.default_rng(3)
     n = 1200
     x = 0.4 + np.where((np.arange(n) > 300) & (np.arange(n) < 500), 0.2 * rng.standard_normal(n), 0.0)

@@ -1,4 +1,4 @@
-"""Experiments as registered data (slipreflex.experiment_specs): the drop and the pour are two
+"""Experiments as registered data (slipreflex.core.experiment_specs): the drop and the pour are two
 registrations, a new experiment registered from a file outside the package runs through
 ``reproduce``, its outputs and its figures, and the paper's rows do not move."""
 
@@ -13,10 +13,10 @@ from pathlib import Path
 
 import pytest
 
-from slipreflex import experiment_specs
 from slipreflex.cli import main
-from slipreflex.errors import ParameterError
-from slipreflex.experiments import ReproduceConfig, trial_seed
+from slipreflex.core import experiment_specs
+from slipreflex.core.errors import ParameterError
+from slipreflex.reproduce.experiments import ReproduceConfig, trial_seed
 from slipreflex.testing import ContractError, check_experiment
 
 SRC = Path(__file__).resolve().parents[1] / "src" / "slipreflex"
@@ -123,9 +123,10 @@ def test_an_experiment_from_a_file_runs_through_reproduce_its_outputs_and_figure
 
 # The run's own modules: what happens in a trial and what its outputs show is read from the
 # experiment's specification, never decided by comparing its name with "drop" or "pour".
-PIPELINE = ["experiments.py", "grid.py", "paper_experiments.py", "analysis/outputs.py", "analysis/figures.py",
-            "analysis/trial.py", "analysis/report/tables.py", "analysis/report/prose.py", "devices/simrig.py",
-            "devices/virtual.py"]
+PIPELINE = ["reproduce/experiments.py", "reproduce/grid.py", "reproduce/paper_experiments.py",
+            "analysis/outputs.py", "analysis/figures.py",
+            "analysis/trial.py", "analysis/report/tables.py", "analysis/report/prose.py", "rig/devices/simrig.py",
+            "rig/devices/virtual.py"]
 
 
 @pytest.mark.parametrize("module", PIPELINE)

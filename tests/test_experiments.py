@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 
 from slipreflex import methods
-from slipreflex.baselines import NMSD, SWTSD
-from slipreflex.baselines.swt import SWT_PERSIST
-from slipreflex.chain import SlipReflex
-from slipreflex.errors import ParameterError
-from slipreflex.experiments import (
+from slipreflex.core.errors import ParameterError
+from slipreflex.methods.baselines import NMSD, SWTSD
+from slipreflex.methods.baselines.swt import SWT_PERSIST
+from slipreflex.methods.chain import SlipReflex
+from slipreflex.reproduce.experiments import (
     RESULTS_CSV_COLUMNS,
     Cell,
     ReproduceConfig,
@@ -40,7 +40,7 @@ def test_config_defaults_come_from_the_simulator_and_validate():
         with pytest.raises(ParameterError):
             ReproduceConfig(**bad)
     assert closing_speed() == HandParams().speed_units_s
-    from slipreflex.experiments import BOTTLE_NAMES
+    from slipreflex.reproduce.experiments import BOTTLE_NAMES
     from slipreflex.sim import BOTTLES
     assert set(BOTTLE_NAMES) == set(BOTTLES)
 
@@ -123,7 +123,7 @@ def test_parallel_and_serial_runs_give_the_same_rows():
 
 def test_a_trial_from_a_kept_grasp_equals_one_from_its_own_grasp():
     """The methods of a paired trial start from copies of one grasp: the same bits as their own."""
-    from slipreflex.experiments import Cell, ReproduceConfig, run_trial, trial_seed
+    from slipreflex.reproduce.experiments import Cell, ReproduceConfig, run_trial, trial_seed
     from slipreflex.sim import variations
 
     cfg = ReproduceConfig(trials=1)

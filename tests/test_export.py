@@ -8,11 +8,11 @@ import os
 import numpy as np
 import pytest
 
-from slipreflex.chain import ReflexParams, SlipReflex, run_chain
 from slipreflex.cli import main
-from slipreflex.csvfiles import read_preamble, read_slip_csv
-from slipreflex.recording import EXPORT_FORMAT, METADATA_NAME, Recorder, read_recording
-from slipreflex.runtime import run_loop
+from slipreflex.files.csvfiles import read_preamble, read_slip_csv
+from slipreflex.files.recording import EXPORT_FORMAT, METADATA_NAME, Recorder, read_recording
+from slipreflex.methods.chain import ReflexParams, SlipReflex, run_chain
+from slipreflex.rig.runtime import run_loop
 
 P0 = {"thumb": 148.0, "index": 147.0, "middle": 147.0}
 
@@ -23,7 +23,7 @@ class _Slipping:
     def __init__(self, n=1200, seed=3):
         rng = np.random.default_rng(seed)
         v = 0.4 + np.where((np.arange(n) > 300) & (np.arange(n) < 500), 0.2 * rng.standard_normal(n), 0.0)
-        from slipreflex.interfaces import DaqSample
+        from slipreflex.core.interfaces import DaqSample
         self.left = [DaqSample(k, k * 0.003, float(v[k]), None, 0) for k in range(n)]
 
     def read(self, timeout):
@@ -55,7 +55,7 @@ def _recorded_run(tmp_path):
     params = ReflexParams(dath=True, p0=P0["middle"])
     path = tmp_path / "run.mcap"
     meta = {"reflex": "dath", "reflex_params": json.dumps(params.to_dict()), "p0": json.dumps(P0)}
-    from slipreflex.hardware import Finger
+    from slipreflex.core.hardware import Finger
     with Recorder(path, metadata={METADATA_NAME: meta}) as rec:
         res = run_loop(_Slipping(), _Hand(), SlipReflex(params), recorder=rec, duration=0.5,
                        p0={Finger[k.upper()]: v for k, v in P0.items()}, watchdog=0.5)

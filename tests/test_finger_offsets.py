@@ -8,14 +8,14 @@ import json
 
 import pytest
 
-from slipreflex.chain import SlipReflex
-from slipreflex.devices.simrig import SimRig
-from slipreflex.errors import ParameterError
-from slipreflex.hardware import DAQ_PERIOD_S, FINGER_MAX, TRIPOD, Finger
-from slipreflex.interfaces import DaqSample
-from slipreflex.recording import METADATA_NAME, Recorder, read_recording
-from slipreflex.replay import replay
-from slipreflex.runtime import run_loop
+from slipreflex.core.errors import ParameterError
+from slipreflex.core.hardware import DAQ_PERIOD_S, FINGER_MAX, TRIPOD, Finger
+from slipreflex.core.interfaces import DaqSample
+from slipreflex.files.recording import METADATA_NAME, Recorder, read_recording
+from slipreflex.methods.chain import SlipReflex
+from slipreflex.rig.devices.simrig import SimRig
+from slipreflex.rig.replay import replay
+from slipreflex.rig.runtime import run_loop
 from test_safe_start import _RigSource
 
 

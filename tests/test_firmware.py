@@ -17,8 +17,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from slipreflex import hardware
-from slipreflex.devices import wire
+from slipreflex.core import hardware
+from slipreflex.rig.devices import wire
 
 ROOT = Path(__file__).resolve().parents[1]
 FIRMWARE = ROOT / "firmware"

@@ -84,9 +84,9 @@ def _wait(cond, seconds=10.0):
 
 
 def test_virtual_rig_schedule_waits_for_run_and_announces_each_perturbation():
-    from slipreflex.devices.ilimb import ILimb
-    from slipreflex.devices.virtual import VirtualDevices
-    from slipreflex.hardware import Finger
+    from slipreflex.core.hardware import Finger
+    from slipreflex.rig.devices.ilimb import ILimb
+    from slipreflex.rig.devices.virtual import VirtualDevices
 
     said = []
     rig = _QuietRig()
@@ -105,7 +105,7 @@ def test_virtual_rig_schedule_waits_for_run_and_announces_each_perturbation():
 
 
 def test_virtual_rig_summary_gives_the_fall_time_and_caps_the_slide():
-    from slipreflex.devices.simrig import SimRig
+    from slipreflex.rig.devices.simrig import SimRig
     from slipreflex.sim import Pour
 
     sim = SimRig("TR", pour=Pour(rate_l_min=6.0, volume_ml=300.0))
@@ -134,7 +134,7 @@ def _option(parser, flag):
 
 
 def test_detect_and_run_offer_the_same_presets():
-    from slipreflex.chain.params import PRESETS
+    from slipreflex.methods.chain.params import PRESETS
 
     assert list(_option(_sub("detect"), "--preset").choices) == list(_option(_sub("run"), "--preset").choices) \
         == sorted(PRESETS)
@@ -150,7 +150,7 @@ def test_defaults_are_shown_as_numbers():
 
 
 def test_the_p0_example_is_what_virtual_rig_prints():
-    from slipreflex.devices.simrig import SimRig
+    from slipreflex.rig.devices.simrig import SimRig
 
     line = SimRig("TR", seed=0).grasp().p0_text()           # virtual-rig's defaults: TR, seed 0
     assert line in " ".join(_sub("run").format_help().split())
@@ -169,18 +169,18 @@ def test_study_docs_install_from_the_repository_or_a_wheel():
 # -- the first run ------------------------------------------------------------------------------
 
 def test_an_empty_numba_cache_is_seen_as_cold(tmp_path):
-    code = "from slipreflex.warmup import cold_kernels; print(len(cold_kernels()))"
+    code = "from slipreflex.reproduce.warmup import cold_kernels; print(len(cold_kernels()))"
     env = {**__import__("os").environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba")}
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=300)
     assert r.returncode == 0, r.stderr
-    from slipreflex.warmup import KERNELS
+    from slipreflex.reproduce.warmup import KERNELS
 
     assert int(r.stdout) == len(KERNELS)
 
 
 def test_the_estimate_counts_the_compilation_of_a_cold_cache(tmp_path, capsys, monkeypatch):
     import slipreflex.commands.reproduce as command
-    import slipreflex.experiments as ex
+    import slipreflex.reproduce.experiments as ex
 
     class Stop(Exception):
         pass
@@ -205,7 +205,7 @@ def test_the_estimate_counts_the_compilation_of_a_cold_cache(tmp_path, capsys, m
 def test_the_kernels_are_compiled_before_the_workers_start():
     """Workers are forked after the parent compiled the closed loops: one compilation, not one per worker."""
     code = """
-import slipreflex.experiments as ex
+import slipreflex.reproduce.experiments as ex
 from slipreflex.sim import closed
 seen = []
 def pool(calls, jobs, finished, done):
@@ -223,7 +223,7 @@ print(seen)
 # -- figures draw what the controller saw ---------------------------------------------------------
 
 def _trial(method, experiment="drop", bottle="DK", k=0, **cfg):
-    from slipreflex.experiments import Cell, ReproduceConfig, calibrate, run_trial, trial_seed
+    from slipreflex.reproduce.experiments import Cell, ReproduceConfig, calibrate, run_trial, trial_seed
 
     config = ReproduceConfig(trials=1, bottles=(bottle,), experiments=(experiment,), **cfg)
     th = calibrate(config) if method in ("nmsd", "swt") else {}
@@ -233,9 +233,9 @@ def _trial(method, experiment="drop", bottle="DK", k=0, **cfg):
 
 @pytest.mark.parametrize("compiled", [True, False])
 def test_the_loop_records_what_its_reflex_computed(compiled):
-    from slipreflex.chain import SlipReflex
-    from slipreflex.experiments import DEFAULT_SEED, trial_seed
-    from slipreflex.hardware import SLIP_FINGER
+    from slipreflex.core.hardware import SLIP_FINGER
+    from slipreflex.methods.chain import SlipReflex
+    from slipreflex.reproduce.experiments import DEFAULT_SEED, trial_seed
     from slipreflex.sim import PAPER_DROP, run_closed_loop
     from slipreflex.sim.loop import reflex_log
     from slipreflex.sim.variations import grasped_rig
@@ -297,7 +297,7 @@ surface = "TR"
 def _jar_config(**kw):
     import tempfile
 
-    from slipreflex.experiments import ReproduceConfig
+    from slipreflex.reproduce.experiments import ReproduceConfig
     from slipreflex.sim import BOTTLES, load_objects
     from slipreflex.sim.uncertain import Plant
 
@@ -310,8 +310,8 @@ def _jar_config(**kw):
 def test_the_suggested_grasp_force_was_simulated_on_the_runs_trials_before_it_is_printed(tmp_path, capsys):
     import re
 
-    from slipreflex.experiments import trial_seed
-    from slipreflex.grasping import GRASP_MARGIN, grasp_holds
+    from slipreflex.reproduce.experiments import trial_seed
+    from slipreflex.reproduce.grasping import GRASP_MARGIN, grasp_holds
 
     config, path = _jar_config(trials=3, methods=("dath",))
     assert main(["reproduce", "--objects", str(path), "--bottles", "JAR", "--methods", "dath", "--trials", "3",
@@ -330,7 +330,7 @@ def test_the_suggested_grasp_force_was_simulated_on_the_runs_trials_before_it_is
 
 def test_a_trial_whose_object_left_before_the_load_is_void_and_reported_apart():
     from slipreflex.analysis.report import report_markdown, summarize, terminal_table
-    from slipreflex.experiments import Cell, run_trial, trial_seed
+    from slipreflex.reproduce.experiments import Cell, run_trial, trial_seed
 
     config, _ = _jar_config(trials=6, methods=("dath",), experiments=("drop",), grasp_force_n=1.95)
     rows = []
@@ -372,7 +372,7 @@ def test_grip_added_before_any_slip_is_measured():
     from importlib.resources import files
 
     from slipreflex.analysis.report import summarize, terminal_table
-    from slipreflex.experiments import Cell, ReproduceConfig, run_trial, trial_seed
+    from slipreflex.reproduce.experiments import Cell, ReproduceConfig, run_trial, trial_seed
     from slipreflex.sim import BOTTLES, HandParams, load_objects
     from slipreflex.sim.uncertain import Plant
 
@@ -396,7 +396,7 @@ def test_grip_added_before_any_slip_is_measured():
 
 def test_the_run_draws_success_and_grip_figures(tmp_path):
     from slipreflex.analysis.outputs import _figure_tasks
-    from slipreflex.experiments import ReproduceConfig, ReproduceResult
+    from slipreflex.reproduce.experiments import ReproduceConfig, ReproduceResult
 
     res = ReproduceResult(ReproduceConfig(trials=1), [], [{"experiment": "drop", "bottle": "TR", "method": "dath",
                                                          "grip_without_slip_mean": 5.0}], {}, {}, 0.0, 1)
@@ -438,7 +438,7 @@ def test_calibrate_draws_the_open_loop_calibration(tmp_path, monkeypatch, capsys
 
 def test_a_run_draws_nmsd_and_swt_trials_and_zooms_that_zoom(tmp_path):
     from slipreflex.analysis.outputs import _figure_tasks, zoom_window
-    from slipreflex.experiments import ReproduceConfig, run_reproduce
+    from slipreflex.reproduce.experiments import ReproduceConfig, run_reproduce
 
     res = run_reproduce(ReproduceConfig(trials=1, bottles=("DK", "TX"), experiments=("drop",)), jobs=1,
                         progress=False)

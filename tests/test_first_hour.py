@@ -65,8 +65,8 @@ def test_virtual_rig_link_dir_that_cannot_be_made_is_one_line(capsys, tmp_path):
 
 
 def test_output_dir_creates_and_proves_writable(tmp_path):
-    from slipreflex.errors import ParameterError
-    from slipreflex.paths import output_dir
+    from slipreflex.core.errors import ParameterError
+    from slipreflex.files.paths import output_dir
     d = output_dir(tmp_path / "a" / "b", "--out")
     assert d.is_dir() and list(d.iterdir()) == []   # the probe file is gone
     ro = tmp_path / "ro"
@@ -100,7 +100,7 @@ def test_batch_functions_take_matlab_row_and_column_vectors():
     import numpy as np
 
     import slipreflex as sr
-    from slipreflex.errors import DataError
+    from slipreflex.core.errors import DataError
     raw = 0.4 + 0.02 * np.sin(np.arange(96) / 2.0)
     flat = sr.run_chain(raw, dath=True)
     for shaped in (raw[None, :], raw[:, None]):
@@ -120,7 +120,7 @@ def test_batch_functions_take_matlab_row_and_column_vectors():
 def test_progress_in_a_log_is_one_line_per_tenth_without_carriage_returns():
     import io
 
-    from slipreflex.progress import Progress
+    from slipreflex.files.progress import Progress
     log = io.StringIO()
     ticks = iter(range(1000))
     with Progress(240, desc="trials", unit="trial", file=log, clock=lambda: float(next(ticks))) as p:
@@ -141,7 +141,7 @@ def test_progress_in_a_log_is_one_line_per_tenth_without_carriage_returns():
 def test_progress_on_a_terminal_is_a_live_bar():
     import io
 
-    from slipreflex.progress import Progress
+    from slipreflex.files.progress import Progress
     term = io.StringIO()
     with Progress(10, desc="trials", file=term, tty=True) as p:
         p.update(10)
@@ -202,7 +202,7 @@ def test_interrupted_reproduce_writes_the_finished_trials_marked_partial(tmp_pat
     ("/proc/nope", "--out /proc/nope: cannot create the directory"),
 ])
 def test_reproduce_out_is_checked_before_the_first_trial(capsys, monkeypatch, out, says):
-    import slipreflex.experiments as ex
+    import slipreflex.reproduce.experiments as ex
 
     monkeypatch.chdir(ROOT)
     monkeypatch.setattr(ex, "run_trial", lambda *a, **k: pytest.fail("a trial ran"))
@@ -223,7 +223,7 @@ def test_seeds_are_derived_in_time_linear_in_the_trials(monkeypatch):
     """3000 trials: every seed comes from O(1) spawned children (it was O(trials) each)."""
     import numpy as np
 
-    from slipreflex.experiments import ReproduceConfig, trial_seed
+    from slipreflex.reproduce.experiments import ReproduceConfig, trial_seed
     spawned = []
     real = np.random.SeedSequence
 
@@ -245,9 +245,9 @@ def test_seeds_are_derived_in_time_linear_in_the_trials(monkeypatch):
 @pytest.mark.slow
 def test_reproduce_estimates_its_run_time_before_starting(tmp_path, capsys, monkeypatch):
     import slipreflex.commands.reproduce as command
-    import slipreflex.experiments as ex
+    import slipreflex.reproduce.experiments as ex
     from slipreflex.cli import main
-    from slipreflex.errors import ParameterError
+    from slipreflex.core.errors import ParameterError
 
     def stop(*a, **k):
         raise ParameterError("stopped by the test")
@@ -255,7 +255,7 @@ def test_reproduce_estimates_its_run_time_before_starting(tmp_path, capsys, monk
     assert main(["reproduce", "--out", str(tmp_path), "--trials", "3000", "--jobs", "2"]) == 2
     err = capsys.readouterr().err.splitlines()
     from slipreflex.commands.reproduce import LONG_RUN_S
-    from slipreflex.progress import format_duration
+    from slipreflex.files.progress import format_duration
 
     est = ex.estimate_wall_s(ex.ReproduceConfig(trials=3000), 2)
     assert est > LONG_RUN_S

@@ -18,7 +18,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from slipreflex.cli import build_parser, main
-from slipreflex.errors import SlipreflexError
+from slipreflex.core.errors import SlipreflexError
 
 #: Examples per test: 150 in CI (seconds); FUZZ_EXAMPLES=1500 for a longer look (1500 found nothing either).
 SETTINGS = settings(max_examples=int(os.environ.get("FUZZ_EXAMPLES", "150")), deadline=None, derandomize=True,
@@ -50,8 +50,8 @@ TEXTS = ["", ",", ",,", "x", "é", "a:b", "stand:5,white:-1", "drop@nan", "thumb
 
 def _files(root: Path) -> list[str]:
     """Hostile and valid input files, made once per test."""
-    from slipreflex.chain import ReflexParams
-    from slipreflex.recording import METADATA_NAME, Recorder
+    from slipreflex.files.recording import METADATA_NAME, Recorder
+    from slipreflex.methods.chain import ReflexParams
 
     (root / "bin.toml").write_bytes(bytes(range(256)) * 4)
     (root / "latin1.toml").write_bytes(b'[bottles.B]\nname = "caf\xe9"\n')

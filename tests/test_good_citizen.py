@@ -14,7 +14,7 @@ import threading
 import pytest
 
 from slipreflex.cli import main
-from slipreflex.study import runner
+from slipreflex.study import cluster, runner
 
 TINY = ["--plants", "2", "--trials", "1", "--bottles", "TX", "--methods", "dath", "--experiments", "drop",
         "--no-calibration", "--no-figures", "--no-progress"]
@@ -50,7 +50,7 @@ class _Server:
                                           (b"", "no Dask handshake within 0.5 s")])
 def test_a_scheduler_that_is_not_dask_is_one_line_and_leaves_no_lock(tmp_path, capsys, monkeypatch,
                                                                        banner, says):
-    monkeypatch.setattr(runner, "SCHEDULER_TIMEOUT_S", 0.5)
+    monkeypatch.setattr(cluster, "SCHEDULER_TIMEOUT_S", 0.5)
     server = _Server(banner)
     try:
         out = tmp_path / "out"

@@ -12,16 +12,16 @@ import os
 import pytest
 import serial
 
-from slipreflex.chain import SlipReflex
 from slipreflex.cli import main
 from slipreflex.commands.run import add_arguments, chain_params
-from slipreflex.devices.ilimb import ILimb, PacketParser
-from slipreflex.devices.simrig import SimRig
-from slipreflex.devices.virtual import VirtualDevices
-from slipreflex.errors import ParameterError
-from slipreflex.grip import Grip, span
-from slipreflex.hardware import DAQ_PERIOD_S, FINGER_SPEED_UNITS_S, TRIPOD, Finger, HandCommand
-from slipreflex.runtime import run_loop
+from slipreflex.core.errors import ParameterError
+from slipreflex.core.grip import Grip, span
+from slipreflex.core.hardware import DAQ_PERIOD_S, FINGER_SPEED_UNITS_S, TRIPOD, Finger, HandCommand
+from slipreflex.methods.chain import SlipReflex
+from slipreflex.rig.devices.ilimb import ILimb, PacketParser
+from slipreflex.rig.devices.simrig import SimRig
+from slipreflex.rig.devices.virtual import VirtualDevices
+from slipreflex.rig.runtime import run_loop
 
 P0S = [0, 100, 148, 200, 500]
 SEED = 165
@@ -213,7 +213,7 @@ def test_the_ilimb_refuses_an_open_or_a_lower_position_while_a_reflex_runs():
 
 
 def hw_cmd(finger, command, value):
-    from slipreflex.devices.ilimb import FingerCommand
+    from slipreflex.rig.devices.ilimb import FingerCommand
 
     return FingerCommand(finger, command, value)
 

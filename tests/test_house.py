@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from slipreflex.errors import ParameterError
+from slipreflex.core.errors import ParameterError
 from test_package import MODULES
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -50,7 +50,7 @@ def test_every_public_constructor_rejects_an_unknown_keyword(cls):
 
 
 def test_the_params_and_overrides_contract_names_the_unknown_keyword():
-    from slipreflex.baselines import NMSD, SWTSD, NMSDParams, SWTParams
+    from slipreflex.methods.baselines import NMSD, SWTSD, NMSDParams, SWTParams
 
     for cls, params in ((NMSD, NMSDParams(threshold=1.0, speed=2.0)), (SWTSD, SWTParams(threshold=1.0, speed=2.0))):
         with pytest.raises(ParameterError, match=UNKNOWN):
@@ -74,10 +74,11 @@ def test_no_function_outside_the_numba_kernels_is_longer_than_80_lines():
     assert not long, f"functions over 80 lines (docstring excluded): {long}"
 
 
-#: Modules over 800 lines while other branches split them: a temporary allowance, emptied when they merge
-#: (an entry whose module is back under the cap fails the test below, so it cannot stay behind).
-OVER_800_UNTIL_SPLIT: frozenset[str] = frozenset({
-    "sim/rig.py", "sim/kernel.py", "runtime.py", "devices/ability.py", "recording.py", "study/runner.py"})
+#: Modules still over 800 lines, each with its reason (an entry whose module is back under the cap fails the test
+#: below, so none stays behind). sim/kernel.py: numba caches the compiled step against its own file alone, and the
+#: step inlines its helpers, so a helper moved to another module could run from a stale cache; the split waits
+#: for a cache stamp that covers every file a kernel inlines.
+OVER_800_UNTIL_SPLIT: frozenset[str] = frozenset({"sim/kernel.py"})
 
 
 def test_no_module_is_longer_than_800_lines():
@@ -95,9 +96,9 @@ def test_no_module_is_longer_than_800_lines():
 def test_experiments_keeps_to_its_job_in_at_most_500_lines():
     """Issue 12: configuration, seeds, the trial and the grid; running the grid is grid.py's,
     the report's prose analysis/report's. Its public names stay importable from it."""
-    from slipreflex import experiments, grid
+    from slipreflex.reproduce import experiments, grid
 
-    lines = (ROOT / "src" / "slipreflex" / "experiments.py").read_text().count("\n")
+    lines = (ROOT / "src" / "slipreflex" / "reproduce" / "experiments.py").read_text().count("\n")
     assert lines <= 500, f"experiments.py has {lines} lines (at most 500)"
     assert experiments.Cell is grid.Cell
     assert all(hasattr(experiments, name) for name in experiments.__all__)
@@ -105,10 +106,10 @@ def test_experiments_keeps_to_its_job_in_at_most_500_lines():
 
 def test_the_default_sampling_rate_is_the_daq_s_everywhere():
     import slipreflex as sr
-    from slipreflex import hardware as hw
     from slipreflex import methods
-    from slipreflex.board import BoardReflex
-    from slipreflex.chain import FilterParams, ReflexParams
+    from slipreflex.core import hardware as hw
+    from slipreflex.methods.board import BoardReflex
+    from slipreflex.methods.chain import FilterParams, ReflexParams
 
     assert hw.DAQ_FS == pytest.approx(333.333, abs=1e-3)
     rates = {"ReflexParams": ReflexParams().fs, "FilterParams": FilterParams().fs,
@@ -236,8 +237,9 @@ def test_every_module_in_src_is_exercised_by_the_fast_tier():
 def test_the_fast_tier_check_sees_a_module_no_fast_test_reaches(tmp_path):
     lonely = tmp_path / "lonely.py"
     lonely.write_text("def f():\n    return 1\n")
-    modules = {"slipreflex.errors": ROOT / "src" / "slipreflex" / "errors.py", "slipreflex.lonely": lonely}
-    assert _fast_tier_reaches(modules) == {"slipreflex.errors"}
+    modules = {"slipreflex.core.errors": ROOT / "src" / "slipreflex" / "core" / "errors.py",
+               "slipreflex.lonely": lonely}
+    assert _fast_tier_reaches(modules) == {"slipreflex.core.errors"}
 
 
 @pytest.mark.slow

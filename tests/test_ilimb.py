@@ -8,18 +8,11 @@ import time
 import pytest
 import serial
 
-from slipreflex import hardware as hw
-from slipreflex.devices.ilimb import (
-    FingerCommand,
-    GraspResult,
-    ILimb,
-    PacketParser,
-    encode_packet,
-    tripod_grasp,
-)
-from slipreflex.devices.virtual import PtyPort
-from slipreflex.errors import DeviceError, ParameterError
-from slipreflex.hardware import Finger, HandCommand
+from slipreflex.core import hardware as hw
+from slipreflex.core.errors import DeviceError, ParameterError
+from slipreflex.core.hardware import Finger, HandCommand
+from slipreflex.rig.devices.ilimb import FingerCommand, GraspResult, ILimb, PacketParser, encode_packet, tripod_grasp
+from slipreflex.rig.devices.virtual import PtyPort
 
 
 def test_packet_layout_follows_spec():

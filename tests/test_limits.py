@@ -9,7 +9,7 @@ from __future__ import annotations
 import pytest
 
 from slipreflex.cli import main
-from slipreflex.validation import LIMITS, limits_markdown, within
+from slipreflex.core.validation import LIMITS, limits_markdown, within
 
 
 def _one_line(capsys, *needles):
@@ -108,7 +108,7 @@ def test_within_names_the_option_and_the_range():
 
 
 def test_numba_cache_falls_back_to_a_private_folder_or_none(tmp_path, monkeypatch, capsys):
-    from slipreflex import _numba_cache as nc
+    from slipreflex.core import _numba_cache as nc
 
     unwritable = tmp_path / "ro"
     monkeypatch.setattr(nc, "_writable", lambda folder: tmp_path / "tmp" in folder.parents or

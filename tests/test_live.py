@@ -1,7 +1,7 @@
 """Watching a run as a lab would: a Foxglove WebSocket client and LSL inlets on loopback.
 
-A run over the virtual devices publishes through ``--live`` (slipreflex.live) and ``--lsl``
-(slipreflex.lsl); a WebSocket client speaking the Foxglove protocol subscribes to every
+A run over the virtual devices publishes through ``--live`` (slipreflex.rig.live) and ``--lsl``
+(slipreflex.rig.lsl); a WebSocket client speaking the Foxglove protocol subscribes to every
 advertised channel and an LSL inlet resolves the outlets, and what they receive is compared
 with the run's own MCAP recording. Each extra skips, with its reason, where its package or
 native library cannot load (scripts/bootstrap.sh installs both, so CI runs them).
@@ -21,9 +21,9 @@ from pathlib import Path
 import pytest
 
 from slipreflex.cli import main
-from slipreflex.recording import TOPICS, read_recording, schema
-from slipreflex.runtime import run_loop
-from slipreflex.taps import Tap
+from slipreflex.core.taps import Tap
+from slipreflex.files.recording import TOPICS, read_recording, schema
+from slipreflex.rig.runtime import run_loop
 
 # liblsl reads its configuration once, at its first call: on this machine only (no multicast).
 os.environ.setdefault("LSLAPICFG", str(Path(__file__).parent / "data" / "lsl_loopback.cfg"))
@@ -49,7 +49,7 @@ class FoxgloveClient:
     """A Foxglove WebSocket client: subscribes to every advertised channel, keeps what arrives."""
 
     def __init__(self, url: str, expect_channels: int) -> None:
-        from slipreflex.live import WS_SUBPROTOCOLS
+        from slipreflex.rig.live import WS_SUBPROTOCOLS
 
         ws_client = _foxglove()
         self.stack = contextlib.ExitStack()
@@ -121,7 +121,7 @@ def _pull(inlet, n: int, timeout: float = 15.0):
 
 def test_live_topics_share_the_recording_schemas():
     pytest.importorskip("foxglove", reason="foxglove-sdk (slipreflex[live]) is not installed")
-    from slipreflex.live import RUN_TOPICS, LiveView
+    from slipreflex.rig.live import RUN_TOPICS, LiveView
 
     with LiveView(("127.0.0.1", 0), RUN_TOPICS + ("/tactile/frames", "/rig/truth")) as view:
         for topic, channel in view.channels.items():
@@ -138,8 +138,8 @@ def test_run_over_the_virtual_rig_watched_live_and_recorded_by_lsl(tmp_path):
     """The whole path: virtual devices -> run_loop -> recording + Foxglove server + LSL outlets."""
     _foxglove()
     pylsl = _pylsl()
-    from slipreflex.live import RUN_TOPICS, LiveView
-    from slipreflex.lsl import SAMPLE_CHANNELS, LslOutlets
+    from slipreflex.rig.live import RUN_TOPICS, LiveView
+    from slipreflex.rig.lsl import SAMPLE_CHANNELS, LslOutlets
     from test_runtime import _recorder, _reflex, rig_and_drivers
 
     path = tmp_path / "live.mcap"
@@ -286,8 +286,8 @@ def test_virtual_rig_live_publishes_the_rigs_truth(tmp_path):
 def test_replay_plays_a_recording_to_a_live_client_as_recorded(tmp_path, capsys):
     _foxglove()
     from slipreflex.commands.replay import play
-    from slipreflex.devices.virtual import VirtualDevices
-    from slipreflex.live import LiveView
+    from slipreflex.rig.devices.virtual import VirtualDevices
+    from slipreflex.rig.live import LiveView
     from test_runtime import ToyRig
 
     path = tmp_path / "r.mcap"
@@ -335,9 +335,9 @@ def test_lsl_samples_of_a_tactile_run_carry_each_taxel(tmp_path):
     pylsl = _pylsl()
     import numpy as np
 
-    from slipreflex.interfaces import TactileSample
-    from slipreflex.lsl import LslOutlets, tactile_channels
-    from slipreflex.runtime import tactile_message
+    from slipreflex.core.interfaces import TactileSample
+    from slipreflex.rig.lsl import LslOutlets, tactile_channels
+    from slipreflex.rig.runtime import tactile_message
 
     outlets = LslOutlets(f"tac-{uuid.uuid4().hex[:8]}", fs=260.0, taxels=6).start()
     try:

@@ -16,10 +16,10 @@ import numpy as np
 import pytest
 
 from slipreflex.cli import main
-from slipreflex.errors import ParameterError
-from slipreflex.experiment_specs import EXPERIMENTS
-from slipreflex.hands import HANDS
-from slipreflex.registry import PLUGIN_ENV
+from slipreflex.core.errors import ParameterError
+from slipreflex.core.experiment_specs import EXPERIMENTS
+from slipreflex.core.registry import PLUGIN_ENV
+from slipreflex.rig.hands import HANDS
 from slipreflex.sim import kernel as K
 from slipreflex.sim.loads import LOAD_KINDS, LoadKind, kind_of, load_names
 
@@ -117,8 +117,8 @@ def test_the_shake_example_runs_as_an_experiment_from_the_command_line(tmp_path)
 
 @pytest.mark.slow        # real time: a virtual rig, then 'slipreflex run' for 3 s
 def test_the_hand_twin_example_gets_the_reflexs_close_commands(tmp_path):
-    from slipreflex.devices.simrig import SimRig
-    from slipreflex.devices.virtual import VirtualDevices
+    from slipreflex.rig.devices.simrig import SimRig
+    from slipreflex.rig.devices.virtual import VirtualDevices
 
     rig = SimRig("TR", seed=1)
     rig.grasp()
@@ -157,8 +157,8 @@ class _EntryPoint:
 def test_an_installed_package_adds_a_hand_through_its_entry_point_group(monkeypatch):
     import importlib.metadata
 
-    from slipreflex.hands import HandSpec
-    from slipreflex.registry import Registry
+    from slipreflex.core.registry import Registry
+    from slipreflex.rig.hands import HandSpec
 
     twin = HandSpec("twin", "hand twin", dict)
     groups = {"slipreflex.hands": [_EntryPoint("twin", lambda: [twin])]}

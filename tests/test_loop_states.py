@@ -8,10 +8,10 @@ from pathlib import Path
 
 import pytest
 
-from slipreflex import loop_states, runtime
-from slipreflex.errors import DeviceError
-from slipreflex.interfaces import DaqSample
-from slipreflex.loop_states import REGIONS, TRANSITIONS, LoopStates, states_markdown
+from slipreflex.core.errors import DeviceError
+from slipreflex.core.interfaces import DaqSample
+from slipreflex.rig import loop_states, runtime
+from slipreflex.rig.loop_states import REGIONS, TRANSITIONS, LoopStates, states_markdown
 
 POLL, WATCHDOG, PERIOD = 0.01, 0.1, 0.003
 

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from slipreflex import methods
-from slipreflex.chain import run_chain
 from slipreflex.cli import main
-from slipreflex.csvfiles import read_slip_csv
+from slipreflex.files.csvfiles import read_slip_csv
+from slipreflex.methods.chain import run_chain
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "slip_example.csv"
 
@@ -39,8 +39,8 @@ def test_detect_refuses_a_method_its_input_cannot_feed_in_one_line(tmp_path, cap
 
 @pytest.mark.slow
 def test_replay_runs_a_registered_method_over_a_recording(tmp_path, capsys):
-    from slipreflex.devices.virtual import VirtualDevices
-    from slipreflex.recording import read_recording
+    from slipreflex.files.recording import read_recording
+    from slipreflex.rig.devices.virtual import VirtualDevices
     from test_runtime import ToyRig
 
     path = tmp_path / "r.mcap"
@@ -64,8 +64,8 @@ def test_replay_runs_a_registered_method_over_a_recording(tmp_path, capsys):
 
 @pytest.mark.slow
 def test_run_dath_event_over_the_virtual_ilimb_records_and_replays(tmp_path, capsys):
-    from slipreflex.devices.virtual import VirtualDevices
-    from slipreflex.recording import read_recording
+    from slipreflex.files.recording import read_recording
+    from slipreflex.rig.devices.virtual import VirtualDevices
     from test_runtime import ToyRig
 
     path = tmp_path / "ev.mcap"

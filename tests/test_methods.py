@@ -9,12 +9,12 @@ import pytest
 
 from slipreflex import methods
 from slipreflex.analysis.report import read_csv
-from slipreflex.baselines import NMSD, SWTSD
-from slipreflex.chain import SlipReflex
 from slipreflex.cli import main
-from slipreflex.errors import ParameterError
-from slipreflex.experiments import ReproduceConfig
-from slipreflex.interfaces import Reflex
+from slipreflex.core.errors import ParameterError
+from slipreflex.core.interfaces import Reflex
+from slipreflex.methods.baselines import NMSD, SWTSD
+from slipreflex.methods.chain import SlipReflex
+from slipreflex.reproduce.experiments import ReproduceConfig
 
 
 def test_the_paper_methods_in_one_order_with_their_specs():

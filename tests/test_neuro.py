@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from slipreflex import methods
-from slipreflex.chain import run_chain
-from slipreflex.errors import DataError
+from slipreflex.core.errors import DataError
+from slipreflex.methods.chain import run_chain
 from slipreflex.neuro.graph import METADATA_KEY, Node, SpikingGraph, chain_graph, host_params
 from slipreflex.neuro.interpreter import GraphExecutor
 from slipreflex.neuro.method import NIRReflex, graph_spikes

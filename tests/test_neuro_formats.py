@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from slipreflex.chain import run_chain
 from slipreflex.cli import main
+from slipreflex.methods.chain import run_chain
 from slipreflex.neuro import events as ev
 
 aedat = pytest.importorskip("aedat", reason="the neuro extra (pip install 'slipreflex[neuro]')")

@@ -14,14 +14,14 @@ import numpy as np
 import pytest
 
 from slipreflex import methods
-from slipreflex.baselines import rest_threshold
 from slipreflex.commands.run import add_arguments, build_reflex, parse_p0
-from slipreflex.devices.ability import sites_from_array
-from slipreflex.devices.simrig import SimRig
-from slipreflex.grip import TRAVEL, Grip
-from slipreflex.hardware import DAQ_PERIOD_S, TRIPOD, Finger
-from slipreflex.interfaces import TactileSample
-from slipreflex.runtime import run_loop
+from slipreflex.core.grip import TRAVEL, Grip
+from slipreflex.core.hardware import DAQ_PERIOD_S, TRIPOD, Finger
+from slipreflex.core.interfaces import TactileSample
+from slipreflex.methods.baselines import rest_threshold
+from slipreflex.rig.devices.ability import sites_from_array
+from slipreflex.rig.devices.simrig import SimRig
+from slipreflex.rig.runtime import run_loop
 
 SEED = 165
 P0S = (0, 148, 500)
@@ -148,7 +148,7 @@ class _Still:
         self.now, self.k = 0.0, 0
 
     def read(self, timeout):
-        from slipreflex.interfaces import DaqSample
+        from slipreflex.core.interfaces import DaqSample
 
         self.now += 4 * DAQ_PERIOD_S
         self.k += 4
@@ -220,7 +220,7 @@ def test_a_method_that_raises_in_step_is_a_fault_with_the_fingers_held_and_a_sum
 
 
 def test_a_method_that_raises_on_its_first_sample_is_refused_before_anything_is_sent():
-    from slipreflex.errors import ParameterError
+    from slipreflex.core.errors import ParameterError
 
     class Broken(_Plugin):
         def step(self, volts, position=None):

@@ -11,13 +11,13 @@ import threading
 
 import pytest
 
-from slipreflex.chain import SlipReflex
 from slipreflex.cli import main
-from slipreflex.csvfiles import read_recording
-from slipreflex.errors import DataError, DeviceError, ParameterError
-from slipreflex.hardware import DAQ_FS, DAQ_PERIOD_S, Finger
-from slipreflex.interfaces import DaqSample
-from slipreflex.runtime import run_loop
+from slipreflex.core.errors import DataError, DeviceError, ParameterError
+from slipreflex.core.hardware import DAQ_FS, DAQ_PERIOD_S, Finger
+from slipreflex.core.interfaces import DaqSample
+from slipreflex.files.csvfiles import read_recording
+from slipreflex.methods.chain import SlipReflex
+from slipreflex.rig.runtime import run_loop
 
 
 class _Still:
@@ -124,9 +124,9 @@ def test_a_scheduler_that_sends_a_header_then_nothing_is_refused_within_the_time
 
 def test_study_with_a_stalling_scheduler_is_one_line_and_writes_nothing(tmp_path, capsys, monkeypatch):
     pytest.importorskip("dask.distributed")
-    from slipreflex.study import runner
+    from slipreflex.study import cluster
 
-    monkeypatch.setattr(runner, "SCHEDULER_TIMEOUT_S", 1.0)
+    monkeypatch.setattr(cluster, "SCHEDULER_TIMEOUT_S", 1.0)
     srv, stop, addr = _fake_scheduler(True)
     out = tmp_path / "study"
     try:
@@ -162,9 +162,9 @@ def test_live_on_every_interface_warns_and_loopback_does_not(capsys, monkeypatch
 def test_run_with_a_method_that_raises_writes_the_summary_holds_and_exits_2(tmp_path, capsys):
     """``slipreflex run`` on the virtual rig with a registered plugin that fails after a second."""
     from slipreflex import methods
-    from slipreflex.devices.simrig import SimRig
-    from slipreflex.devices.virtual import VirtualDevices
-    from slipreflex.recording import read_recording as read_mcap
+    from slipreflex.files.recording import read_recording as read_mcap
+    from slipreflex.rig.devices.simrig import SimRig
+    from slipreflex.rig.devices.virtual import VirtualDevices
 
     class Fails(SlipReflex):
         steps = 0

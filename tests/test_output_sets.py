@@ -12,8 +12,8 @@ from pathlib import Path
 import pytest
 
 from slipreflex.cli import main
-from slipreflex.errors import ParameterError
-from slipreflex.paths import MANIFEST, OutputSet, unique_prefix
+from slipreflex.core.errors import ParameterError
+from slipreflex.files.paths import MANIFEST, OutputSet, unique_prefix
 
 
 def _set(folder, names, text):
@@ -29,7 +29,7 @@ def test_a_failed_manifest_write_rolls_back_to_the_previous_set(tmp_path, monkey
     out, staged = _set(tmp_path, ["a.csv", "b.csv"], "old")
     out.commit(staged)
     out, staged = _set(tmp_path, ["a.csv", "b.csv"], "new")
-    from slipreflex import paths
+    from slipreflex.files import paths
 
     real = paths.new_file
 

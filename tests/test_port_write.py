@@ -10,10 +10,10 @@ import time
 
 import pytest
 
-from slipreflex.devices.ilimb import ILimb, PacketParser
-from slipreflex.devices.virtual import PtyPort
-from slipreflex.errors import DeviceError
-from slipreflex.hardware import Finger
+from slipreflex.core.errors import DeviceError
+from slipreflex.core.hardware import Finger
+from slipreflex.rig.devices.ilimb import ILimb, PacketParser
+from slipreflex.rig.devices.virtual import PtyPort
 
 
 def test_a_packet_written_whole_is_sent_even_if_the_thread_lost_the_cpu_after_it(monkeypatch):

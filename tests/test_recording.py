@@ -16,13 +16,7 @@ import time
 import pytest
 
 from conftest import reap_child
-from slipreflex.recording import (
-    METADATA_NAME,
-    TOPICS,
-    Recorder,
-    RecordingError,
-    read_recording,
-)
+from slipreflex.files.recording import METADATA_NAME, TOPICS, Recorder, RecordingError, read_recording
 
 
 def test_round_trip_and_foxglove_facing_format(tmp_path):
@@ -54,7 +48,7 @@ def test_round_trip_and_foxglove_facing_format(tmp_path):
 
 _CHILD = textwrap.dedent("""
     import sys, time
-    from slipreflex.recording import Recorder
+    from slipreflex.files.recording import Recorder
     rec = Recorder(sys.argv[1], flush_interval=0.25)
     k = 0
     t0 = time.perf_counter()
@@ -156,9 +150,9 @@ def test_disk_full_mid_run_stops_recording_without_raising():
 @pytest.mark.slow
 def test_sigkilled_run_leaves_a_recording_that_replays(tmp_path):
     """End to end: `slipreflex run` on the virtual rig, killed with SIGKILL mid-run."""
-    from slipreflex.devices.simrig import SimRig
-    from slipreflex.devices.virtual import VirtualDevices
-    from slipreflex.replay import replay
+    from slipreflex.rig.devices.simrig import SimRig
+    from slipreflex.rig.devices.virtual import VirtualDevices
+    from slipreflex.rig.replay import replay
 
     sim = SimRig("TR", seed=2)
     p0 = sim.grasp().position
@@ -190,7 +184,7 @@ def test_sigkilled_run_leaves_a_recording_that_replays(tmp_path):
 
 
 def _chain_recording(path, commands):
-    from slipreflex.chain import ReflexParams
+    from slipreflex.methods.chain import ReflexParams
     meta = {METADATA_NAME: {"reflex_params": json.dumps(ReflexParams(p0=100.0).to_dict())}}
     with Recorder(path, metadata=meta) as rec:
         for k in range(32):
@@ -215,7 +209,7 @@ def test_replay_detects_a_recording_it_cannot_reproduce(tmp_path, capsys):
 
 def test_reading_something_that_is_not_a_recording(tmp_path, capsys):
     from slipreflex.cli import main
-    from slipreflex.errors import DataError
+    from slipreflex.core.errors import DataError
 
     junk = tmp_path / "junk.mcap"
     junk.write_bytes(b"not an mcap file at all")
@@ -235,8 +229,9 @@ def test_the_recording_package_imports_nothing_of_the_chain_or_the_board():
     from test_imports import _graph
 
     edges = _graph()
-    seen, todo = set(), [m for m in edges if m == "slipreflex.recording" or m.startswith("slipreflex.recording.")]
-    assert "slipreflex.recording.format" in todo and "slipreflex.recording.reader" in todo
+    seen, todo = set(), [m for m in edges
+                         if m == "slipreflex.files.recording" or m.startswith("slipreflex.files.recording.")]
+    assert "slipreflex.files.recording.format" in todo and "slipreflex.files.recording.reader" in todo
     while todo:
         module = todo.pop()
         if module not in seen:
@@ -244,15 +239,15 @@ def test_the_recording_package_imports_nothing_of_the_chain_or_the_board():
             todo.extend(edges.get(module, {}))
     above = sorted(m for m in seen if m.split(".")[1] in ("chain", "board", "replay", "runtime", "sim"))
     assert not above, f"the recording package reaches {above}"
-    assert "slipreflex.recording" in _graph()["slipreflex.replay"]     # the check sees a real edge
+    assert "slipreflex.files.recording" in _graph()["slipreflex.rig.replay"]     # the check sees a real edge
 
 
 def test_every_public_name_is_importable_from_the_package():
-    import slipreflex.recording as recording
-    from slipreflex.recording import export, format, reader, recover, writer
+    import slipreflex.files.recording as recording
+    from slipreflex.files.recording import export, format, reader, recover, writer
 
     for module in (export, format, reader, recover, writer):
         for name in module.__all__:
             assert getattr(recording, name) is getattr(module, name), (module.__name__, name)
             assert name in recording.__all__, name
-    assert recording.RecordingError.__module__ == "slipreflex.recording"
+    assert recording.RecordingError.__module__ == "slipreflex.files.recording"

@@ -16,11 +16,11 @@ import pytest
 from mcap.reader import NonSeekingReader, make_reader
 
 from conftest import reap_child
-from slipreflex.chain import ReflexParams, SlipReflex
 from slipreflex.cli import main
-from slipreflex.errors import DataError
-from slipreflex.recording import METADATA_NAME, PLANNED_SAMPLES, Recorder, read_recording, recover_recording
-from slipreflex.replay import replay
+from slipreflex.core.errors import DataError
+from slipreflex.files.recording import METADATA_NAME, PLANNED_SAMPLES, Recorder, read_recording, recover_recording
+from slipreflex.methods.chain import ReflexParams, SlipReflex
+from slipreflex.rig.replay import replay
 from test_recording import _CHILD
 
 N = 2000

@@ -1,4 +1,4 @@
-"""One generic registry under the methods, the hands and the experiments (slipreflex.registry)."""
+"""One generic registry under the methods, the hands and the experiments (slipreflex.core.registry)."""
 
 from __future__ import annotations
 
@@ -6,9 +6,11 @@ from dataclasses import dataclass
 
 import pytest
 
-from slipreflex import experiment_specs, hands, methods
-from slipreflex.errors import ParameterError
-from slipreflex.registry import EntryPoint, Registry
+from slipreflex import methods
+from slipreflex.core import experiment_specs
+from slipreflex.core.errors import ParameterError
+from slipreflex.core.registry import EntryPoint, Registry
+from slipreflex.rig import hands
 
 
 @dataclass(frozen=True)
@@ -77,7 +79,7 @@ def test_the_registry_sits_at_the_bottom_of_the_import_graph():
     import ast
     from pathlib import Path
 
-    import slipreflex.registry as mod
+    import slipreflex.core.registry as mod
     tree = ast.parse(Path(mod.__file__).read_text())
     imported = {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) and n.level}
     assert imported <= {"errors", "validation"}, imported
@@ -87,7 +89,7 @@ def test_a_hand_registered_from_outside_the_package_opens_by_name():
     import serial
 
     def open_twin(port, **options):
-        from slipreflex.devices.ilimb import ILimb
+        from slipreflex.rig.devices.ilimb import ILimb
         return ILimb(port, **options)
 
     hands.register_hand(hands.HandSpec("ilimb-twin", "i-Limb twin", open_twin))

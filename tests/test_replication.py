@@ -4,12 +4,12 @@ import dataclasses
 
 import pytest
 
-from slipreflex import experiments as E
-from slipreflex import replication as R
 from slipreflex.analysis import claims as C
 from slipreflex.analysis.outputs import ReproduceResult, judged_claims, replicates_note, write_outputs
 from slipreflex.analysis.trial import TrialRow
-from slipreflex.interrupts import Interrupted
+from slipreflex.files.interrupts import Interrupted
+from slipreflex.reproduce import experiments as E
+from slipreflex.reproduce import replication as R
 
 BOTTLES = ("TR", "DK", "TX")
 #: DATH's responses straddling claim 8's 85 ms on one run of 6 trials, and clearly under it.

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from slipreflex.analysis.report import discussion_text, setup_lines, summarize
 from slipreflex.analysis.trial import TrialRow
-from slipreflex.experiments import ReproduceConfig, ReproduceResult
+from slipreflex.reproduce.experiments import ReproduceConfig, ReproduceResult
 
 
 def _rows():

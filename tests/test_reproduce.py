@@ -8,7 +8,7 @@ import pytest
 
 from slipreflex.analysis.report import SUMMARY_COLUMNS, read_csv
 from slipreflex.cli import main
-from slipreflex.experiments import BOTTLE_NAMES, EXPERIMENTS, METHODS, RESULTS_CSV_COLUMNS
+from slipreflex.reproduce.experiments import BOTTLE_NAMES, EXPERIMENTS, METHODS, RESULTS_CSV_COLUMNS
 
 
 @pytest.fixture(scope="module")

@@ -14,18 +14,18 @@ import numpy as np
 import pytest
 import serial
 
-from slipreflex import hardware as hw
-from slipreflex.chain import SlipReflex
 from slipreflex.cli import main
-from slipreflex.csvfiles import read_slip_csv
-from slipreflex.devices import wire
-from slipreflex.devices.daq import SerialDaq
-from slipreflex.devices.ilimb import ILimb, PacketParser
-from slipreflex.devices.virtual import VirtualDevices
-from slipreflex.interfaces import DaqSample
-from slipreflex.recording import METADATA_NAME, Recorder, read_recording
-from slipreflex.replay import replay
-from slipreflex.runtime import run_loop
+from slipreflex.core import hardware as hw
+from slipreflex.core.interfaces import DaqSample
+from slipreflex.files.csvfiles import read_slip_csv
+from slipreflex.files.recording import METADATA_NAME, Recorder, read_recording
+from slipreflex.methods.chain import SlipReflex
+from slipreflex.rig.devices import wire
+from slipreflex.rig.devices.daq import SerialDaq
+from slipreflex.rig.devices.ilimb import ILimb, PacketParser
+from slipreflex.rig.devices.virtual import VirtualDevices
+from slipreflex.rig.replay import replay
+from slipreflex.rig.runtime import run_loop
 
 P0 = 150.0
 

@@ -13,15 +13,15 @@ import os
 import pytest
 
 from slipreflex.cli import main
-from slipreflex.errors import ParameterError
-from slipreflex.paths import OutputSet, create_new, new_file, unique_name
-from slipreflex.recording import METADATA_NAME, PLANNED_SAMPLES, Recorder, RecordingError, read_recording
+from slipreflex.core.errors import ParameterError
+from slipreflex.files.paths import OutputSet, create_new, new_file, unique_name
+from slipreflex.files.recording import METADATA_NAME, PLANNED_SAMPLES, Recorder, RecordingError, read_recording
 
 RUN = ["run", "--daq", "/nonexistent/daq", "--hand", "/nonexistent/hand", "--p0", "148"]
 
 
 def _recording(path, n=300, planned=None):
-    from slipreflex.chain import ReflexParams
+    from slipreflex.methods.chain import ReflexParams
 
     meta = {"reflex_params": json.dumps(ReflexParams(p0=100.0).to_dict()), "p0": '{"middle": 100.0}'}
     if planned:
@@ -101,7 +101,7 @@ def test_export_onto_its_recording_or_an_existing_csv_is_refused(tmp_path, capsy
 
 
 def test_link_dir_keeps_a_users_file_and_removes_only_its_own_links(tmp_path, capsys):
-    from slipreflex.devices.virtual import PtyPort
+    from slipreflex.rig.devices.virtual import PtyPort
 
     (tmp_path / "daq").write_text("precious")
     assert main(["virtual-rig", "--link-dir", str(tmp_path), "--duration", "1"]) == 2
@@ -139,7 +139,7 @@ def test_output_set_refuses_a_users_file_and_replaces_its_own_set_whole(tmp_path
 
 def _fake_result():
     from slipreflex.analysis.outputs import ReproduceResult
-    from slipreflex.experiments import ReproduceConfig
+    from slipreflex.reproduce.experiments import ReproduceConfig
 
     return ReproduceResult(ReproduceConfig(trials=1), [], [], {}, {}, 0.0, 1, 0.0, 1, 1)
 

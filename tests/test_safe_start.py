@@ -6,14 +6,14 @@ import json
 
 import pytest
 
-from slipreflex.chain import SlipReflex
 from slipreflex.cli import main
-from slipreflex.devices.simrig import SimRig
-from slipreflex.devices.virtual import VirtualDevices
-from slipreflex.errors import ParameterError
-from slipreflex.hardware import DAQ_PERIOD_S, TRIPOD, Finger
-from slipreflex.recording import METADATA_NAME, read_recording
-from slipreflex.runtime import run_loop, safe_start, start_positions
+from slipreflex.core.errors import ParameterError
+from slipreflex.core.hardware import DAQ_PERIOD_S, TRIPOD, Finger
+from slipreflex.files.recording import METADATA_NAME, read_recording
+from slipreflex.methods.chain import SlipReflex
+from slipreflex.rig.devices.simrig import SimRig
+from slipreflex.rig.devices.virtual import VirtualDevices
+from slipreflex.rig.runtime import run_loop, safe_start, start_positions
 
 
 class _RigSource:

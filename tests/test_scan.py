@@ -4,8 +4,8 @@ and the CLI writes its files."""
 import numpy as np
 import pytest
 
-from slipreflex import hardware as hw
 from slipreflex.cli import main
+from slipreflex.core import hardware as hw
 from slipreflex.sim import scan
 
 

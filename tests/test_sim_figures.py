@@ -13,9 +13,10 @@ from collections import defaultdict
 import numpy as np
 import pytest
 
-from slipreflex import experiment_specs, methods
-from slipreflex.experiments import ReproduceConfig, method_context, run_reproduce, trial_seed
-from slipreflex.hardware import SLIP_FINGER
+from slipreflex import methods
+from slipreflex.core import experiment_specs
+from slipreflex.core.hardware import SLIP_FINGER
+from slipreflex.reproduce.experiments import ReproduceConfig, method_context, run_reproduce, trial_seed
 from slipreflex.sim import HandParams, SlipSensorParams
 
 

@@ -8,7 +8,7 @@ import pytest
 from scipy.optimize import brentq
 
 import slipreflex
-from slipreflex import hardware as hw
+from slipreflex.core import hardware as hw
 from slipreflex.sim import BOTTLES, Drop, HandParams, PhysicsParams, Pour, Rig, run_closed_loop, simulate_open_loop
 from slipreflex.sim import kernel as K
 from slipreflex.sim.calibration import (

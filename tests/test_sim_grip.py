@@ -6,9 +6,9 @@ import math
 import numpy as np
 import pytest
 
-from slipreflex import hardware as hw
-from slipreflex.errors import ParameterError
-from slipreflex.hardware import Finger, HandCommand
+from slipreflex.core import hardware as hw
+from slipreflex.core.errors import ParameterError
+from slipreflex.core.hardware import Finger, HandCommand
 from slipreflex.sim import BOTTLES, Bottle, HandParams, Rig
 from slipreflex.sim import kernel as K
 from slipreflex.sim.contacts import grip_curve, normal_stiffness

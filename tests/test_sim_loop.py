@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 import slipreflex
-from slipreflex import hardware as hw
-from slipreflex.interfaces import Reflex
+from slipreflex.core import hardware as hw
+from slipreflex.core.interfaces import Reflex
 from slipreflex.sim import HandParams, Pour, Rig, run_closed_loop, simulate_open_loop
 
 SLOW_POUR = Pour(rate_l_min=0.5, volume_ml=300)

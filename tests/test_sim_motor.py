@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from slipreflex import hardware as hw
-from slipreflex.hardware import HandCommand
+from slipreflex.core import hardware as hw
+from slipreflex.core.hardware import HandCommand
 from slipreflex.sim import HandParams, Rig
 from slipreflex.sim import kernel as K
 

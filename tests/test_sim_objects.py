@@ -5,7 +5,7 @@ from importlib import resources
 import numpy as np
 import pytest
 
-from slipreflex.errors import ParameterError
+from slipreflex.core.errors import ParameterError
 from slipreflex.sim import (
     BOTTLES,
     SURFACES,

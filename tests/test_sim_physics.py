@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from slipreflex import hardware as hw
+from slipreflex.core import hardware as hw
 from slipreflex.sim import Bottle, Drop, PhysicsParams, Pour, Rig, simulate_open_loop
 from slipreflex.sim import kernel as K
 

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 import slipreflex
-from slipreflex import hardware as hw
-from slipreflex.interfaces import DaqSample
+from slipreflex.core import hardware as hw
+from slipreflex.core.interfaces import DaqSample
 from slipreflex.sim import BOTTLES, Drop, ImuParams, Pour, Rig, simulate_open_loop
 from slipreflex.sim.sensors import opr5005_volts
 

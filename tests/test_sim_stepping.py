@@ -13,8 +13,8 @@ import os
 import numpy as np
 import pytest
 
-from slipreflex import hardware as hw
-from slipreflex.errors import ParameterError
+from slipreflex.core import hardware as hw
+from slipreflex.core.errors import ParameterError
 from slipreflex.sim import PAPER_DROP, PAPER_POUR, Rig, simulate_open_loop
 from slipreflex.sim import kernel as K
 from slipreflex.sim.rig import STEPPING_ENV, default_stepping, stepping
@@ -124,7 +124,7 @@ def test_adaptive_steps_keep_every_trial_row_and_every_claim_class():
     does not step the physics (it reads the surface along a prescribed path) and is the same by
     construction."""
     from slipreflex.analysis.claims import judge
-    from slipreflex.experiments import ReproduceConfig, calibrate, run_trial
+    from slipreflex.reproduce.experiments import ReproduceConfig, calibrate, run_trial
 
     config = ReproduceConfig(trials=2)
     rows = {}

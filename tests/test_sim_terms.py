@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from slipreflex.errors import ParameterError
+from slipreflex.core.errors import ParameterError
 from slipreflex.sim.terms import (
     GROUPS,
     PHYSICS_TERMS,

@@ -4,7 +4,7 @@ import dataclasses
 
 import pytest
 
-from slipreflex.errors import ParameterError
+from slipreflex.core.errors import ParameterError
 from slipreflex.sim import BOTTLES, UNCERTAIN, Plant, load_ranges, plant_from_values
 from slipreflex.sim.uncertain import UncertainConstant, nominal_values
 
@@ -13,7 +13,7 @@ def _reading_default(fld):
     """What the package uses when no study draws a reading: the method's and the judge's defaults."""
     from slipreflex.analysis.claims import Reading
     from slipreflex.analysis.trial import MAX_RESPONSE_S
-    from slipreflex.baselines import REST_K, SWTParams
+    from slipreflex.methods.baselines import REST_K, SWTParams
 
     if fld == "cutoff_ms":
         assert Reading().cutoff_ms == 1e3 * MAX_RESPONSE_S
@@ -163,7 +163,7 @@ def test_plant_is_frozen():
 
 def test_a_reproduction_on_a_drawn_plant_runs_in_worker_processes_as_in_one():
     """A Plant pickles (its mappings are read-only proxies), so reproduce --jobs 2 runs on it, same rows."""
-    from slipreflex.experiments import ReproduceConfig, run_reproduce
+    from slipreflex.reproduce.experiments import ReproduceConfig, run_reproduce
     from slipreflex.sim.uncertain import plant_from_values
 
     plant = plant_from_values({"spot_travel_per_unit": 0.0})
@@ -175,7 +175,7 @@ def test_a_reproduction_on_a_drawn_plant_runs_in_worker_processes_as_in_one():
 
 @pytest.mark.slow
 def test_the_nominal_plant_is_the_built_in_plant_bit_for_bit():
-    from slipreflex.experiments import ReproduceConfig, run_reproduce
+    from slipreflex.reproduce.experiments import ReproduceConfig, run_reproduce
     from slipreflex.sim import BOTTLES
 
     p = plant_from_values({})

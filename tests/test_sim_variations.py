@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from slipreflex.errors import ParameterError
-from slipreflex.experiments import ReproduceConfig, trial_seed
-from slipreflex.hardware import SLIP_FINGER
+from slipreflex.core.errors import ParameterError
+from slipreflex.core.hardware import SLIP_FINGER
+from slipreflex.reproduce.experiments import ReproduceConfig, trial_seed
 from slipreflex.sim import BOTTLES, HandParams
 from slipreflex.sim.variations import TrialVariation, VariationSpread, apply_variation, draw_variation, trial_rig
 
@@ -67,7 +67,7 @@ def test_paired_by_default_and_independent_seeds_on_request():
 def test_a_grasp_that_cannot_hold_is_an_error_before_any_trial(monkeypatch):
     import dataclasses
 
-    from slipreflex import experiments
+    from slipreflex.reproduce import experiments
     from slipreflex.sim.calibration import GraspFailed, check_grasp
 
     jar = dataclasses.replace(BOTTLES["TR"], name="JAR", mass_kg=0.25, mu_s=0.4, mu_k=0.3)

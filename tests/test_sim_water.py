@@ -6,8 +6,8 @@ import math
 import numpy as np
 import pytest
 
-from slipreflex import hardware as hw
-from slipreflex.errors import ParameterError
+from slipreflex.core import hardware as hw
+from slipreflex.core.errors import ParameterError
 from slipreflex.sim import BOTTLES, HandParams, Pour, Rig, WaterParams, simulate_open_loop
 from slipreflex.sim.objects import WATER_DENSITY
 

@@ -6,8 +6,8 @@ import math
 import numpy as np
 import pytest
 
-from slipreflex import _slots
-from slipreflex.chain import SlipReflex
+from slipreflex.core import _slots
+from slipreflex.methods.chain import SlipReflex
 from slipreflex.sim import Rig
 
 
@@ -41,7 +41,7 @@ def test_rig_truth_slots_are_documented_floats():
 
 # ---- layouts: every compiled vector's slots named once, NaN until filled, checked complete ----
 
-LAYOUT_MODULES = ["slipreflex.chain._layout", "slipreflex.baselines._layout", "slipreflex.sim.kernel"]
+LAYOUT_MODULES = ["slipreflex.methods.chain._layout", "slipreflex.methods.baselines._layout", "slipreflex.sim.kernel"]
 
 
 def _layouts():
@@ -56,8 +56,8 @@ def _layouts():
 
 def test_every_compiled_vector_has_a_layout():
     found = {(m, a) for m, a, _ in _layouts()}
-    assert {("slipreflex.chain._layout", "PARAMS"), ("slipreflex.chain._layout", "STATE"),
-            ("slipreflex.baselines._layout", "PARAMS"), ("slipreflex.baselines._layout", "STATE"),
+    assert {("slipreflex.methods.chain._layout", "PARAMS"), ("slipreflex.methods.chain._layout", "STATE"),
+            ("slipreflex.methods.baselines._layout", "PARAMS"), ("slipreflex.methods.baselines._layout", "STATE"),
             ("slipreflex.sim.kernel", "PARAMS"), ("slipreflex.sim.kernel", "STATE"),
             ("slipreflex.sim.kernel", "DROP"), ("slipreflex.sim.kernel", "POUR")} <= found
 
@@ -73,8 +73,8 @@ def test_every_slot_constant_is_its_layouts_name(module, attr, layout):
 
 
 def test_a_vector_starts_nan_and_an_unfilled_slot_is_an_error_naming_it():
-    from slipreflex.chain import ReflexParams
-    from slipreflex.chain import _layout as L
+    from slipreflex.methods.chain import ReflexParams
+    from slipreflex.methods.chain import _layout as L
 
     head = L.PARAMS.new()
     assert np.isnan(head).all()

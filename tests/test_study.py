@@ -11,7 +11,7 @@ import pytest
 
 from slipreflex.analysis.claims import HOLDS
 from slipreflex.cli import main
-from slipreflex.errors import ParameterError
+from slipreflex.core.errors import ParameterError
 from slipreflex.sim.uncertain import UNCERTAIN
 from slipreflex.study import StudyConfig, draw_design, read_parts, run_study, unit_design, varying
 from slipreflex.study.analyse import claim_fractions, plant_table, sensitivity, wilson, write_outputs

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from slipreflex.analysis.claims import proportion_interval
-from slipreflex.errors import ParameterError
+from slipreflex.core.errors import ParameterError
 from slipreflex.study import StudyConfig, run_study
 from slipreflex.study.analyse import claim_fractions, plant_table, refinement
 from slipreflex.study.refine import boundary, candidates, make_plan, ratio_estimate

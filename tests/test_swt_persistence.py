@@ -2,7 +2,7 @@
 
 The paper (II-E): slip "was considered to have occurred if the value of the third level detail
 coefficient crossed a threshold and movement would continue for at least another 21 ms". The
-readings live in ``slipreflex.baselines.swt.SWT_PERSISTENCE``; the default is the one whose
+readings live in ``slipreflex.methods.baselines.swt.SWT_PERSISTENCE``; the default is the one whose
 simulated pour reaction times lie nearer the paper's (III-C: SWT-SD 86 ms on TR, 73 ms on DK).
 That comparison is a check of the choice, not a fit: nothing in the plant or the method is
 adjusted to it, and docs/method.md section 2 says how far both readings stay from the paper.
@@ -15,17 +15,17 @@ import math
 import numpy as np
 import pytest
 
-from slipreflex.baselines import SWTParams, swt_on
-from slipreflex.baselines.builders import build_swt
-from slipreflex.baselines.swt import (
+from slipreflex.core.errors import ParameterError
+from slipreflex.methods import MethodContext
+from slipreflex.methods.baselines import SWTParams, swt_on
+from slipreflex.methods.baselines.builders import build_swt
+from slipreflex.methods.baselines.swt import (
     SWT_PERSIST,
     SWT_PERSISTENCE,
     SWT_PERSISTENCE_DEFAULT,
     SWT_WINDOW,
     swt_persistence,
 )
-from slipreflex.errors import ParameterError
-from slipreflex.methods import MethodContext
 
 #: The paper's SWT-SD pour reaction times (III-C), ms.
 PAPER_POUR_MS = {"TR": 86.0, "DK": 73.0}
@@ -64,7 +64,7 @@ def test_within_window_decides_at_the_crossing_after_crossing_21_ms_later():
 
 def _pour_medians(persist: int, trials: int) -> dict[str, float]:
     """Median SWT-SD pour reaction time per bottle (ms); a slip never answered ranks slowest (inf)."""
-    from slipreflex.experiments import ReproduceConfig, run_reproduce
+    from slipreflex.reproduce.experiments import ReproduceConfig, run_reproduce
 
     cfg = ReproduceConfig(trials=trials, bottles=tuple(PAPER_POUR_MS), methods=("swt",),
                           experiments=("pour",), swt_persist=persist)
@@ -91,8 +91,8 @@ def test_the_default_reading_is_the_one_the_paper_reaction_times_support():
 
 
 def test_a_reading_keeps_its_time_when_the_benchmark_runs_swt_sd_at_a_data_rate():
-    from slipreflex.baselines import SWTSD
     from slipreflex.benchmark.run import _scaled
+    from slipreflex.methods.baselines import SWTSD
 
     after = SWTSD(threshold=0.1, speed=500.0, persist="after-crossing")
     assert _scaled(after, 380.0, 60.0)["persist"] == 1                 # 21 ms at 60 Hz

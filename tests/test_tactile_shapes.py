@@ -5,7 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from slipreflex.baselines import (
+from slipreflex.core.errors import DataError, ParameterError
+from slipreflex.core.hardware import NMSD_FS, SWT_FS
+from slipreflex.methods.baselines import (
     NMSD,
     SWTSD,
     NMSDParams,
@@ -15,8 +17,6 @@ from slipreflex.baselines import (
     rest_threshold,
     swt_commands,
 )
-from slipreflex.errors import DataError, ParameterError
-from slipreflex.hardware import NMSD_FS, SWT_FS
 
 
 def _frames(fs, shape, seed=0):

@@ -7,8 +7,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from slipreflex import validation as V
-from slipreflex.errors import ParameterError
+from slipreflex.core import validation as V
+from slipreflex.core.errors import ParameterError
 
 
 @pytest.mark.parametrize("value", [3, 3.0, np.int8(3), np.int64(3), np.uint16(3), np.float32(3.0)])
@@ -93,8 +93,8 @@ def test_resolve_params_contract():
 
 
 def test_numpy_integers_are_accepted_alike_by_the_migrated_users():
-    from slipreflex.baselines import SWTParams
-    from slipreflex.experiments import ReproduceConfig
+    from slipreflex.methods.baselines import SWTParams
+    from slipreflex.reproduce.experiments import ReproduceConfig
 
     assert SWTParams(threshold=0.1, speed=500.0, persist=np.int64(3)).persist == 3
     cfg = ReproduceConfig(trials=np.int64(2), seed=np.uint32(7), swt_persist=np.int16(4))

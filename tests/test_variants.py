@@ -9,9 +9,9 @@ import pytest
 
 import slipreflex as sr
 import spec_oracle as oracle
-from slipreflex import hardware as hw
-from slipreflex.chain import ReflexParams, SlipReflex
-from slipreflex.errors import ParameterError
+from slipreflex.core import hardware as hw
+from slipreflex.core.errors import ParameterError
+from slipreflex.methods.chain import ReflexParams, SlipReflex
 
 U = 1.0 / 1024.0  # an exact binary unit: hand-worked sums carry no rounding
 
@@ -151,7 +151,7 @@ def test_dath_floor_stops_the_zoom_below_one_adc_step():
 
 
 def test_chain_parameters_take_numpy_numbers_like_every_other_class():
-    # one validator (slipreflex.validation): numpy integers and floats are numbers, bool is not
+    # one validator (slipreflex.core.validation): numpy integers and floats are numbers, bool is not
     p = ReflexParams(n=np.int64(8), acc_reset=np.int32(33), acc_leak=np.float32(12.5), kp=np.int16(3))
     assert (p.n, p.acc_reset, p.acc_leak, p.kp) == (8, 33, 12.5, 3.0)
     assert type(p.n) is int and type(p.acc_leak) is float and type(p.kp) is float
@@ -329,7 +329,7 @@ def test_window_mpi_without_reset_matches_oracle_and_stream():
 
 def test_closed_loop_sends_the_middle_finger_its_offset():
     """The middle finger's + 20 is extra closing time at the first command; rises close all alike."""
-    from slipreflex.hardware import FINGER_SPEED_UNITS_S, TRIPOD, Finger, HandCommand
+    from slipreflex.core.hardware import FINGER_SPEED_UNITS_S, TRIPOD, Finger, HandCommand
     from slipreflex.sim.loop import _grip_sender, grip_groups
 
     class Hand:
@@ -375,7 +375,7 @@ def test_detect_preset_authors_gui_runs_the_preset(tmp_path, capsys):
     from pathlib import Path
 
     from slipreflex.cli import main
-    from slipreflex.csvfiles import read_slip_csv
+    from slipreflex.files.csvfiles import read_slip_csv
 
     example = Path(__file__).resolve().parents[1] / "examples" / "slip_example.csv"
     assert main(["detect", str(example), "--preset", "authors-gui", "--out", str(tmp_path / "g")]) == 0
@@ -398,8 +398,8 @@ def test_a_compiled_caller_runs_the_same_step_as_slipreflex():
     # what a compiled closed loop does: hold (S, P) and call chain_step from its own numba code
     from numba import njit
 
-    from slipreflex.chain._kernels import chain_step
-    from slipreflex.chain._layout import init_state, pack_params
+    from slipreflex.methods.chain._kernels import chain_step
+    from slipreflex.methods.chain._layout import init_state, pack_params
 
     @njit
     def loop(S, P, raw, positions, out):
@@ -425,7 +425,7 @@ def test_a_compiled_caller_runs_the_same_step_as_slipreflex():
     ("acc_reset", 33), ("acc_leak", 32.0), ("mpi_mode", "event"), ("filter_kind", "mean"),
     ("reset_after", None), ("slip_finger_offset", 20.0)])
 def test_the_board_refuses_a_chain_option_it_cannot_reproduce(option, value):
-    from slipreflex.board import BoardParams
+    from slipreflex.methods.board import BoardParams
 
     with pytest.raises(ParameterError, match=f"^{option}=") as err:
         BoardParams.from_chain(**{option: value})
@@ -435,7 +435,7 @@ def test_the_board_refuses_a_chain_option_it_cannot_reproduce(option, value):
 
 
 def test_the_board_refuses_a_level_that_would_round_to_zero_and_keeps_a_real_dath_floor():
-    from slipreflex.board import BoardParams, volts_to_q16
+    from slipreflex.methods.board import BoardParams, volts_to_q16
 
     for option in ("threshold", "dath_floor"):
         with pytest.raises(ParameterError, match=f"^{option}=1e-09 V is below the board's resolution"):

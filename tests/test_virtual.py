@@ -11,14 +11,14 @@ import time
 
 import pytest
 
-from slipreflex.chain import SlipReflex
 from slipreflex.cli import main
-from slipreflex.devices.daq import SerialDaq
-from slipreflex.devices.ilimb import ILimb
-from slipreflex.devices.simrig import SimRig
-from slipreflex.devices.virtual import VirtualDevices
-from slipreflex.grip import Grip, span
-from slipreflex.hardware import DAQ_PERIOD_S, SLIP_FINGER, TRIPOD, Finger, HandCommand
+from slipreflex.core.grip import Grip, span
+from slipreflex.core.hardware import DAQ_PERIOD_S, SLIP_FINGER, TRIPOD, Finger, HandCommand
+from slipreflex.methods.chain import SlipReflex
+from slipreflex.rig.devices.daq import SerialDaq
+from slipreflex.rig.devices.ilimb import ILimb
+from slipreflex.rig.devices.simrig import SimRig
+from slipreflex.rig.devices.virtual import VirtualDevices
 from slipreflex.sim import Pour, Rig, run_closed_loop
 
 # A fast pour (300 ml at 6 L/min) that makes the bottle fall out of an unassisted grasp
@@ -170,7 +170,7 @@ def _await(condition, timeout=10.0):
 
 
 def run_loop_for(daq, hand, reflex, duration):
-    from slipreflex.runtime import run_loop
+    from slipreflex.rig.runtime import run_loop
     return run_loop(daq, hand, reflex, duration=duration)
 
 
@@ -247,8 +247,8 @@ def test_virtual_rig_command_keys_signals_schedule_and_run(tmp_path, capsys, mon
 
 
 def test_tripod_grasp_routine_on_the_simulated_hand():
-    from slipreflex.devices.ilimb import tripod_grasp
-    from slipreflex.hardware import CONTACT_FORCE_N, Finger
+    from slipreflex.core.hardware import CONTACT_FORCE_N, Finger
+    from slipreflex.rig.devices.ilimb import tripod_grasp
 
     rig = Rig("TR", seed=0)
 

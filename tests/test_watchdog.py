@@ -11,15 +11,15 @@ import time
 import pytest
 import serial
 
-from slipreflex import hardware as hw
-from slipreflex.chain import SlipReflex
-from slipreflex.devices import wire
-from slipreflex.devices.daq import SerialDaq
-from slipreflex.devices.virtual import PtyPort
-from slipreflex.errors import ParameterError
-from slipreflex.interfaces import DaqSample
-from slipreflex.recording import read_recording
-from slipreflex.runtime import run_loop
+from slipreflex.core import hardware as hw
+from slipreflex.core.errors import ParameterError
+from slipreflex.core.interfaces import DaqSample
+from slipreflex.files.recording import read_recording
+from slipreflex.methods.chain import SlipReflex
+from slipreflex.rig.devices import wire
+from slipreflex.rig.devices.daq import SerialDaq
+from slipreflex.rig.devices.virtual import PtyPort
+from slipreflex.rig.runtime import run_loop
 
 
 class _Hand:

@@ -1,4 +1,4 @@
-"""Tests of slipreflex.devices.wire against the shared vectors file and by fuzzing."""
+"""Tests of slipreflex.rig.devices.wire against the shared vectors file and by fuzzing."""
 
 from __future__ import annotations
 
@@ -8,10 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from slipreflex import hardware
-from slipreflex.devices import wire
-from slipreflex.errors import DataError, ParameterError, SlipreflexError
-from slipreflex.interfaces import DaqSample
+from slipreflex.core import hardware
+from slipreflex.core.errors import DataError, ParameterError, SlipreflexError
+from slipreflex.core.interfaces import DaqSample
+from slipreflex.rig.devices import wire
 
 VECTORS = Path(__file__).parent / "data" / "wire" / "vectors.txt"
 

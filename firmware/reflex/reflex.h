@@ -4,7 +4,7 @@
  * Portable C99: no AVR header, no floating point, no dynamic memory. The caller owns
  * the parameters and the state (as in PyWavelets' C core), so several chains can run
  * side by side and the host tests can run the very code the board runs. The Python
- * twin, slipreflex.board, does the same integer operations; tests/data/board/vectors.txt
+ * twin, slipreflex.methods.board, does the same integer operations; tests/data/board/vectors.txt
  * holds inputs and outputs that both must reproduce bit for bit (docs/firmware.md,
  * "The reflex on the board", states every format, rounding and overflow bound).
  *

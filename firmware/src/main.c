@@ -158,7 +158,7 @@ static inline void tx_start(void)
 #ifndef REFLEX_P0
 #define REFLEX_P0 0
 #endif
-/* Fault rules (reflex_config.h, from slipreflex.board.FIRMWARE_*): readings near the
+/* Fault rules (reflex_config.h, from slipreflex.methods.board.FIRMWARE_*): readings near the
  * rails mean a disconnected or shorted sensor, a long run of identical readings a stuck
  * converter or a dead sensor; the chain skips them and the hand holds. */
 static const struct reflex_params chain_params = {
@@ -183,7 +183,7 @@ static struct reflex_state chain;
  * g units of closing at full PWM, g / 625 s = 8 g / 15 samples; grip_left counts the
  * closing still owed in fifteenths of a sample. CLOSE goes out when the fingers are to
  * close, STOP when their time is up or a fault starts; never OPEN, never POSITION. The
- * Python twin is slipreflex.board.BoardHand. */
+ * Python twin is slipreflex.methods.board.BoardHand. */
 #define HAND_BAUD 115200UL
 #define HAND_UBRR ((F_CPU + 4UL * HAND_BAUD) / (8UL * HAND_BAUD) - 1UL)           /* 16 */
 #define HAND_START 0x24u
@@ -244,7 +244,7 @@ static uint8_t hand_send(uint8_t command)
     return 1;
 }
 
-/* After each sample: the grip-only rule (slipreflex.board.BoardHand, step by step).
+/* After each sample: the grip-only rule (slipreflex.methods.board.BoardHand, step by step).
  * Returns 1 if a packet was queued. */
 static uint8_t hand_step(const struct reflex_out *out)
 {

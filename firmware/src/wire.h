@@ -1,7 +1,7 @@
 /*
  * wire.h -- the DAQ frame format (docs/wire-protocol.md), firmware side.
  *
- * The Python side is src/slipreflex/devices/wire.py; tests/test_firmware.py checks that
+ * The Python side is src/slipreflex/rig/devices/wire.py; tests/test_firmware.py checks that
  * the constants below equal the Python ones, and firmware/test/test_vectors.c checks
  * this encoder against tests/data/wire/vectors.txt.  Portable C: builds for the AVR and
  * for the host.

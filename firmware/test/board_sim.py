@@ -80,7 +80,7 @@ def build(dath: bool, p0: int, build_root: Path = FIRMWARE / "build") -> Path:
 
 def simulate(adc, *, dath: bool, p0: int, mega: bool = False, workdir: Path | None = None):
     """Run the board on ``adc``; return (capture directory, check_board report)."""
-    from slipreflex import hardware
+    from slipreflex.core import hardware
 
     check_board = _load("check_board")
     bdir = build(dath, p0)
@@ -101,8 +101,8 @@ def simulate(adc, *, dath: bool, p0: int, mega: bool = False, workdir: Path | No
 
 def main(argv: list[str] | None = None) -> int:
     """Command line; see the module docstring."""
-    from slipreflex import board
-    from slipreflex.errors import SlipreflexError
+    from slipreflex.methods import board
+    from slipreflex.core.errors import SlipreflexError
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("adc_csv", type=Path, help="CSV with a column adc (counts 0..1023)")
@@ -130,7 +130,7 @@ def main(argv: list[str] | None = None) -> int:
         prefix = args.out.with_suffix("") if args.out.suffix == ".csv" else args.out
         paths = board.write_board_outputs(prefix, rep.events[:k], rep.counts[:nwin], rep.commands[:nwin])
         if args.mega:
-            from slipreflex.csvfiles import write_columns
+            from slipreflex.files.csvfiles import write_columns
 
             hand = [(s, c, p) for (s, p), c in zip(rep.packets, rep.latencies) if s < k]
             paths += (Path(f"{prefix}.hand.csv"),)

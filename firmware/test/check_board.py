@@ -4,17 +4,17 @@
 
 Reads a harness capture (firmware/test/harness.c) of a firmware built with the reflex
 on board (daq-reflex.elf, or hand2560.elf run with --mcu atmega2560), decodes its
-version-2 frames with slipreflex.devices.wire and runs slipreflex.board on the ADC
+version-2 frames with slipreflex.rig.devices.wire and runs slipreflex.methods.board on the ADC
 counts the harness injected, with the parameters that firmware was built with
 (BoardParams.firmware). It checks that
 
 - every frame carries the twin's filtered sample (Q16), spike, fault, window flag,
   window count and command for its sample: bit-exact, on every sample;
 - (with uart1.bin, the standalone build) the bytes on UART1 are valid i-Limb packets
-  (slipreflex.devices.ilimb.PacketParser), each a CLOSE at full PWM or a STOP for
+  (slipreflex.rig.devices.ilimb.PacketParser), each a CLOSE at full PWM or a STOP for
   thumb, index and middle, never an OPEN or a POSITION; the first is the STOP every
   start sends, before the first sample; the packets are exactly those the grip-only
-  rule predicts from the twin (slipreflex.board.board_hand: CLOSE when a rise owes
+  rule predicts from the twin (slipreflex.methods.board.board_hand: CLOSE when a rise owes
   closing time, STOP when it is up or a fault starts), at the same samples; every
   frame flagged HAND matches one packet; each packet's first byte leaves within 1 ms
   (16,000 cycles) of the start of its sample's conversion; and every closing with no
@@ -32,8 +32,9 @@ from pathlib import Path
 
 import numpy as np
 
-from slipreflex import board, hardware
-from slipreflex.devices import ilimb, wire
+from slipreflex.methods import board
+from slipreflex.core import hardware
+from slipreflex.rig.devices import ilimb, wire
 
 #: Latency bound from the completing sample's conversion start to the packet's first byte.
 LATENCY_LIMIT_CYCLES = hardware.F_CPU // 1000
@@ -129,7 +130,7 @@ def _compare(frames: list[wire.Frame], res: board.BoardResult, err: list[str]) -
 
 def expected_packets(res: board.BoardResult) -> list[tuple[int, hardware.HandCommand]]:
     """(sample, CLOSE or STOP) of every hand packet the firmware sends for this run;
-    sample -1 is the STOP every start sends (slipreflex.board.board_hand)."""
+    sample -1 is the STOP every start sends (slipreflex.methods.board.board_hand)."""
     return board.board_hand(res).packets
 
 

@@ -3,7 +3,7 @@
     python3 firmware/test/check_capture.py OUTDIR [--no-imu]
 
 Reads OUTDIR/uart.bin, uart_cycles.bin and events.txt, decodes the UART bytes with
-slipreflex.devices.wire.FrameParser and checks that
+slipreflex.rig.devices.wire.FrameParser and checks that
 
 - the stream is clean: no CRC error, truncated or invalid frame, no garbage byte, no
   sequence gap, seq starting at 0, no OVERRUN flag;
@@ -29,8 +29,8 @@ from pathlib import Path
 
 import numpy as np
 
-from slipreflex import hardware
-from slipreflex.devices import wire
+from slipreflex.core import hardware
+from slipreflex.rig.devices import wire
 
 #: CPU cycles in one sample period at 16 MHz.
 PERIOD_CYCLES = hardware.F_CPU * hardware.DAQ_PERIOD_S

@@ -2,7 +2,7 @@
 
 Run from the repository root:  python3 firmware/test/gen_vectors.py > tests/data/wire/vectors.txt
 
-The Python tests check the committed file against slipreflex.devices.wire; the C
+The Python tests check the committed file against slipreflex.rig.devices.wire; the C
 host test (firmware/test/test_vectors.c) checks it against the firmware's own
 encoder and an independent CRC, so a change on either side shows up as a failure.
 """
@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import sys
 
-from slipreflex.devices import wire
+from slipreflex.rig.devices import wire
 
 HEADER = """\
 # Wire-protocol test vectors of the slipreflex DAQ board (docs/wire-protocol.md).

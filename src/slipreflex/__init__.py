@@ -13,7 +13,9 @@ Examples
 [0, 0, 5, 9, 7, 6]
 """
 
-from .chain import (
+from .core._moved import install as _install_moved
+from .core.errors import DataError, DeviceError, ParameterError, SlipreflexError
+from .methods.chain import (
     ChainResult,
     EncoderParams,
     EncoderTrace,
@@ -34,9 +36,10 @@ from .chain import (
     mpi,
     run_chain,
 )
-from .errors import DataError, DeviceError, ParameterError, SlipreflexError
 
 __version__ = "0.1.0"
+
+_install_moved()
 
 __all__ = [
     "lowpass", "design_lowpass", "encode", "encode_trace", "count_windows", "mpi", "run_chain",

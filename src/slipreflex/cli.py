@@ -1,7 +1,7 @@
 """The ``slipreflex`` console script: parse, call, print.
 
 Subcommands live in :mod:`slipreflex.commands`, one module each, discovered at
-run time. A :class:`~slipreflex.errors.SlipreflexError` becomes a one-line
+run time. A :class:`~slipreflex.core.errors.SlipreflexError` becomes a one-line
 message on stderr and exit status 2, never a traceback.
 
 Examples
@@ -22,8 +22,8 @@ from collections.abc import Sequence
 
 from . import __version__, commands
 from .commands._lists import list_hint
-from .errors import ParameterError, SlipreflexError
-from .registry import PLUGIN_ENV, load_plugin_file
+from .core.errors import ParameterError, SlipreflexError
+from .core.registry import PLUGIN_ENV, load_plugin_file
 
 __all__ = ["main", "build_parser"]
 
@@ -36,7 +36,7 @@ def _command_modules() -> list:
 
 def _load_plugins(argv: list[str]) -> list[str]:
     """Load every ``--plugin FILE`` of ``argv`` (before the parser is built: its choices list the plugins'
-    names) and name them in :data:`~slipreflex.registry.PLUGIN_ENV` for worker processes; returns the rest."""
+    names) and name them in :data:`~slipreflex.core.registry.PLUGIN_ENV` for worker processes; returns the rest."""
     rest, files = [], []
     it = iter(argv)
     for arg in it:

@@ -1,7 +1,7 @@
 """Conformance checks any reflex can run, in the spirit of Gymnasium's ``env_checker``.
 
 :func:`check_reflex` drives a reflex through a synthetic trial (rest, then a
-slip) and checks the :class:`slipreflex.interfaces.Reflex` contract:
+slip) and checks the :class:`slipreflex.core.interfaces.Reflex` contract:
 
 * the attributes: ``name``, ``input_kind`` ("slip" or "tactile"), a finite
   positive ``fs``, callable ``step`` / ``reset``, and the diagnostics
@@ -13,17 +13,17 @@ slip) and checks the :class:`slipreflex.interfaces.Reflex` contract:
 * the same input gives the same bits (a run, a reset and a second run agree
   exactly, and so does a deep copy of the fresh reflex);
 * a non-finite sample is handled: it is skipped or refused with
-  :class:`~slipreflex.errors.DataError` (any other exception fails), it never
+  :class:`~slipreflex.core.errors.DataError` (any other exception fails), it never
   yields a command below the hand's measured position or the last command (a
   fault never opens the hand), and the reflex still answers the slip after it;
 * the optional members the real-time loop reads (``command``, ``params.p0``, ``params.hi``,
   ``finger_offsets``, ``last_board``, ``last_mismatch``), where the reflex has them, of the
-  kind :data:`slipreflex.interfaces.CONTRACTS` declares;
-* a :class:`~slipreflex.interfaces.CompiledReflex`: ``compiled()`` returns the
+  kind :data:`slipreflex.core.interfaces.CONTRACTS` declares;
+* a :class:`~slipreflex.core.interfaces.CompiledReflex`: ``compiled()`` returns the
   live state, and its step on that state gives ``step``'s commands and
   diagnostics bit for bit (what the compiled closed loop relies on).
 
-:func:`check_hand` and :func:`check_source` (from :mod:`slipreflex.contract_checks`) check a
+:func:`check_hand` and :func:`check_source` (from :mod:`slipreflex.core.contract_checks`) check a
 hand and a sample source the same way.
 
 :func:`reflex_for_check` builds any registered method ready for the check
@@ -32,7 +32,7 @@ package's one rule).
 
 Examples
 --------
->>> from slipreflex.chain import SlipReflex
+>>> from slipreflex.methods.chain import SlipReflex
 >>> report = check_reflex(SlipReflex(dath=True, p0=100.0))
 >>> report.commands > 0, report.events > 0
 (True, True)
@@ -50,14 +50,15 @@ from typing import Any
 
 import numpy as np
 
-from . import experiment_specs, methods
-from . import hardware as hw
-from .baselines import REST_K, rest_statistic
-from .contract_checks import ContractError, check_hand, check_reflex_members, check_source
-from .errors import DataError
-from .experiments import Cell, ReproduceConfig, run_trial, trial_seed
-from .interfaces import Reflex
-from .thresholds import calibrate
+from . import methods
+from .core import experiment_specs
+from .core import hardware as hw
+from .core.contract_checks import ContractError, check_hand, check_reflex_members, check_source
+from .core.errors import DataError
+from .core.interfaces import Reflex
+from .methods.baselines import REST_K, rest_statistic
+from .reproduce.experiments import Cell, ReproduceConfig, run_trial, trial_seed
+from .reproduce.thresholds import calibrate
 
 __all__ = ["ContractError", "CheckReport", "check_reflex", "check_method", "synthetic_input", "check_hand",
            "check_source",
@@ -130,7 +131,7 @@ def reflex_for_check(name: str, *, shape: tuple[int, ...] | None = None, **param
     """A fresh reflex of the registered method ``name``, ready for :func:`check_reflex`.
 
     A method with a rest statistic gets its threshold by the package's one rule
-    (:data:`slipreflex.baselines.REST_K` sd of the statistic) from the rest part
+    (:data:`slipreflex.methods.baselines.REST_K` sd of the statistic) from the rest part
     of :func:`synthetic_input`. ``shape`` (a tactile method's frame shape) is
     passed on to the method as its ``shape`` parameter.
 
@@ -172,7 +173,7 @@ def _check_attributes(reflex: Any) -> None:
     if not isinstance(reflex, Reflex):
         members = [n for n, v in vars(Reflex).items() if isinstance(v, property)]
         missing = [a for a in (*members, "step", "reset") if not hasattr(reflex, a)]
-        _fail(reflex, f"is not a slipreflex.interfaces.Reflex (missing: {', '.join(missing)})")
+        _fail(reflex, f"is not a slipreflex.core.interfaces.Reflex (missing: {', '.join(missing)})")
 
 
 def _diagnostics(reflex: Any) -> tuple:
@@ -242,7 +243,7 @@ def _first_difference(a: list[tuple], b: list[tuple]) -> int:
 
 
 def _check_compiled(reflex: Any, x: np.ndarray, reference: list[tuple]) -> None:
-    """A :class:`~slipreflex.interfaces.CompiledReflex`: its step on its live state is ``step`` itself."""
+    """A :class:`~slipreflex.core.interfaces.CompiledReflex`: its step on its live state is ``step`` itself."""
     if not callable(getattr(reflex, "compiled", None)):
         return
     reflex.reset()
@@ -290,7 +291,7 @@ def _check_non_finite(reflex: Any, x: np.ndarray, k_bad: int, k_rest: int, refer
 
 
 def check_reflex(reflex: Any, *, shape: tuple[int, ...] | None = None, seed: int = 0) -> CheckReport:
-    """Check that ``reflex`` keeps the :class:`~slipreflex.interfaces.Reflex` contract.
+    """Check that ``reflex`` keeps the :class:`~slipreflex.core.interfaces.Reflex` contract.
 
     Parameters
     ----------
@@ -321,7 +322,7 @@ def check_reflex(reflex: Any, *, shape: tuple[int, ...] | None = None, seed: int
     >>> check_reflex(Opens())
     Traceback (most recent call last):
     ...
-    slipreflex.contract_checks.ContractError: Opens (opens): a non-finite sample produced the command 0.0, below ...
+    slipreflex.core.contract_checks.ContractError: Opens (opens): a non-finite sample produced the command 0.0, ...
     """
     _check_attributes(reflex)
     check_reflex_members(reflex)
@@ -397,7 +398,7 @@ def check_experiment(name: str, config: Any = None, *, method: str = "fixed") ->
     Parameters
     ----------
     name : str
-        A registered experiment (:mod:`slipreflex.experiment_specs`).
+        A registered experiment (:mod:`slipreflex.core.experiment_specs`).
     config : ReproduceConfig, optional
         The run to build its perturbation from (default: the paper's, this experiment only).
     method : str

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import DataError
+from ..core.errors import DataError
 from .onset import OnsetParams, accel_envelope, episodes, rest_threshold_of, select_axis
 
 __all__ = ["MERGE_S", "LEAD_S", "SlipEvent", "segment_events", "first_pour_slip"]

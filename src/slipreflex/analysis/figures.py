@@ -30,9 +30,9 @@ from typing import Any
 
 import numpy as np
 
-from .. import experiment_specs
 from .. import methods as _registry
-from ..errors import ParameterError
+from ..core import experiment_specs
+from ..core.errors import ParameterError
 from .paper import BOTTLE_ORDER, PAPER_SUCCESS, paper_value
 
 __all__ = ["TrialPlot", "plot_trial", "bar_chart", "success_chart", "grip_chart", "check_figure_path"]
@@ -94,7 +94,7 @@ class TrialPlot:
 def check_figure_path(path: str | Path, option: str) -> None:
     """Refuse, before any work, a figure path whose suffix matplotlib cannot write.
 
-    Raises :class:`~slipreflex.errors.ParameterError` naming the option and the formats.
+    Raises :class:`~slipreflex.core.errors.ParameterError` naming the option and the formats.
 
     Examples
     --------
@@ -102,7 +102,7 @@ def check_figure_path(path: str | Path, option: str) -> None:
     >>> check_figure_path("out/cal.toml", "--figure")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    slipreflex.errors.ParameterError: --figure out/cal.toml: matplotlib cannot write '.toml' (one of: ..., .png, ...)
+    slipreflex.core.errors.ParameterError: --figure out/cal.toml: matplotlib cannot write '.toml' (one of: ..., ...
     """
     from matplotlib.backend_bases import FigureCanvasBase  # deferred: heavy (matplotlib)
 
@@ -267,7 +267,7 @@ def bar_chart(summary: Sequence[dict[str, Any]], experiment: str, metric: str,
     """Bars of ``metric`` ("response" or "total") with sd, ours beside the paper's.
 
     ``what`` names the load as run ("10 g dropped from 2 cm"; default: the experiment's
-    title, :mod:`slipreflex.experiment_specs`).
+    title, :mod:`slipreflex.core.experiment_specs`).
 
     Our values are the filled bars; the paper's mean and sd, where it reports
     them, are black diamonds with error bars next to each bar.

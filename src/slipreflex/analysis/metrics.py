@@ -38,7 +38,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import DataError, ParameterError
+from ..core.errors import DataError, ParameterError
 
 __all__ = ["ACTIVITY_GAP_S", "Activity", "increases", "response_time", "controller_activity",
            "suppressed", "grip_without_slip"]

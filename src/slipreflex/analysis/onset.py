@@ -49,8 +49,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import DataError, ParameterError
-from ..validation import flag, number, set_field
+from ..core.errors import DataError, ParameterError
+from ..core.validation import flag, number, set_field
 
 __all__ = ["ONSET_K", "OnsetParams", "Onset", "select_axis", "accel_envelope", "rest_threshold_of",
            "episodes", "detect_onset"]
@@ -90,7 +90,7 @@ class OnsetParams:
     >>> OnsetParams(cutoff=0.0)
     Traceback (most recent call last):
     ...
-    slipreflex.errors.ParameterError: cutoff must be a finite number > 0, got 0.0
+    slipreflex.core.errors.ParameterError: cutoff must be a finite number > 0, got 0.0
     """
 
     cutoff: float = 30.0

@@ -1,7 +1,7 @@
 """The files a reproduction writes: results.csv, summary.csv, report.md and the figures.
 
 :class:`ReproduceResult` holds what a run of the grid produced (made by
-:func:`slipreflex.experiments.run_reproduce`); :func:`write_outputs` writes it;
+:func:`slipreflex.reproduce.experiments.run_reproduce`); :func:`write_outputs` writes it;
 :func:`trial_plot` turns one simulated trial into the data of its figure, drawing the
 method's detections the way its :class:`~slipreflex.methods.MethodSpec` says. The text
 comes from :mod:`slipreflex.analysis.report`, the drawing from :mod:`slipreflex.analysis.figures`.
@@ -9,7 +9,7 @@ comes from :mod:`slipreflex.analysis.report`, the drawing from :mod:`slipreflex.
 Examples
 --------
 >>> import tempfile
->>> from slipreflex.experiments import ReproduceConfig, run_reproduce
+>>> from slipreflex.reproduce.experiments import ReproduceConfig, run_reproduce
 >>> res = run_reproduce(ReproduceConfig(trials=1, bottles=("TX",), methods=("fixed",),
 ...                                     experiments=("drop",)), jobs=1, progress=False, plots=False)
 >>> sorted(write_outputs(res, tempfile.mkdtemp()))[:3]
@@ -26,8 +26,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .. import experiment_specs
-from ..interrupts import worker_signals
+from ..core import experiment_specs
+from ..files.interrupts import worker_signals
 from ..methods import DATH
 from . import figures as F
 from .claims import judge_run, write_claims_csv, write_parts_csv
@@ -60,7 +60,7 @@ class ReproduceResult:
 
     Attributes
     ----------
-    config : slipreflex.experiments.ReproduceConfig
+    config : slipreflex.reproduce.experiments.ReproduceConfig
     rows : list of TrialRow
         One per trial and slip event (the rows of results.csv).
     summary : list of dict
@@ -78,7 +78,7 @@ class ReproduceResult:
         calibration *recording* is ``config.calibration_s``.
     trials_planned, trials_finished : int
         Trials in the grid and trials finished: fewer when Ctrl-C or SIGTERM
-        stopped the run (:class:`~slipreflex.interrupts.Interrupted` carries it).
+        stopped the run (:class:`~slipreflex.files.interrupts.Interrupted` carries it).
     replicates : list of TrialRow
         Rows of the replicate grids run on derived master seeds for claims this run's
         trials left unresolved (``replicates.csv``; empty: none was needed).
@@ -87,7 +87,7 @@ class ReproduceResult:
 
     Examples
     --------
-    >>> from slipreflex.experiments import ReproduceConfig
+    >>> from slipreflex.reproduce.experiments import ReproduceConfig
     >>> ReproduceResult(ReproduceConfig(), [], [], {}, {}, 0.0, 1).rows
     []
     """
@@ -111,7 +111,7 @@ class ReproduceResult:
 
         Examples
         --------
-        >>> from slipreflex.experiments import ReproduceConfig
+        >>> from slipreflex.reproduce.experiments import ReproduceConfig
         >>> ReproduceResult(ReproduceConfig(), [], [], {}, {}, 0.0, 1, 0.0, 240, 87).partial_note
         'interrupted after 87 of 240 trials'
         """
@@ -145,7 +145,7 @@ def write_outputs(result: ReproduceResult, out_dir: str | Path, *, command: str 
     Examples
     --------
     >>> import tempfile
-    >>> from slipreflex.experiments import ReproduceConfig, run_reproduce
+    >>> from slipreflex.reproduce.experiments import ReproduceConfig, run_reproduce
     >>> cfg = ReproduceConfig(trials=1, bottles=("TX",), methods=("dath",), experiments=("drop",))
     >>> res = run_reproduce(cfg, jobs=1, progress=False)
     >>> paths = write_outputs(res, tempfile.mkdtemp())
@@ -193,7 +193,7 @@ def judged_claims(result: ReproduceResult) -> list:
 
     Examples
     --------
-    >>> from slipreflex.experiments import ReproduceConfig
+    >>> from slipreflex.reproduce.experiments import ReproduceConfig
     >>> judged_claims(ReproduceResult(ReproduceConfig(), [], [], {}, {}, 0.0, 1))
     []
     """
@@ -209,7 +209,7 @@ def replicates_note(result: ReproduceResult) -> str:
 
     Examples
     --------
-    >>> from slipreflex.experiments import ReproduceConfig
+    >>> from slipreflex.reproduce.experiments import ReproduceConfig
     >>> replicates_note(ReproduceResult(ReproduceConfig(), [], [], {}, {}, 0.0, 1))
     ''
     """
@@ -236,11 +236,11 @@ def scored(rows: Sequence[Any]) -> list[Any]:
 def not_the_papers(config: Any) -> list[str]:
     """What in a run is not the paper's: its own bottles, drop or pour (empty: all the paper's).
 
-    ``config`` is a :class:`slipreflex.experiments.ReproduceConfig`.
+    ``config`` is a :class:`slipreflex.reproduce.experiments.ReproduceConfig`.
 
     Examples
     --------
-    >>> from slipreflex.experiments import ReproduceConfig
+    >>> from slipreflex.reproduce.experiments import ReproduceConfig
     >>> not_the_papers(ReproduceConfig())
     []
     >>> not_the_papers(ReproduceConfig(drop_mass_kg=0.02))
@@ -265,7 +265,7 @@ def paper_part(result: ReproduceResult) -> tuple[ReproduceResult, list[dict[str,
 
     Examples
     --------
-    >>> from slipreflex.experiments import ReproduceConfig
+    >>> from slipreflex.reproduce.experiments import ReproduceConfig
     >>> res = ReproduceResult(ReproduceConfig(drop_mass_kg=0.02), [], [], {}, {}, 0.0, 1)
     >>> paper_part(res)[2][:50]
     "Not the paper's objects: drop (20 g from 2 cm). Th"
@@ -378,7 +378,7 @@ def trial_plot(cell: Any, spec: Any, tr: Any, reflex: Any, rows: Sequence[Any], 
 
     Parameters
     ----------
-    cell : slipreflex.experiments.Cell
+    cell : slipreflex.reproduce.experiments.Cell
         The trial (experiment, bottle, method, index, seed).
     spec : slipreflex.methods.MethodSpec
         The method's specification: its input stream and how its detections are drawn.
@@ -393,7 +393,7 @@ def trial_plot(cell: Any, spec: Any, tr: Any, reflex: Any, rows: Sequence[Any], 
 
     Examples
     --------
-    >>> from slipreflex.experiments import ReproduceConfig, Cell, run_trial, trial_seed
+    >>> from slipreflex.reproduce.experiments import ReproduceConfig, Cell, run_trial, trial_seed
     >>> cfg = ReproduceConfig(trials=1, after_s=0.5)
     >>> cell = Cell("drop", "TX", "nmsd", 0, trial_seed(cfg.seed, "drop", "TX", 0))
     >>> _, plot = run_trial(cell, cfg, {"nmsd": 15.0}, keep_plot=True)

@@ -35,7 +35,7 @@ BOTTLE_ORDER: tuple[str, ...] = ("TR", "DK", "TX")
 def bottle_key(bottle: str) -> int:
     """A paper bottle's position in :data:`BOTTLE_ORDER`; another bottle's key from its name (never 0-2).
 
-    Keys the trial seeds of a bottle (:func:`slipreflex.experiments.trial_seed`) and the
+    Keys the trial seeds of a bottle (:func:`slipreflex.reproduce.experiments.trial_seed`) and the
     order of results.csv, so neither depends on which other bottles run.
 
     Examples

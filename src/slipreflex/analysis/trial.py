@@ -43,8 +43,9 @@ from typing import Any
 
 import numpy as np
 
-from .. import experiment_specs, methods
-from ..errors import ParameterError
+from .. import methods
+from ..core import experiment_specs
+from ..core.errors import ParameterError
 from .events import LEAD_S, MERGE_S, segment_events
 from .metrics import ACTIVITY_GAP_S, controller_activity, response_time, suppressed
 from .onset import OnsetParams, accel_envelope, detect_onset, rest_threshold_of, select_axis
@@ -221,7 +222,7 @@ class TrialStreams:
     Parameters
     ----------
     experiment : str
-        A registered experiment (:mod:`slipreflex.experiment_specs`).
+        A registered experiment (:mod:`slipreflex.core.experiment_specs`).
     method, bottle : str
     seed, trial : int
         The trial's seed and index (reported, not used).

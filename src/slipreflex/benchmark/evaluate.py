@@ -23,9 +23,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import methods as registry
-from ..baselines import rest_threshold
-from ..chain import run_chain
-from ..errors import DataError, ParameterError
+from ..core.errors import DataError, ParameterError
+from ..methods.baselines import rest_threshold
+from ..methods.chain import run_chain
 from . import learned
 from .protocol import OperatingPoint, ProtocolConfig, folds, operating_point
 from .run import Skipped, _check_data_rate, _scaled, _trial_reflex, applicable

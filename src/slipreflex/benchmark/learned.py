@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import DataError
+from ..core.errors import DataError
 from .sweep import channel_inputs, energy_statistic
 from .trials import RecordedTrial
 

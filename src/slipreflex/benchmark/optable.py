@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from .. import methods as registry
-from ..csvfiles import write_columns
+from ..files.csvfiles import write_columns
 from .evaluate import Evaluation
 from .protocol import ALARM_WARNING, OperatingPoint
 from .report import _plt

@@ -32,8 +32,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import ParameterError
-from ..validation import integer, number
+from ..core.errors import ParameterError
+from ..core.validation import integer, number
 from .sweep import Sweep
 
 __all__ = ["ProtocolConfig", "OperatingPoint", "folds", "choose_index", "operating_point", "curve", "area",
@@ -71,7 +71,7 @@ class ProtocolConfig:
     >>> ProtocolConfig(fa_per_min=-1)
     Traceback (most recent call last):
     ...
-    slipreflex.errors.ParameterError: fa_per_min must be a finite number >= 0 and <= 1e+06, got -1
+    slipreflex.core.errors.ParameterError: fa_per_min must be a finite number >= 0 and <= 1e+06, got -1
     """
 
     fa_per_min: float = 10.0

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from .. import methods as registry
-from ..csvfiles import write_columns
+from ..files.csvfiles import write_columns
 from .run import MethodRun, reduce_channels
 
 __all__ = ["RUN_COLUMNS", "SUMMARY_COLUMNS", "write_runs", "summarize", "write_summary", "format_table",

@@ -20,7 +20,7 @@ the rate the method was specified at:
 3. **Threshold** by one rule for every method, from the calibration span only (the first
    ``calibration_s`` of the trial, which must end before the labelled onset): ``rest_k``
    standard deviations of the method's own statistic there. NMSD and SWT-SD use their
-   registered rest statistics (:func:`slipreflex.baselines.rest_threshold`, as in
+   registered rest statistics (:func:`slipreflex.methods.baselines.rest_threshold`, as in
    simulation); a chain method uses its own low-passed channel minus its mean over the
    span (what its accumulator measures from a reference sample). A DATH floor of one ADC
    step becomes the channel's own step (its smallest non-zero change).
@@ -48,11 +48,11 @@ from typing import Any
 import numpy as np
 
 from .. import methods as registry
-from ..baselines import rest_threshold
-from ..baselines.calibration import REST_K
-from ..chain import SlipReflex, run_chain
-from ..errors import DataError, ParameterError
-from ..validation import number
+from ..core.errors import DataError, ParameterError
+from ..core.validation import number
+from ..methods.baselines import rest_threshold
+from ..methods.baselines.calibration import REST_K
+from ..methods.chain import SlipReflex, run_chain
 from .scoring import Score, score
 from .trials import RecordedTrial
 
@@ -95,7 +95,7 @@ class BenchmarkConfig:
     >>> BenchmarkConfig(rates=("fast",))
     Traceback (most recent call last):
     ...
-    slipreflex.errors.ParameterError: rates: unknown 'fast' (known: data, method)
+    slipreflex.core.errors.ParameterError: rates: unknown 'fast' (known: data, method)
     """
 
     methods: tuple[str, ...] | None = None

@@ -36,9 +36,9 @@ from typing import Any
 import numpy as np
 
 from .. import methods as registry
-from ..baselines import rest_statistic
-from ..chain import run_chain
-from ..errors import DataError
+from ..core.errors import DataError
+from ..methods.baselines import rest_statistic
+from ..methods.chain import run_chain
 from .run import _quantum, _scaled, _trial_reflex, reduce_channels, to_rate
 from .trials import RecordedTrial
 

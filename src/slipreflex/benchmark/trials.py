@@ -2,7 +2,7 @@
 
 One CSV file per trial, one folder per data set (docs/benchmark.md, "Bring your own data"):
 
-* optional ``# key: value`` lines first (:func:`slipreflex.csvfiles.read_preamble`);
+* optional ``# key: value`` lines first (:func:`slipreflex.files.csvfiles.read_preamble`);
 * a header row naming the columns: ``t`` (seconds, strictly increasing), ``slip``
   (0/1, the ground truth per sample), and every other column is one channel;
 * ``# layout: RxC``, ``RxCxV`` or ``AxRxCxV`` says that the channels, in column order,
@@ -38,9 +38,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..csvfiles import finite_cell, read_preamble
-from ..errors import DataError
-from ..validation import LIMITS
+from ..core.errors import DataError
+from ..core.validation import LIMITS
+from ..files.csvfiles import finite_cell, read_preamble
 
 __all__ = ["Layout", "RecordedTrial", "read_trial", "read_folder", "TIME_COLUMN", "SLIP_COLUMN",
            "MIN_SAMPLES", "TRIAL_LABEL", "TRIAL_LABELS"]
@@ -108,7 +108,7 @@ class Layout:
         >>> Layout.parse("4x4x3", components=None, normal=None, channels=47, where="f.csv")
         Traceback (most recent call last):
         ...
-        slipreflex.errors.DataError: f.csv: layout 4x4x3 needs 48 channel columns, the file has 47
+        slipreflex.core.errors.DataError: f.csv: layout 4x4x3 needs 48 channel columns, the file has 47
         """
         if not _DIMS.match(text):
             raise DataError(f"{where}: layout {text!r} is not RxC, RxCxV or AxRxCxV (positive integers)")
@@ -243,7 +243,7 @@ def read_trial(path: str | os.PathLike) -> RecordedTrial:
     """Read and check one trial file (see the module docstring for the format).
 
     The file is read as a stream under the limits of every CSV input (``LIMITS`` in
-    :mod:`slipreflex.validation`, docs/runtime.md "Limits"): at most ``csv_samples`` rows,
+    :mod:`slipreflex.core.validation`, docs/runtime.md "Limits"): at most ``csv_samples`` rows,
     lines of at most ``csv_line_bytes``, a file of at most ``text_file_bytes``; a FIFO, a
     device or a folder named like a trial is refused before it is opened.
 
@@ -264,7 +264,7 @@ def read_trial(path: str | os.PathLike) -> RecordedTrial:
     >>> read_trial(p)
     Traceback (most recent call last):
     ...
-    slipreflex.errors.DataError: ...bad.csv: no 't' column (time in seconds); the columns are time, x, slip
+    slipreflex.core.errors.DataError: ...bad.csv: no 't' column (time in seconds); the columns are time, x, slip
     """
     path = Path(path)
     _check_regular(path)

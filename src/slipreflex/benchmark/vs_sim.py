@@ -46,11 +46,11 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import hardware as hw
-from ..baselines import nmsd_statistic, rest_threshold, swt_statistic
-from ..baselines.calibration import REST_K
-from ..csvfiles import write_columns
+from ..core import hardware as hw
+from ..files.csvfiles import write_columns
 from ..methods import NMSD, SWT
+from ..methods.baselines import nmsd_statistic, rest_threshold, swt_statistic
+from ..methods.baselines.calibration import REST_K
 from .report import _plt
 
 __all__ = ["Comparison", "compare", "write_comparison", "format_comparison", "plot_comparison",

@@ -16,11 +16,11 @@ import sys
 from collections.abc import Iterable
 from typing import Any
 
-from ..errors import ParameterError
-from ..hardware import DAQ_FS
-from ..live import DEFAULT_PORT, LiveView, parse_address, require_foxglove
-from ..lsl import LslOutlets, require_pylsl
-from ..taps import close_all
+from ..core.errors import ParameterError
+from ..core.hardware import DAQ_FS
+from ..core.taps import close_all
+from ..rig.live import DEFAULT_PORT, LiveView, parse_address, require_foxglove
+from ..rig.lsl import LslOutlets, require_pylsl
 
 __all__ = ["add_live_arguments", "check_live_arguments", "open_taps", "close_taps", "is_loopback"]
 

@@ -21,7 +21,6 @@ from pathlib import Path
 import numpy as np
 
 from .. import methods as registry
-from ..baselines.calibration import REST_K
 from ..benchmark import BenchmarkConfig, read_folder, read_trial, shipped_dataset
 from ..benchmark.evaluate import evaluate, method_names, rest_thresholds, select_channels
 from ..benchmark.optable import format_points, plot_curves, write_points
@@ -30,10 +29,11 @@ from ..benchmark.report import format_table, plot_trial_runs, summarize, write_r
 from ..benchmark.run import RATES, REDUCTIONS, plan, run_trial
 from ..benchmark.sweep import AGGREGATIONS, GRID_POINTS
 from ..benchmark.vs_sim import compare, format_comparison, plot_comparison, write_comparison
-from ..errors import ParameterError
-from ..paths import OutputSet
-from ..progress import format_duration
-from ..validation import within
+from ..core.errors import ParameterError
+from ..core.validation import within
+from ..files.paths import OutputSet
+from ..files.progress import format_duration
+from ..methods.baselines.calibration import REST_K
 
 NAME = "benchmark"
 HELP = "score every detection method on recorded labelled slip trials (default: the shipped real data set)"

@@ -29,10 +29,10 @@ from typing import Any
 
 import numpy as np
 
-from .. import hardware as hw
 from ..analysis.figures import _plt, check_figure_path
-from ..errors import ParameterError
-from ..paths import new_file, output_dir, unique_name
+from ..core import hardware as hw
+from ..core.errors import ParameterError
+from ..files.paths import new_file, output_dir, unique_name
 from ._lists import names_list
 
 NAME = "calibrate"

@@ -43,9 +43,9 @@ from ..analysis.claims import (
 )
 from ..analysis.outputs import scored
 from ..analysis.trial import TrialRow
-from ..errors import ParameterError
-from ..experiments import ReproduceConfig
-from ..paths import read_text
+from ..core.errors import ParameterError
+from ..files.paths import read_text
+from ..reproduce.experiments import ReproduceConfig
 
 NAME = "claims"
 HELP = "judge the paper's claims on a results.csv (yours, or an earlier run's)"
@@ -75,7 +75,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def read_rows(path: Path) -> list:
     """The rows of a results table as :class:`~slipreflex.analysis.trial.TrialRow` s.
 
-    Raises :class:`~slipreflex.errors.ParameterError` naming the file (and line) when it
+    Raises :class:`~slipreflex.core.errors.ParameterError` naming the file (and line) when it
     is missing, lacks a column the claims read, or holds a value that does not parse.
     """
 

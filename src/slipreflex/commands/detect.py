@@ -15,15 +15,15 @@ from pathlib import Path
 
 import numpy as np
 
-from ..board import BoardParams, read_adc_csv, run_board_chain, write_board_outputs
-from ..chain import ReflexParams, run_chain
-from ..chain.params import PRESETS
-from ..csvfiles import Recording, irregular_steps, read_recording, write_columns
-from ..errors import DataError, ParameterError
-from ..hardware import FINGER_MAX
+from ..core.errors import DataError, ParameterError
+from ..core.hardware import FINGER_MAX
+from ..core.validation import number, within
+from ..files.csvfiles import Recording, irregular_steps, read_recording, write_columns
+from ..files.paths import output_dir, unique_prefix
 from ..methods import DATH, FIXED, applicable, make
-from ..paths import output_dir, unique_prefix
-from ..validation import number, within
+from ..methods.board import BoardParams, read_adc_csv, run_board_chain, write_board_outputs
+from ..methods.chain import ReflexParams, run_chain
+from ..methods.chain.params import PRESETS
 
 NAME = "detect"
 HELP = "run the slip-detection chain over a CSV recording of slip-sensor samples"
@@ -72,7 +72,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--hi", type=float, default=None, help=f"highest command ({d.hi:g})")
     p.add_argument("--board", action="store_true",
                    help="the recording is ADC counts (a column adc): run the board's fixed-point chain "
-                        "(slipreflex.board, as the firmware is built, with --method and --p0 only) and "
+                        "(slipreflex.methods.board, as the firmware is built, with --method and --p0 only) and "
                         "write sample,event and window,v,command as firmware/test/board_sim.py does")
     p.add_argument("--out", type=Path, default=None,
                    help="output prefix (default: out/detect/NAME, giving NAME.samples.csv and NAME.windows.csv)")
@@ -123,7 +123,7 @@ def method_chain(name: str | None) -> tuple[str | None, ReflexParams | None]:
     >>> method_chain("swt")                       # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    slipreflex.errors.ParameterError: --method swt reads tactile frames, which detect's input ... does not supply ...
+    slipreflex.core.errors.ParameterError: --method swt reads tactile frames, which detect's input ... does not ...
     """
 
     if name is None:

@@ -12,7 +12,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..recording import export_csv
+from ..files.recording import export_csv
 from .replay import add_recording_arguments, read_checked
 
 NAME = "export"

@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from .. import methods
-from ..errors import ParameterError
+from ..core.errors import ParameterError
 from ..neuro import agreement as ag
 from ..neuro.agreement import measure
 from ..neuro.backends import BACKENDS, available

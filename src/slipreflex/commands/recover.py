@@ -21,7 +21,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..recording import PART_SUFFIX, recover_recording
+from ..files.recording import PART_SUFFIX, recover_recording
 
 NAME = "recover"
 HELP = "rewrite a recording cut by a crash as a complete MCAP file that any MCAP reader opens"

@@ -20,11 +20,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import DataError, ParameterError
-from ..hardware import SLIP_FINGER
+from ..core.errors import DataError, ParameterError
+from ..core.hardware import SLIP_FINGER
+from ..files.recording import METADATA_NAME, TOPICS, read_recording
 from ..methods import MethodContext, applicable, make
-from ..recording import METADATA_NAME, TOPICS, read_recording
-from ..replay import replay
+from ..rig.replay import replay
 from ._live import add_live_arguments, check_live_arguments, close_taps, open_taps
 
 NAME = "replay"
@@ -119,7 +119,7 @@ def play(rec, taps, pace: float = 1.0, *, sleep=None, clock=None) -> int:
 
     Examples
     --------
-    >>> from slipreflex.recording import Recording
+    >>> from slipreflex.files.recording import Recording
     >>> rec = Recording("r.mcap", messages={"/chain/events": [{"seq": 1, "t": 0.0}]},
     ...                 log_times={"/chain/events": [5]})
     >>> class Tap:

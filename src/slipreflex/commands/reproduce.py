@@ -20,26 +20,20 @@ import shlex
 import sys
 from pathlib import Path
 
-from .. import experiment_specs, methods
+from .. import methods
 from ..analysis.claims import claims_terminal
 from ..analysis.outputs import judged_claims, paper_part, replicates_note, write_outputs
 from ..analysis.report import terminal_table
-from ..errors import ParameterError
-from ..experiments import (
-    BOTTLE_NAMES,
-    EXPERIMENTS,
-    METHODS,
-    ReproduceConfig,
-    grasp_seeds,
-    run_reproduce,
-)
-from ..grasping import check_run_grasp
-from ..interrupts import Interrupted, signals_ignored, sigterm_interrupts
-from ..paths import OutputSet
-from ..progress import format_duration
-from ..replication import replicate_undecided
-from ..validation import choices, within
-from ..warmup import COLD_COMPILE_S, cold_kernels, estimate_wall_s
+from ..core import experiment_specs
+from ..core.errors import ParameterError
+from ..core.validation import choices, within
+from ..files.interrupts import Interrupted, signals_ignored, sigterm_interrupts
+from ..files.paths import OutputSet
+from ..files.progress import format_duration
+from ..reproduce.experiments import BOTTLE_NAMES, EXPERIMENTS, METHODS, ReproduceConfig, grasp_seeds, run_reproduce
+from ..reproduce.grasping import check_run_grasp
+from ..reproduce.replication import replicate_undecided
+from ..reproduce.warmup import COLD_COMPILE_S, cold_kernels, estimate_wall_s
 from ._lists import names_list
 from .nir import add_graph_option, apply_graph_option
 
@@ -204,10 +198,10 @@ def run(args: argparse.Namespace) -> int:
     return 0 if _write(result, outputs, command) is not None else 130
 
 
-#: Everything ``reproduce`` writes into ``--out``; replaced as one set (slipreflex.paths.OutputSet).
+#: Everything ``reproduce`` writes into ``--out``; replaced as one set (slipreflex.files.paths.OutputSet).
 OUTPUT_NAMES: tuple[str, ...] = ("results.csv", "summary.csv", "report.md", "figures")
 
-#: Options bounded by slipreflex.validation.LIMITS: (option, its dest, the limit's name).
+#: Options bounded by slipreflex.core.validation.LIMITS: (option, its dest, the limit's name).
 _LIMITED = (("--trials", "trials", "trials"), ("--rest", "rest", "rest_s"), ("--after", "after", "after_s"),
             ("--calibration", "calibration", "calibration_s"), ("--rest-k", "rest_k", "rest_k"),
             ("--swt-persist", "swt_persist", "swt_persist"), ("--grasp-force", "grasp_force", "grasp_force_n"),

@@ -20,18 +20,19 @@ from pathlib import Path
 from typing import Any
 
 from .. import __version__
-from ..board import BoardParams, BoardSource, CheckedBoardReflex
-from ..chain import ReflexParams, SlipReflex
-from ..chain.params import PRESETS
-from ..devices.daq import SerialDaq
-from ..errors import ParameterError
-from ..hands import get_hand, hand_names, open_hand
-from ..hardware import DAQ_FS, FINGER_MAX, FINGER_MIN, SLIP_FINGER, TRIPOD, Finger
-from ..live import RUN_TOPICS
+from ..core.errors import ParameterError
+from ..core.hardware import DAQ_FS, FINGER_MAX, FINGER_MIN, SLIP_FINGER, TRIPOD, Finger
+from ..core.validation import within
+from ..files.paths import unique_name
+from ..files.recording import METADATA_NAME, PART_SUFFIX, PLANNED_SAMPLES, Recorder, RecordingError
 from ..methods import DATH, FIXED, MethodContext, applicable, make
-from ..paths import unique_name
-from ..recording import METADATA_NAME, PART_SUFFIX, PLANNED_SAMPLES, Recorder, RecordingError
-from ..runtime import (
+from ..methods.board import BoardParams, BoardSource, CheckedBoardReflex
+from ..methods.chain import ReflexParams, SlipReflex
+from ..methods.chain.params import PRESETS
+from ..rig.devices.daq import SerialDaq
+from ..rig.hands import get_hand, hand_names, open_hand
+from ..rig.live import RUN_TOPICS
+from ..rig.runtime import (
     WATCHDOG_MAX_S,
     WATCHDOG_MIN_S,
     WATCHDOG_S,
@@ -41,7 +42,6 @@ from ..runtime import (
     run_loop,
     start_positions,
 )
-from ..validation import within
 from ._live import add_live_arguments, check_live_arguments, close_taps, open_taps
 from .nir import add_graph_option, apply_graph_option
 
@@ -99,7 +99,7 @@ def chain_params(args: argparse.Namespace, p0: float):
     chain option is an error naming it, rather than one of them being silently ignored).
 
     ``p0`` is the MPI's bookkeeping only (the hand gets the command's rises as closing time,
-    :mod:`slipreflex.grip`), so the command's ceiling is ``p0`` plus one whole finger travel:
+    :mod:`slipreflex.core.grip`), so the command's ceiling is ``p0`` plus one whole finger travel:
     whatever ``p0`` says, the reflex can add the same grip (the hand's end stop ends it)."""
 
     hi = p0 + (FINGER_MAX - FINGER_MIN)
@@ -129,7 +129,7 @@ def parse_p0(text: str) -> dict[Finger, float]:
     >>> parse_p0("thumb=148,thumb=14,index=147,middle=147")
     Traceback (most recent call last):
     ...
-    slipreflex.errors.ParameterError: --p0 'thumb=148,thumb=14,index=147,middle=147': finger thumb is given twice
+    slipreflex.core.errors.ParameterError: --p0 'thumb=148,thumb=14,index=147,middle=147': finger thumb is given twice
     """
 
     items = [x.strip() for x in str(text).split(",") if x.strip()]
@@ -259,7 +259,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--hand", required=True,
                    help="the hand's serial port (i-Limb control unit e.g. /dev/ttyUSB0; Ability Hand UART)")
     p.add_argument("--hand-type", default="ilimb", choices=hand_names(),
-                   help="which hand is on --hand (slipreflex.hands; default ilimb); ability: the PSYONIC "
+                   help="which hand is on --hand (slipreflex.rig.hands; default ilimb); ability: the PSYONIC "
                         "Ability Hand, whose index fingertip's touch sensors a tactile method reads")
     p.add_argument("--p0", required=True,
                    help="position (0..500) at which each tripod finger holds the object, as the grasp "

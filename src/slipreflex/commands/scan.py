@@ -20,11 +20,11 @@ from typing import Any
 import numpy as np
 
 from ..analysis.paper import PAPER_SCAN_VOLTS
-from ..errors import ParameterError
-from ..hardware import DAQ_FS
+from ..core.errors import ParameterError
+from ..core.hardware import DAQ_FS
+from ..core.validation import number, within
+from ..files.paths import OutputSet
 from ..methods import DATH, FIXED
-from ..paths import OutputSet
-from ..validation import number, within
 
 NAME = "scan"
 HELP = "simulate the slip sensor's characterization scan (paper Fig. 4-9): CSV, figure, numbers"
@@ -109,7 +109,7 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-#: What ``scan`` writes into ``--out``, replaced as one set (slipreflex.paths.OutputSet).
+#: What ``scan`` writes into ``--out``, replaced as one set (slipreflex.files.paths.OutputSet).
 OUTPUT_NAMES: tuple[str, ...] = ("scan.csv", "scan.png")
 
 

@@ -19,12 +19,12 @@ from pathlib import Path
 import numpy as np
 
 from ..benchmark import read_trial
-from ..csvfiles import read_preamble, read_slip_csv
-from ..errors import ParameterError
+from ..core.errors import ParameterError
+from ..files.csvfiles import read_preamble, read_slip_csv
+from ..files.recording import read_recording
 from ..neuro import events as ev
 from ..neuro.events import FORMATS, sensor_size, write_events
-from ..recording import read_recording
-from ..replay import chain_params_of
+from ..rig.replay import chain_params_of
 
 NAME = "spikes"
 HELP = "write spikes as AEDAT4, tonic's events_struct (.npy) or NIR event data"

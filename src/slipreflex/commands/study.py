@@ -30,16 +30,17 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from .. import experiment_specs, methods
+from .. import methods
 from ..analysis.claims import DEPENDS_PLANT
-from ..errors import SlipreflexError
-from ..experiments import BOTTLE_NAMES, EXPERIMENTS
-from ..experiments import DEFAULT_SEED as seed
-from ..paths import OutputSet
+from ..core import experiment_specs
+from ..core.errors import SlipreflexError
+from ..core.validation import within
+from ..files.paths import OutputSet
+from ..reproduce.experiments import BOTTLE_NAMES, EXPERIMENTS
+from ..reproduce.experiments import DEFAULT_SEED as seed
 from ..study import DEFAULT_PLANTS, DEFAULT_TRIALS, DESIGNS, StudyConfig, read_parts, run_study
 from ..study.analyse import claim_fractions, plant_table, pooled_scan, refinement, sensitivity, write_outputs
 from ..study.runner import probe_scheduler
-from ..validation import within
 
 NAME = "study"
 HELP = "map where the paper's claims hold across plausible plants (Dask; resumable)"

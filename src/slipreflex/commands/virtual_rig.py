@@ -28,14 +28,14 @@ import threading
 import time
 from pathlib import Path
 
-from ..devices.simrig import SimRig
-from ..devices.virtual import VirtualDevices, parse_schedule
-from ..errors import ParameterError
-from ..hands import get_hand, hand_names
+from ..core.errors import ParameterError
+from ..core.validation import within
+from ..files.paths import output_dir
 from ..methods import applicable
-from ..paths import output_dir
-from ..runtime import realtime_priority
-from ..validation import within
+from ..rig.devices.simrig import SimRig
+from ..rig.devices.virtual import VirtualDevices, parse_schedule
+from ..rig.hands import get_hand, hand_names
+from ..rig.runtime import realtime_priority
 from ._live import add_live_arguments, check_live_arguments, close_taps, open_taps
 from .nir import add_graph_option, apply_graph_option
 from .reproduce import own_objects

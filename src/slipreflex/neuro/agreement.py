@@ -1,6 +1,6 @@
 """The graphs held against Eq. 1-9, stage by stage, on recorded and simulated signals.
 
-For one signal, :func:`compare` runs the chain (:func:`slipreflex.chain.run_chain`: the paper's
+For one signal, :func:`compare` runs the chain (:func:`slipreflex.methods.chain.run_chain`: the paper's
 rules, fixed threshold or DATH) and a graph in a backend, and counts:
 
 * spikes: the chain's spikes that the graph also fires, same polarity, at the same sample
@@ -31,10 +31,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import hardware as hw
 from ..benchmark import BenchmarkConfig, read_folder, shipped_dataset
 from ..benchmark.run import reduce_channels, to_rate
-from ..csvfiles import read_slip_csv
+from ..core import hardware as hw
+from ..files.csvfiles import read_slip_csv
 from .backends import run_backend
 from .graph import chain_graph
 
@@ -132,7 +132,7 @@ def compare(signal: Signal, graph: str, backend: str) -> Agreement:
     >>> a.chain_spikes > 0 and a.same_sample == a.chain_spikes
     True
     """
-    from ..chain import count_windows, mpi, run_chain  # deferred: heavy (numba kernels)
+    from ..methods.chain import count_windows, mpi, run_chain  # deferred: heavy (numba kernels)
 
     dath = graph == "dath"
     res = run_chain(signal.raw, fs=signal.fs, threshold=signal.threshold, dath=dath, p0=100.0)
@@ -158,7 +158,7 @@ def shipped_signals() -> list[Signal]:
     >>> [s.group for s in shipped_signals()][:2]
     ['example', 'imanlab']
     """
-    from ..chain import run_chain  # deferred: heavy (numba kernels)
+    from ..methods.chain import run_chain  # deferred: heavy (numba kernels)
 
     example = Path(__file__).resolve().parents[3] / "examples" / "slip_example.csv"
     out = []

@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import DataError, ParameterError
+from ..core.errors import DataError, ParameterError
 from .graph import SpikingGraph, to_nir
 from .interpreter import GraphExecutor
 
@@ -211,7 +211,7 @@ def run_backend(name: str, graph: SpikingGraph, inputs: np.ndarray) -> np.ndarra
     >>> run_backend("loihi", chain_graph(), np.zeros((1, 1)))
     Traceback (most recent call last):
     ...
-    slipreflex.errors.ParameterError: backend 'loihi' is not one of reference, spyx, nengo
+    slipreflex.core.errors.ParameterError: backend 'loihi' is not one of reference, spyx, nengo
     """
     if name not in BACKENDS:
         raise ParameterError(f"backend {name!r} is not one of {', '.join(BACKENDS)}")

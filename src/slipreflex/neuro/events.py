@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import DataError, ParameterError
+from ..core.errors import DataError, ParameterError
 from .graph import _nir
 
 __all__ = ["EVENT_DTYPE", "FORMATS", "chain_events", "taxel_events", "sensor_size", "write_events",
@@ -58,7 +58,7 @@ def chain_events(raw, t, params=None, **chain: Any) -> np.ndarray:
     raw, t : array_like
         Samples (V) and their DAQ times (s). A NaN sample is skipped as the streaming chain
         skips it.
-    params : slipreflex.chain.ReflexParams, optional
+    params : slipreflex.methods.chain.ReflexParams, optional
         The chain (a recording's own, for a replay); or give its parameters as keywords.
 
     Returns
@@ -70,7 +70,7 @@ def chain_events(raw, t, params=None, **chain: Any) -> np.ndarray:
     >>> chain_events([0.4, 0.4, 0.3], [0.0, 0.003, 0.006], filter=False)["p"].tolist()
     [False]
     """
-    from ..chain import ReflexParams, SlipReflex  # deferred: heavy (numba kernels)
+    from ..methods.chain import ReflexParams, SlipReflex  # deferred: heavy (numba kernels)
 
     p = params if params is not None else ReflexParams.from_dict(chain)
     raw = np.asarray(raw, dtype=np.float64)
@@ -116,7 +116,7 @@ def taxel_events(frames, t, threshold: float, *, fs: float | None = None, filter
     >>> taxel_events(f, [0.0, 0.1, 0.2], 0.5, filter=False)[["x", "y", "p"]].tolist()
     [(0, 1, False)]
     """
-    from ..chain import encode_trace, lowpass  # deferred: heavy (numba kernels)
+    from ..methods.chain import encode_trace, lowpass  # deferred: heavy (numba kernels)
 
     grid = _as_grid(np.asarray(frames, dtype=np.float64), patches)
     t_us = _micros(t)
@@ -227,7 +227,7 @@ def write_events(events: np.ndarray, path: str | Path, fmt: str) -> Path:
     >>> write_events(np.zeros(0, dtype=EVENT_DTYPE), "x.avi", "avi")
     Traceback (most recent call last):
     ...
-    slipreflex.errors.ParameterError: event format 'avi' is not one of aedat4, tonic, nir
+    slipreflex.core.errors.ParameterError: event format 'avi' is not one of aedat4, tonic, nir
     """
     if fmt not in FORMATS:
         raise ParameterError(f"event format {fmt!r} is not one of {', '.join(FORMATS)}")

@@ -40,7 +40,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import DataError, ParameterError
+from ..core.errors import DataError, ParameterError
 
 __all__ = ["Node", "SpikingGraph", "chain_graph", "to_nir", "from_nir", "write_graph", "read_graph",
            "host_params", "SUPPORTED", "METADATA_KEY"]
@@ -216,7 +216,7 @@ def chain_graph(threshold: float = 0.008, *, dath: bool = False, fs: float | Non
     >>> json.loads(chain_graph(dath=True).metadata[METADATA_KEY])["stands_for"]
     'dath'
     """
-    from ..chain.params import ReflexParams  # deferred: heavy (scipy, via the chain's filter design)
+    from ..methods.chain.params import ReflexParams  # deferred: heavy (scipy, via the chain's filter design)
 
     theta = float(threshold)
     if not (math.isfinite(theta) and theta > 0):
@@ -250,14 +250,14 @@ def host_params(graph: SpikingGraph, **overrides: Any):
 
     Returns
     -------
-    slipreflex.chain.ReflexParams
+    slipreflex.methods.chain.ReflexParams
 
     Examples
     --------
     >>> host_params(chain_graph(), p0=120.0).p0
     120.0
     """
-    from ..chain.params import ReflexParams  # deferred: heavy (scipy, via the chain's filter design)
+    from ..methods.chain.params import ReflexParams  # deferred: heavy (scipy, via the chain's filter design)
 
     raw = graph.metadata.get(METADATA_KEY)
     record: dict[str, Any] = {}

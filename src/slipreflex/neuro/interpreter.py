@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import DataError, ParameterError
+from ..core.errors import DataError, ParameterError
 from .graph import SpikingGraph
 
 __all__ = ["GraphExecutor"]

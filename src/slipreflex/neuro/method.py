@@ -10,7 +10,7 @@ default) it is the fixed-threshold chain with its encoder replaced by two IF neu
 Examples
 --------
 >>> import numpy as np
->>> from slipreflex.chain import run_chain
+>>> from slipreflex.methods.chain import run_chain
 >>> r = NIRReflex(p0=100.0)
 >>> raw = np.r_[np.full(32, 0.40), np.linspace(0.40, 0.55, 64)]      # a rise: the graph is exact here
 >>> [c for c in (r.step(v) for v in raw) if c is not None] == run_chain(raw, p0=100.0).commands.tolist()
@@ -25,8 +25,8 @@ from typing import Any
 
 import numpy as np
 
-from .. import hardware as hw
-from ..errors import DataError
+from ..core import hardware as hw
+from ..core.errors import DataError
 from ..methods import Detections
 from .graph import SpikingGraph, chain_graph, host_params, read_graph
 from .interpreter import GraphExecutor
@@ -38,7 +38,7 @@ NAME = "nir"
 
 
 class NIRReflex:
-    """A :class:`~slipreflex.interfaces.Reflex` whose spikes come from a NIR graph.
+    """A :class:`~slipreflex.core.interfaces.Reflex` whose spikes come from a NIR graph.
 
     Parameters
     ----------
@@ -59,7 +59,7 @@ class NIRReflex:
 
     def __init__(self, graph: SpikingGraph | None = None, *, p0: float = 0.0, name: str = NAME,
                  **host: Any) -> None:
-        from ..chain import LowPass, MPIController, WindowCounter  # deferred: heavy (scipy filter design)
+        from ..methods.chain import LowPass, MPIController, WindowCounter  # deferred: heavy (scipy filter design)
 
         self.graph = graph if graph is not None else chain_graph()
         if self.graph.input_size != 1:
@@ -150,7 +150,7 @@ def build_nir_file(graph: str, p0: float, context: Any, **params: Any) -> NIRRef
     --------
     >>> build_nir_file("missing.nir", 0.0, None)       # doctest: +SKIP
     Traceback (most recent call last):
-    slipreflex.errors.DataError: missing.nir: no such NIR graph file
+    slipreflex.core.errors.DataError: missing.nir: no such NIR graph file
     """
     return build_nir(p0, context, graph=graph, **params)
 

@@ -33,9 +33,9 @@ from typing import Any
 
 import numpy as np
 
-from .. import hardware as hw
-from ..errors import ParameterError
-from ..registry import EntryPoint
+from ..core import hardware as hw
+from ..core.errors import ParameterError
+from ..core.registry import EntryPoint
 from .contacts import static_capacity
 from .objects import PAPER_DROP, PAPER_POUR, WATER_DENSITY, Bottle, Drop, Pour
 from .rig import Rig
@@ -120,7 +120,7 @@ def _rig(bottle: Bottle, seed: int, rig_kwargs: dict[str, Any] | None, grasp_for
 
 
 #: After the poured water lands, its knock is over by this time (s): the analysis of a pour trial
-#: starts looking for slips this long after the jet lands (``slipreflex.experiments.LANDING_S``, the
+#: starts looking for slips this long after the jet lands (``slipreflex.reproduce.experiments.LANDING_S``, the
 #: same value; a test keeps them equal).
 LANDING_S: float = 0.1
 #: After the bottle has fallen out, the open-loop recording goes on this long (s): the fall's

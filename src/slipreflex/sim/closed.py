@@ -1,8 +1,8 @@
 """The closed loop in one compiled function, for reflexes with a compiled step.
 
 :func:`slipreflex.sim.run_closed_loop` runs here when the reflex implements
-:class:`slipreflex.interfaces.CompiledReflex` (every method built on
-:class:`~slipreflex.chain.SlipReflex`, NMSD and SWT-SD). The numba kernels below do what the Python loop in
+:class:`slipreflex.core.interfaces.CompiledReflex` (every method built on
+:class:`~slipreflex.methods.chain.SlipReflex`, NMSD and SWT-SD). The numba kernels below do what the Python loop in
 :mod:`slipreflex.sim.loop` does, in the same order and with the same arithmetic:
 
 * advance the physics (:func:`slipreflex.sim.kernel.step_until`) in the same
@@ -15,7 +15,7 @@
   the middle-finger position of the latest DAQ row at or before the frame
   (:meth:`Rig.finger_position_at`'s rule);
 * turn every rise of a command into a CLOSE and a STOP per finger group (the
-  grip-only rule, :func:`slipreflex.grip.Grip.rise` and :func:`slipreflex.grip.span`,
+  grip-only rule, :func:`slipreflex.core.grip.Grip.rise` and :func:`slipreflex.core.grip.span`,
   with the groups of :func:`~slipreflex.sim.loop.grip_groups`) and queue each with
   the due step :meth:`SimHand.command` gives it
   (``max(ceil((t + latency) / dt - 1e-9), step now)``).
@@ -46,10 +46,10 @@ import numpy as np
 from numba import njit, types
 from numba.core import caching as _caching
 
-from .. import hardware as hw
-from .._numba_cache import CACHE
-from ..errors import ParameterError
-from ..hardware import Finger, HandCommand
+from ..core import hardware as hw
+from ..core._numba_cache import CACHE
+from ..core.errors import ParameterError
+from ..core.hardware import Finger, HandCommand
 from . import kernel as K
 
 __all__ = ["SLIP_STEP", "TACTILE_STEP", "run_compiled", "compilable"]
@@ -449,7 +449,7 @@ def compilable(rig, reflex, fingers: tuple[Finger, ...]) -> bool:
     Examples
     --------
     >>> from slipreflex.sim import Rig
-    >>> from slipreflex.chain import SlipReflex
+    >>> from slipreflex.methods.chain import SlipReflex
     >>> compilable(Rig("TR"), SlipReflex(), hw.TRIPOD), compilable(Rig("TR"), object(), hw.TRIPOD)
     (True, False)
     """
@@ -529,7 +529,7 @@ def run_compiled(rig, reflex, t_end: float, split: list[tuple[tuple[Finger, ...]
     Examples
     --------
     >>> from slipreflex.sim import Rig
-    >>> from slipreflex.chain import SlipReflex
+    >>> from slipreflex.methods.chain import SlipReflex
     >>> from slipreflex.sim.loop import grip_groups
     >>> rig = Rig("TR", seed=1); g = rig.grasp()
     >>> split = grip_groups(hw.TRIPOD, None)

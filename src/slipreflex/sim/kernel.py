@@ -86,12 +86,12 @@ import math
 import numpy as np
 from numba import njit
 
-from .._numba_cache import CACHE
-from .._slots import Layout
+from ..core._numba_cache import CACHE
+from ..core._slots import Layout
 
 __all__: list[str] = []
 
-# Every vector's slots are named once, in a Layout (slipreflex._slots); the constants below are
+# Every vector's slots are named once, in a Layout (slipreflex.core._slots); the constants below are
 # bound from it for the kernels, and tests/test_slots.py checks each against its layout's name.
 
 # ---- state vector S -------------------------------------------------------

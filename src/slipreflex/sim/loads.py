@@ -26,7 +26,7 @@ Examples
 >>> kind_of(3.0)
 Traceback (most recent call last):
 ...
-slipreflex.errors.ParameterError: perturb: no load kind takes a float (known: drop, pour)
+slipreflex.core.errors.ParameterError: perturb: no load kind takes a float (known: drop, pour)
 """
 
 from __future__ import annotations
@@ -38,10 +38,10 @@ from typing import Any, Literal
 
 import numpy as np
 
-from .. import hardware as hw
-from ..errors import ParameterError
-from ..registry import Registry
-from ..validation import choice
+from ..core import hardware as hw
+from ..core.errors import ParameterError
+from ..core.registry import Registry
+from ..core.validation import choice
 from . import kernel as K
 from .objects import WATER_DENSITY, Drop, Pour
 
@@ -121,7 +121,7 @@ def register_load(spec: LoadKind, *, replace: bool = False) -> None:
     >>> register_load(get_load("drop"))
     Traceback (most recent call last):
     ...
-    slipreflex.errors.ParameterError: load kind 'drop' is already registered (pass replace=True)
+    slipreflex.core.errors.ParameterError: load kind 'drop' is already registered (pass replace=True)
     """
     LOAD_KINDS.register(spec, replace=replace)
 

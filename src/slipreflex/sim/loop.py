@@ -1,21 +1,21 @@
 """Closed-loop runs of a reflex on the simulated rig, and their result object.
 
-:func:`run_closed_loop` feeds a :class:`slipreflex.interfaces.Reflex` the
+:func:`run_closed_loop` feeds a :class:`slipreflex.core.interfaces.Reflex` the
 input its ``input_kind`` asks for (slip-sensor volts at the DAQ's 333.33 Hz,
 or ``(4, 4)`` index-finger tactile frames at the reflex's own ``fs``), passes
 the measured middle-finger position with every sample, and sends every rise of
 the returned command to the tripod fingers (thumb, index, middle) as closing
-time, the grip-only rule of :mod:`slipreflex.grip` that the real-rig loop
+time, the grip-only rule of :mod:`slipreflex.core.grip` that the real-rig loop
 applies too: a rise of ``g`` units is a CLOSE at the hand's closing speed
 (full PWM: ``HandParams.speed_units_s``, the documented
-:data:`~slipreflex.hardware.FINGER_SPEED_UNITS_S` on the nominal plant) and a
+:data:`~slipreflex.core.hardware.FINGER_SPEED_UNITS_S` on the nominal plant) and a
 STOP ``g / speed`` seconds later, a rise while the fingers still close extends
 the closing. The commands are sent at the time of the sample that produced them and
 reach the fingers after the hand's latency; the physics is advanced in
 stretches that never pass a time a pending command could still change, so
 the result is the same as stepping sample by sample.
 
-A reflex with a compiled step (:class:`slipreflex.interfaces.CompiledReflex`:
+A reflex with a compiled step (:class:`slipreflex.core.interfaces.CompiledReflex`:
 every method on the paper's chain, NMSD, SWT-SD) runs this same loop inside
 one numba function (:mod:`slipreflex.sim.closed`), 2 to 4 times faster and
 with the same bits; ``run_closed_loop(..., compiled=False)`` forces the Python
@@ -54,12 +54,12 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import hardware as hw
-from ..errors import ParameterError
-from ..grip import Grip, finger_groups, span
-from ..hardware import Finger, HandCommand
-from ..interfaces import Reflex
-from ..paths import new_file
+from ..core import hardware as hw
+from ..core.errors import ParameterError
+from ..core.grip import Grip, finger_groups, span
+from ..core.hardware import Finger, HandCommand
+from ..core.interfaces import Reflex
+from ..files.paths import new_file
 from .closed import compilable, run_compiled
 from .objects import Drop, Pour
 from .rig import DaqBlock, Rig, SlipEvent
@@ -297,12 +297,12 @@ def grip_groups(fingers: tuple[Finger, ...], offsets) -> list[tuple[tuple[Finger
     """How the rises of a command go to ``fingers``: ``(fingers, offset)`` pairs.
 
     Fingers with the same declared offset (``finger_offsets``; 0 for the others)
-    close together (:func:`slipreflex.grip.finger_groups`); the Python loop and the
+    close together (:func:`slipreflex.core.grip.finger_groups`); the Python loop and the
     compiled one both split a command this way.
 
     Examples
     --------
-    >>> from slipreflex.hardware import TRIPOD
+    >>> from slipreflex.core.hardware import TRIPOD
     >>> grip_groups(TRIPOD, {Finger.MIDDLE: 20.0})
     [((<Finger.THUMB: 0>, <Finger.INDEX: 1>), 0.0), ((<Finger.MIDDLE: 2>,), 20.0)]
     """
@@ -316,7 +316,7 @@ def grip_start(rig: Rig, reflex: Reflex) -> float:
     Examples
     --------
     >>> from slipreflex.sim import Rig
-    >>> from slipreflex.chain import SlipReflex
+    >>> from slipreflex.methods.chain import SlipReflex
     >>> grip_start(Rig("TR"), SlipReflex(p0=500.0)), grip_start(Rig("TR"), object())
     (500.0, 0.0)
     """
@@ -329,7 +329,7 @@ def grip_start(rig: Rig, reflex: Reflex) -> float:
 def _grip_sender(hand, groups: list[tuple[tuple[Finger, ...], float]], start: float):
     """A ``send(c, at)`` that turns each rise of ``c`` into CLOSE and STOP commands (the grip rule)."""
     grip = Grip(start, [f for g, _ in groups for f in g], {f: off for g, off in groups for f in g})
-    assert grip.groups == groups   # both from slipreflex.grip.finger_groups
+    assert grip.groups == groups   # both from slipreflex.core.grip.finger_groups
     # the simulated hand's own closing speed is its documented rate (625 units/s on the nominal
     # plant, hardware.FINGER_SPEED_UNITS_S): a rise of g units closes its fingers g units
     speed = float(getattr(getattr(hand, "params", None), "speed_units_s", hw.FINGER_SPEED_UNITS_S))
@@ -371,7 +371,7 @@ def run_closed_loop(rig: Rig, reflex: Reflex, duration: float, *,
     compiled : bool
         Run the whole loop in one compiled function (:mod:`slipreflex.sim.closed`)
         when the reflex has a compiled step
-        (:class:`~slipreflex.interfaces.CompiledReflex`), the fingers are tripod
+        (:class:`~slipreflex.core.interfaces.CompiledReflex`), the fingers are tripod
         fingers and no command for another finger is queued; the result is the
         same, bit for bit, as the Python loop's, which ``compiled=False`` forces
         (and which runs every other reflex).
@@ -447,7 +447,7 @@ def reflex_log(trace: SimTrace) -> dict[str, np.ndarray] | None:
     Examples
     --------
     >>> from slipreflex.sim import Rig
-    >>> from slipreflex.chain import SlipReflex
+    >>> from slipreflex.methods.chain import SlipReflex
     >>> rig = Rig("TR"); g = rig.grasp()
     >>> log = reflex_log(run_closed_loop(rig, SlipReflex(p0=g.position), 0.1))
     >>> sorted(log)[:3], log["t"].size

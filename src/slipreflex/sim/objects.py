@@ -8,7 +8,7 @@ poured at a constant rate). Built-ins reproduce the paper's set-up
 (:data:`BOTTLES`, :data:`SURFACES`, :data:`PAPER_DROP`, :data:`PAPER_POUR`);
 a user adds new ones from Python or from a TOML file (:func:`load_objects`)
 without editing the package. Invalid values raise
-:class:`~slipreflex.errors.ParameterError` naming the field.
+:class:`~slipreflex.core.errors.ParameterError` naming the field.
 
 Units are SI and spelled out in the field names (``mass_kg``, ``height_m``),
 except the pour, which uses the units the paper uses (L/min, ml).
@@ -45,7 +45,7 @@ Examples
 >>> Drop(mass_kg=-1)
 Traceback (most recent call last):
 ...
-slipreflex.errors.ParameterError: Drop.mass_kg must be a finite number > 0 and <= 5, got -1
+slipreflex.core.errors.ParameterError: Drop.mass_kg must be a finite number > 0 and <= 5, got -1
 """
 
 from __future__ import annotations
@@ -56,9 +56,9 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
-from ..errors import ParameterError
-from ..paths import read_toml
-from ..validation import number
+from ..core.errors import ParameterError
+from ..core.validation import number
+from ..files.paths import read_toml
 
 __all__ = [
     "Surface", "Bottle", "Drop", "Pour", "Objects", "SURFACES", "BOTTLES",
@@ -84,7 +84,7 @@ FRICTION_LAWS: tuple[str, ...] = ("rate-state", "coulomb")
 
 def _check(cls: str, name: str, value: Any, *, lo: float | None = None, hi: float | None = None,
            lo_open: bool = False, hi_open: bool = False) -> None:
-    """A finite number within the bounds (:func:`slipreflex.validation.number`, the one validator)."""
+    """A finite number within the bounds (:func:`slipreflex.core.validation.number`, the one validator)."""
     number(f"{cls}.{name}", value, lo=lo, hi=hi, lo_open=lo_open, hi_open=hi_open)
 
 

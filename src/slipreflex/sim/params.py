@@ -2,7 +2,7 @@
 
 Hardware facts shared with the rest of the package (sampling rate, ADC,
 finger range, tactile shape, 0.8 N contact force, flow-sensor pulses per
-litre, gravity) live in :mod:`slipreflex.hardware` and are imported, not
+litre, gravity) live in :mod:`slipreflex.core.hardware` and are imported, not
 repeated. This module holds what only the simulator needs, grouped into
 frozen dataclasses that validate themselves; a :class:`~slipreflex.sim.Rig`
 takes one of each, so any of them can be changed per rig without editing
@@ -22,16 +22,16 @@ Examples
 >>> HandParams(latency_s=-1)
 Traceback (most recent call last):
 ...
-slipreflex.errors.ParameterError: HandParams.latency_s must be a finite number >= 0, got -1
+slipreflex.core.errors.ParameterError: HandParams.latency_s must be a finite number >= 0, got -1
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .. import hardware as hw
-from ..errors import ParameterError
-from ..validation import positive, set_field
+from ..core import hardware as hw
+from ..core.errors import ParameterError
+from ..core.validation import positive, set_field
 
 __all__ = ["HandParams", "SlipSensorParams", "ImuParams", "TactileParams", "FlowParams", "PhysicsParams", "WaterParams",
            "WATER_KINEMATIC_VISCOSITY", "SLOSH_ROOT"]
@@ -61,7 +61,7 @@ class HandParams:
         Servo speed limit (position units/s): an i-Limb digit closes fully
         (0 -> 500) in about 0.8 s (manufacturer; Belter et al. 2013, J
         Rehabil Res Dev 50(5)), so 625 units/s
-        (:data:`slipreflex.hardware.FINGER_SPEED_UNITS_S`).
+        (:data:`slipreflex.core.hardware.FINGER_SPEED_UNITS_S`).
     latency_s : float
         Command latency (s): a 15-byte packet at 115200 baud takes 1.3 ms,
         the prosthesis control unit and the digit controller add a few ms;
@@ -404,7 +404,7 @@ class FlowParams:
     ----------
     k_factor_sd : float
         Relative standard deviation of this unit's pulses per litre around
-        the nominal 450 (``slipreflex.hardware.FLOW_PULSES_PER_LITRE``).
+        the nominal 450 (``slipreflex.core.hardware.FLOW_PULSES_PER_LITRE``).
         Datasheet accuracy is +-10 % over the range; a given unit at a fixed
         flow is repeatable, so each seed draws one factor with sd 3 %.
 
@@ -499,7 +499,7 @@ class WaterParams:
     >>> WaterParams(jet_offset_m=0.05)
     Traceback (most recent call last):
     ...
-    slipreflex.errors.ParameterError: WaterParams.jet_offset_m must be <= 0.02 m (inside a bottle's neck), got 0.05
+    slipreflex.core.errors.ParameterError: WaterParams.jet_offset_m must be <= 0.02 m (inside a bottle's neck), got 0.05
     """
 
     splash_rms: float = 0.2

@@ -1,10 +1,10 @@
 """The simulated rig: a bottle in the i-Limb's tripod grasp, with the paper's sensors.
 
 :class:`Rig` owns the physics, the hand (:class:`SimHand`, a
-:class:`slipreflex.interfaces.Hand`) and the sensors. It is advanced from
+:class:`slipreflex.core.interfaces.Hand`) and the sensors. It is advanced from
 outside in increments of any size (``rig.advance_to(t)`` /
 ``rig.advance(dt)``), which return the new DAQ samples
-(:class:`slipreflex.interfaces.DaqSample`, 333.33 Hz: slip-sensor volts,
+(:class:`slipreflex.core.interfaces.DaqSample`, 333.33 Hz: slip-sensor volts,
 latest accelerometer reading in g, cumulative flow pulses); tactile frames
 come from samplers at any rate (``rig.tactile_sampler(260.0)``). The whole
 run is deterministic under ``seed`` and does not depend on how it is cut
@@ -47,11 +47,11 @@ from typing import Any
 
 import numpy as np
 
-from .. import hardware as hw
-from .._slots import slot
-from ..errors import ParameterError
-from ..hardware import Finger, HandCommand
-from ..interfaces import DaqSample, GraspResult
+from ..core import hardware as hw
+from ..core._slots import slot
+from ..core.errors import ParameterError
+from ..core.hardware import Finger, HandCommand
+from ..core.interfaces import DaqSample, GraspResult
 from . import kernel as K
 from .loads import kind_of
 from .objects import BOTTLES, Bottle, Surface

@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..interfaces import DaqSample
+from ..core.interfaces import DaqSample
 from . import kernel as K
 
 if TYPE_CHECKING:
@@ -104,7 +104,7 @@ class DaqBlock:
             load_force=rows[:, K.O_LOAD].copy(), water_force_lateral=rows[:, K.O_FWAT].copy())
 
     def samples(self) -> list[DaqSample]:
-        """The block as :class:`~slipreflex.interfaces.DaqSample` objects.
+        """The block as :class:`~slipreflex.core.interfaces.DaqSample` objects.
 
         Examples
         --------

@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy.special import j1
 
-from .. import hardware as hw
+from ..core import hardware as hw
 from . import kernel as K
 from .contacts import fill_contact_params
 from .objects import WATER_DENSITY

@@ -30,10 +30,10 @@ from dataclasses import replace as _replace
 
 import numpy as np
 
-from .. import hardware as hw
-from ..chain import encode_trace, lowpass
-from ..errors import ParameterError
+from ..core import hardware as hw
+from ..core.errors import ParameterError
 from ..methods import DATH, FIXED
+from ..methods.chain import encode_trace, lowpass
 from . import kernel as K
 from .objects import SURFACES, Surface, resolve_surface
 from .params import SlipSensorParams

@@ -9,9 +9,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .. import hardware as hw
-from ..errors import ParameterError
-from ..hardware import Finger, HandCommand
+from ..core import hardware as hw
+from ..core.errors import ParameterError
+from ..core.hardware import Finger, HandCommand
 from .params import (
     HandParams,
 )
@@ -26,7 +26,7 @@ __all__ = ["SimHand"]
 class SimHand:
     """The simulated i-Limb: position servos with a speed limit and a command latency.
 
-    Implements :class:`slipreflex.interfaces.Hand`. Commands take effect
+    Implements :class:`slipreflex.core.interfaces.Hand`. Commands take effect
     ``latency`` seconds after they are given (rig time). Thumb, index and
     middle are simulated with their dynamics; the other digits, the thumb
     rotator and the wrist just take their targets after the latency.
@@ -36,7 +36,7 @@ class SimHand:
     Examples
     --------
     >>> from slipreflex.sim import Rig
-    >>> from slipreflex.interfaces import Hand
+    >>> from slipreflex.core.interfaces import Hand
     >>> rig = Rig("TR")
     >>> isinstance(rig.hand, Hand)
     True
@@ -53,7 +53,7 @@ class SimHand:
         self._count = 0
         self._others: dict[Finger, float] = {f: 0.0 for f in Finger if f not in hw.TRIPOD}
         #: When the closing a closed loop started for each finger ends (rig time, s; the grip
-        #: rule of :mod:`slipreflex.grip`: a later rise extends it rather than cutting it short).
+        #: rule of :mod:`slipreflex.core.grip`: a later rise extends it rather than cutting it short).
         self.closing_until: dict[Finger, float] = {}
         #: Servo targets and speed limits of thumb, index and middle (the rig hands them to the physics).
         self.targets = np.zeros(len(hw.TRIPOD))

@@ -6,7 +6,7 @@ import os
 
 import numpy as np
 
-from ..errors import ParameterError
+from ..core.errors import ParameterError
 
 __all__ = ["STEP_ROUND", "STEPPINGS", "STEPPING_ENV", "COARSE_STEP_S", "default_stepping", "stepping",
            "seed_sequence"]

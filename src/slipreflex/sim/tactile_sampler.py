@@ -7,8 +7,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .. import hardware as hw
-from ..hardware import Finger
+from ..core import hardware as hw
+from ..core.hardware import Finger
 from . import kernel as K
 from .params import (
     TactileParams,
@@ -30,7 +30,7 @@ class TactileSampler:
     Examples
     --------
     >>> from slipreflex.sim import Rig
-    >>> from slipreflex.hardware import NMSD_FS
+    >>> from slipreflex.core.hardware import NMSD_FS
     >>> rig = Rig("TR")
     >>> s = rig.tactile_sampler(NMSD_FS)
     >>> _ = rig.advance(0.1)

@@ -37,7 +37,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
 
-from ..errors import ParameterError
+from ..core.errors import ParameterError
 from .uncertain import UNCERTAIN, UncertainConstant
 
 __all__ = ["PhysicsTerm", "PHYSICS_TERMS", "GROUPS", "SWITCHES", "VERDICT_SWITCHES", "absent_values", "markdown_table"]

@@ -46,10 +46,10 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
-from ..baselines.calibration import REST_K
-from ..baselines.swt import SWT_PERSIST, SWT_PERSISTENCE
-from ..errors import ParameterError
-from ..paths import read_toml
+from ..core.errors import ParameterError
+from ..files.paths import read_toml
+from ..methods.baselines.calibration import REST_K
+from ..methods.baselines.swt import SWT_PERSIST, SWT_PERSISTENCE
 from .calibration import CALIBRATION_SEEDS, calibrate_bottle
 from .objects import BOTTLES, Bottle, Surface
 from .params import FlowParams, HandParams, ImuParams, PhysicsParams, SlipSensorParams, TactileParams, WaterParams
@@ -393,7 +393,7 @@ class Plant:
     readings: Mapping[str, float] = field(default_factory=dict)
 
     def method_options(self) -> dict[str, Any]:
-        """The method readings this plant carries, as :class:`~slipreflex.experiments.ReproduceConfig` fields.
+        """The method readings this plant carries, as :class:`~slipreflex.reproduce.experiments.ReproduceConfig` fields.
 
         Examples
         --------

@@ -42,7 +42,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ParameterError
+from ..core.errors import ParameterError
 from .objects import BOTTLES, Bottle
 from .params import HandParams
 from .rig import Rig, default_stepping

@@ -52,7 +52,7 @@ from ..analysis.claims import (
     ClaimInput,
     proportion_interval,
 )
-from ..paths import new_file
+from ..files.paths import new_file
 from .design import varying
 from .refine import ratio_estimate
 from .runner import _arrow_table

@@ -33,7 +33,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from ..errors import ParameterError
+from ..core.errors import ParameterError
 
 __all__ = ["DESIGNS", "varying", "unit_design", "design_size", "draw_design", "values_at"]
 

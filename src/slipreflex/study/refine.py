@@ -49,7 +49,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ParameterError
+from ..core.errors import ParameterError
 
 __all__ = ["NEIGHBOURS", "SPREAD_FLOOR", "MIN_CANDIDATES", "candidates", "boundary", "RefinePlan", "make_plan",
            "ratio_estimate"]

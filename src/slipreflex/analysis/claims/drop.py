@@ -14,7 +14,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from ... import hardware as hw
+from ...core import hardware as hw
 from ..paper import BOTTLE_ORDER
 
 __all__ = [

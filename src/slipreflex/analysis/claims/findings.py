@@ -15,7 +15,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from ... import hardware as hw
+from ...core import hardware as hw
 from ...methods import DATH, FIXED
 from ...methods import label as _label
 from ..paper import BOTTLE_ORDER, PAPER

@@ -21,8 +21,8 @@ from typing import Any
 
 import numpy as np
 
-from ... import hardware as hw
-from ...csvfiles import cell_bool, cell_float
+from ...core import hardware as hw
+from ...files.csvfiles import cell_bool, cell_float
 from ..stats import (
     Sample,
     look_level,

@@ -17,12 +17,13 @@ from typing import Any
 
 import numpy as np
 
-from ... import experiment_specs, methods
-from ... import hardware as hw
-from ...baselines import CLOSE_S
-from ...baselines.swt import SWT_LEVEL
-from ...chain import ReflexParams
+from ... import methods
+from ...core import experiment_specs
+from ...core import hardware as hw
 from ...methods import label as _label
+from ...methods.baselines import CLOSE_S
+from ...methods.baselines.swt import SWT_LEVEL
+from ...methods.chain import ReflexParams
 from ..onset import OnsetParams
 from ..paper import BOTTLE_ORDER, EXPERIMENTS, PAPER, PAPER_SUCCESS, paper_value
 from ..trial import MAX_RESPONSE_S, TrialRow
@@ -120,11 +121,11 @@ GRIP_CAPTION: str = ("Grip added without slip: how far the hand closed (finger u
 
 
 def setup_lines(result: Any, command: str | None = None) -> list[str]:
-    """Bullet lines describing a run (a :class:`slipreflex.experiments.ReproduceResult`).
+    """Bullet lines describing a run (a :class:`slipreflex.reproduce.experiments.ReproduceResult`).
 
     Examples
     --------
-    >>> from slipreflex.experiments import ReproduceConfig, ReproduceResult
+    >>> from slipreflex.reproduce.experiments import ReproduceConfig, ReproduceResult
     >>> r = ReproduceResult(ReproduceConfig(trials=1, rest_k=4), [], [], {"nmsd": 10.0, "swt": 0.02},
     ...                     {}, 3.0, 2)
     >>> [s for s in setup_lines(r) if "threshold" in s][0][:48]
@@ -229,7 +230,7 @@ def discussion_text(result: Any) -> list[str]:
 
     Examples
     --------
-    >>> from slipreflex.experiments import ReproduceConfig, ReproduceResult
+    >>> from slipreflex.reproduce.experiments import ReproduceConfig, ReproduceResult
     >>> discussion_text(ReproduceResult(ReproduceConfig(trials=1), [], [], {}, {}, 0.0, 1))[0][:2]
     '**'
     """

@@ -19,10 +19,11 @@ from typing import Any
 
 import numpy as np
 
-from ... import experiment_specs, methods
-from ...csvfiles import cell_bool, cell_float
+from ... import methods
+from ...core import experiment_specs
+from ...files.csvfiles import cell_bool, cell_float
+from ...files.paths import new_file
 from ...methods import label as _label
-from ...paths import new_file
 from ..claims import claims_section
 from ..paper import BOTTLE_ORDER, EXPERIMENTS, PAPER_NOTES, PAPER_SUCCESS, paper_value
 from ..trial import RESULT_COLUMNS

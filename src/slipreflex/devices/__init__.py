@@ -1,1 +1,0 @@
-"""slipreflex.devices."""

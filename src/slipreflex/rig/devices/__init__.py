@@ -1,0 +1,1 @@
+"""slipreflex.rig.devices."""
