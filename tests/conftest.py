@@ -16,9 +16,17 @@ import functools
 import os
 import shutil
 import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
+
+#: The test modules live in folders that mirror the package (plus journeys/ and house/); a module
+#: imports another's helpers by its name, as pytest's default import mode imports it.
+for _folder in sorted(Path(__file__).resolve().parent.iterdir()):
+    if _folder.is_dir() and _folder.name not in ("data", "__pycache__") and str(_folder) not in sys.path:
+        sys.path.insert(0, str(_folder))
 
 #: How each tool a test may need is found. ``simavr`` is the library and headers the
 #: firmware's harness links against (libsimavr-dev, libelf-dev), found by pkg-config.

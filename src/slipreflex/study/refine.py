@@ -129,6 +129,13 @@ class RefinePlan:
         ``w_h``: the share of the first-phase candidates in each stratum.
     n_candidates : int
         First-phase candidates (``n'``).
+
+    Examples
+    --------
+    >>> RefinePlan(np.zeros((2, 3)), np.array([0]), np.array([1.0, 0.0]), 64)
+    Traceback (most recent call last):
+    ...
+    slipreflex.core.errors.ParameterError: RefinePlan: 2 points but 1 strata
     """
 
     points: np.ndarray
