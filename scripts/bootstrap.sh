@@ -14,7 +14,7 @@
 # toolchain, simavr, avrdude for `make -C firmware flash`, python3-venv) are installed
 # with apt-get, as root or through sudo. PYTHON=/path/to/python3 picks the interpreter.
 # tests/test_bootstrap.py runs this script against a system Python made externally
-# managed; scripts/fresh_debian_check.sh runs it in a freshly debootstrapped Debian 12.
+# managed; scripts/dev/fresh_debian_check.sh runs it in a freshly debootstrapped Debian 12.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 job="${1:-test}"; shift || true

@@ -2,41 +2,42 @@
 
 Usage::
 
-    python scripts/regenerate.py              # run every default step (a default reproduction first)
-    python scripts/regenerate.py --with-tiers # ... and time both test tiers (the whole suite: minutes)
-    python scripts/regenerate.py --dry-run    # list the steps and the markers each one writes
-    python scripts/regenerate.py --only "speed table"   # one step and the steps it needs, first
-    python scripts/regenerate.py --jobs 4     # worker processes of the reproduction (default 2)
+    python -m scripts.regenerate              # run every default step (a default reproduction first)
+    python -m scripts.regenerate --with-tiers # ... and time both test tiers (the whole suite: minutes)
+    python -m scripts.regenerate --dry-run    # list the steps and the markers each one writes
+    python -m scripts.regenerate --only "speed table"   # one step and the steps it needs, first
+    python -m scripts.regenerate --jobs 4     # worker processes of the reproduction (default 2)
 
 Each table sits between two markers, ``<!-- NAME begins -->`` and ``<!-- NAME ends -->``, and
-each marker pair is written by exactly one step below; ``tests/test_regenerate.py`` fails when
+each marker pair is written by exactly one step below; ``tests/house/test_regenerate.py`` fails when
 a marker in README.md or docs/*.md has no step, so a physics change updates every table the
 docs quote in one commit. Steps:
 
 1. ``slipreflex reproduce --jobs 2 --out TMP/repro --no-progress`` into a fresh temporary
    folder (the default run; the command docs/reproduce.md records, so a rerun changes only
    what the code changes);
-2. ``scripts/readme_results.py SUMMARY --write``: README's results and claims tables;
-3. ``scripts/splice_report.py REPORT``: the run's report in docs/reproduce.md;
-4. ``scripts/benchmark_table.py --write``: the real-data benchmark tables of README.md and
+2. ``scripts/docs/readme_results.py SUMMARY --write``: README's results and claims tables;
+3. ``scripts/docs/splice_report.py REPORT``: the run's report in docs/reproduce.md;
+4. ``scripts/docs/benchmark_table.py --write``: the real-data benchmark tables of README.md and
    docs/benchmark.md;
-5. ``scripts/limits_table.py --write``: the plausible ranges in docs/runtime.md;
-6. ``scripts/claims_seeds.py --write``: the claims' classes on five master seeds in
+5. ``scripts/docs/limits_table.py --write``: the plausible ranges in docs/runtime.md;
+6. ``scripts/docs/claims_seeds.py --write``: the claims' classes on five master seeds in
    docs/reproduce.md (about five default grids, plus their replicates);
-7. ``scripts/open_loop_table.py --write`` and ``scripts/physics_terms.py --write``: docs/simulator.md's
+7. ``scripts/docs/open_loop_table.py --write`` and ``scripts/docs/physics_terms.py --write``: docs/simulator.md's
    open-loop table and the physics terms one by one (and their figure);
-8. ``scripts/term_claims.py --write``: the claims with each physics term switched off in turn
+8. ``scripts/docs/term_claims.py --write``: the claims with each physics term switched off in turn
    (docs/study.md; one default grid per term, each plant recalibrated: the longest step);
-9. ``slipreflex study`` into a temporary folder (timed, for the speed table's row), then ``scripts/study_table.py`` and
-   ``scripts/term_claims.py --study``: the default study's claims and where claims 4, 5 and 7
+9. ``slipreflex study`` into a temporary folder (timed, for the speed table's row), then
+   ``scripts/docs/study_table.py`` and
+   ``scripts/docs/term_claims.py --study``: the default study's claims and where claims 4, 5 and 7
    become decidable (docs/study.md);
-10. ``scripts/threshold_sensitivity.py --write``: the tactile methods' thresholds (docs/reproduce.md);
-11. ``slipreflex reproduce`` of the chain's variants (3 trials) and ``scripts/method_table.py``:
+10. ``scripts/docs/threshold_sensitivity.py --write``: the tactile methods' thresholds (docs/reproduce.md);
+11. ``slipreflex reproduce`` of the chain's variants (3 trials) and ``scripts/docs/method_table.py``:
     docs/method.md's table;
-12. ``scripts/speed_table.py --write``: docs/speed.md's table, every benchmark run now, the
+12. ``scripts/docs/speed_table.py --write``: docs/speed.md's table, every benchmark run now, the
    reproduction's and the study's rows from steps 1 and 9's timings (their wall and CPU time,
    written to ``timing.json`` in each one's folder);
-13. only with ``--with-tiers``: ``scripts/tier_times.py --write``, docs/development.md's test
+13. only with ``--with-tiers``: ``scripts/docs/tier_times.py --write``, docs/development.md's test
    tiers (it runs the fast tier and then the whole suite).
 
 **What a step needs.** Each step names the steps whose outputs it reads (:attr:`Step.needs`):
@@ -46,7 +47,7 @@ study's, the speed table both runs' timings, and so on. ``--only STEP`` runs STE
 never taken from an earlier regeneration: every run writes into a new temporary folder, and the
 speed table's timings must be this run's (a timing of another session on another load would
 make the table lie). ``--dry-run`` prints the plan, each step with what it writes and needs;
-``tests/test_regenerate.py`` checks that the needs form no circle and cover every folder a
+``tests/house/test_regenerate.py`` checks that the needs form no circle and cover every folder a
 step's command reads.
 """
 
@@ -97,48 +98,48 @@ STEPS: list[Step] = [
     Step("reproduce", (), [sys.executable, "-m", "slipreflex", "reproduce", "--jobs", "{jobs}", "--out", "{out}",
                            "--no-progress"]),
     Step("README results and claims tables", ("results table", "claims table"),
-         [sys.executable, str(SCRIPTS / "readme_results.py"), "{out}/summary.csv", "--write"], needs=("reproduce",)),
+         [sys.executable, "-m", "scripts.docs.readme_results", "{out}/summary.csv", "--write"], needs=("reproduce",)),
     Step("docs/reproduce.md report", ("report.md",),
-         [sys.executable, str(SCRIPTS / "splice_report.py"), "{out}/report.md"], needs=("reproduce",)),
+         [sys.executable, "-m", "scripts.docs.splice_report", "{out}/report.md"], needs=("reproduce",)),
     Step("benchmark tables", ("benchmark table", "operating points", "ranking", "benchmark summary", "vs-sim table",
                               "chain rule", "k sensitivity", "why"),
-         [sys.executable, str(SCRIPTS / "benchmark_table.py"), "--write"]),
+         [sys.executable, "-m", "scripts.docs.benchmark_table", "--write"]),
     Step("contracts and loop states tables", ("contracts table", "loop states table"),
-         [sys.executable, str(SCRIPTS / "contract_tables.py"), "--write"]),
-    Step("limits table", ("limits table",), [sys.executable, str(SCRIPTS / "limits_table.py"), "--write"]),
+         [sys.executable, "-m", "scripts.docs.contract_tables", "--write"]),
+    Step("limits table", ("limits table",), [sys.executable, "-m", "scripts.docs.limits_table", "--write"]),
     Step("claims over five master seeds", ("claims seeds table",),
-         [sys.executable, str(SCRIPTS / "claims_seeds.py"), "--jobs", "{jobs}", "--write"]),
-    Step("open-loop table", ("open-loop table",), [sys.executable, str(SCRIPTS / "open_loop_table.py"), "--write"]),
+         [sys.executable, "-m", "scripts.docs.claims_seeds", "--jobs", "{jobs}", "--write"]),
+    Step("open-loop table", ("open-loop table",), [sys.executable, "-m", "scripts.docs.open_loop_table", "--write"]),
     Step("physics terms table", ("physics terms table",),
-         [sys.executable, str(SCRIPTS / "physics_terms.py"), "--figure", str(ROOT / "docs" / "physics_terms.png"),
+         [sys.executable, "-m", "scripts.docs.physics_terms", "--figure", str(ROOT / "docs" / "physics_terms.png"),
           "--write"]),
     Step("term claims table", ("term claims table",),
-         [sys.executable, str(SCRIPTS / "term_claims.py"), "--jobs", "{jobs}", "--write"]),
+         [sys.executable, "-m", "scripts.docs.term_claims", "--jobs", "{jobs}", "--write"]),
     Step("study", (), [sys.executable, "-m", "slipreflex", "study", "--out", "{out}-study", "--no-progress"]),
     Step("study claims table", ("study claims table",),
-         [sys.executable, str(SCRIPTS / "study_table.py"), "{out}-study", "--write"], needs=("study",)),
+         [sys.executable, "-m", "scripts.docs.study_table", "{out}-study", "--write"], needs=("study",)),
     Step("study decidable", ("study decidable",),
-         [sys.executable, str(SCRIPTS / "term_claims.py"), "--study", "{out}-study", "--write"], needs=("study",)),
+         [sys.executable, "-m", "scripts.docs.term_claims", "--study", "{out}-study", "--write"], needs=("study",)),
     Step("threshold sensitivity table", ("threshold sensitivity table",),
-         [sys.executable, str(SCRIPTS / "threshold_sensitivity.py"), "--jobs", "{jobs}", "--write"]),
+         [sys.executable, "-m", "scripts.docs.threshold_sensitivity", "--jobs", "{jobs}", "--write"]),
     Step("method variants", (), [sys.executable, "-m", "slipreflex", "reproduce", "--methods",
                                  ",".join(METHOD_VARIANTS), "--trials", "3", "--jobs", "{jobs}", "--no-figures",
                                  "--no-progress", "--out", "{out}-methods"]),
     Step("method variants table", ("method variants table",),
-         [sys.executable, str(SCRIPTS / "method_table.py"), "{out}-methods/summary.csv", "--write"],
+         [sys.executable, "-m", "scripts.docs.method_table", "{out}-methods/summary.csv", "--write"],
          needs=("method variants",)),
     Step("NIR agreement tables", ("nir stages table", "nir backends table"),
-         [sys.executable, str(SCRIPTS / "nir_table.py"), "--write"]),
+         [sys.executable, "-m", "scripts.docs.nir_table", "--write"]),
     Step("NIR loop", (), [sys.executable, "-m", "slipreflex", "reproduce", "--methods", "fixed,nir", "--trials", "3",
                           "--jobs", "{jobs}", "--no-figures", "--no-progress", "--out", "{out}-nir"]),
     Step("NIR loop table", ("nir loop table",),
-         [sys.executable, str(SCRIPTS / "nir_table.py"), "--loop", "{out}-nir/summary.csv", "--write"],
+         [sys.executable, "-m", "scripts.docs.nir_table", "--loop", "{out}-nir/summary.csv", "--write"],
          needs=("NIR loop",)),
-    Step("speed table", ("speed table",), [sys.executable, str(SCRIPTS / "speed_table.py"), "--write",
+    Step("speed table", ("speed table",), [sys.executable, "-m", "scripts.docs.speed_table", "--write",
                                            "--reproduce-timing", "{out}/timing.json",
                                            "--study-timing", "{out}-study/timing.json"],
          needs=("reproduce", "study")),
-    Step("test tiers", ("test tiers",), [sys.executable, str(SCRIPTS / "tier_times.py"), "--write"]),
+    Step("test tiers", ("test tiers",), [sys.executable, "-m", "scripts.docs.tier_times", "--write"]),
 ]
 
 #: Steps timed as they run, the speed table's rows of the default jobs: step -> its timing option there.
@@ -182,8 +183,7 @@ def _command(step: Step, out: str, jobs: str, timed_here: set[str]) -> list[str]
 def _run(step: Step, cmd: list[str], timed_here: set[str]) -> int:
     """Run one step (timed when it is one of :data:`TIMED`); its exit code, with a line on failure."""
     if step.name in TIMED:      # timed: the speed table's row of this default job (not run twice)
-        sys.path.insert(0, str(SCRIPTS))
-        from speed_table import Missing, timed
+        from scripts.docs.speed_table import Missing, timed
         try:
             timing = timed(cmd)
         except Missing as err:
@@ -226,4 +226,6 @@ def main(argv: list[str]) -> int:
 
 
 if __name__ == "__main__":
+    if not __package__:   # run as a file, the scripts package is not importable
+        sys.exit("regenerate: run it from the repository's top as: python -m scripts.regenerate")
     sys.exit(main(sys.argv[1:]))

@@ -279,7 +279,7 @@ def test_benchmark_table_script_markers_and_compact_table():
     from pathlib import Path
 
     root = Path(__file__).resolve().parents[2]
-    script = runpy.run_path(str(root / "scripts" / "benchmark_table.py"))
+    script = runpy.run_path(str(root / "scripts" / "docs" / "benchmark_table.py"))
     for key, (begin, end) in script["MARKS"].items():
         text = (root / ("README.md" if key == "readme" else "docs/benchmark.md")).read_text()
         assert text.count(begin) == 1 and text.count(end) == 1, key

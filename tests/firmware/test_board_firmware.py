@@ -5,7 +5,7 @@ standalone ATmega2560 build (i-Limb CLOSE and STOP packets on UART1: grip only a
 run in firmware/test/harness.c; firmware/test/check_board.py compares every frame and
 every hand packet with the Python twin (slipreflex.methods.board) and checks the packets'
 latency and the closings' length; the wrong-rounding build is the negative control.
-Needs the same tools as tests/test_firmware.py (scripts/bootstrap.sh installs them).
+Needs the same tools as tests/firmware/test_firmware.py (scripts/bootstrap.sh installs them).
 """
 
 from __future__ import annotations

@@ -4,7 +4,7 @@ The script is run for real (bash, ``python3 -m venv``, pip) with ``PATH`` limite
 system directories, on a copy of it inside a small stand-in project: the stand-in builds
 with an in-tree PEP 517 backend and has no dependencies, so pip needs no network and
 the test takes seconds. ``dpkg`` and ``apt-get`` are stand-ins that record what they are
-asked (the real Debian packages are checked by ``scripts/fresh_debian_check.sh``, which
+asked (the real Debian packages are checked by ``scripts/dev/fresh_debian_check.sh``, which
 runs the whole bootstrap in a freshly debootstrapped Debian 12).
 """
 

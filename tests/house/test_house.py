@@ -60,11 +60,7 @@ def test_the_params_and_overrides_contract_names_the_unknown_keyword():
 
 def test_no_function_outside_the_numba_kernels_is_longer_than_80_lines():
     """In the package, the scripts and the benchmarks alike."""
-    sys.path.insert(0, str(ROOT / "scripts"))
-    try:
-        from function_lengths import ROOTS, function_lengths
-    finally:
-        sys.path.pop(0)
+    from scripts.dev.function_lengths import ROOTS, function_lengths
     assert {root.relative_to(ROOT).as_posix() for root in ROOTS} == {"src/slipreflex", "scripts", "benchmarks"}
     rows = [row for root in ROOTS for row in function_lengths(root)]
     assert any(kernel for _, _, kernel in rows), "the numba kernels were not recognised"

@@ -1,10 +1,10 @@
-"""scripts/readme_results.py builds the README's results table from a run's summary."""
+"""scripts/docs/readme_results.py builds the README's results table from a run's summary."""
 
 import runpy
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
-SCRIPT = runpy.run_path(str(ROOT / "scripts" / "readme_results.py"))
+SCRIPT = runpy.run_path(str(ROOT / "scripts" / "docs" / "readme_results.py"))
 
 
 def _row(e, b, m, resp, total, rate, n):

@@ -12,11 +12,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "scripts"))
-try:
-    import regenerate
-finally:
-    sys.path.pop(0)
+import scripts.regenerate as regenerate  # noqa: E402  (the repository's top is on pytest's path)
 
 
 def _markers() -> dict[str, str]:
@@ -42,8 +38,8 @@ def test_every_generated_table_has_a_step_and_every_step_a_script():
 
 
 def test_the_dry_run_lists_the_steps_in_order():
-    res = subprocess.run([sys.executable, str(ROOT / "scripts" / "regenerate.py"), "--dry-run", "--jobs", "2"],
-                         capture_output=True, text=True, timeout=120)
+    res = subprocess.run([sys.executable, "-m", "scripts.regenerate", "--dry-run", "--jobs", "2"],
+                         capture_output=True, text=True, timeout=120, cwd=ROOT)
     assert res.returncode == 0, res.stderr
     lines = res.stdout.splitlines()
     assert [line.split(":")[1].strip() for line in lines] == [step.name for step in regenerate.STEPS]
@@ -128,31 +124,29 @@ def test_only_plans_what_a_step_needs_first_and_nothing_else():
 
 
 def test_the_dry_run_of_only_a_dependent_step_prints_its_plan():
-    res = subprocess.run([sys.executable, str(ROOT / "scripts" / "regenerate.py"), "--dry-run", "--only",
-                          "study claims table"], capture_output=True, text=True, timeout=120)
+    res = subprocess.run([sys.executable, "-m", "scripts.regenerate", "--dry-run", "--only",
+                          "study claims table"], capture_output=True, text=True, timeout=120, cwd=ROOT)
     assert res.returncode == 0, res.stderr
     lines = res.stdout.splitlines()
     assert [line.split(":")[1].strip() for line in lines] == ["study", "study claims table"]
     assert lines[1].endswith("(needs: study)")
     study_out = lines[0].split("--out ")[1].split()[0]
-    assert f"study_table.py {study_out} --write" in lines[1]
+    assert f"scripts.docs.study_table {study_out} --write" in lines[1]
 
 
 def _script(name: str):
-    sys.path.insert(0, str(ROOT / "scripts"))
-    try:
-        return __import__(name)
-    finally:
-        sys.path.pop(0)
+    import importlib
+
+    return importlib.import_module(f"scripts.docs.{name}")
 
 
 def test_the_dry_run_names_the_opt_in_step_and_only_runs_one_step():
-    res = subprocess.run([sys.executable, str(ROOT / "scripts" / "regenerate.py"), "--dry-run"],
-                         capture_output=True, text=True, timeout=120)
+    res = subprocess.run([sys.executable, "-m", "scripts.regenerate", "--dry-run"],
+                         capture_output=True, text=True, timeout=120, cwd=ROOT)
     tiers = [line for line in res.stdout.splitlines() if line.startswith("regenerate: test tiers:")]
     assert tiers and tiers[0].endswith("(only with --with-tiers)")
-    bad = subprocess.run([sys.executable, str(ROOT / "scripts" / "regenerate.py"), "--only", "nope"],
-                         capture_output=True, text=True, timeout=120)
+    bad = subprocess.run([sys.executable, "-m", "scripts.regenerate", "--only", "nope"],
+                         capture_output=True, text=True, timeout=120, cwd=ROOT)
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "--only 'nope': no such step" in bad.stderr
 
 

@@ -1,10 +1,10 @@
-"""scripts/splice_report.py carries a run's report.md into docs/reproduce.md unedited."""
+"""scripts/docs/splice_report.py carries a run's report.md into docs/reproduce.md unedited."""
 
 import runpy
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
-SCRIPT = runpy.run_path(str(ROOT / "scripts" / "splice_report.py"))
+SCRIPT = runpy.run_path(str(ROOT / "scripts" / "docs" / "splice_report.py"))
 
 
 def test_sections_drop_title_run_heading_and_figures_and_demote_the_rest():

@@ -458,14 +458,14 @@ def test_a_run_draws_nmsd_and_swt_trials_and_zooms_that_zoom(tmp_path):
 def test_the_method_table_in_the_docs_is_the_scripts_format():
     import runpy
 
-    script = runpy.run_path(str(ROOT / "scripts" / "method_table.py"))
+    script = runpy.run_path(str(ROOT / "scripts" / "docs" / "method_table.py"))
     row = {"response_mean_ms": "58.4", "response_sd_ms": "27.1", "response_n": "3", "n_events": "3",
            "trial_success_rate": "1.0"}
     assert script["cell"](row) == "58 ± 27 (3)"
     assert script["cell"]({**row, "response_n": "0", "n_events": "0", "trial_success_rate": "0.0"}) == \
         "- (no slip), 0 %"
     text = (ROOT / "docs" / "method.md").read_text()
-    assert "c26cb00" not in text and "python scripts/method_table.py OUT/summary.csv" in text
+    assert "c26cb00" not in text and "python -m scripts.docs.method_table OUT/summary.csv" in text
     table = script["table"]([{"experiment": "drop", "bottle": "TR", "method": m, **row}
                              for m in script["ORDER"]])
     assert table.splitlines()[0] in text                         # the docs' header is the script's

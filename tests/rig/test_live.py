@@ -318,7 +318,7 @@ def test_shipped_layout_is_built_by_its_script_and_plots_recorded_fields():
     import importlib.util
 
     root = Path(__file__).resolve().parents[2]
-    spec = importlib.util.spec_from_file_location("foxglove_layout", root / "scripts" / "foxglove_layout.py")
+    spec = importlib.util.spec_from_file_location("foxglove_layout", root / "scripts" / "dev" / "foxglove_layout.py")
     script = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(script)
     for path in script.series_paths():

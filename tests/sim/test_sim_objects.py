@@ -94,7 +94,7 @@ def test_builtins_are_read_only():
 
 def _run(seed, chunks=None):
     # the fixed-step reference: with adaptive steps a call's end also ends a coarse step (the rows stay
-    # within the tolerance of tests/test_sim_stepping.py, not the same bits)
+    # within the tolerance of tests/sim/test_sim_stepping.py, not the same bits)
     rig = Rig("DK", seed=seed, stepping="fixed")
     rig.grasp()
     rig.perturb(Drop(), at=rig.t + 0.1)

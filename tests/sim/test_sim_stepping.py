@@ -146,14 +146,8 @@ def test_adaptive_steps_keep_every_trial_row_and_every_claim_class():
 
 
 def test_the_speed_table_reads_both_kernels_and_their_ratio_from_the_benchmark():
-    import sys
-    from pathlib import Path
 
-    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "scripts"))
-    try:
-        import speed_table
-    finally:
-        sys.path.pop(0)
+    import scripts.docs.speed_table as speed_table
     lines = [f"{m:14s} {e:10s} {d:6.1f}   {500:8.0f} ({300:6.0f})   {1500:8.0f} ({900:6.0f})   {3.0:5.2f}x"
              for m in ("dath", "fixed", "nmsd", "swt") for e, d in (("drop", 2.5), ("pour", 32.5))]
     for what in ("", ", 260 Hz tactile", ", 380 Hz tactile"):

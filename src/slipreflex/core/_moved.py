@@ -5,7 +5,7 @@ Until version 0.1 every module sat at the top of the package
 :mod:`slipreflex.rig.runtime`). Code written against the old paths keeps
 working: importing an old path gives the module at its new place, the same
 object (so a name patched through either path is patched for both).
-Nothing inside slipreflex uses the old paths (``tests/test_imports.py``
+Nothing inside slipreflex uses the old paths (``tests/house/test_imports.py``
 checks).
 
 Examples

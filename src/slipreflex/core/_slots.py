@@ -7,7 +7,7 @@ layout is one :class:`Layout`: the slot names in order (a block of several slots
 is made by :meth:`Layout.new`, NaN in every slot without an initial value, filled by name,
 and checked by :meth:`Layout.check` before a kernel runs: a slot nobody filled is an error
 naming it, never a silent 0.0. The modules bind the slot indices to constants for the
-kernels (``(P_A, P_B) = LAYOUT.slots``); ``tests/test_slots.py`` checks every such constant
+kernels (``(P_A, P_B) = LAYOUT.slots``); ``tests/house/test_slots.py`` checks every such constant
 against its layout's name.
 
 Their public read-outs are each one slot of the state, cast (:func:`slot`).

@@ -20,7 +20,7 @@ __all__ = ["GRASP_MARGIN", "GRASP_CHECK_TRIALS", "grasp_holds", "verified_grasp_
 #: The force a failed grasp check suggests is the weakest that held every checked trial grasp
 #: of the run, times this margin (an estimate: trial-to-trial variation of placement and
 #: friction beyond the checked seeds; 1.2 is the margin above which no trial of the jar
-#: example fell in 40 grasps, tests/test_first_day.py).
+#: example fell in 40 grasps, tests/journeys/test_first_day.py).
 GRASP_MARGIN: float = 1.2
 #: At most this many of a run's trial grasps are simulated to verify a suggested force.
 GRASP_CHECK_TRIALS: int = 20

@@ -6,7 +6,7 @@ decide it. :func:`replicate_undecided` then runs the grid again on derived maste
 (:func:`~slipreflex.analysis.claims.replicate_seed`), only for the methods the undecided
 claims read, and the claims are judged on the pooled rows
 (:func:`~slipreflex.analysis.outputs.judged_claims`). ``slipreflex reproduce`` does this after
-its grid; ``scripts/claims_seeds.py`` does it for each master seed it compares.
+its grid; ``scripts/docs/claims_seeds.py`` does it for each master seed it compares.
 """
 
 from __future__ import annotations

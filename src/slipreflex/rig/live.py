@@ -6,7 +6,7 @@ and the tap's thread logs them on a `Foxglove SDK <https://docs.foxglove.dev/doc
 WebSocket server (the ``foxglove-sdk`` package, ``pip install 'slipreflex[live]'``), on
 loopback by default. Open Foxglove, *Open connection* -> *Foxglove WebSocket*,
 ``ws://127.0.0.1:8765``, and import the layout ``foxglove/slipreflex.json`` of the
-repository (built by ``scripts/foxglove_layout.py``; docs/runtime.md, "Live view") for
+repository (built by ``scripts/dev/foxglove_layout.py``; docs/runtime.md, "Live view") for
 plots of the signal, the spikes and the MPI command as in the paper's Fig. 10. The same
 layout opens a recorded MCAP file.
 

@@ -23,7 +23,7 @@
 Afterwards :func:`run_compiled` hands back to the rig and the hand what their
 Python objects own (DAQ history, events, tactile snapshots for every open
 sampler, the pending commands), so the rig continues as if the Python loop had
-run; ``tests/test_closed_loop.py`` checks every trace array bit for bit.
+run; ``tests/sim/test_closed_loop.py`` checks every trace array bit for bit.
 
 The kernels have one numba signature each (the reflex's step arrives as a
 first-class function of a fixed type), so they compile once (about 8 s, then

@@ -92,7 +92,7 @@ from ..core._slots import Layout
 __all__: list[str] = []
 
 # Every vector's slots are named once, in a Layout (slipreflex.core._slots); the constants below are
-# bound from it for the kernels, and tests/test_slots.py checks each against its layout's name.
+# bound from it for the kernels, and tests/house/test_slots.py checks each against its layout's name.
 
 # ---- state vector S -------------------------------------------------------
 # Bottle-level: S_S mean slid distance of the contacts, S_W smallest sliding speed,

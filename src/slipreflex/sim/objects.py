@@ -147,7 +147,7 @@ class Surface:
 SURFACES: Mapping[str, Surface] = MappingProxyType({
     # Calibrated to the paper's scan (Fig. 6-9; see docs/simulator.md) on ensemble statistics, texture
     # blurred by the sensor's spot: over 200 texture seeds the median filtered level range is 0.3-0.5 V
-    # on white and 3.32-3.35 V on black (python scripts/scan_calibration.py; sim.scan.calibrate_surface).
+    # on white and 3.32-3.35 V on black (python -m scripts.research.scan_calibration; sim.scan.calibrate_surface).
     "white": Surface("white", reflectance=0.9332, texture=0.0384, texture_exponent=2.5,
                      texture_max_wavelength_m=8e-3),
     "black": Surface("black", reflectance=0.3325, texture=0.0062, texture_exponent=2.5,
@@ -390,7 +390,7 @@ class Bottle:
 
 #: The paper's three bottles (section II-D): same body, different surfaces.
 #: The pads' mu_s is :data:`PAPER_PAD_MU_S` (:data:`PAPER_PAD_MU_S_TX` on tape); mu_k keeps its estimated
-#: ratio to mu_s (0.75 on smooth PET, 0.714 on tape). ``tests/test_sim_friction.py`` recomputes the calibration.
+#: ratio to mu_s (0.75 on smooth PET, 0.714 on tape). ``tests/sim/test_sim_friction.py`` recomputes the calibration.
 BOTTLES: Mapping[str, Bottle] = MappingProxyType({
     "TR": Bottle("TR", surface="TR", mu_s=PAPER_PAD_MU_S, mu_k=0.75 * PAPER_PAD_MU_S),
     "DK": Bottle("DK", surface="DK", mu_s=PAPER_PAD_MU_S, mu_k=0.75 * PAPER_PAD_MU_S),

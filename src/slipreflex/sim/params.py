@@ -429,7 +429,7 @@ class PhysicsParams:
     dt : float
         Physics time step (s). 1e-4 s resolves the stiffest mode (the landing
         mass on the bottle's bottom, ~700 rad/s, and the grasp's stick
-        resonance) with omega*dt < 0.1; ``tests/test_sim_physics.py`` shows
+        resonance) with omega*dt < 0.1; ``tests/sim/test_sim_physics.py`` shows
         that halving it does not change the results.
     track_length_m : float
         Length (m) of the surface texture generated for a bottle (covers the

@@ -35,7 +35,7 @@ kept, by name, in :data:`SWT_PERSISTENCE`:
 
 The default is the reading whose pour reaction times lie nearer the paper's own
 (III-C: SWT-SD 86 ms on TR, 73 ms on DK; docs/method.md section 2 gives the
-numbers, ``tests/test_swt_persistence.py`` checks it). The wavelet, the use of
+numbers, ``tests/methods/test_swt_persistence.py`` checks it). The wavelet, the use of
 the first coefficient and these readings are ours; the threshold comes from
 :func:`slipreflex.methods.baselines.rest_threshold`, the same rule as for NMSD.
 

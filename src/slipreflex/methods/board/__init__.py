@@ -4,7 +4,7 @@ The C99 core in ``firmware/reflex/reflex.c`` runs the chain of docs/method.md se
 in integer fixed point on 10-bit ADC counts. This module does the same integer
 operations, in the same order, so the two agree bit for bit on every sample; the
 shared vectors in ``tests/data/board/vectors.txt`` and random signals check that
-(tests/test_board.py). docs/firmware.md states the formats:
+(tests/methods/test_board.py). docs/firmware.md states the formats:
 
 * filter: 2nd-order Butterworth low-pass in direct form I, coefficients with
   :data:`COEF_Q` = 24 fractional bits (``b = g (1, 2, 1)``, ``a = (1, a1, a2)``,

@@ -2,11 +2,12 @@
 
 Usage::
 
-    python scripts/speed_table.py                 # run every benchmark, print the table
-    python scripts/speed_table.py --write         # ... and put it between docs/speed.md's markers
-    python scripts/speed_table.py --write --reproduce-timing /tmp/repro/timing.json --study-timing /tmp/s/timing.json
+    python -m scripts.docs.speed_table                 # run every benchmark, print the table
+    python -m scripts.docs.speed_table --write         # ... and put it between docs/speed.md's markers
+    python -m scripts.docs.speed_table --write --reproduce-timing /tmp/repro/timing.json \
+        --study-timing /tmp/s/timing.json
 
-``python scripts/regenerate.py`` runs it with ``--write`` after its default reproduction and hands
+``python -m scripts.regenerate`` runs it with ``--write`` after its default reproduction and hands
 it the timings of its default reproduction and study (``--reproduce-timing``, ``--study-timing``);
 alone, it times its own. A
 benchmark whose output no longer has the line a row reads is an error naming the benchmark and
@@ -27,7 +28,7 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 DOC = ROOT / "docs" / "speed.md"
 BEGIN, END = "<!-- speed table begins -->", "<!-- speed table ends -->"
 PY = "python"    # how the table writes the interpreter in its commands
@@ -254,13 +255,14 @@ def measure(timing: dict[str, float] | None, log=print,
             study_timing = timed([*STUDY, str(Path(out) / "study")])
     rows.append(study_row(study_timing))
     rows.append(("set-up and every test on a fresh Debian 12 (debootstrap, python3 only), network included",
-                 "not measured here: it needs root and debootstrap", "", "`sudo bash scripts/fresh_debian_check.sh`"))
+                 "not measured here: it needs root and debootstrap", "",
+                 "`sudo bash scripts/dev/fresh_debian_check.sh`"))
     return rows
 
 
 def markdown(rows: list[tuple[str, str, str, str]], machine: str) -> str:
     """The table and the line that says when and where it was measured."""
-    lines = [f"Measured on {datetime.date.today().isoformat()} by `python scripts/regenerate.py` on {machine} "
+    lines = [f"Measured on {datetime.date.today().isoformat()} by `python -m scripts.regenerate` on {machine} "
              "(shared with other jobs: the load average says how busy it was).", "",
              "| what | measured | target | command |", "|---|---|---|---|"]
     lines += [f"| {' | '.join(r)} |" for r in rows]
@@ -268,10 +270,9 @@ def markdown(rows: list[tuple[str, str, str, str]], machine: str) -> str:
 
 
 def main(argv: list[str]) -> int:
-    sys.path.insert(0, str(ROOT / "benchmarks"))
-    sys.path.insert(0, str(ROOT / "scripts"))
-    from machine import describe
-    from splice_report import write_marked
+    from benchmarks.machine import describe
+
+    from scripts.docs.splice_report import write_marked
 
     timing, study_timing = (json.loads(Path(argv[argv.index(o) + 1]).read_text()) if o in argv else None
                             for o in ("--reproduce-timing", "--study-timing"))

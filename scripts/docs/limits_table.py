@@ -2,10 +2,10 @@
 
 Usage::
 
-    python scripts/limits_table.py           # print the table
-    python scripts/limits_table.py --write   # and write it between docs/runtime.md's markers
+    python -m scripts.docs.limits_table           # print the table
+    python -m scripts.docs.limits_table --write   # and write it between docs/runtime.md's markers
 
-``tests/test_limits.py`` fails when the docs' copy differs from the code's table.
+``tests/journeys/test_limits.py`` fails when the docs' copy differs from the code's table.
 """
 
 from __future__ import annotations
@@ -13,15 +13,13 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 DOCS = ROOT / "docs" / "runtime.md"
 BEGIN, END = "<!-- limits table begins -->", "<!-- limits table ends -->"
 
 
 def main(argv: list[str]) -> int:
-    sys.path.insert(0, str(ROOT / "scripts"))
-    from splice_report import write_marked
-
+    from scripts.docs.splice_report import write_marked
     from slipreflex.core.validation import limits_markdown
 
     table = limits_markdown()

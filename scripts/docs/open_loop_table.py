@@ -6,7 +6,7 @@ calibrated), how long after that onset the open-loop bottle falls out, and how f
 a 10 g drop slides; then the largest static capacity at which a 10 g drop still
 ends in complete slippage (``calibration.drop_fall_capacity``, TR and TX).
 
-Run: ``python scripts/open_loop_table.py [--write]`` (``--write``: into docs/simulator.md's markers).
+Run: ``python -m scripts.docs.open_loop_table [--write]`` (``--write``: into docs/simulator.md's markers).
 """
 
 from __future__ import annotations
@@ -50,7 +50,7 @@ def main(argv: list[str]) -> int:
     print(body)
     if "--write" not in argv:
         return 0
-    from splice_report import write_section
+    from scripts.docs.splice_report import write_section
 
     return write_section("open_loop_table", "docs/simulator.md", "open-loop table", body)
 

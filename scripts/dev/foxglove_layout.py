@@ -9,8 +9,8 @@ built with the layout types foxglove-sdk ships (``foxglove.layouts``).
 
 Usage::
 
-    python scripts/foxglove_layout.py            # rewrites foxglove/slipreflex.json
-    python scripts/foxglove_layout.py --check    # exit 1 if the file differs from what it builds
+    python -m scripts.dev.foxglove_layout            # rewrites foxglove/slipreflex.json
+    python -m scripts.dev.foxglove_layout --check    # exit 1 if the file differs from what it builds
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ import json
 import sys
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 OUT = ROOT / "foxglove" / "slipreflex.json"
 
 #: (panel title, y label, [(topic.field, label, colour, line or points)])

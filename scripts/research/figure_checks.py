@@ -2,13 +2,13 @@
 
 Usage::
 
-    python scripts/figure_checks.py [--trials 4] [--bottles DK,TR]
+    python -m scripts.research.figure_checks [--trials 4] [--bottles DK,TR]
 
 For each bottle, experiment and trial seed of the default run (the nominal plant: no
 trial-to-trial variation), prints every slip the simulator had (its onset, the water in
 the bottle then, how far it slid) and every burst of the DATH controller's rises (when,
 the water then, units added). docs/simulator.md ("The plant against the paper's
-figures") quotes these numbers; tests/test_sim_figures.py checks what they must show.
+figures") quotes these numbers; tests/sim/test_sim_figures.py checks what they must show.
 """
 
 from __future__ import annotations

@@ -6,7 +6,7 @@ texture seeds, of the filtered level range inside the region is the paper's (whi
 (:func:`slipreflex.sim.scan.calibrate_surface`). Then the ensemble's central 90 % of
 each level and of the fixed threshold's smallest spike spacing, on the built-in surfaces.
 
-Run: ``python scripts/scan_calibration.py`` (about a minute).
+Run: ``python -m scripts.research.scan_calibration`` (about a minute).
 """
 
 from __future__ import annotations

@@ -3,10 +3,10 @@
 
 Usage::
 
-    python scripts/contract_tables.py           # print the tables
-    python scripts/contract_tables.py --write   # and write them between docs/runtime.md's markers
+    python -m scripts.docs.contract_tables           # print the tables
+    python -m scripts.docs.contract_tables --write   # and write them between docs/runtime.md's markers
 
-``tests/test_contracts.py`` and ``tests/test_loop_states.py`` fail when the docs' copies differ
+``tests/core/test_contracts.py`` and ``tests/rig/test_loop_states.py`` fail when the docs' copies differ
 from the code's tables.
 """
 
@@ -15,14 +15,12 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 DOCS = ROOT / "docs" / "runtime.md"
 
 
 def main(argv: list[str]) -> int:
-    sys.path.insert(0, str(ROOT / "scripts"))
-    from splice_report import write_marked
-
+    from scripts.docs.splice_report import write_marked
     from slipreflex.core.interfaces import contract_markdown
     from slipreflex.rig.loop_states import states_markdown
 

@@ -3,9 +3,9 @@
 Numba kernels (functions decorated with ``njit`` / ``jit``) are listed apart: they are
 written as flat loops on purpose. Used for the house measure "no function outside the
 numba kernels longer than about 80 lines", which holds in every folder of :data:`ROOTS`;
-``tests/test_house.py`` checks the limit.
+``tests/house/test_house.py`` checks the limit.
 
-Usage: python scripts/function_lengths.py [N] [--root src/slipreflex --root scripts ...] [--with-docstrings]
+Usage: python -m scripts.dev.function_lengths [N] [--root src/slipreflex --root scripts ...] [--with-docstrings]
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ import argparse
 import ast
 from pathlib import Path
 
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[2]
 #: The folders the 80-line rule holds in: the package, the scripts, the benchmarks.
 ROOTS: tuple[Path, ...] = (REPO / "src" / "slipreflex", REPO / "scripts", REPO / "benchmarks")
 

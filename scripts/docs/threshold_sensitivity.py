@@ -2,7 +2,7 @@
 
 Usage::
 
-    python scripts/threshold_sensitivity.py [--trials 10] [--jobs 2]
+    python -m scripts.docs.threshold_sensitivity [--trials 10] [--jobs 2]
 
 Re-runs the default grid for the two tactile methods (same seeds) with the threshold's
 k (sd of the method's statistic at rest) and SWT-SD's persistence changed, one at a
@@ -66,7 +66,7 @@ def main() -> int:
             print(lines[-1], flush=True)
     if not args.write:
         return 0
-    from splice_report import write_section
+    from scripts.docs.splice_report import write_section
 
     return write_section("threshold_sensitivity", "docs/reproduce.md", "threshold sensitivity table",
                          "\n".join(lines))

@@ -4,7 +4,7 @@ Usage::
 
     slipreflex reproduce --methods fixed,dath,nmsd,swt,authors-gui,authors-chain,dath-event,dath-floor,dath-leak \\
         --trials 3 --jobs 2 --no-figures --out /tmp/methods
-    python scripts/method_table.py /tmp/methods/summary.csv
+    python -m scripts.docs.method_table /tmp/methods/summary.csv
 
 Each cell: the response time in ms, mean ± sd (slip events that got a response); then the
 success per trial where it is not 100 %; "-" where no slip got a response, "- (no slip)"
@@ -58,7 +58,7 @@ def main(argv: list[str]) -> int:
     write = "--write" in argv
     argv = [a for a in argv if a != "--write"]
     if len(argv) != 1 or not Path(argv[0]).is_file():
-        print("usage: python scripts/method_table.py OUT/summary.csv [--write]", file=sys.stderr)
+        print("usage: python -m scripts.docs.method_table OUT/summary.csv [--write]", file=sys.stderr)
         return 2
     from slipreflex.analysis.report import read_csv
 
@@ -66,7 +66,7 @@ def main(argv: list[str]) -> int:
     print(body)
     if not write:
         return 0
-    from splice_report import write_section
+    from scripts.docs.splice_report import write_section
 
     return write_section("method_table", "docs/method.md", "method variants table", body)
 

@@ -5,7 +5,7 @@ A literal counts when the whole string is exactly the name of a method the packa
 ``slipreflex/methods.py``, is listed apart. Used to report the count
 "method names stop being string literals scattered over the package".
 
-Usage: python scripts/method_literals.py [--root src/slipreflex] [--list]
+Usage: python -m scripts.dev.method_literals [--root src/slipreflex] [--list]
 """
 
 from __future__ import annotations
@@ -42,7 +42,7 @@ def method_literals(root: Path, names: set[str]) -> list[tuple[str, int, str]]:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--root", type=Path, default=Path(__file__).resolve().parents[1] / "src" / "slipreflex")
+    ap.add_argument("--root", type=Path, default=Path(__file__).resolve().parents[2] / "src" / "slipreflex")
     ap.add_argument("--list", action="store_true", help="print every literal, not only the counts per file")
     args = ap.parse_args(argv)
     sys.path.insert(0, str(args.root.parent))

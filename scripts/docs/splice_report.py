@@ -3,7 +3,7 @@
 Usage::
 
     slipreflex reproduce --jobs 2 --out /tmp/repro
-    python scripts/splice_report.py /tmp/repro/report.md
+    python -m scripts.docs.splice_report /tmp/repro/report.md
 
 The report's sections go in one heading level down, without its title, its "Run"
 heading (the run's lines stay) and its figure list (the figures are not in the docs).
@@ -17,7 +17,7 @@ import re
 import sys
 from pathlib import Path
 
-DOCS = Path(__file__).resolve().parent.parent / "docs" / "reproduce.md"
+DOCS = Path(__file__).resolve().parents[2] / "docs" / "reproduce.md"
 BEGIN, END = "<!-- report.md begins -->", "<!-- report.md ends -->"
 
 
@@ -39,7 +39,7 @@ def sections(report: str) -> str:
 
 def main(argv: list[str]) -> int:
     if len(argv) != 1:
-        print(__doc__.strip().splitlines()[0], "\nusage: python scripts/splice_report.py OUT/report.md",
+        print(__doc__.strip().splitlines()[0], "\nusage: python -m scripts.docs.splice_report OUT/report.md",
               file=sys.stderr)
         return 2
     report = Path(argv[0])
@@ -81,9 +81,9 @@ def write_section(tool: str, doc: str, name: str, body: str) -> int:
     """:func:`write_marked` for the table called ``name`` in ``doc`` (a path from the repository's top,
     e.g. ``"docs/simulator.md"``), between ``<!-- NAME begins -->`` and ``<!-- NAME ends -->``.
 
-    A table script run as ``python scripts/X.py`` has this folder on ``sys.path`` and imports it directly.
+    A table script imports it as ``from scripts.docs.splice_report import write_section``.
     """
-    root = Path(__file__).resolve().parent.parent
+    root = Path(__file__).resolve().parents[2]
     return write_marked(tool, root / doc, f"<!-- {name} begins -->", f"<!-- {name} ends -->", body)
 
 

@@ -7,9 +7,9 @@ ablation does: a term that moves the grasp's capacity must not move the first sl
 each (:func:`slipreflex.analysis.claims.judge_run`) and prints the verdict classes side by side, with the numbers
 of the claims whose verdict or numbers a term changes.
 
-Run: ``python scripts/term_claims.py [--jobs 2] [--terms grip,roll,...]``.
+Run: ``python -m scripts.docs.term_claims [--jobs 2] [--terms grip,roll,...]``.
 
-``python scripts/term_claims.py --study DIR`` instead reads a finished study's ``plants.csv`` and prints, for
+``python -m scripts.docs.term_claims --study DIR`` instead reads a finished study's ``plants.csv`` and prints, for
 claims 4, 5 and 7, on how many plants each was decidable (a verdict other than not-decidable) and held, and the
 constants whose values go with the claim being decidable (Spearman's rho; Benjamini-Hochberg q < 0.05 over the
 constants that can reach the claim).
@@ -64,7 +64,7 @@ def decidable(folder: str, claims: tuple[int, ...] = (4, 5, 7)) -> list[str]:
 
 
 def _write(marker: str, lines: list[str]) -> int:
-    from splice_report import write_section
+    from scripts.docs.splice_report import write_section
 
     return write_section("term_claims", "docs/study.md", marker, "\n".join("    " + x for x in lines))
 

@@ -25,7 +25,7 @@ Marker poses, joint states and the ``fail`` flag are left out (not channels of a
 Usage::
 
     git clone https://github.com/imanlab/proactive-slip-control src-repo
-    python scripts/convert_imanlab.py src-repo/data_set src/slipreflex/data/datasets/imanlab-slip \\
+    python -m scripts.dev.convert_imanlab src-repo/data_set src/slipreflex/data/datasets/imanlab-slip \\
         --commit "$(git -C src-repo rev-parse HEAD)"
 """
 

@@ -23,7 +23,7 @@ in the grasp, rocked by a drop landing off the axis; nothing tilts it in a pour)
 (``--figure PATH``) shows the index array's NMSD and SWT-SD ratios
 over time for the base and each term, pour and drop on TR.
 
-Run: ``python scripts/physics_terms.py [--figure physics_terms.png] [--bottles TR,TX]``.
+Run: ``python -m scripts.docs.physics_terms [--figure physics_terms.png] [--bottles TR,TX]``.
 """
 
 from __future__ import annotations
@@ -146,7 +146,7 @@ def main() -> int:
         fig.savefig(args.figure, dpi=110)
         print(f"figure: {args.figure}")
     if args.write:
-        from splice_report import write_section
+        from scripts.docs.splice_report import write_section
 
         return write_section("physics_terms", "docs/simulator.md", "physics terms table",
                              "\n".join("    " + x for x in lines))

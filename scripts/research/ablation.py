@@ -2,8 +2,8 @@
 
 Usage::
 
-    python scripts/ablation.py spot_travel_per_unit 0 --experiments drop --methods dath,nmsd --trials 10
-    python scripts/ablation.py tilt --experiments drop      # a physics term switched off
+    python -m scripts.research.ablation spot_travel_per_unit 0 --experiments drop --methods dath,nmsd --trials 10
+    python -m scripts.research.ablation tilt --experiments drop      # a physics term switched off
 
 
 Runs the reproduction grid (same seeds) on the nominal plant of :mod:`slipreflex.sim.uncertain`

@@ -8,7 +8,7 @@
 #
 # Needs root, debootstrap (apt-get install debootstrap) and network access to Debian and
 # PyPI; takes 3-5 minutes. Not part of CI (tests/test_bootstrap.py is its fast part).
-#   sudo bash scripts/fresh_debian_check.sh [JOB] [DIR]      (DIR default: /tmp/slipreflex-deb12)
+#   sudo bash scripts/dev/fresh_debian_check.sh [JOB] [DIR]      (DIR default: /tmp/slipreflex-deb12)
 # If pip on this machine needs a CA bundle (PIP_CERT), that file is handed to the chroot.
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -3,8 +3,8 @@
 Usage::
 
     slipreflex reproduce --jobs 2 --out /tmp/repro
-    python scripts/readme_results.py /tmp/repro/summary.csv            # print the table
-    python scripts/readme_results.py /tmp/repro/summary.csv --write    # put it into README.md
+    python -m scripts.docs.readme_results /tmp/repro/summary.csv            # print the table
+    python -m scripts.docs.readme_results /tmp/repro/summary.csv --write    # put it into README.md
 
 The table goes between the README's two markers; every value comes from the run's
 summary (DATH unless the row says otherwise), the paper's column from
@@ -19,7 +19,7 @@ import csv
 import sys
 from pathlib import Path
 
-README = Path(__file__).resolve().parent.parent / "README.md"
+README = Path(__file__).resolve().parents[2] / "README.md"
 BEGIN, END = "<!-- results table begins -->", "<!-- results table ends -->"
 CLAIMS_BEGIN, CLAIMS_END = "<!-- claims table begins -->", "<!-- claims table ends -->"
 
@@ -84,7 +84,7 @@ def table(summary: list[dict], first_slip: dict[str, float]) -> str:
 def main(argv: list[str]) -> int:
     args = [a for a in argv if a != "--write"]
     if len(args) != 1 or not Path(args[0]).is_file():
-        print("usage: python scripts/readme_results.py OUT/summary.csv [--write]", file=sys.stderr)
+        print("usage: python -m scripts.docs.readme_results OUT/summary.csv [--write]", file=sys.stderr)
         return 2
     from slipreflex.sim import BOTTLES
     from slipreflex.sim.calibration import first_slip_ml
@@ -97,8 +97,7 @@ def main(argv: list[str]) -> int:
     if "--write" not in argv:
         print(text + ("\n\n" + claims if claims else ""))
         return 0
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
-    from splice_report import write_marked
+    from scripts.docs.splice_report import write_marked
 
     status = write_marked("readme_results", README, BEGIN, END, text)
     if not status and claims:

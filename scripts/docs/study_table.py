@@ -3,8 +3,8 @@
 Usage::
 
     slipreflex study --out /tmp/study
-    python scripts/study_table.py /tmp/study            # print the table
-    python scripts/study_table.py /tmp/study --write    # and put it between docs/study.md's markers
+    python -m scripts.docs.study_table /tmp/study            # print the table
+    python -m scripts.docs.study_table /tmp/study --write    # and put it between docs/study.md's markers
 
 Takes the "## Claims" table of the study's own ``study.md`` (``slipreflex.study.analyse``:
 per claim its class, the fraction of plants where it holds with its Wilson interval, the
@@ -32,13 +32,14 @@ def main(argv: list[str]) -> int:
     args = [a for a in argv if a != "--write"]
     report = Path(args[0]) / "study.md" if len(args) == 1 else None
     if report is None or not report.is_file():
-        print("usage: python scripts/study_table.py STUDY_DIR [--write] (STUDY_DIR holds study.md)", file=sys.stderr)
+        print("usage: python -m scripts.docs.study_table STUDY_DIR [--write] (STUDY_DIR holds study.md)",
+              file=sys.stderr)
         return 2
     body = claims_table(report.read_text())
     print(body)
     if "--write" not in argv:
         return 0
-    from splice_report import write_section
+    from scripts.docs.splice_report import write_section
 
     return write_section("study_table", "docs/study.md", "study claims table", body)
 

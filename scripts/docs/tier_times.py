@@ -2,10 +2,10 @@
 
 Usage::
 
-    python scripts/tier_times.py            # run the fast tier, then the whole suite; print the table
-    python scripts/tier_times.py --write    # ... and put it between docs/development.md's markers
+    python -m scripts.docs.tier_times            # run the fast tier, then the whole suite; print the table
+    python -m scripts.docs.tier_times --write    # ... and put it between docs/development.md's markers
 
-``python scripts/regenerate.py --with-tiers`` runs it with ``--write`` (not by default: the full suite
+``python -m scripts.regenerate --with-tiers`` runs it with ``--write`` (not by default: the full suite
 takes minutes). Each row says the tests that passed, the CPU time (user + system, the run's cost
 whatever else the machine does) and the wall time with the load average when it started.
 """
@@ -21,7 +21,7 @@ import sys
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 DOC = ROOT / "docs" / "development.md"
 BEGIN, END = "<!-- test tiers begins -->", "<!-- test tiers ends -->"
 
@@ -29,7 +29,7 @@ BEGIN, END = "<!-- test tiers begins -->", "<!-- test tiers ends -->"
 TIERS = [
     ("fast", 'python -m pytest -m "not slow" -q', ["-m", "not slow"],
      "every test module keeps at least one test here, every module's doctests run here, and every module of "
-     "`src/` is reached (`tests/test_house.py` checks both)"),
+     "`src/` is reached (`tests/house/test_house.py` checks both)"),
     ("full", "python -m pytest -q", [],
      "adds the slow tier: whole reproduce runs, the firmware under simavr, the bootstrap script, the "
      "real-time loop against the wall clock, the Dask study"),
@@ -69,17 +69,16 @@ def table(rows: list[str], machine: str) -> str:
     return "\n".join([
         "| tier | command | what | tests | CPU time | wall time, 2 shared cores |", "|---|---|---|---|---|---|",
         *rows, "",
-        f"Measured on {datetime.date.today().isoformat()} by `python scripts/regenerate.py --with-tiers` "
-        f"(`scripts/tier_times.py`) on {machine}, with numba's cache warm (a first run on a fresh checkout "
+        f"Measured on {datetime.date.today().isoformat()} by `python -m scripts.regenerate --with-tiers` "
+        f"(`scripts/docs/tier_times.py`) on {machine}, with numba's cache warm (a first run on a fresh checkout "
         "also compiles the kernels and takes longer). The CPU time (user + system) is what a run "
         "costs; the wall time depends on what else the 2 cores run."])
 
 
 def main(argv: list[str]) -> int:
-    sys.path.insert(0, str(ROOT / "benchmarks"))
-    sys.path.insert(0, str(ROOT / "scripts"))
-    from machine import describe
-    from splice_report import write_marked
+    from benchmarks.machine import describe
+
+    from scripts.docs.splice_report import write_marked
 
     rows = []
     for tier, command, args, what in TIERS:

@@ -2,8 +2,8 @@
 
 Usage::
 
-    python scripts/benchmark_table.py            # print the tables
-    python scripts/benchmark_table.py --write    # put them between the markers of README.md and docs/benchmark.md
+    python -m scripts.docs.benchmark_table            # print the tables
+    python -m scripts.docs.benchmark_table --write    # put them between the markers of README.md and docs/benchmark.md
 
 It runs what ``slipreflex benchmark`` runs on the shipped data set (the operating-point
 protocol with its defaults: leave-one-trial-out, 10 false alarms per minute, 0.25 s episodes,
@@ -17,7 +17,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 README = ROOT / "README.md"
 DOCS = ROOT / "docs" / "benchmark.md"
 MARKS = {
@@ -215,8 +215,7 @@ def main(argv: list[str]) -> int:
         for k, v in blocks.items():
             print(f"[{k}]\n{v}\n")
         return 0
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
-    from splice_report import replace_marked
+    from scripts.docs.splice_report import replace_marked
 
     for key, path in (("readme", README), ("operating", DOCS), ("ranking", DOCS), ("full", DOCS), ("vs_sim", DOCS),
                       ("chain_rule", DOCS), ("k_sensitivity", DOCS), ("why", DOCS)):

@@ -2,9 +2,9 @@
 
 Usage::
 
-    python scripts/claims_seeds.py                       # the default grid on seeds 20191215, 1, 2, 3, 4
-    python scripts/claims_seeds.py --seeds 5,6,7 --trials 10 --jobs 2
-    python scripts/claims_seeds.py --write               # and put the table into docs/reproduce.md
+    python -m scripts.docs.claims_seeds                       # the default grid on seeds 20191215, 1, 2, 3, 4
+    python -m scripts.docs.claims_seeds --seeds 5,6,7 --trials 10 --jobs 2
+    python -m scripts.docs.claims_seeds --write               # and put the table into docs/reproduce.md
 
 Runs ``slipreflex reproduce``'s grid (in process, no figures) once per master seed, with the
 replicate grids ``reproduce`` adds where one run's trials leave a claim unresolved
@@ -22,7 +22,7 @@ import sys
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 DOCS = ROOT / "docs" / "reproduce.md"
 BEGIN, END = "<!-- claims seeds table begins -->", "<!-- claims seeds table ends -->"
 
@@ -62,7 +62,7 @@ def main(argv: list[str] | None = None) -> int:
               for n, v in table.items()]
     lines += ["| replicate grids | " + " | ".join(cost) + " |", "",
               f"{same} of {len(table)} claims have the same class on all {len(seeds)} seeds "
-              f"(`python scripts/claims_seeds.py --seeds {args.seeds}`"
+              f"(`python -m scripts.docs.claims_seeds --seeds {args.seeds}`"
               + (f" --trials {args.trials}" if args.trials is not None else "") + "). A master seed changes "
               "the trials' noise (texture draws, sensor noise, onsets), never the plant's physics: the same class "
               "on every seed says the class does not hang on one draw of the noise, not that it holds on other "
@@ -70,8 +70,7 @@ def main(argv: list[str] | None = None) -> int:
     body = "\n".join(lines)
     print(body)
     if args.write:
-        sys.path.insert(0, str(ROOT / "scripts"))
-        from splice_report import write_marked
+        from scripts.docs.splice_report import write_marked
 
         return write_marked("claims_seeds", DOCS, BEGIN, END, body)
     return 0

@@ -2,10 +2,10 @@
 
 Usage::
 
-    python scripts/nir_table.py                 # print both agreement tables
-    python scripts/nir_table.py --write         # and write them between the docs' markers
+    python -m scripts.docs.nir_table                 # print both agreement tables
+    python -m scripts.docs.nir_table --write         # and write them between the docs' markers
     slipreflex reproduce --methods fixed,nir --trials 3 --jobs 2 --no-figures --out /tmp/nir
-    python scripts/nir_table.py --loop /tmp/nir/summary.csv --write   # the closed-loop table
+    python -m scripts.docs.nir_table --loop /tmp/nir/summary.csv --write   # the closed-loop table
 
 The agreement tables run ``slipreflex.neuro.agreement`` on the shipped recordings and the
 simulated drops and pours, in every backend installed (the package's executor, Spyx, Nengo).
@@ -17,12 +17,11 @@ import csv
 import sys
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _loop_table(summary: Path) -> str:
-    sys.path.insert(0, str(ROOT / "scripts"))
-    from method_table import cell
+    from scripts.docs.method_table import cell
 
     rows = list(csv.DictReader(summary.read_text().splitlines()))
     keys = sorted({(r["experiment"], r["bottle"]) for r in rows})
@@ -35,8 +34,7 @@ def _loop_table(summary: Path) -> str:
 
 
 def main(argv: list[str]) -> int:
-    sys.path.insert(0, str(ROOT / "scripts"))
-    from splice_report import write_section
+    from scripts.docs.splice_report import write_section
 
     write = "--write" in argv
     if "--loop" in argv:

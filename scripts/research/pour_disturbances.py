@@ -11,7 +11,7 @@ Prints, for the paper's bottle (6.5 cm) and the default ``WaterParams``:
    bottle's sideways acceleration (truth), and the accelerometer's x axis
    with and without the water's disturbances.
 
-Run: ``python scripts/pour_disturbances.py``.
+Run: ``python -m scripts.research.pour_disturbances``.
 """
 
 from __future__ import annotations
