@@ -254,3 +254,42 @@ def test_a_simulation_at_collection_time_stops_the_run(tmp_path):
                          capture_output=True, text=True, timeout=300, cwd=tmp_path)
     assert res.returncode != 0
     assert "1 simulated rig(s) built while collecting the tests (Rig('TR',))" in res.stdout + res.stderr
+
+
+def _layout_blocks() -> dict[str, str]:
+    """docs/design.md's map: ``{package path ("" for the top): the text of its entry}``."""
+    text = (ROOT / "docs" / "design.md").read_text()
+    body = text.split("    src/slipreflex/\n", 1)[1].split("\n    firmware/", 1)[0]
+    blocks: dict[str, str] = {"": ""}
+    current = ""
+    for line in body.splitlines():
+        first = line.split()[0] if line.split() else ""
+        indent = len(line) - len(line.lstrip())
+        if first.endswith("/") and indent == 6:
+            current = first.rstrip("/")
+            blocks[current] = line
+        elif indent == 6:           # a top-level module's line
+            current = ""
+            blocks[""] += line + "\n"
+        else:
+            blocks[current] += "\n" + line
+    return blocks
+
+
+def test_the_design_map_lists_every_module_of_the_tree():
+    """docs/design.md's layout names every package and every module in it (an __init__.py speaks for its package)."""
+    import re
+
+    pkg = ROOT / "src" / "slipreflex"
+    blocks = _layout_blocks()
+    missing = []
+    for path in sorted(pkg.rglob("*.py")):
+        rel = path.relative_to(pkg)
+        where = rel.parent.as_posix() if rel.parent.as_posix() != "." else ""
+        if path.name == "__init__.py":
+            if where and where not in blocks:
+                missing.append(f"{where}/")
+        elif path.name not in re.findall(r"[\w]+\.py", blocks.get(where, "")):
+            missing.append(rel.as_posix())
+    stale = [f"{b}/" for b in blocks if b and not (pkg / b).is_dir()]
+    assert not missing and not stale, f"docs/design.md's map: missing {missing}; not in the tree {stale}"

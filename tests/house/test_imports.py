@@ -184,3 +184,73 @@ def test_the_registry_sits_below_the_implementations_it_lists():
             if isinstance(part, methods.EntryPoint):
                 module, _, attr = part.target.partition(":")
                 assert module in MODULES and attr in ast.unparse(ast.parse(MODULES[module].read_text())), part
+
+
+#: The declared layers, bottom first. A unit (a package directly below slipreflex, or a top-level module;
+#: "slipreflex" is the package's own __init__) imports only units declared at or below it, so the tree
+#: reads bottom-up in this order. A new top-level package or module is placed here (and in docs/design.md).
+LAYERS: tuple[str, ...] = (
+    "slipreflex.core",        # facts and contracts: hardware, errors, protocols, the grip rule, registries' machinery
+    "slipreflex.files",       # files and processes: output sets, CSV, recordings, Ctrl-C, progress
+    "slipreflex.methods",     # the method registry and its implementations: the chain, the baselines, the board twin
+    "slipreflex",             # the package: the chain's public names
+    "slipreflex.sim",         # the simulator
+    "slipreflex.analysis",    # a trial's metrics, the claims, the report
+    "slipreflex.benchmark",   # every method on recorded labelled slip
+    "slipreflex.rig",         # devices, the real-time loop, the live view, LSL
+    "slipreflex.reproduce",   # the trial, the grid, thresholds, replication
+    "slipreflex.neuro",       # NIR export and neuromorphic back-ends
+    "slipreflex.study",       # the claims over plausible plants
+    "slipreflex.testing",     # the conformance checkers
+    "slipreflex.commands",    # one module per subcommand
+    "slipreflex.cli",         # the console script
+    "slipreflex.__main__",    # python -m slipreflex
+)
+
+
+def _upward(edges: dict[str, dict[str, str]], layers: tuple[str, ...]) -> list[str]:
+    """Every import of a unit declared above the importer ("a -> b (where)")."""
+    return [f"{a} -> {b} ({where})" for a, targets in sorted(edges.items()) for b, where in sorted(targets.items())
+            if layers.index(b) > layers.index(a)]
+
+
+def test_every_unit_of_the_tree_has_its_declared_layer():
+    units = {_subpackage(m) for m in MODULES}
+    assert units == set(LAYERS), f"undeclared: {sorted(units - set(LAYERS))}; gone: {sorted(set(LAYERS) - units)}"
+
+
+def test_imports_only_go_down_the_declared_layers():
+    up = _upward(_graph(_subpackage), LAYERS)
+    assert not up, "imports of a layer above the importer:\n" + "\n".join(up)
+
+
+def test_the_layer_check_finds_an_upward_import():
+    assert _upward({"a": {"b": "a.py:3"}, "b": {}}, ("a", "b")) == ["a -> b (a.py:3)"]
+    assert _upward({"b": {"a": "b.py:1"}}, ("a", "b")) == []
+
+
+def _named_targets(name: str, path: Path) -> list[str]:
+    """Every module path an import of ``name`` names, as written (before any resolution)."""
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    out: list[str] = []
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.ImportFrom):
+            parts = package.split(".")
+            base = ".".join(parts[:len(parts) - node.level + 1] + ([node.module] if node.module else [])) \
+                if node.level else (node.module or "")
+            out += [base] + [f"{base}.{a.name}" for a in node.names]
+        elif isinstance(node, ast.Import):
+            out += [a.name for a in node.names]
+    return out
+
+
+def test_every_old_import_path_is_the_module_at_its_new_place():
+    import importlib
+
+    from slipreflex.core._moved import MOVED, new_name
+
+    for old, new in MOVED.items():
+        assert importlib.import_module(f"slipreflex.{old}") is importlib.import_module(f"slipreflex.{new}"), old
+    internal = [f"{p.relative_to(SRC)}: {t}" for name, p in sorted(MODULES.items())
+                for t in _named_targets(name, p) if new_name(t) is not None]
+    assert not internal, "old import paths inside the package:\n" + "\n".join(internal)
