@@ -251,6 +251,7 @@ def test_every_old_import_path_is_the_module_at_its_new_place():
 
     for old, new in MOVED.items():
         assert importlib.import_module(f"slipreflex.{old}") is importlib.import_module(f"slipreflex.{new}"), old
+        assert importlib.import_module(f"slipreflex.{old}").__spec__.name == f"slipreflex.{new}", old  # its own
     internal = [f"{p.relative_to(SRC)}: {t}" for name, p in sorted(MODULES.items())
                 for t in _named_targets(name, p) if new_name(t) is not None]
     assert not internal, "old import paths inside the package:\n" + "\n".join(internal)

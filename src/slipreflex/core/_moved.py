@@ -99,10 +99,14 @@ class _Alias(importlib.abc.MetaPathFinder, importlib.abc.Loader):
         return importlib.machinery.ModuleSpec(fullname, self, is_package=spec.submodule_search_locations is not None)
 
     def create_module(self, spec):
-        return importlib.import_module(new_name(spec.name) or spec.name)
+        module = importlib.import_module(new_name(spec.name) or spec.name)
+        spec.loader_state = module.__spec__   # the import system sets __spec__ to this alias; exec puts it back
+        return module
 
     def exec_module(self, module):
-        """Nothing to run: the module ran at its new path, and running it again would make a copy."""
+        """Nothing to run (the module ran at its new path); its own spec is put back, so its relative
+        imports still resolve from its package."""
+        module.__spec__ = module.__spec__.loader_state
 
 
 def install() -> None:
