@@ -106,7 +106,9 @@ class _Alias(importlib.abc.MetaPathFinder, importlib.abc.Loader):
     def exec_module(self, module):
         """Nothing to run (the module ran at its new path); its own spec is put back, so its relative
         imports still resolve from its package."""
-        module.__spec__ = module.__spec__.loader_state
+        alias = module.__spec__
+        if alias is not None and alias.loader_state is not None:
+            module.__spec__ = alias.loader_state
 
 
 def install() -> None:
