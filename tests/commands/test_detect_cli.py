@@ -95,7 +95,7 @@ def _write(path, t, x):
 
 
 def test_detect_on_an_export_reruns_the_run_with_its_p0_and_chain(tmp_path, capsys, monkeypatch):
-    """Issue 11 item 16: an export's header carries p0 and the chain (docs/runtime.md); detect uses them."""
+    """An export's header carries p0 and the chain (docs/runtime.md); detect uses them."""
     import json
 
     from slipreflex.files.csvfiles import write_columns
@@ -160,7 +160,7 @@ def test_detect_prints_window_and_dath_lengths_in_ms(tmp_path, capsys, monkeypat
 
 
 def test_detect_reports_the_mpi_saturating_at_500(tmp_path, capsys, monkeypatch):
-    """Issue 11 item 17: when the command hit 500 and how many slip windows came after."""
+    """When the command hit 500 and how many slip windows came after."""
     monkeypatch.chdir(tmp_path)
     n = 16 * 40
     x = 0.4 + np.where(np.arange(n) >= 160, 0.05 * np.sin(np.arange(n) * 0.9), 0.0)

@@ -90,7 +90,7 @@ def test_no_module_is_longer_than_800_lines():
 
 
 def test_experiments_keeps_to_its_job_in_at_most_500_lines():
-    """Issue 12: configuration, seeds, the trial and the grid; running the grid is grid.py's,
+    """Configuration, seeds, the trial and the grid; running the grid is grid.py's,
     the report's prose analysis/report's. Its public names stay importable from it."""
     from slipreflex.reproduce import experiments, grid
 

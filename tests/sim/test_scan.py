@@ -58,7 +58,7 @@ def test_scan_command_rejects_bad_arguments(capsys):
 
 
 def test_scan_takes_own_surfaces_and_bottles_from_objects(tmp_path, capsys):
-    """Issue 11 item 12: --objects FILE.toml and --layout with its surfaces (or a bottle's surface)."""
+    """--objects FILE.toml and --layout with its surfaces (or a bottle's surface)."""
     from slipreflex.cli import main
     objs = tmp_path / "o.toml"
     objs.write_text('[surfaces.foil]\nreflectance = 0.8\ntexture = 0.02\n\n'
