@@ -2,30 +2,9 @@
 
 Written from the hand's published interface control document (the Ability Hand ICD,
 sections 3.3-3.5: extended API frames, position data, touch sensor data, checksums,
-PPP byte stuffing); nothing here depends on PSYONIC's own Python wrapper. The frames are
-encoded and decoded in :mod:`slipreflex.rig.devices.ability_wire`; every name of it is importable
-from here too.
-
-Frames
-    Every frame is byte-stuffed (ICD 3.5.5): it starts and ends with 0x7E, and a 0x7E or
-    0x7D inside it is sent as 0x7D followed by the byte XOR 0x20. Inside: the hand's
-    slave address (0x50 by default), a format header, the data, and a checksum that makes
-    the 8-bit sum of the frame zero (ICD 3.4.8).
-Commands (host -> hand)
-    Position mode, header ``0x10 + variant``: six int16 little-endian positions,
-    ``degrees * 32767 / 150``, in the hand's order index, middle, ring, pinky, thumb
-    flexor, thumb rotator (the rotator's angles are negative). Velocity mode, header
-    ``0x20 + variant``: six int16 velocities, ``degrees/s * 32767 / 3000`` (ICD 3.4.2;
-    positive closes). Read-only mode, header ``0xA0 + variant``: no data; the hand replies
-    without changing what it does.
-Replies (hand -> host), variant 0 (the ICD's "variant 1")
-    header, then per finger position and motor current (int16 each, 24 bytes), then the
-    30 touch sites as 12-bit values packed two per three bytes (45 bytes; 6 sites per
-    finger, index first, thumb last), a hot/cold status byte and the checksum.
-Touch sensors
-    FSRs: ``V = D * 3.3 / 4096``, ``R = 33000 / V + 10000`` ohm, and the ICD's placeholder
-    calibration ``F = C1 / R + C2`` newtons (C1 = 121591, C2 = 0.878894; "a rough
-    approximation", ICD 3.4.6). A raw value of 0 reads as 0 N.
+PPP byte stuffing); nothing here depends on PSYONIC's own Python wrapper. The frames (byte
+stuffing, the commands, the replies, the touch sensors' conversion) are encoded, decoded and
+described in :mod:`slipreflex.rig.devices.ability_wire`; every name of it is importable from here too.
 
 Positions in this package are finger units, 0 (open) .. 500 (closed), the same for every
 hand (:data:`slipreflex.core.hardware.FINGER_MAX`); this driver maps them linearly onto
