@@ -79,11 +79,8 @@ def new_name(name: str) -> str | None:
     """
     if not name.startswith("slipreflex."):
         return None
-    rest = name[len("slipreflex."):]
-    for old in sorted(MOVED, key=len, reverse=True):
-        if rest == old or rest.startswith(old + "."):
-            return "slipreflex." + MOVED[old] + rest[len(old):]
-    return None
+    old, dot, below = name[len("slipreflex."):].partition(".")   # every old path was a top-level module
+    return f"slipreflex.{MOVED[old]}{dot}{below}" if old in MOVED else None
 
 
 class _Alias(importlib.abc.MetaPathFinder, importlib.abc.Loader):
