@@ -125,7 +125,7 @@ def test_installed_packages_add_methods_through_entry_points(tmp_path, monkeypat
     monkeypatch.syspath_prepend(str(tmp_path))
     good = md.EntryPoint(name="mine", value="my_reflexes:SPECS", group=methods.ENTRY_POINT_GROUP)
     monkeypatch.setattr(md, "entry_points", lambda group: [good] if group == methods.ENTRY_POINT_GROUP else [])
-    monkeypatch.setattr(methods, "_plugins_loaded", False)
+    monkeypatch.setattr(methods.METHODS, "_group_read", False)
     try:
         assert "dath-d2" in methods.names()                  # loaded on first use
         assert methods.load_plugins() == ()                   # once per process
@@ -135,6 +135,6 @@ def test_installed_packages_add_methods_through_entry_points(tmp_path, monkeypat
         methods.unregister("dath-d2")
     bad = md.EntryPoint(name="oops", value="my_reflexes:broken", group=methods.ENTRY_POINT_GROUP)
     monkeypatch.setattr(md, "entry_points", lambda group: [bad])
-    monkeypatch.setattr(methods, "_plugins_loaded", False)
+    monkeypatch.setattr(methods.METHODS, "_group_read", False)
     with pytest.raises(ParameterError, match=r"method plugin 'oops' \(my_reflexes:broken\): gave 'not a spec'"):
         methods.load_plugins()

@@ -244,12 +244,9 @@ class MethodSpec:
 
 
 #: The method registry (the order is the one method order everywhere); the functions below read it.
-METHODS: Registry[MethodSpec] = Registry("method", MethodSpec, any_case=True,
-                                         before_read=lambda: load_plugins())
-
 #: Entry-point group through which installed packages add methods (see :func:`load_plugins`).
 ENTRY_POINT_GROUP: str = "slipreflex.methods"
-_plugins_loaded = False
+METHODS: Registry[MethodSpec] = Registry("method", MethodSpec, any_case=True, group=ENTRY_POINT_GROUP)
 
 
 def load_plugins() -> tuple[str, ...]:
@@ -281,27 +278,7 @@ def load_plugins() -> tuple[str, ...]:
     >>> load_plugins()          # nothing installed declares one here, and it runs once
     ()
     """
-    global _plugins_loaded
-    if _plugins_loaded:
-        return ()
-    _plugins_loaded = True
-    from importlib.metadata import entry_points  # deferred: heavy (importlib.metadata, ~30 ms of import)
-
-    added = []
-    for ep in sorted(entry_points(group=ENTRY_POINT_GROUP), key=lambda e: e.name):
-        try:
-            obj = ep.load()
-            got = obj() if callable(obj) and not isinstance(obj, MethodSpec) else obj
-            specs = [got] if isinstance(got, MethodSpec) else list(got)  # pyright: ignore[reportArgumentType]
-        except Exception as err:  # a broken plugin is the user's to fix: say which one
-            raise ParameterError(f"method plugin {ep.name!r} ({ep.value}): cannot load: {err}") from err
-        for spec in specs:
-            if not isinstance(spec, MethodSpec):
-                raise ParameterError(f"method plugin {ep.name!r} ({ep.value}): gave {spec!r}, "
-                                     "not a MethodSpec")
-            if METHODS.add_new(spec):
-                added.append(spec.name)
-    return tuple(added)
+    return METHODS.load_entry_points()
 
 
 def register(spec: MethodSpec, *, replace: bool = False) -> None:
