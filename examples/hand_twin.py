@@ -22,7 +22,9 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
+from slipreflex.core.errors import ParameterError
 from slipreflex.core.hardware import FINGER_MAX, TRIPOD, Finger
+from slipreflex.files.paths import create_new
 from slipreflex.rig.hands import HANDS, HandSpec
 
 
@@ -32,14 +34,18 @@ class TwinHand:
     Parameters
     ----------
     port : str or path
-        The command log to write (JSON lines); created, or appended to.
+        The command log to write (JSON lines), created new: a name already taken (a symlink
+        included) is refused, so an earlier log is never written over or followed.
     start : float
         Every finger's position when the twin opens (i-Limb units).
     """
 
     def __init__(self, port: Any, start: float = 150.0, **_options: Any) -> None:
         self.log_path = Path(str(port))
-        self._log = self.log_path.open("a", encoding="utf-8")
+        try:
+            self._log = create_new(self.log_path, "w")
+        except OSError as err:
+            raise ParameterError(f"--hand {self.log_path}: cannot create the twin's log ({err.strerror})") from None
         self._t0 = time.monotonic()
         self._pos = {f: float(start) for f in TRIPOD}
         self._speed = {f: 0.0 for f in TRIPOD}
