@@ -462,3 +462,58 @@ def test_a_command_out_of_the_finger_range_only_closes_for_its_rise():
     assert [(e[2], e[3]) for e in pending] == [(HandCommand.STOP, (Finger.THUMB_ROTATOR, Finger.INDEX))]
     assert rig.hand.closing_until[Finger.INDEX] == pytest.approx(600.0 / hw.FINGER_SPEED_UNITS_S)
     assert rig.hand.targets[1] == hw.FINGER_MAX  # closing (the CLOSE runs to the end of the range)
+
+
+@pytest.mark.parametrize("rate", [0.0, hw.NMSD_FS, hw.SWT_FS])
+@pytest.mark.parametrize("latency", [0.0, 0.001, 0.010, 0.0301])
+def test_a_stretch_ends_on_a_sample_instant_no_later_than_the_latency_allows(rate, latency):
+    daq_t = hw.DAQ_PERIOD_S
+    for index in range(0, 400, 7):
+        t = index * daq_t if rate == 0.0 else index / rate
+        end = closed.stretch_end(index, rate, latency, daq_t)
+        assert t - 1e-15 <= end <= t + latency + 1e-15
+        on_daq = abs(end / daq_t - round(end / daq_t)) < 1e-9
+        on_own = rate != 0.0 and abs(end * rate - round(end * rate)) < 1e-9
+        assert on_daq or on_own, (index, end)
+        # the furthest such instant: the next DAQ row or frame would be past the latency
+        nxt = min((math.floor(end / daq_t + 1e-9) + 1) * daq_t,
+                  (math.floor(end * rate + 1e-9) + 1) / rate if rate else math.inf)
+        assert nxt > t + latency - 1e-12
+
+
+def test_a_reflex_that_never_commands_costs_the_adaptive_kernel_no_extra_steps():
+    """The loop's stretches end where the kernel ends a step anyway (a DAQ row): the closed held pour
+    takes as many kernel steps as the same pour run open loop."""
+
+    @njit(cache=True)
+    def never(S, P, raw, position):
+        return np.nan
+
+    class Never:
+        name, input_kind, fs = "never", "slip", hw.DAQ_FS
+
+        def __init__(self):
+            self.S, self.P = np.zeros(1), np.zeros(1)
+
+        def compiled(self):
+            return never, self.S, self.P
+
+        def step(self, sample, position=None):
+            return None
+
+        def reset(self):
+            pass
+
+    steps = []
+    for closed_loop in (False, True):
+        rig = Rig("TR", seed=1, stepping="adaptive")
+        g = rig.grasp()
+        rig.hand.set_positions({f: g.positions[f] + 40 for f in hw.TRIPOD})
+        rig.perturb(PAPER_POUR, at=rig.t + 0.5)
+        before = rig.steps_taken
+        if closed_loop:
+            run_closed_loop(rig, Never(), 6.0)
+        else:
+            rig.advance_block(rig.t + 6.0)
+        steps.append(rig.steps_taken - before)
+    assert steps[1] == steps[0] < 6.0 / 1e-4 / 8

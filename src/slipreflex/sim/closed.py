@@ -52,7 +52,7 @@ from ..core.errors import ParameterError
 from ..core.hardware import Finger, HandCommand
 from . import kernel as K
 
-__all__ = ["SLIP_STEP", "TACTILE_STEP", "run_compiled", "compilable"]
+__all__ = ["SLIP_STEP", "TACTILE_STEP", "run_compiled", "compilable", "stretch_end"]
 
 #: numba signature of a slip reflex's compiled step: ``step(S, P, volts, position) -> command or NaN``.
 SLIP_STEP = types.float64(types.float64[::1], types.float64[::1], types.float64, types.float64)
@@ -117,6 +117,33 @@ _f2, _i2, _f3 = types.float64[:, ::1], types.int64[:, ::1], types.float64[:, :, 
 _COMMON = (_f1, _f1, _f1, _i1, _f1, _u1, _f2, _f2, _f1, _f1, _i1, _i1,  # RS RP | S C P keys D W track rates next cont
            _f1, _f1, _i2, _f1, _i1, _i1, _f1, _f1, _f1,  # tgt spd q_i q_v masks cmd_g cmd_off g_level g_until
            _f1, _i1, _f2, _f2, _f2, _f1, _f1, _f2, _f2, _f2, _i1)  # cfg cnt daq ev tac cmd_t cmd_v s_daq s_ev s_tac s_n
+
+
+@njit(cache=CACHE)
+def stretch_end(index, rate, latency, daq_t):
+    """Where the loop's next stretch of physics ends, waiting for input ``index`` of a stream at ``rate`` Hz
+    (the DAQ's rows: ``rate`` 0, their times ``index * daq_t``; a sampler's frames: ``index / rate``).
+
+    The commands the inputs of a stretch produce are due ``latency`` after the earliest of them, so the
+    stretch may run that far. It ends on the last instant there of the stream's grid or the DAQ's, where
+    the kernel ends a step anyway: a cut between two of them would split a coarse step of the adaptive
+    stepping for nothing. The Python loop (:mod:`slipreflex.sim.loop`) ends its stretches here too.
+
+    Examples
+    --------
+    >>> round(stretch_end(2, 0.0, 0.010, 0.003), 6)        # DAQ rows at 6, 9, 12, 15 ms: to the one at 15 ms
+    0.015
+    >>> round(stretch_end(1, 260.0, 0.010, 0.003), 6)      # a 260 Hz frame at 3.85 ms: to the DAQ row at 12 ms
+    0.012
+    >>> stretch_end(2, 0.0, 0.0, 0.003) == 2 * 0.003       # no latency: the input's own instant
+    True
+    """
+    if rate == 0.0:
+        return (index + np.floor(latency / daq_t)) * daq_t
+    t = index / rate
+    own = (index + np.floor(latency * rate)) / rate
+    daq = np.floor((t + latency) / daq_t) * daq_t
+    return max(own, daq) if daq <= t + latency else own
 
 
 @njit(cache=CACHE, inline="always")
@@ -282,7 +309,7 @@ def _closed_slip(step, RS, RP, S, C, P, keys, D, W, track, tac_rates, tac_next, 
     roomy = -np.inf   # the outputs have room for everything advancing to this time may produce
     while C[K.C_DAQ] * daq_t <= t_end + _EPS:
         t = C[K.C_N] * dt
-        horizon = min(t_end, max(t + dt, C[K.C_DAQ] * daq_t + cfg[CF_LAT]))
+        horizon = min(t_end, max(t + dt, stretch_end(C[K.C_DAQ], 0.0, cfg[CF_LAT], daq_t)))
         if np.ceil(horizon / dt - _ROUND) <= C[K.C_N]:
             return _DONE   # no step left before t_end (a zero-length run from t = 0)
         if horizon > roomy:
@@ -345,7 +372,7 @@ def _closed_tactile(step, RS, RP, S, C, P, keys, D, W, track, tac_rates, tac_nex
     fs = tac_rates[si]
     while tac_next[si] / fs <= t_end + _EPS:
         t = C[K.C_N] * dt
-        horizon = min(t_end, max(t + dt, tac_next[si] / fs + cfg[CF_LAT]))
+        horizon = min(t_end, max(t + dt, stretch_end(tac_next[si], fs, cfg[CF_LAT], cfg[CF_DAQ_T])))
         if np.ceil(horizon / dt - _ROUND) <= C[K.C_N]:
             return _DONE
         if not (_room(C, D, tac_rates, cfg, cnt, q_i, q_v, daq, ev, tac, cmd_t, cmd_g.shape[0], horizon, fs)

@@ -60,7 +60,7 @@ from ..core.grip import Grip, finger_groups, span
 from ..core.hardware import Finger, HandCommand
 from ..core.interfaces import Reflex
 from ..files.paths import new_file
-from .closed import compilable, run_compiled
+from .closed import compilable, run_compiled, stretch_end
 from .objects import Drop, Pour
 from .rig import DaqBlock, Rig, SlipEvent
 
@@ -478,7 +478,7 @@ def _python_slip(rig: Rig, reflex: Reflex, t_end: float, send, record: list | No
     dt = rig.physics.dt
     lat = rig.hand.latency
     while rig.next_daq_time <= t_end + _EPS:
-        horizon = min(t_end, max(rig.t + dt, rig.next_daq_time + lat))
+        horizon = min(t_end, max(rig.t + dt, float(stretch_end(rig.next_daq_index, 0.0, lat, hw.DAQ_PERIOD_S))))
         if math.ceil(horizon / dt - 1e-9) <= rig.step_index:
             break   # no step left before t_end (a zero-length run from t = 0)
         times, volts_a, mids_a = rig.advance_slip(horizon)
@@ -510,7 +510,8 @@ def _python_tactile(rig: Rig, reflex: Reflex, t_end: float, send, tac_s, record:
     step = reflex.step
     lat = rig.hand.latency
     while tac_s.next_time <= t_end + _EPS:
-        horizon = min(t_end, max(rig.t + rig.physics.dt, tac_s.next_time + lat))
+        horizon = min(t_end, max(rig.t + rig.physics.dt, float(stretch_end(tac_s.next_index, tac_s.fs, lat,
+                                                                           hw.DAQ_PERIOD_S))))
         if math.ceil(horizon / rig.physics.dt - 1e-9) <= rig.step_index:
             break
         rig.advance_slip(horizon)

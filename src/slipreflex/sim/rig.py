@@ -289,6 +289,17 @@ class Rig:
         """
         return int(self._C[K.C_DAQ]) * hw.DAQ_PERIOD_S
 
+    @property
+    def next_daq_index(self) -> int:
+        """Index of the next DAQ sample not produced yet (its time is ``index * DAQ_PERIOD_S``).
+
+        Examples
+        --------
+        >>> rig = Rig("TR"); _ = rig.advance(0.01); rig.next_daq_index
+        4
+        """
+        return int(self._C[K.C_DAQ])
+
     def advance(self, duration: float) -> list[DaqSample]:
         """Advance by ``duration`` seconds; return the new DAQ samples.
 
