@@ -408,3 +408,16 @@ def test_claims_command_writes_new_files_never_over_nor_through_a_link(tmp_path,
     assert "writing claims-2.csv and claim_parts-2.csv" in capsys.readouterr().out
     assert (tmp_path / "claims.csv").read_text() == "mine\n" and outside.read_text() == "keep\n"
     assert (tmp_path / "claims-2.csv").is_file() and (tmp_path / "claim_parts-2.csv").is_file()
+
+
+def test_the_claims_files_replace_a_link_of_their_name_and_never_write_through_it(tmp_path):
+    from slipreflex.analysis.claims import judge, write_claims_csv, write_parts_csv
+
+    for writer, name in ((write_claims_csv, "claims.csv"), (write_parts_csv, "claim_parts.csv")):
+        target = tmp_path / f"elsewhere-{name}"
+        target.write_text("keep me\n")
+        (tmp_path / name).symlink_to(target)
+        writer(tmp_path / name, judge([]))
+        assert target.read_text() == "keep me\n"
+        assert not (tmp_path / name).is_symlink()
+        assert (tmp_path / name).read_text().startswith("claim,")

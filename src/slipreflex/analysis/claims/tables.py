@@ -16,6 +16,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from ...files.paths import new_file
 from .judging import CLAIMS
 from .verdicts import VERDICTS, ClaimResult
 
@@ -43,6 +44,9 @@ def write_claims_csv(path: str | Path, results: Sequence[Any], columns: Sequence
                      ) -> Path:
     """Write the claims table as CSV (one row per claim; NaN as an empty cell).
 
+    The file appears under its name only when complete (an earlier one is replaced, a symlink of
+    that name replaced, not followed: :func:`slipreflex.files.paths.new_file`).
+
     ``results`` holds :class:`ClaimResult` s or mappings with the columns.
 
     Examples
@@ -54,7 +58,7 @@ def write_claims_csv(path: str | Path, results: Sequence[Any], columns: Sequence
     'claim,verdict,qualifier,parts,reason,value,criterion,low,high,text,where,numbers'
     """
     path = Path(path)
-    with path.open("w", newline="") as fh:
+    with new_file(path, "w", replace=True) as fh:   # complete or not there, never through a link
         w = csv.writer(fh, lineterminator="\n")
         w.writerow(columns)
         for r in results:
@@ -79,7 +83,7 @@ def write_parts_csv(path: str | Path, results: Sequence[ClaimResult]) -> Path:
     ['1', 'scan levels', 'True', 'not-decidable']
     """
     path = Path(path)
-    with path.open("w", newline="") as fh:
+    with new_file(path, "w", replace=True) as fh:   # complete or not there, never through a link
         w = csv.writer(fh, lineterminator="\n")
         w.writerow(PARTS_CSV_COLUMNS)
         for r in results:
