@@ -12,6 +12,7 @@ import math
 
 import numpy as np
 import pytest
+from loop_fakes import LogHand, StillSource
 
 from slipreflex import methods
 from slipreflex.commands.run import add_arguments, build_reflex, parse_p0
@@ -143,41 +144,9 @@ class _Plugin:
         return self.out
 
 
-class _Still:
-    def __init__(self):
-        self.now, self.k = 0.0, 0
-
-    def read(self, timeout):
-        from slipreflex.core.interfaces import DaqSample
-
-        self.now += 4 * DAQ_PERIOD_S
-        self.k += 4
-        return [DaqSample(self.k + i, self.now, 0.4, None, 0) for i in range(4)]
-
-    def close(self):
-        pass
-
-
-class _LogHand:
-    def __init__(self):
-        self.log = []
-
-    def set_positions(self, t):
-        raise AssertionError("a position")
-
-    def close_fingers(self, fingers, speed):
-        self.log.append(("close", tuple(fingers)))
-
-    def hold(self, fingers):
-        self.log.append(("stop", tuple(fingers)))
-
-    def positions(self):
-        return {Finger.THUMB: 148.0, Finger.INDEX: 147.0, Finger.MIDDLE: 147.0}
-
-
 def _plugin_run(reflex, p0=148, hand=None):
-    src = _Still()
-    return run_loop(src, hand or _LogHand(), reflex, p0=p0, duration=1.0, watchdog=0.5,
+    src = StillSource()
+    return run_loop(src, hand or LogHand(), reflex, p0=p0, duration=1.0, watchdog=0.5,
                     clock=lambda: src.now, guard=False)
 
 
@@ -212,7 +181,7 @@ def test_a_method_that_raises_in_step_is_a_fault_with_the_fingers_held_and_a_sum
                 raise ZeroDivisionError("boom")
             return self.out
 
-    hand = _LogHand()
+    hand = LogHand()
     res = _plugin_run(Broken(150.0), hand=hand)
     assert [f.kind for f in res.faults] == ["reflex-error"]
     assert res.error and "ZeroDivisionError: boom" in res.error and "ended early" in res.summary()
@@ -226,7 +195,7 @@ def test_a_method_that_raises_on_its_first_sample_is_refused_before_anything_is_
         def step(self, volts, position=None):
             raise KeyError("x")
 
-    hand = _LogHand()
+    hand = LogHand()
     with pytest.raises(ParameterError, match="raised in step"):
         _plugin_run(Broken(150.0), hand=hand)
     assert hand.log == []

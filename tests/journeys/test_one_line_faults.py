@@ -10,27 +10,14 @@ import struct
 import threading
 
 import pytest
+from loop_fakes import StillSource
 
 from slipreflex.cli import main
 from slipreflex.core.errors import DataError, DeviceError, ParameterError
-from slipreflex.core.hardware import DAQ_FS, DAQ_PERIOD_S, Finger
-from slipreflex.core.interfaces import DaqSample
+from slipreflex.core.hardware import DAQ_FS, Finger
 from slipreflex.files.csvfiles import read_recording
 from slipreflex.methods.chain import SlipReflex
 from slipreflex.rig.runtime import run_loop
-
-
-class _Still:
-    def __init__(self):
-        self.now, self.k = 0.0, 0
-
-    def read(self, timeout):
-        self.now += 4 * DAQ_PERIOD_S
-        self.k += 4
-        return [DaqSample(self.k + i, self.now, 0.4, None, 0) for i in range(4)]
-
-    def close(self):
-        pass
 
 
 class _Step:
@@ -65,7 +52,7 @@ class _PortLostAfterClose:
 
 
 def test_a_hand_port_lost_during_a_closing_is_a_fault_with_the_true_grip():
-    src = _Still()
+    src = StillSource()
     res = run_loop(src, _PortLostAfterClose(), _Step(), p0=148, duration=0.5, watchdog=0.5,
                    clock=lambda: src.now, guard=False)
     kinds = [f.kind for f in res.faults]
