@@ -196,3 +196,38 @@ def test_the_tabled_step_factors_are_the_ones_the_kernel_would_compute():
                 tabled = P[K.P_HEAL_DECAY_H + c * (K.ALPHA_STEPS + 1) + m]
                 assert tabled == computed(alpha, heal * (c + 1), dt, m)[1]
     assert rig._P[K.P_ACC_ALPHA_H + 1] == rig._P[K.P_ACC_ALPHA]   # one fine step: the filter's own factor
+
+
+def test_a_filling_bottle_takes_longer_coarse_steps_with_rate_state_contacts_only():
+    import dataclasses
+
+    from slipreflex.sim import BOTTLES
+
+    coulomb = dataclasses.replace(BOTTLES["TR"], friction_law="coulomb", cuff_friction_law="coulomb")
+    caps = {}
+    for bottle in (BOTTLES["TR"], coulomb):
+        rig = Rig(bottle, seed=3, stepping="adaptive")
+        g = rig.grasp()
+        rig.hand.set_positions({f: g.positions[f] + 40 for f in hw.TRIPOD})
+        rig.perturb(PAPER_POUR, at=rig.t + 0.2)
+        rig.advance(2.0)
+        early = rig.steps_taken
+        rig.advance(1.0)
+        early = rig.steps_taken - early
+        rig.advance(8.0)
+        late = rig.steps_taken
+        rig.advance(1.0)
+        caps[bottle.friction_law] = (early, rig.steps_taken - late, int(rig.kernel_arrays().C[K.C_CAP]))
+    coarse = Rig("TR").coarse_steps()
+    early, late, cap = caps["rate-state"]
+    # with ~150 ml in it the bottle's stiffest mode is slow enough for one step per DAQ row
+    assert cap == int(round(3e-3 / 1e-4)) > coarse and late < early
+    assert late <= hw.DAQ_FS * 1.05
+    assert caps["coulomb"][2] in (0, coarse)
+
+
+def test_the_coarse_step_bound_grows_with_the_fill_from_the_empty_bottles():
+    P = Rig("TR").kernel_arrays().P
+    coarse = int(P[K.P_COARSE])
+    caps = [int(K.mass_cap(mw, 0.3 * mw, P, coarse)) for mw in np.linspace(0.0, 0.5, 51)]
+    assert caps[0] == coarse and caps == sorted(caps) and caps[-1] == int(P[K.P_COARSE_MAX]) == 30

@@ -133,11 +133,12 @@ S_SIZE = STATE.size
 # which the adaptive stepping looks again whether the rig is calm (kept here: a call's end changes nothing).
 # C_DAQ_AT1 .. C_SEEN_END: the adaptive stepping's next DAQ row (plus one; 0: none yet), the step at whose end
 # it is taken, the IMU reading it carries and that reading's step, functions of the row alone, kept from call
-# to call (a closed loop calls once per row).
+# to call (a closed loop calls once per row). C_CAP: the adaptive stepping's longest coarse step for the fill
+# the slosh mode last followed (:func:`mass_cap`; 0 before any water: the empty bottle's ``P_COARSE``).
 COUNTERS = Layout("the rig's counters C", "N DAQ ACC NFAIL NITER SPL MS0 MS1 STEPS RECHECK DAQ_AT1 DAQ_END SEEN_J "
-                  "SEEN_END", prefix="C_")
+                  "SEEN_END CAP", prefix="C_")
 (C_N, C_DAQ, C_ACC, C_NFAIL, C_NITER, C_SPL, C_MS0, C_MS1, C_STEPS, C_RECHECK, C_DAQ_AT1, C_DAQ_END, C_SEEN_J,
- C_SEEN_END) = COUNTERS.slots
+ C_SEEN_END, C_CAP) = COUNTERS.slots
 C_SIZE = COUNTERS.size
 
 # ---- parameters P ---------------------------------------------------------
@@ -183,7 +184,8 @@ PARAMS = Layout("the rig's parameters P", f"""
     MV_F MV_W MV_INV_SPEED
     TAPER TAPER_SIN
     LEVER0:3 ZG IB MBD DROP_E TILT_PEN
-    COARSE=1 ACC_LQ ACC_ALPHA_H:{ALPHA_STEPS + 1} HEAL_DECAY_H:{3 * (ALPHA_STEPS + 1)}""", prefix="P_")
+    COARSE=1 COARSE_MAX=1 KT_SUM TILT_K
+    ACC_LQ ACC_ALPHA_H:{ALPHA_STEPS + 1} HEAL_DECAY_H:{3 * (ALPHA_STEPS + 1)}""", prefix="P_")
 (P_DT, P_G, P_MB, P_KN, P_LAM, P_QC, P_KSERVO, P_STALL, P_GRIP,
  P_DAQ_T, P_ACC_T, P_ACC_ALPHA, P_ACC_NOISE, P_ACC_LSB, P_ACC_RANGE, P_TILT_X, P_TILT_Z, P_TILT_Y,
  P_VCC, P_VSAT, P_KNEE, P_VNOISE, P_GAP, P_ADC_LSB, P_ADC_MAX, P_TRACK_DX, P_TRACK_OFF,
@@ -197,7 +199,7 @@ PARAMS = Layout("the rig's parameters P", f"""
  P_MV_F, P_MV_W, P_MV_INV_SPEED,
  P_TAPER, P_TAPER_SIN,
  P_LEVER0, P_ZG, P_IB, P_MBD, P_DROP_E, P_TILT_PEN,
- P_COARSE, P_ACC_LQ, P_ACC_ALPHA_H, P_HEAL_DECAY_H) = PARAMS.slots
+ P_COARSE, P_COARSE_MAX, P_KT_SUM, P_TILT_K, P_ACC_LQ, P_ACC_ALPHA_H, P_HEAL_DECAY_H) = PARAMS.slots
 P_L0 = P_SPL_RMS
 P_SIZE = PARAMS.size
 #: Friction laws (PC_LAW): Coulomb with a Stribeck curve; slip weakening + healing + log rate.
@@ -422,6 +424,21 @@ def tilt_inertia(mw, P):
     h = mw / (P[P_RHO_W] * np.pi * r * r)
     dw = zg - 0.5 * h
     return P[P_IB] + mw * (0.25 * r * r + h * h / 12.0 + dw * dw), P[P_MBD] + mw * dw
+
+
+@njit(cache=CACHE, inline="always")
+def mass_cap(mw, m1, P, coarse):
+    """Fine steps a coarse step may span with ``mw`` kg of water in the bottle (``m1`` of it sloshing):
+    ``omega h <= 1`` for the stiffest mode of the bottle as it is now (along the axis on the contacts'
+    shear stiffness ``P_KT_SUM``, sideways on ``P_KLAT`` without the slosh mass, in tilt on ``P_TILT_K``
+    about :func:`tilt_inertia`), at least the empty bottle's ``coarse`` and at most ``P_COARSE_MAX``.
+    Water only lowers these frequencies, so a bound from an earlier, smaller fill errs on the short side."""
+    m = P[P_MB] + mw
+    ml = m - m1 if m1 > 0.0 else m
+    inertia, _ = tilt_inertia(mw, P)
+    om2 = max(P[P_KT_SUM] / m, max(P[P_KLAT] / ml, P[P_TILT_K] / inertia))
+    k = np.int64(1.0 / (np.sqrt(om2) * P[P_DT]))
+    return min(np.int64(P[P_COARSE_MAX]), max(coarse, k))
 
 
 @njit(cache=CACHE, inline="always")
@@ -740,6 +757,8 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
     th = S[S_TH]
     om = S[S_OM]
     coarse = np.int64(P[P_COARSE])
+    # the coarse step's bound for the bottle as the slosh mode last saw it filled: longer as it fills
+    cap_m = coarse if C[C_CAP] < coarse else C[C_CAP]
     acc_lq = P[P_ACC_LQ]
     alpha_coarse = P[P_ACC_ALPHA_H + coarse] if coarse <= ALPHA_STEPS else -np.expm1(coarse * acc_lq)
     # the step at whose end the next DAQ row is taken (for the counter's value daq_at; recomputed when it
@@ -779,7 +798,7 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
                     if i == 2 and rs and S[bs + SC_PHI] < _CALM_PHI:
                         # the cuff weakened, creeping or stuck for a moment between creeps: a yield releases
                         # at most _CALM_PHI of its static-to-kinetic drop
-                        if S[bs + SC_STUCK] == 0.0 and S[bs + SC_W] * coarse * dt > _CALM_SLIP * P[bp + PC_DC]:
+                        if S[bs + SC_STUCK] == 0.0 and S[bs + SC_W] * cap_m * dt > _CALM_SLIP * P[bp + PC_DC]:
                             calm = False
                     elif S[bs + SC_STUCK] > 0.0:
                         lim = (P[bp + PC_MUK] + (P[bp + PC_MUS] - P[bp + PC_MUK]) * S[bs + SC_PHI] if rs
@@ -788,7 +807,7 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
                             calm = False
                     else:
                         calm = False
-            cap = coarse
+            cap = cap_m
             for d in range(D.shape[0] if calm else 0):
                 if D[d, D_ACT] > 0.0:
                     # a mass resting on the bottom rings on its contact spring: omega h <= 1
@@ -949,6 +968,9 @@ def step_until(S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, n_e
                 S[S_M1] = m1
                 S[S_C1] = 2.0 * zeta * m1 * np.sqrt(kth * g)
                 S[S_BETA] = beta
+                if coarse > 1:
+                    cap_m = mass_cap(mw, m1, P, coarse)
+                    C[C_CAP] = cap_m
         x_old = x
         fdrop = 0.0
         mdrop = 0.0

@@ -187,7 +187,8 @@ class Rig:
 
     def coarse_steps(self, P: np.ndarray | None = None) -> int:
         """Fine steps one coarse step of the adaptive stepping spans at most: ``omega h <= 1`` for the stiffest
-        mode of the held bottle (empty: its highest frequencies), and at most :data:`COARSE_STEP_S`.
+        mode of the held bottle (empty: its highest frequencies), and at most :data:`COARSE_STEP_S`. As water
+        comes in the kernel lets it grow to :data:`COARSE_STEP_S` (:func:`slipreflex.sim.kernel.mass_cap`).
 
         Examples
         --------

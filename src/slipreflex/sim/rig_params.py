@@ -24,6 +24,7 @@ from .contacts import fill_contact_params
 from .objects import WATER_DENSITY
 from .params import SLOSH_ROOT, WATER_KINEMATIC_VISCOSITY, SlipSensorParams
 from .sensors import Track
+from .stepping import COARSE_STEP_S
 
 if TYPE_CHECKING:
     from .rig import Rig
@@ -124,8 +125,17 @@ def rig_params(rig: Rig, flow_k: float, flow_phase: float) -> np.ndarray:
     P[K.P_FLOW_K] = flow_k
     P[K.P_FLOW_PHASE] = flow_phase
     water_params(rig, P)
+    kts = [P[K.P_C0 + i * K.PC_SIZE + K.PC_KT] for i in range(3)]
+    P[K.P_KT_SUM] = sum(kts)
+    P[K.P_TILT_K] = sum(k * P[K.P_LEVER0 + i] ** 2 for i, k in enumerate(kts))
     if rig.stepping == "adaptive":
         P[K.P_COARSE] = rig.coarse_steps(P)
+        # a filling bottle's modes slow down and its steps may grow (kernel.mass_cap), with rate-and-state
+        # contacts only: their stuck pads' predictor keeps the fine step's damping in a long step, the
+        # Coulomb contact's explicit update has none (with steps past the empty bottle's bound a stuck
+        # Coulomb pad slipped under a pour's splash where the fixed steps' did not)
+        rate_state = all(P[K.P_C0 + i * K.PC_SIZE + K.PC_LAW] == K.LAW_RATE_STATE for i in range(3))
+        P[K.P_COARSE_MAX] = max(P[K.P_COARSE], int(COARSE_STEP_S / ph.dt + 1e-9)) if rate_state else P[K.P_COARSE]
     K.fill_step_tables(P)
     return K.PARAMS.check(P)
 
