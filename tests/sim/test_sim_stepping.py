@@ -12,16 +12,13 @@ import os
 
 import numpy as np
 import pytest
+from scripts.research.stepping_rows import ROW_TOLERANCE  # the declared tolerance of a trial's row
 
 from slipreflex.core import hardware as hw
 from slipreflex.core.errors import ParameterError
 from slipreflex.sim import PAPER_DROP, PAPER_POUR, Rig, simulate_open_loop
 from slipreflex.sim import kernel as K
 from slipreflex.sim.rig import STEPPING_ENV, default_stepping, stepping
-
-#: The declared tolerances of a trial's row (docs/simulator.md, "Time step"): times in ms, distances in mm.
-ROW_TOLERANCE = {"onset_s": 2e-3, "true_onset_s": 2e-3, "response_ms": 3.0, "total_ms": 3.0, "fell_out_s": 2e-3,
-                 "true_slip_mm": 0.05, "true_slip_ms": 1.0}
 
 
 def _held_pour(kind: str, seconds: float, fs: float | None = None):
