@@ -70,23 +70,14 @@ def test_no_function_outside_the_numba_kernels_is_longer_than_80_lines():
     assert not long, f"functions over 80 lines (docstring excluded): {long}"
 
 
-#: Modules still over 800 lines, each with its reason (an entry whose module is back under the cap fails the test
-#: below, so none stays behind). sim/kernel.py: numba caches the compiled step against its own file alone, and the
-#: step inlines its helpers, so a helper moved to another module could run from a stale cache; the split waits
-#: for a cache stamp that covers every file a kernel inlines.
-OVER_800_UNTIL_SPLIT: frozenset[str] = frozenset({"sim/kernel.py"})
-
-
 def test_no_module_is_longer_than_800_lines():
     """Every module of the package, numba kernels' included: a module that outgrows 800 lines becomes a
     package of the same name re-exporting its public names."""
     pkg = ROOT / "src" / "slipreflex"
     sizes = {path.relative_to(pkg).as_posix(): len(path.read_text().splitlines()) for path in pkg.rglob("*.py")}
     assert len(sizes) > 80 and max(sizes.values()) > 400, "the package's modules were not read"
-    over = {name: n for name, n in sizes.items() if n > 800 and name not in OVER_800_UNTIL_SPLIT}
+    over = {name: n for name, n in sizes.items() if n > 800}
     assert not over, f"modules over 800 lines (split each into a package of the same name): {over}"
-    stale = sorted(name for name in OVER_800_UNTIL_SPLIT if sizes.get(name, 0) <= 800)
-    assert not stale, f"under the cap now (or gone): remove them from OVER_800_UNTIL_SPLIT: {stale}"
 
 
 def test_experiments_keeps_to_its_job_in_at_most_500_lines():
