@@ -58,15 +58,16 @@ def test_the_params_and_overrides_contract_names_the_unknown_keyword():
         assert cls(params, threshold=3.0).params.threshold == 3.0
 
 
-def test_no_function_outside_the_numba_kernels_is_longer_than_80_lines():
-    """In the package, the scripts and the benchmarks alike."""
+def test_no_function_is_longer_than_80_lines():
+    """In the package, the scripts and the benchmarks alike, numba kernels included (a long kernel is cut
+    into pieces numba inlines)."""
     from scripts.dev.function_lengths import ROOTS, function_lengths
     assert {root.relative_to(ROOT).as_posix() for root in ROOTS} == {"src/slipreflex", "scripts", "benchmarks"}
     rows = [row for root in ROOTS for row in function_lengths(root)]
-    assert any(kernel for _, _, kernel in rows), "the numba kernels were not recognised"
-    assert any(where.startswith("scripts/") for _, where, _ in rows), "the scripts were not measured"
-    assert any(where.startswith("benchmarks/") for _, where, _ in rows), "the benchmarks were not measured"
-    long = [(n, where) for n, where, kernel in rows if not kernel and n > 80]
+    assert any(where.endswith(" step_until") for _, where in rows), "the numba kernels were not measured"
+    assert any(where.startswith("scripts/") for _, where in rows), "the scripts were not measured"
+    assert any(where.startswith("benchmarks/") for _, where in rows), "the benchmarks were not measured"
+    long = [(n, where) for n, where in rows if n > 80]
     assert not long, f"functions over 80 lines (docstring excluded): {long}"
 
 

@@ -83,12 +83,16 @@ Model (one physics step of ``dt``, semi-implicit Euler):
 Noise is counter-based (splitmix64 of a per-channel key and the sample
 index), so a trace does not depend on how the run is cut into calls.
 
-Speed: the per-step helpers (:func:`_rs_contact`, :func:`_coulomb_contact`,
-:func:`_coulomb_post`) take and return scalars and the step writes its output
-rows element by element. An inlined helper that takes an array, or a row view
-``daq_out[nd]``, costs numba an atomic incref/decref pair per call that its
-reference-count pruning does not remove: with them a held grasp took about
-160 ns per step, without them about 50 ns (``benchmarks/bench_sim.py``).
+Speed: the step is a sequence of pieces numba inlines into :func:`step_until`
+(``inline="always"``: the fingers, the normal force, the loads, the splash, the
+drops, the slosh, the held bottle's contacts and micro-slips, the IMU, the DAQ
+rows, the tactile snapshots); each returns the scalars it changes, and the step
+writes its output rows element by element. An inlined helper that takes an
+array, or a row view ``daq_out[nd]``, costs numba an atomic incref/decref pair
+per call that its reference-count pruning does not remove (with them a held
+grasp took about 160 ns per step, without them about 50 ns,
+``benchmarks/bench_sim.py``), so :func:`step_until` hands its pieces borrowed
+arrays, which numba counts no references to.
 """
 
 from __future__ import annotations
