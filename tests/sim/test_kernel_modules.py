@@ -5,6 +5,7 @@ from __future__ import annotations
 import types
 
 import numpy as np
+import pytest
 
 from slipreflex.core._slots import Layout
 from slipreflex.sim import _kernel_layout, kernel_calm, kernel_contacts, kernel_noise, kernel_sensors, kernel_step
@@ -45,6 +46,7 @@ def test_the_noise_is_counter_based_and_the_calm_rules_round_to_steps():
     assert kernel_calm._fire_end(3.5 * dt, dt) == 4
 
 
+@pytest.mark.slow
 def test_the_scan_volts_are_the_sensors_along_a_track():
     from slipreflex.sim import Rig
 
@@ -53,3 +55,40 @@ def test_the_scan_volts_are_the_sensors_along_a_track():
     out = np.empty(4)
     kernel_sensors.volts_along(A.P, A.track, A.keys, np.linspace(0.0, 1e-3, 4), out)
     assert np.isfinite(out).all() and (out >= 0.0).all()
+
+
+
+def test_a_borrowed_array_is_the_same_memory_without_reference_counts():
+    """step_until hands its pieces borrowed arrays: the same memory (writes go through), and an inlined piece
+    taking one costs no reference count (numba's atomic incref, which its pruning leaves in a branching loop)."""
+    import re
+
+    from numba import njit
+
+    @njit(inline="always")
+    def piece(a, x):
+        if x > a[0]:
+            a[1] += x
+        return x * 0.5 + 1.0
+
+    @njit
+    def plain(a, n):
+        x = 0.0
+        for _ in range(n):
+            x = piece(a, x)
+        a[2] = x
+
+    @njit
+    def borrowed(a, n):
+        b = kernel_step._borrow(a)
+        x = 0.0
+        for _ in range(n):
+            x = piece(b, x)
+        b[2] = x
+
+    a, b = np.zeros(3), np.zeros(3)
+    plain(a, 10)
+    borrowed(b, 10)
+    assert (a == b).all() and b[1] > 0.0
+    increfs = [len(re.findall(r"call void @NRT_incref", f.inspect_llvm(f.signatures[0]))) for f in (plain, borrowed)]
+    assert increfs[0] > 0 and increfs[1] == 0, increfs
