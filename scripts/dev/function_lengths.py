@@ -1,9 +1,9 @@
 """Print the longest functions of the package, scripts/ and benchmarks/ (``def`` to last line, docstring excluded).
 
-Numba kernels (functions decorated with ``njit`` / ``jit``) are listed apart: they are
-written as flat loops on purpose. Used for the house measure "no function outside the
-numba kernels longer than about 80 lines", which holds in every folder of :data:`ROOTS`;
-``tests/house/test_house.py`` checks the limit.
+Numba kernels (functions decorated with ``njit`` / ``jit``) are measured like every other
+function: a long kernel is cut into pieces inlined at compile time (``inline="always"``).
+Used for the house measure "no function longer than 80 lines", which holds in every folder
+of :data:`ROOTS`; ``tests/house/test_house.py`` checks the limit.
 
 Usage: python -m scripts.dev.function_lengths [N] [--root src/slipreflex --root scripts ...] [--with-docstrings]
 """
@@ -19,18 +19,8 @@ REPO = Path(__file__).resolve().parents[2]
 ROOTS: tuple[Path, ...] = (REPO / "src" / "slipreflex", REPO / "scripts", REPO / "benchmarks")
 
 
-def _is_kernel(node: ast.AST) -> bool:
-    for d in getattr(node, "decorator_list", []):
-        target = d.func if isinstance(d, ast.Call) else d
-        name = target.attr if isinstance(target, ast.Attribute) else getattr(target, "id", "")
-        if name in ("njit", "jit", "vectorize", "guvectorize"):
-            return True
-    return False
-
-
-def function_lengths(root: Path, *, docstrings: bool = False) -> list[tuple[int, str, bool]]:
-    """(lines, "file:line name", is a numba kernel) for every function; docstrings not counted
-    unless ``docstrings``."""
+def function_lengths(root: Path, *, docstrings: bool = False) -> list[tuple[int, str]]:
+    """(lines, "file:line name") for every function; docstrings not counted unless ``docstrings``."""
     out = []
     for path in sorted(root.rglob("*.py")):
         tree = ast.parse(path.read_text(), filename=str(path))
@@ -43,7 +33,7 @@ def function_lengths(root: Path, *, docstrings: bool = False) -> list[tuple[int,
                         and isinstance(head.value.value, str)):
                     n -= head.end_lineno - head.lineno + 1
                 rel = path.relative_to(root.parent)
-                out.append((n, f"{rel}:{node.lineno} {node.name}", _is_kernel(node)))
+                out.append((n, f"{rel}:{node.lineno} {node.name}"))
     return sorted(out, reverse=True)
 
 
@@ -58,12 +48,9 @@ def main() -> None:
     rows = sorted((row for root in roots for row in function_lengths(root, docstrings=args.with_docstrings)),
                   reverse=True)
     what = "docstring included" if args.with_docstrings else "docstring excluded"
-    print(f"longest functions outside numba kernels (lines, {what}):")
-    for n, where, _ in [r for r in rows if not r[2]][: args.n]:
+    print(f"longest functions (lines, {what}):")
+    for n, where in rows[: args.n]:
         print(f"{n:5d}  {where}")
-    kernels = [r for r in rows if r[2]]
-    if kernels:
-        print(f"longest numba kernel: {kernels[0][0]} lines ({kernels[0][1]})")
 
 
 if __name__ == "__main__":

@@ -243,17 +243,21 @@ def test_compiled_must_be_a_bool():
 
 
 def test_the_loop_kernels_cache_goes_stale_when_the_physics_changes(tmp_path, monkeypatch):
-    """The kernels compile step_until into themselves: their disk cache is stamped with kernel.py too."""
+    """The kernels compile step_until into themselves: their disk cache is stamped with the physics' files too."""
     from pathlib import Path
 
-    from slipreflex.sim import kernel
+    from slipreflex.core import _numba_cache
+    from slipreflex.sim import kernel_contacts, kernel_step
 
     locator = closed._closed_slip._cache._impl.locator
-    assert isinstance(locator, closed._Stamped)
-    assert kernel.__file__ in locator._deps and closed.__file__ in locator._deps
-    physics = tmp_path / "kernel.py"
-    physics.write_text(Path(kernel.__file__).read_text())
-    monkeypatch.setattr(closed._Stamped, "_deps", (closed.__file__, str(physics), hw.__file__))
+    assert isinstance(locator, _numba_cache._Stamped)
+    files = _numba_cache.stamped_files(closed.__file__)
+    assert {closed.__file__, kernel_step.__file__, kernel_contacts.__file__, hw.__file__} <= set(files)
+    physics = tmp_path / "kernel_contacts.py"
+    physics.write_text(Path(kernel_contacts.__file__).read_text())
+    monkeypatch.setitem(_numba_cache._INLINES, kernel_step.__file__,
+                        tuple(str(physics) if p == kernel_contacts.__file__ else p
+                              for p in _numba_cache._INLINES[kernel_step.__file__]))
     before = locator.get_source_stamp()
     physics.write_text(physics.read_text() + "\n# a changed constant\n")
     assert locator.get_source_stamp() != before

@@ -28,26 +28,24 @@ run; ``tests/sim/test_closed_loop.py`` checks every trace array bit for bit.
 The kernels have one numba signature each (the reflex's step arrives as a
 first-class function of a fixed type), so they compile once (about 8 s, then
 loaded from the disk cache in about 0.3 s) and a new method does not recompile
-the loop. Their cache is stamped with ``sim/kernel.py`` too, whose physics they
-compile into themselves. What is left of their cost over the physics alone
-(about 10 % on a held pour, ``benchmarks/bench_closed_loop.py``) is mostly one
+the loop. Their cache is stamped with the kernel's files too, whose physics they
+compile into themselves (:func:`slipreflex.core._numba_cache.stamped_cache`).
+What is left of their cost over the physics alone (about 10 % on a held pour,
+``benchmarks/bench_closed_loop.py``) is mostly one
 :func:`~slipreflex.sim.kernel.step_until` call per stretch and the hand's queue.
 """
 
 from __future__ import annotations
 
-import hashlib
 import math
-import os
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from numba import njit, types
-from numba.core import caching as _caching
 
 from ..core import hardware as hw
-from ..core._numba_cache import CACHE
+from ..core._numba_cache import stamped_cache
 from ..core.errors import ParameterError
 from ..core.hardware import Finger, HandCommand
 from . import kernel as K
@@ -78,38 +76,10 @@ _GROW, _DONE, _BAD_COMMAND = 1, 0, 2
 
 
 
-class _Stamped:
-    """This module's cache goes stale when this file OR a file whose code its kernels inline changes.
-
-    numba stamps a cached kernel with its own source file only, but the loop kernels
-    compile :func:`slipreflex.sim.kernel.step_until` (and the hardware constants) into
-    themselves: without this, an edited physics would keep running from a stale cache.
-    The reflex's step is not inlined (a first-class function), so it is not listed.
-    Mixed into numba's locators (their order kept) for this module's functions only.
-    """
-
-    _deps = (__file__, K.__file__, hw.__file__)
-
-    def get_source_stamp(self):
-        h = hashlib.sha256()
-        for path in self._deps:
-            with open(path, "rb") as fh:
-                h.update(fh.read())
-        return h.hexdigest()
-
-    @classmethod
-    def from_function(cls, py_func, py_file):
-        if os.path.abspath(py_file) != os.path.abspath(__file__):
-            return None
-        return super().from_function(py_func, py_file)  # pyright: ignore[reportAttributeAccessIssue] (numba's locator, mixed in)
-
-
-_LOCATORS = getattr(getattr(_caching, "CacheImpl", None), "_locator_classes", None)
-_CACHE = CACHE and isinstance(_LOCATORS, list)   # another numba: no cache rather than a stale one
-if CACHE and isinstance(_LOCATORS, list) and not any(issubclass(c, _Stamped) for c in _LOCATORS):
-    _LOCATORS[:0] = [type(f"_Stamped{base.__name__}", (_Stamped, base), {})
-                     for base in (_caching.UserProvidedCacheLocator, _caching.InTreeCacheLocator,
-                                  _caching.UserWideCacheLocator)]
+#: the loop kernels compile step_until and tactile_frames (and the hardware constants) into themselves: their cache
+#: is stamped with those files too, or an edited physics would run from a stale cache. The reflex's step is not
+#: compiled in (a first-class function), so its file is not listed.
+_CACHE = stamped_cache(__file__, K.__file__, hw.__file__)
 
 _f1, _i1, _u1 = types.float64[::1], types.int64[::1], types.uint64[::1]
 _f2, _i2, _f3 = types.float64[:, ::1], types.int64[:, ::1], types.float64[:, :, ::1]
@@ -119,7 +89,7 @@ _COMMON = (_f1, _f1, _f1, _i1, _f1, _u1, _f2, _f2, _f1, _f1, _i1, _i1,  # RS RP 
            _f1, _i1, _f2, _f2, _f2, _f1, _f1, _f2, _f2, _f2, _i1)  # cfg cnt daq ev tac cmd_t cmd_v s_daq s_ev s_tac s_n
 
 
-@njit(cache=CACHE)
+@njit(cache=_CACHE)
 def stretch_end(index, rate, latency, daq_t):
     """Where the loop's next stretch of physics ends, waiting for input ``index`` of a stream at ``rate`` Hz
     (the DAQ's rows: ``rate`` 0, their times ``index * daq_t``; a sampler's frames: ``index / rate``).
@@ -146,7 +116,7 @@ def stretch_end(index, rate, latency, daq_t):
     return max(own, daq) if daq <= t + latency else own
 
 
-@njit(cache=CACHE, inline="always")
+@njit(cache=_CACHE, inline="always")
 def _apply_due(n, S, tgt, spd, q_i, q_v, masks, cnt, speed):
     """SimHand.apply_due(n) on the array queue, then the rig's copy into S."""
     head = cnt[N_QHEAD]
@@ -176,7 +146,7 @@ def _apply_due(n, S, tgt, spd, q_i, q_v, masks, cnt, speed):
         S[K.S_SPD0 + i] = spd[i]
 
 
-@njit(cache=CACHE, inline="always")
+@njit(cache=_CACHE, inline="always")
 def _enqueue(q_i, q_v, cnt, step, kind, group, value):
     """bisect.insort by (due step, sequence number), as SimHand.command queues."""
     count = cnt[N_COUNT]
@@ -196,14 +166,14 @@ def _enqueue(q_i, q_v, cnt, step, kind, group, value):
     cnt[N_QLEN] += 1
 
 
-@njit(cache=CACHE, inline="always")
+@njit(cache=_CACHE, inline="always")
 def _due(at, n, cfg):
     """SimHand.command's due step for a command sent at ``at``."""
     step = np.int64(np.ceil((at + cfg[CF_LAT]) / cfg[CF_DT] - _ROUND))
     return n if step < n else step
 
 
-@njit(cache=CACHE, inline="always")
+@njit(cache=_CACHE, inline="always")
 def _command(c, ts, n, cfg, q_i, q_v, cnt, cmd_g, cmd_off, g_level, g_until, cmd_t, cmd_v):
     """The loop's grip sender for command ``c`` at ``ts`` (sim/loop.py's ``_grip_sender``: per finger
     group, a rise becomes CLOSE at ``max(ts, until)`` and STOP ``rise / speed`` later) and its record."""
@@ -227,7 +197,7 @@ def _command(c, ts, n, cfg, q_i, q_v, cnt, cmd_g, cmd_off, g_level, g_until, cmd
 _ROOM_ROWS = 8
 
 
-@njit(cache=CACHE, inline="always")
+@njit(cache=_CACHE, inline="always")
 def _room(C, D, tac_rates, cfg, cnt, q_i, q_v, daq, ev, tac, cmd_t, n_groups, horizon, fs_in):
     """Whether every output can take what advancing to ``horizon`` may produce (else the caller grows them)."""
     dt = cfg[CF_DT]
@@ -253,7 +223,7 @@ def _room(C, D, tac_rates, cfg, cnt, q_i, q_v, daq, ev, tac, cmd_t, n_groups, ho
             and cnt[N_QLEN] + 2.0 * inputs * n_groups <= q_i.shape[0])
 
 
-@njit(cache=CACHE, inline="always")
+@njit(cache=_CACHE, inline="always")
 def _append(out, filled, rows, n):
     """Copy the first ``n`` rows of ``rows`` after the ``filled`` rows of ``out``; the new fill."""
     for r in range(n):
@@ -262,7 +232,7 @@ def _append(out, filled, rows, n):
     return filled + n
 
 
-@njit(cache=CACHE, inline="always")
+@njit(cache=_CACHE, inline="always")
 def _advance(horizon, S, C, P, keys, D, W, track, tac_rates, tac_next, tac_contact, tgt, spd, q_i, q_v,
              masks, cfg, cnt, daq, ev, tac, s_daq, s_ev, s_tac, s_n):
     """Rig._advance_rows(horizon): apply due commands, run the physics to the next due step or the end."""

@@ -16,7 +16,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ...core._numba_cache import CACHE
+from ...core._numba_cache import stamped_cache
+from . import _layout
 from ._layout import (
     KIND_SWT,
     P_FS,
@@ -45,8 +46,11 @@ from ._layout import (
     S_TRIGGERS,
 )
 
+#: these kernels compile in the layout's slot constants: their cache is stamped with it too
+_CACHE = stamped_cache(__file__, _layout.__file__)
 
-@njit(cache=CACHE, inline="always")
+
+@njit(cache=_CACHE, inline="always")
 def _feed(S, P, trig, hold):
     """Closer.feed: a trigger adds a quantum ("events"), or starts one when none runs ("hold")."""
     if trig and (not hold or S[S_REMAINING] <= 0.0):
@@ -54,7 +58,7 @@ def _feed(S, P, trig, hold):
         S[S_TRIGGERS] += 1.0
 
 
-@njit(cache=CACHE, inline="always")
+@njit(cache=_CACHE, inline="always")
 def _close(S, P, position):
     """Closer.step: one sample of the ramp; the new target, or NaN when it does not change.
 
@@ -82,7 +86,7 @@ def _close(S, P, position):
     return target if target != old else np.nan
 
 
-@njit(cache=CACHE, inline="always")
+@njit(cache=_CACHE, inline="always")
 def _nmsd_detect(S, P, frame):
     """NMSD on one flat frame: (largest |d_k - d_(k-1)|, any taxel over threshold)."""
     taxels = int(P[P_TAXELS])
@@ -103,7 +107,7 @@ def _nmsd_detect(S, P, frame):
     return stat, stat > P[P_THRESHOLD]
 
 
-@njit(cache=CACHE, inline="always")
+@njit(cache=_CACHE, inline="always")
 def _swt_detect(S, P, frame):
     """SWT-SD on one flat frame: (largest |c_k|, some taxel over threshold for persist + 1 frames).
 
@@ -144,7 +148,7 @@ def _swt_detect(S, P, frame):
     return stat, level
 
 
-@njit(cache=CACHE, inline="always")
+@njit(cache=_CACHE, inline="always")
 def _tactile_step(S, P, frame, position):
     taxels = int(P[P_TAXELS])
     if frame.size != taxels:
@@ -167,7 +171,7 @@ def _tactile_step(S, P, frame, position):
     return _close(S, P, position)
 
 
-@njit(cache=CACHE)
+@njit(cache=_CACHE)
 def tactile_step(S, P, frame, position):
     """One tactile frame through NMSD or SWT-SD (``P[P_KIND]``) and the closing rule.
 
@@ -179,19 +183,19 @@ def tactile_step(S, P, frame, position):
     return _tactile_step(S, P, frame, position)
 
 
-@njit(cache=CACHE)
+@njit(cache=_CACHE)
 def closer_feed(S, P, trig, hold):
     """Closer.feed on a Closer's state."""
     _feed(S, P, trig, hold)
 
 
-@njit(cache=CACHE)
+@njit(cache=_CACHE)
 def closer_step(S, P, position):
     """Closer.step on a Closer's state (NaN position: unknown; NaN result: no change)."""
     return _close(S, P, position)
 
 
-@njit(cache=CACHE)
+@njit(cache=_CACHE)
 def closing_kernel(triggers, positions, hold, S, P, out):
     """The closing rule over whole arrays (closing_commands): ``out[k]`` the target or NaN."""
     for k in range(triggers.size):
@@ -199,7 +203,7 @@ def closing_kernel(triggers, positions, hold, S, P, out):
         out[k] = _close(S, P, positions[k])
 
 
-@njit(cache=CACHE)
+@njit(cache=_CACHE)
 def tactile_kernel(frames, positions, S, P, out):
     """tactile_step over ``(K, taxels)`` frames (benchmarks and tests)."""
     for k in range(frames.shape[0]):

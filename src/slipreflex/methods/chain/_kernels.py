@@ -12,7 +12,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ...core._numba_cache import CACHE
+from ...core._numba_cache import stamped_cache
+from . import _layout
 from ._layout import (
     FILTER_BUTTERWORTH,
     FILTER_MEAN,
@@ -63,8 +64,11 @@ from ._layout import (
     S_ZI,
 )
 
+#: these kernels compile in the layout's slot constants: their cache is stamped with it too
+_CACHE = stamped_cache(__file__, _layout.__file__)
 
-@njit(cache=CACHE, inline="always")
+
+@njit(cache=_CACHE, inline="always")
 def sos_update(sos, zi, x):
     """One sample through every second-order section (scipy's sosfilt order)."""
     for s in range(sos.shape[0]):
@@ -75,7 +79,7 @@ def sos_update(sos, zi, x):
     return x
 
 
-@njit(cache=CACHE, inline="always")
+@njit(cache=_CACHE, inline="always")
 def encoder_update(x, prev, acc, theta, remaining, clock, theta0, dath, dath_samples, floor,
                    acc_reset, leak, leak_on):
     """docs/method.md section 1.2 for one sample, with the accumulator's optional leak and periodic reset.
@@ -108,7 +112,7 @@ def encoder_update(x, prev, acc, theta, remaining, clock, theta0, dath, dath_sam
     return event, acc_seen, theta_used, acc, theta, remaining, clock
 
 
-@njit(cache=CACHE, inline="always")
+@njit(cache=_CACHE, inline="always")
 def mpi_update(v, p_base, h, m_prev, zeros, kp, ki, reset_after, lo, hi, position):
     """docs/method.md section 1.4 for one window; a reset takes ``position`` as P0, or the command if it is NaN.
 
@@ -129,13 +133,13 @@ def mpi_update(v, p_base, h, m_prev, zeros, kp, ki, reset_after, lo, hi, positio
     return m, p_base, h, zeros
 
 
-@njit(cache=CACHE)
+@njit(cache=_CACHE)
 def lowpass_kernel(raw, sos, zi, out):
     for k in range(raw.size):
         out[k] = sos_update(sos, zi, raw[k])
 
 
-@njit(cache=CACHE)
+@njit(cache=_CACHE)
 def encode_kernel(x, prev, theta0, dath, dath_samples, floor, acc_reset, leak, leak_on,
                   events, acc_out, theta_out):
     acc = 0.0
@@ -152,7 +156,7 @@ def encode_kernel(x, prev, theta0, dath, dath_samples, floor, acc_reset, leak, l
         prev = x[k]
 
 
-@njit(cache=CACHE)
+@njit(cache=_CACHE)
 def mpi_kernel(v, p0, m0, kp, ki, reset_after, lo, hi, out):
     p_base = p0
     h = 0.0
@@ -167,7 +171,7 @@ def mpi_kernel(v, p0, m0, kp, ki, reset_after, lo, hi, out):
 
 # --- the composed chain over a state array (layout: slipreflex.methods.chain._layout) -------------
 
-@njit(cache=CACHE, inline="always")
+@njit(cache=_CACHE, inline="always")
 def _offsets(P):
     """Start of zi, of the event ring and of the mean ring in the state vector."""
     nsec = int(P[P_NSEC])
@@ -175,7 +179,7 @@ def _offsets(P):
     return nsec, slide, slide + int(P[P_N])
 
 
-@njit(cache=CACHE, inline="always")
+@njit(cache=_CACHE, inline="always")
 def _filter_step(S, P, raw, first):
     kind = P[P_FILTER]
     nsec, _slide, mean = _offsets(P)
@@ -211,7 +215,7 @@ def _filter_step(S, P, raw, first):
     return raw
 
 
-@njit(cache=CACHE, inline="always")
+@njit(cache=_CACHE, inline="always")
 def _encoder_step(S, P, x):
     event, acc_seen, theta_used, acc, theta, remaining, clock = encoder_update(
         x, S[S_PREV], S[S_ACC], S[S_THETA], int(S[S_REMAINING]), int(S[S_CLOCK]), P[P_THETA0],
@@ -227,7 +231,7 @@ def _encoder_step(S, P, x):
     return event
 
 
-@njit(cache=CACHE, inline="always")
+@njit(cache=_CACHE, inline="always")
 def _event_mpi_step(S, P, event, position):
     """The event-driven MPI for one sample; returns the new command or NaN if unchanged."""
     n = int(P[P_N])
@@ -257,7 +261,7 @@ def _event_mpi_step(S, P, event, position):
     return m if m != m_prev else np.nan
 
 
-@njit(cache=CACHE, inline="always")
+@njit(cache=_CACHE, inline="always")
 def _chain_step(S, P, raw, position):
     """One raw sample through the whole chain; the new command, or NaN for none.
 
@@ -301,7 +305,7 @@ def _chain_step(S, P, raw, position):
     return out
 
 
-@njit(cache=CACHE)
+@njit(cache=_CACHE)
 def chain_step(S, P, raw, position):
     """One raw sample through the whole chain (state ``S``, parameters ``P``, layout in
     :mod:`slipreflex.methods.chain._layout`); the new command, or NaN for none. ``position`` is the
@@ -309,7 +313,7 @@ def chain_step(S, P, raw, position):
     return _chain_step(S, P, raw, position)
 
 
-@njit(cache=CACHE)
+@njit(cache=_CACHE)
 def chain_kernel(raw, S, P, x_out, events, acc_out, theta_out, counts, commands, sample_commands):
     """chain_step over a whole recording, keeping its per-sample and per-window outputs.
 
@@ -335,7 +339,7 @@ def chain_kernel(raw, S, P, x_out, events, acc_out, theta_out, counts, commands,
             commands[z] = S[S_M]
 
 
-@njit(cache=CACHE)
+@njit(cache=_CACHE)
 def _staged_chain(raw, P, x_out, events, acc_out, theta_out, counts, commands, sample_commands):
     """chain_kernel's outputs from the initial state, one stage over the whole recording at a time."""
     nsec, _slide, _mean = _offsets(P)
