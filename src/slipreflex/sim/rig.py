@@ -64,6 +64,7 @@ from .params import (
     TactileParams,
     WaterParams,
 )
+from .closing_memo import CLOSINGS, Closing, closing_key
 from .rig_data import DaqBlock, KernelArrays, SlipEvent
 from .rig_params import fill_slip_sensor_params, rig_params
 from .sensors import Track
@@ -578,6 +579,32 @@ class Rig:
         settle = hp.settle_s if settle is None else float(settle)
         if not (0 < speed <= hp.speed_units_s):
             raise ParameterError(f"speed must be in (0, {hp.speed_units_s}] units/s, got {speed!r}")
+        # the closing phase does not depend on the contacts' friction: kept once per its other inputs
+        key = self._closing_key(force, speed, settle)
+        kept = CLOSINGS.get(key)
+        if kept is None:
+            t_contact = self._close(force, speed, settle)
+            if key is not None:
+                CLOSINGS.put(key, self._closing(t_contact))
+        else:
+            t_contact = self._restore_closing(kept)
+        self._S[K.S_SUPPORTED] = 0.0
+        t_release = self.t
+        self._advance_rows(self.t + settle)
+        S = self._S
+        stable = bool(S[K.S_FALLEN] == 0.0 and S[K.S_STUCK] > 0.0 and abs(S[K.S_V]) < 1e-3)
+        pos = self.hand.positions()
+        self._grasp = GraspResult(position=pos[hw.SLIP_FINGER], force_n=float(S[K.S_NC]),
+                                  positions={f: pos[f] for f in hw.TRIPOD}, contact=True, stable=stable, t=self.t,
+                                  t_contact=t_contact, t_release=t_release)
+        return self._grasp
+
+    def _close(self, force: float, speed: float, settle: float) -> float:
+        """The grasp's closing phase: close until both arrays read ``force``, settle on the support.
+
+        Returns when the first finger's array reached the force (s).
+        """
+        hp = self.hand_params
         pwm = speed / hp.speed_units_s * hw.PWM_MAX
         self.hand.command(HandCommand.CLOSE, hw.TRIPOD, pwm)
         s_idx = self.tactile_sampler(hp.grasp_poll_fs, Finger.INDEX)
@@ -605,16 +632,50 @@ class Rig:
             s_idx.close()
             s_th.close()
         self._advance_rows(self.t + settle)
-        self._S[K.S_SUPPORTED] = 0.0
-        t_release = self.t
-        self._advance_rows(self.t + settle)
-        S = self._S
-        stable = bool(S[K.S_FALLEN] == 0.0 and S[K.S_STUCK] > 0.0 and abs(S[K.S_V]) < 1e-3)
-        pos = self.hand.positions()
-        self._grasp = GraspResult(position=pos[hw.SLIP_FINGER], force_n=float(S[K.S_NC]),
-                                  positions={f: pos[f] for f in hw.TRIPOD}, contact=True, stable=stable, t=self.t,
-                                  t_contact=t_contact, t_release=t_release)
-        return self._grasp
+        return t_contact
+
+    def _closing_key(self, force: float, speed: float, settle: float) -> bytes | None:
+        """Everything the closing phase reads (see :mod:`slipreflex.sim.closing_memo`), or None: a rig that has
+        done something already closes in full."""
+        hand = self.hand
+        fresh = (self._n == 0 and not self._samplers and self._n_samplers_made == 0 and self._oneoff == 0
+                 and not self.perturbations and not self._daq_chunks and not self._events
+                 and hand.next_due_step() is None and not hand.closing_until)
+        if not fresh:
+            return None
+        text = repr((force, speed, settle, self.history, self.stepping, self.hand_params, self.tactile_params,
+                     sorted(hand._others.items()), hand._count))
+        return closing_key(self._P, (self._S, self._C, self._keys, self._D, self._W, hand.targets, hand.speeds),
+                           self.track.rho, text)
+
+    def _closing(self, t_contact: float) -> Closing:
+        """This rig's state at the end of its closing phase (copies)."""
+        hand = self.hand
+        return Closing(S=self._S.copy(), C=self._C.copy(), D=self._D.copy(), W=self._W.copy(),
+                       daq=tuple(c.copy() for c in self._daq_chunks), events=tuple(e.copy() for e in self._events),
+                       hand=(list(hand._pending), hand._count, dict(hand._others), dict(hand.closing_until),
+                             hand.targets.copy(), hand.speeds.copy()),
+                       samplers_made=self._n_samplers_made, oneoff=self._oneoff, t_contact=t_contact)
+
+    def _restore_closing(self, kept: Closing) -> float:
+        """Take a kept closing phase's state (copies; the parameters, and so the friction, stay this rig's)."""
+        self._S[:] = kept.S
+        self._C[:] = kept.C
+        self._D = kept.D.copy()
+        self._W = kept.W.copy()
+        self._daq_chunks = [c.copy() for c in kept.daq] if self.history else []
+        self._events = [e.copy() for e in kept.events]
+        hand = self.hand
+        pending, count, others, closing_until, targets, speeds = kept.hand
+        hand.restore_queue(list(pending), count)
+        hand._others = dict(others)
+        hand.closing_until = dict(closing_until)
+        hand.targets[:] = targets
+        hand.speeds[:] = speeds
+        self._n_samplers_made = kept.samplers_made
+        self._oneoff = kept.oneoff
+        self._sync_samplers()
+        return kept.t_contact
 
     def release_support(self) -> None:
         """Remove the bottle's support without the grasp routine (the bottle hangs in the fingers).
