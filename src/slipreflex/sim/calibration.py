@@ -36,6 +36,7 @@ import numpy as np
 from ..core import hardware as hw
 from ..core.errors import ParameterError
 from ..core.registry import EntryPoint
+from . import kernel as K
 from .contacts import static_capacity
 from .objects import PAPER_DROP, PAPER_POUR, WATER_DENSITY, Bottle, Drop, Pour
 from .rig import Rig
@@ -166,10 +167,11 @@ OBSERVED_ONSET = EntryPoint("slipreflex.analysis.events:first_pour_slip")
 
 def _observed_onset(rig, t_rec: float, t0: float, pour: Pour) -> tuple[float, float]:
     """(onset time, flow-sensor ml at it) of the first slip the accelerometer recipe finds (NaN, NaN if none)."""
-    h = rig.daq_history(since=t_rec)
+    rows, _ = rig.daq_rows(since=t_rec)   # the three columns read, as rig.daq_history would give them
+    t, accel = rows[:, K.O_T].copy(), rows[:, K.O_AX:K.O_AZ + 1].copy()
     lo = t0 + math.sqrt(2.0 * pour.fall_height_m / hw.GRAVITY) + LANDING_S
-    ml = h.flow_pulses / hw.FLOW_PULSES_PER_LITRE * 1000.0
-    return OBSERVED_ONSET(h.t, h.accel, ml, (lo, float(h.t[-1]) if h.t.size else lo))
+    ml = rows[:, K.O_PULSES].astype(np.int64) / hw.FLOW_PULSES_PER_LITRE * 1000.0
+    return OBSERVED_ONSET(t, accel, ml, (lo, float(t[-1]) if t.size else lo))
 
 
 def first_slip(bottle: Bottle, *, rig_kwargs: dict[str, Any] | None = None, seeds=CALIBRATION_SEEDS,
@@ -213,7 +215,7 @@ def first_slip(bottle: Bottle, *, rig_kwargs: dict[str, Any] | None = None, seed
         stop, last = end, -1.0
         while rig.t < stop and rig.t > last:      # (the rig stops on its own time grid, at or before `stop`)
             last = rig.t
-            rig.advance_block(min(stop, rig.t + 0.5))
+            rig.run_to(min(stop, rig.t + 0.5))
             fell = rig.fall_time
             if fell is not None:
                 stop = min(stop, float(fell) + _AFTER_FALL_S)

@@ -41,6 +41,7 @@ Examples
 
 from __future__ import annotations
 
+import copy
 import math
 import operator
 from typing import Any
@@ -182,6 +183,27 @@ class Rig:
         self._no_tac = np.empty((0, K.T_SIZE))
         self._grasp: GraspResult | None = None
 
+    def __deepcopy__(self, memo: dict) -> Rig:
+        """A copy that runs exactly as this rig runs (same state, same random streams); it shares the slip
+        sensor's track (read-only, as every rig built from the same inputs shares it) and gets its own
+        scratch buffers (they carry nothing from one kernel call to the next) instead of copies of them.
+
+        Examples
+        --------
+        >>> import copy
+        >>> rig = Rig("TR"); _ = rig.advance(0.01); twin = copy.deepcopy(rig)
+        >>> twin.track is rig.track, twin.hand.positions() == rig.hand.positions(), twin.t == rig.t
+        (True, True, True)
+        """
+        twin = type(self).__new__(type(self))
+        memo[id(self)] = twin
+        memo[id(self.track)] = self.track
+        for scratch in (self._daq_buf, self._ev_buf, self._counts):
+            memo[id(scratch)] = np.empty_like(scratch)
+        for name, value in self.__dict__.items():
+            twin.__dict__[name] = copy.deepcopy(value, memo)
+        return twin
+
     # ------------------------------------------------------------------ setup
     def _params(self, flow_k: float, flow_phase: float) -> np.ndarray:
         return rig_params(self, flow_k, flow_phase)
@@ -320,6 +342,17 @@ class Rig:
         """
         seq0 = int(self._C[K.C_DAQ])
         return DaqBlock.from_rows(self._advance_rows(t), seq0)
+
+    def run_to(self, t: float) -> int:
+        """Like :meth:`advance_to`, but nothing is handed back (the history keeps the samples): the number of
+        new DAQ samples.
+
+        Examples
+        --------
+        >>> rig = Rig("TR"); rig.run_to(1.0), rig.daq_history().t.size
+        (334, 334)
+        """
+        return int(self._advance_rows(t).shape[0])
 
     def advance_slip(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Advance to ``t``; return the new DAQ samples' times, slip volts and middle-finger positions.
@@ -831,6 +864,20 @@ class Rig:
         >>> b = rig.daq_history(since=0.02); b.seq.tolist(), b.t.size
         ([7, 8, 9, 10], 4)
         """
+        rows, skip = self.daq_rows(since)
+        return DaqBlock.from_rows(rows, skip)
+
+    def daq_rows(self, since: float | None = None) -> tuple[np.ndarray, int]:
+        """The rows :meth:`daq_history` is made of, in the kernel's layout (columns ``kernel.O_*``), and the
+        sample number of the first: for a reader that needs a few columns (read them, never write them).
+
+        Examples
+        --------
+        >>> rig = Rig("TR"); _ = rig.advance(0.03)
+        >>> rows, first = rig.daq_rows(since=0.02)
+        >>> rows[:, K.O_T].size, first
+        (4, 7)
+        """
         chunks = self._daq_chunks
         skip = 0
         if since is not None:
@@ -841,4 +888,4 @@ class Rig:
         if since is not None:
             i = int(np.searchsorted(rows[:, K.O_T], since - 1e-12, side="left"))
             rows, skip = rows[i:], skip + i
-        return DaqBlock.from_rows(rows, skip)
+        return rows, skip
