@@ -1,4 +1,4 @@
-"""Work not repeated, the same bits: a grasp's closing phase kept across frictions, rig copies, kept pours and textures."""
+"""Work not repeated, the same bits: closing phases kept across frictions, rig copies, kept pours and textures."""
 
 import copy
 from dataclasses import replace

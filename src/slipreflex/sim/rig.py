@@ -54,6 +54,7 @@ from ..core.errors import ParameterError
 from ..core.hardware import Finger, HandCommand
 from ..core.interfaces import DaqSample, GraspResult
 from . import kernel as K
+from .closing_memo import CLOSINGS, Closing, closing_key
 from .loads import kind_of
 from .objects import BOTTLES, Bottle, Surface
 from .params import (
@@ -65,7 +66,6 @@ from .params import (
     TactileParams,
     WaterParams,
 )
-from .closing_memo import CLOSINGS, Closing, closing_key
 from .rig_data import DaqBlock, KernelArrays, SlipEvent
 from .rig_params import fill_slip_sensor_params, rig_params
 from .sensors import Track
