@@ -34,16 +34,25 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
+import math
 import weakref
 from collections import OrderedDict
 from collections.abc import Iterator
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..core import hardware as hw
+from ..core.errors import ParameterError
+from ..core.hardware import Finger, HandCommand
 from . import kernel as K
 
-__all__ = ["Closing", "ClosingMemo", "CLOSINGS", "CLOSINGS_KEEP", "friction_slots", "array_digest"]
+if TYPE_CHECKING:
+    from .rig import Rig
+
+__all__ = ["Closing", "ClosingMemo", "CLOSINGS", "CLOSINGS_KEEP", "friction_slots", "array_digest", "closing_key",
+           "close", "closing_key_of", "closing_of", "restore_closing"]
 
 #: Closing phases :data:`CLOSINGS` keeps (each about 0.1-0.2 MB: its DAQ rows; a plant's calibration
 #: needs at most one per bottle and seed, three seeds and three bottles).
@@ -207,3 +216,119 @@ class ClosingMemo:
 
 #: This process's kept closing phases (:meth:`slipreflex.sim.Rig.grasp` reads and fills it).
 CLOSINGS = ClosingMemo()
+
+
+def close(rig: Rig, force: float, speed: float, settle: float) -> float:
+    """The grasp's closing phase on ``rig``: close until both arrays read ``force``, settle on the support.
+
+    Returns when the first finger's array reached the force (s); the support is still there.
+
+    Examples
+    --------
+    >>> from slipreflex.sim import Rig
+    >>> rig = Rig("TR"); t_contact = close(rig, 0.8, 150.0, 0.5)
+    >>> 0 < t_contact < rig.t, rig.kernel_arrays().S[K.S_SUPPORTED] > 0
+    (True, True)
+    """
+    hp = rig.hand_params
+    pwm = speed / hp.speed_units_s * hw.PWM_MAX
+    rig.hand.command(HandCommand.CLOSE, hw.TRIPOD, pwm)
+    s_idx = rig.tactile_sampler(hp.grasp_poll_fs, Finger.INDEX)
+    s_th = rig.tactile_sampler(hp.grasp_poll_fs, Finger.THUMB)
+    stopped: set[Finger] = set()
+    t_contact = math.nan
+    t_limit = rig.t + 1.5 * hw.FINGER_MAX / speed + 1.0
+    try:
+        while len(stopped) < 2:
+            if rig.t > t_limit:
+                raise ParameterError(f"grasp: fingers closed fully without reaching {force} N "
+                                     f"(bottle diameter {rig.bottle.diameter_m} m too small?)")
+            rig.run_to(max(s_idx.next_time, rig.t + rig.physics.dt))
+            _, fi = s_idx.read()
+            _, ft = s_th.read()
+            if Finger.INDEX not in stopped and fi.shape[0] and fi[-1].sum() >= force:
+                rig.hand.command(HandCommand.STOP, [Finger.INDEX, Finger.MIDDLE])
+                stopped.add(Finger.INDEX)
+                t_contact = rig.t if math.isnan(t_contact) else t_contact
+            if Finger.THUMB not in stopped and ft.shape[0] and ft[-1].sum() >= force:
+                rig.hand.command(HandCommand.STOP, [Finger.THUMB])
+                stopped.add(Finger.THUMB)
+                t_contact = rig.t if math.isnan(t_contact) else t_contact
+    finally:
+        s_idx.close()
+        s_th.close()
+    rig.run_to(rig.t + settle)
+    return t_contact
+
+
+def closing_key_of(rig: Rig, force: float, speed: float, settle: float) -> bytes | None:
+    """Everything the closing phase of ``rig.grasp(force, speed=speed, settle=settle)`` reads, as a key; None
+    (closed in full, nothing kept) for a rig that has done something already.
+
+    Examples
+    --------
+    >>> from slipreflex.sim import Rig
+    >>> closing_key_of(Rig("TR"), 0.8, 150.0, 0.5) == closing_key_of(Rig("TR"), 0.8, 150.0, 0.5)
+    True
+    >>> rig = Rig("TR"); _ = rig.run_to(0.01); closing_key_of(rig, 0.8, 150.0, 0.5) is None
+    True
+    """
+    hand = rig.hand
+    fresh = (rig.step_index == 0 and not rig.samplers and rig._n_samplers_made == 0 and rig._oneoff == 0
+             and not rig.perturbations and not rig._daq_chunks and not rig._events
+             and hand.next_due_step() is None and not hand.closing_until)
+    if not fresh:
+        return None
+    text = repr((force, speed, settle, rig.history, rig.stepping, rig.hand_params, rig.tactile_params,
+                 sorted(hand._others.items()), hand._count))
+    a = rig.kernel_arrays()
+    return closing_key(a.P, (a.S, a.C, a.keys, a.D, a.W, hand.targets, hand.speeds), rig.track.rho, text)
+
+
+def closing_of(rig: Rig, t_contact: float) -> Closing:
+    """``rig``'s state at the end of its closing phase (copies).
+
+    Examples
+    --------
+    >>> from slipreflex.sim import Rig
+    >>> rig = Rig("TR"); kept = closing_of(rig, close(rig, 0.8, 150.0, 0.5))
+    >>> kept.samplers_made, kept.S is rig.kernel_arrays().S
+    (2, False)
+    """
+    hand = rig.hand
+    a = rig.kernel_arrays()
+    return Closing(S=a.S.copy(), C=a.C.copy(), D=a.D.copy(), W=a.W.copy(),
+                   daq=tuple(c.copy() for c in rig._daq_chunks), events=tuple(e.copy() for e in rig._events),
+                   hand=(list(hand._pending), hand._count, dict(hand._others), dict(hand.closing_until),
+                         hand.targets.copy(), hand.speeds.copy()),
+                   samplers_made=rig._n_samplers_made, oneoff=rig._oneoff, t_contact=t_contact)
+
+
+def restore_closing(rig: Rig, kept: Closing) -> float:
+    """Give ``rig`` a kept closing phase's state (copies; its parameters, so its friction, stay its own);
+    return when the first finger's array reached the force (s).
+
+    Examples
+    --------
+    >>> from slipreflex.sim import Rig
+    >>> a = Rig("TR"); kept = closing_of(a, close(a, 0.8, 150.0, 0.5))
+    >>> b = Rig("TR"); _ = restore_closing(b, kept); b.t == a.t
+    True
+    """
+    rig._S[:] = kept.S
+    rig._C[:] = kept.C
+    rig._D = kept.D.copy()
+    rig._W = kept.W.copy()
+    rig._daq_chunks = [c.copy() for c in kept.daq] if rig.history else []
+    rig._events = [e.copy() for e in kept.events]
+    hand = rig.hand
+    pending, count, others, closing_until, targets, speeds = kept.hand
+    hand.restore_queue(list(pending), count)
+    hand._others = dict(others)
+    hand.closing_until = dict(closing_until)
+    hand.targets[:] = targets
+    hand.speeds[:] = speeds
+    rig._n_samplers_made = kept.samplers_made
+    rig._oneoff = kept.oneoff
+    rig._sync_samplers()
+    return kept.t_contact

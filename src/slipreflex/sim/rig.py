@@ -51,10 +51,10 @@ import numpy as np
 from ..core import hardware as hw
 from ..core._slots import slot
 from ..core.errors import ParameterError
-from ..core.hardware import Finger, HandCommand
+from ..core.hardware import Finger
 from ..core.interfaces import DaqSample, GraspResult
 from . import kernel as K
-from .closing_memo import CLOSINGS, Closing, closing_key
+from .closing_memo import CLOSINGS, close, closing_key_of, closing_of, restore_closing
 from .loads import kind_of
 from .objects import BOTTLES, Bottle, Surface
 from .params import (
@@ -66,7 +66,7 @@ from .params import (
     TactileParams,
     WaterParams,
 )
-from .rig_data import DaqBlock, KernelArrays, SlipEvent
+from .rig_data import DaqBlock, KernelArrays, SlipEvent, slip_episodes
 from .rig_params import fill_slip_sensor_params, rig_params
 from .sensors import Track
 from .sim_hand import SimHand
@@ -613,14 +613,14 @@ class Rig:
         if not (0 < speed <= hp.speed_units_s):
             raise ParameterError(f"speed must be in (0, {hp.speed_units_s}] units/s, got {speed!r}")
         # the closing phase does not depend on the contacts' friction: kept once per its other inputs
-        key = self._closing_key(force, speed, settle)
+        key = closing_key_of(self, force, speed, settle)
         kept = CLOSINGS.get(key)
         if kept is None:
-            t_contact = self._close(force, speed, settle)
+            t_contact = close(self, force, speed, settle)
             if key is not None:
-                CLOSINGS.put(key, self._closing(t_contact))
+                CLOSINGS.put(key, closing_of(self, t_contact))
         else:
-            t_contact = self._restore_closing(kept)
+            t_contact = restore_closing(self, kept)
         self._S[K.S_SUPPORTED] = 0.0
         t_release = self.t
         self._advance_rows(self.t + settle)
@@ -631,84 +631,6 @@ class Rig:
                                   positions={f: pos[f] for f in hw.TRIPOD}, contact=True, stable=stable, t=self.t,
                                   t_contact=t_contact, t_release=t_release)
         return self._grasp
-
-    def _close(self, force: float, speed: float, settle: float) -> float:
-        """The grasp's closing phase: close until both arrays read ``force``, settle on the support.
-
-        Returns when the first finger's array reached the force (s).
-        """
-        hp = self.hand_params
-        pwm = speed / hp.speed_units_s * hw.PWM_MAX
-        self.hand.command(HandCommand.CLOSE, hw.TRIPOD, pwm)
-        s_idx = self.tactile_sampler(hp.grasp_poll_fs, Finger.INDEX)
-        s_th = self.tactile_sampler(hp.grasp_poll_fs, Finger.THUMB)
-        stopped: set[Finger] = set()
-        t_contact = math.nan
-        t_limit = self.t + 1.5 * hw.FINGER_MAX / speed + 1.0
-        try:
-            while len(stopped) < 2:
-                if self.t > t_limit:
-                    raise ParameterError(f"grasp: fingers closed fully without reaching {force} N "
-                                         f"(bottle diameter {self.bottle.diameter_m} m too small?)")
-                self._advance_rows(max(s_idx.next_time, self.t + self.physics.dt))
-                _, fi = s_idx.read()
-                _, ft = s_th.read()
-                if Finger.INDEX not in stopped and fi.shape[0] and fi[-1].sum() >= force:
-                    self.hand.command(HandCommand.STOP, [Finger.INDEX, Finger.MIDDLE])
-                    stopped.add(Finger.INDEX)
-                    t_contact = self.t if math.isnan(t_contact) else t_contact
-                if Finger.THUMB not in stopped and ft.shape[0] and ft[-1].sum() >= force:
-                    self.hand.command(HandCommand.STOP, [Finger.THUMB])
-                    stopped.add(Finger.THUMB)
-                    t_contact = self.t if math.isnan(t_contact) else t_contact
-        finally:
-            s_idx.close()
-            s_th.close()
-        self._advance_rows(self.t + settle)
-        return t_contact
-
-    def _closing_key(self, force: float, speed: float, settle: float) -> bytes | None:
-        """Everything the closing phase reads (see :mod:`slipreflex.sim.closing_memo`), or None: a rig that has
-        done something already closes in full."""
-        hand = self.hand
-        fresh = (self._n == 0 and not self._samplers and self._n_samplers_made == 0 and self._oneoff == 0
-                 and not self.perturbations and not self._daq_chunks and not self._events
-                 and hand.next_due_step() is None and not hand.closing_until)
-        if not fresh:
-            return None
-        text = repr((force, speed, settle, self.history, self.stepping, self.hand_params, self.tactile_params,
-                     sorted(hand._others.items()), hand._count))
-        return closing_key(self._P, (self._S, self._C, self._keys, self._D, self._W, hand.targets, hand.speeds),
-                           self.track.rho, text)
-
-    def _closing(self, t_contact: float) -> Closing:
-        """This rig's state at the end of its closing phase (copies)."""
-        hand = self.hand
-        return Closing(S=self._S.copy(), C=self._C.copy(), D=self._D.copy(), W=self._W.copy(),
-                       daq=tuple(c.copy() for c in self._daq_chunks), events=tuple(e.copy() for e in self._events),
-                       hand=(list(hand._pending), hand._count, dict(hand._others), dict(hand.closing_until),
-                             hand.targets.copy(), hand.speeds.copy()),
-                       samplers_made=self._n_samplers_made, oneoff=self._oneoff, t_contact=t_contact)
-
-    def _restore_closing(self, kept: Closing) -> float:
-        """Take a kept closing phase's state (copies; the parameters, and so the friction, stay this rig's)."""
-        self._S[:] = kept.S
-        self._C[:] = kept.C
-        self._D = kept.D.copy()
-        self._W = kept.W.copy()
-        self._daq_chunks = [c.copy() for c in kept.daq] if self.history else []
-        self._events = [e.copy() for e in kept.events]
-        hand = self.hand
-        pending, count, others, closing_until, targets, speeds = kept.hand
-        hand.restore_queue(list(pending), count)
-        hand._others = dict(others)
-        hand.closing_until = dict(closing_until)
-        hand.targets[:] = targets
-        hand.speeds[:] = speeds
-        self._n_samplers_made = kept.samplers_made
-        self._oneoff = kept.oneoff
-        self._sync_samplers()
-        return kept.t_contact
 
     def release_support(self) -> None:
         """Remove the bottle's support without the grasp routine (the bottle hangs in the fingers).
@@ -826,31 +748,7 @@ class Rig:
         >>> Rig("TR").slip_events()
         []
         """
-        ev = self.events()
-        out: list[SlipEvent] = []
-        onset = None
-        last_stick = None
-        s_on = 0.0
-        x_stick = 0.0
-        for t, kind, x in ev:
-            if kind == K.E_ONSET:
-                if onset is not None and last_stick is not None and t - last_stick >= quiet:
-                    out.append(SlipEvent(onset, last_stick, x_stick - s_on))
-                    onset = None
-                if onset is None:
-                    onset, s_on = float(t), float(x)
-                last_stick = None
-            elif kind == K.E_STICK and onset is not None:
-                last_stick, x_stick = float(t), float(x)
-            elif kind == K.E_FALLEN and onset is not None:
-                out.append(SlipEvent(onset, None, float(x) - s_on))
-                onset = None
-        if onset is not None:
-            if last_stick is not None and not self.slipping and not self.fallen:
-                out.append(SlipEvent(onset, last_stick, x_stick - s_on))
-            else:
-                out.append(SlipEvent(onset, None, self.displacement - s_on))
-        return out
+        return slip_episodes(self.events(), quiet, self.slipping or self.fallen, self.displacement)
 
     def daq_history(self, since: float | None = None) -> DaqBlock:
         """Every DAQ sample (and truth) produced since the rig started (empty with ``history=False``),
