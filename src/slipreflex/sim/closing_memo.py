@@ -227,7 +227,7 @@ def close(rig: Rig, force: float, speed: float, settle: float) -> float:
     --------
     >>> from slipreflex.sim import Rig
     >>> rig = Rig("TR"); t_contact = close(rig, 0.8, 150.0, 0.5)
-    >>> 0 < t_contact < rig.t, rig.kernel_arrays().S[K.S_SUPPORTED] > 0
+    >>> 0 < t_contact < rig.t, bool(rig.kernel_arrays().S[K.S_SUPPORTED] > 0)
     (True, True)
     """
     hp = rig.hand_params
