@@ -45,6 +45,7 @@ Examples
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -216,11 +217,25 @@ def accel_envelope(t, signal, params: OnsetParams | None = None) -> np.ndarray:
     x = np.abs(a[:, 0] - a[_baseline(t, p.baseline_s), 0].mean())
     if p.cutoff >= fs / 2:
         raise ParameterError(f"cutoff must be below fs/2 = {fs / 2:g} Hz, got {p.cutoff}")
-    sos = sps.butter(2, p.cutoff, fs=fs, output="sos")
+    kept, zi = _lowpass(p.cutoff, fs)
+    sos = kept.copy()    # scipy's filter takes a writable array; the kept design stays read-only
     if p.zero_phase:
         return sps.sosfiltfilt(sos, x)
-    y, _ = sps.sosfilt(sos, x, zi=sps.sosfilt_zi(sos) * x[0])
+    y, _ = sps.sosfilt(sos, x, zi=zi * x[0])
     return y
+
+
+@functools.lru_cache(maxsize=64, typed=True)
+def _lowpass(cutoff: float, fs: float) -> tuple[np.ndarray, np.ndarray]:
+    """The envelope's 2nd-order Butterworth sections and their unit-step state, designed once per
+    ``(cutoff, fs)`` (read-only: the design is deterministic, so a kept one is the one designed)."""
+    from scipy import signal as sps  # deferred: heavy (scipy)
+
+    sos = np.asarray(sps.butter(2, cutoff, fs=fs, output="sos"))
+    zi = np.asarray(sps.sosfilt_zi(sos))
+    sos.flags.writeable = False
+    zi.flags.writeable = False
+    return sos, zi
 
 
 def detect_onset(t, accel, window: tuple[float, float], params: OnsetParams | None = None,

@@ -106,6 +106,8 @@ class Layout:
         """The slots of ``vector`` still NaN that must not be."""
         v = np.asarray(vector, dtype=np.float64)[: self.size - self.start]
         bad = np.isnan(v) & ~self._may_be_nan
+        if not bad.any():    # the usual answer, without a look at every slot
+            return []
         out = []
         for name, first, n in zip(self.names, self.slots, self.widths):
             k = first - self.start

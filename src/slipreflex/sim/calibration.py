@@ -36,6 +36,7 @@ import numpy as np
 from ..core import hardware as hw
 from ..core.errors import ParameterError
 from ..core.registry import EntryPoint
+from . import kernel as K
 from .contacts import static_capacity
 from .objects import PAPER_DROP, PAPER_POUR, WATER_DENSITY, Bottle, Drop, Pour
 from .rig import Rig
@@ -166,14 +167,16 @@ OBSERVED_ONSET = EntryPoint("slipreflex.analysis.events:first_pour_slip")
 
 def _observed_onset(rig, t_rec: float, t0: float, pour: Pour) -> tuple[float, float]:
     """(onset time, flow-sensor ml at it) of the first slip the accelerometer recipe finds (NaN, NaN if none)."""
-    h = rig.daq_history(since=t_rec)
+    rows, _ = rig.daq_rows(since=t_rec)   # the three columns read, as rig.daq_history would give them
+    t, accel = rows[:, K.O_T].copy(), rows[:, K.O_AX:K.O_AZ + 1].copy()
     lo = t0 + math.sqrt(2.0 * pour.fall_height_m / hw.GRAVITY) + LANDING_S
-    ml = h.flow_pulses / hw.FLOW_PULSES_PER_LITRE * 1000.0
-    return OBSERVED_ONSET(h.t, h.accel, ml, (lo, float(h.t[-1]) if h.t.size else lo))
+    ml = rows[:, K.O_PULSES].astype(np.int64) / hw.FLOW_PULSES_PER_LITRE * 1000.0
+    return OBSERVED_ONSET(t, accel, ml, (lo, float(t[-1]) if t.size else lo))
 
 
 def first_slip(bottle: Bottle, *, rig_kwargs: dict[str, Any] | None = None, seeds=CALIBRATION_SEEDS,
-               pour: Pour = PAPER_POUR, grasp_force: float = hw.CONTACT_FORCE_N) -> FirstSlip:
+               pour: Pour = PAPER_POUR, grasp_force: float = hw.CONTACT_FORCE_N,
+               memo: dict | None = None) -> FirstSlip:
     """The open-loop first pour slip, true and as the accelerometer recipe observes it.
 
     The grasp closes to ``grasp_force``, the rig records from there, the pour
@@ -185,6 +188,10 @@ def first_slip(bottle: Bottle, *, rig_kwargs: dict[str, Any] | None = None, seed
     is the flow sensor's (as in the paper's Fig. 15A). A slow rate-and-state
     slip creeps before its acceleration shows, so the observed volume is the
     larger.
+
+    ``memo``: a dict of single pours by every input but the bottle's name and surface (see
+    :func:`calibrate_bottle`): a pour of the same plant, seed and friction is not run again (a
+    search with one seed and a later one with three share their first seed's pours).
 
     Returns
     -------
@@ -202,29 +209,49 @@ def first_slip(bottle: Bottle, *, rig_kwargs: dict[str, Any] | None = None, seed
     """
     trues, obs, delays = [], [], []
     for seed in seeds:
-        rig = _rig(bottle, seed, rig_kwargs, grasp_force)
-        if rig.fallen or rig.slipping:
+        key = (_mechanics(bottle), repr(rig_kwargs), repr(seed), repr(pour), repr(grasp_force))
+        one = memo.get(key) if memo is not None else None
+        if one is None:
+            one = _pour_once(bottle, seed, rig_kwargs, pour, grasp_force)
+            if memo is not None:
+                memo[key] = one
+        if one is _HELD_NOTHING:
             return FirstSlip(0.0, 0.0, math.nan, ((0.0, 0.0),))
-        t_rec = rig.t
-        t0 = rig.t + _REST_S
-        rig.perturb(pour, at=t0)
-        end = t0 + pour.duration_s + 1.0
-        n0 = rig.onsets.size
-        stop, last = end, -1.0
-        while rig.t < stop and rig.t > last:      # (the rig stops on its own time grid, at or before `stop`)
-            last = rig.t
-            rig.advance_block(min(stop, rig.t + 0.5))
-            fell = rig.fall_time
-            if fell is not None:
-                stop = min(stop, float(fell) + _AFTER_FALL_S)
-        if rig.onsets.size == n0:
+        if one is _NO_SLIP:
             return FirstSlip(math.nan, math.nan, math.nan, ((math.nan, math.nan),))
-        t_on = float(rig.onsets[n0])
-        trues.append(_water_kg(pour, t0, t_on) / WATER_DENSITY * 1e6)
-        t_obs, ml = _observed_onset(rig, t_rec, t0, pour)
-        obs.append(ml)
-        delays.append(t_obs - t_on)
+        trues.append(one[0])
+        obs.append(one[1])
+        delays.append(one[2])
     return FirstSlip(float(np.mean(trues)), float(np.mean(obs)), float(np.mean(delays)), tuple(zip(trues, obs)))
+
+
+#: What :func:`_pour_once` returns when the grasp does not hold the empty bottle, and when it does not slip.
+_HELD_NOTHING, _NO_SLIP = ("grasp does not hold",), ("no slip",)
+
+
+def _pour_once(bottle: Bottle, seed, rig_kwargs: dict[str, Any] | None, pour: Pour,
+               grasp_force: float) -> tuple:
+    """One seed's open-loop pour: ``(true ml, observed ml, delay s)``, or :data:`_HELD_NOTHING`, :data:`_NO_SLIP`."""
+    rig = _rig(bottle, seed, rig_kwargs, grasp_force)
+    if rig.fallen or rig.slipping:
+        return _HELD_NOTHING
+    t_rec = rig.t
+    t0 = rig.t + _REST_S
+    rig.perturb(pour, at=t0)
+    end = t0 + pour.duration_s + 1.0
+    n0 = rig.onsets.size
+    stop, last = end, -1.0
+    while rig.t < stop and rig.t > last:      # (the rig stops on its own time grid, at or before `stop`)
+        last = rig.t
+        rig.run_to(min(stop, rig.t + 0.5))
+        fell = rig.fall_time
+        if fell is not None:
+            stop = min(stop, float(fell) + _AFTER_FALL_S)
+    if rig.onsets.size == n0:
+        return _NO_SLIP
+    t_on = float(rig.onsets[n0])
+    t_obs, ml = _observed_onset(rig, t_rec, t0, pour)
+    return _water_kg(pour, t0, t_on) / WATER_DENSITY * 1e6, ml, t_obs - t_on
 
 
 def first_slip_ml(bottle: Bottle, *, rig_kwargs: dict[str, Any] | None = None, seeds=CALIBRATION_SEEDS,
@@ -375,7 +402,8 @@ def calibrate_bottle(bottle: Bottle, target_ml: float = PAPER_FIRST_SLIP_ML, *,
     slip does not depend on the bottle's name or surface (the surface only feeds the slip
     sensor's track, which no state and no accelerometer or flow reading depends on), so bottles
     that differ only there (TR and DK: one polymer, one finish) share their pours: the same
-    numbers, one computation.
+    numbers, one computation. Its entries are single pours (one seed each), so a search with
+    several seeds after a one-seed search does not run the first seed's pours again.
 
     Raises
     ------
@@ -404,14 +432,8 @@ def calibrate_bottle(bottle: Bottle, target_ml: float = PAPER_FIRST_SLIP_ML, *,
     seen: dict[float, FirstSlip] = {}
 
     def f(mu: float) -> float:   # a bottle that does not slip during the pour counts as twice its volume
-        b = with_mu(mu)
-        key = (_mechanics(b), repr(rig_kwargs), repr(tuple(seeds)), repr(pour), repr(grasp_force))
-        if memo is not None and key in memo:
-            s = seen[mu] = memo[key]
-        else:
-            s = seen[mu] = first_slip(b, rig_kwargs=rig_kwargs, seeds=seeds, pour=pour, grasp_force=grasp_force)
-            if memo is not None:
-                memo[key] = s
+        s = seen[mu] = first_slip(with_mu(mu), rig_kwargs=rig_kwargs, seeds=seeds, pour=pour,
+                                  grasp_force=grasp_force, memo=memo)
         v = s.observed_ml if observed else s.true_ml
         return pour.volume_ml * 2 if math.isnan(v) else v
 

@@ -41,6 +41,7 @@ Examples
 
 from __future__ import annotations
 
+import copy
 import math
 import operator
 from typing import Any
@@ -50,9 +51,10 @@ import numpy as np
 from ..core import hardware as hw
 from ..core._slots import slot
 from ..core.errors import ParameterError
-from ..core.hardware import Finger, HandCommand
+from ..core.hardware import Finger
 from ..core.interfaces import DaqSample, GraspResult
 from . import kernel as K
+from .closing_memo import CLOSINGS, close, closing_key_of, closing_of, restore_closing
 from .loads import kind_of
 from .objects import BOTTLES, Bottle, Surface
 from .params import (
@@ -64,7 +66,7 @@ from .params import (
     TactileParams,
     WaterParams,
 )
-from .rig_data import DaqBlock, KernelArrays, SlipEvent
+from .rig_data import DaqBlock, KernelArrays, SlipEvent, slip_episodes
 from .rig_params import fill_slip_sensor_params, rig_params
 from .sensors import Track
 from .sim_hand import SimHand
@@ -181,6 +183,27 @@ class Rig:
         self._no_tac = np.empty((0, K.T_SIZE))
         self._grasp: GraspResult | None = None
 
+    def __deepcopy__(self, memo: dict) -> Rig:
+        """A copy that runs exactly as this rig runs (same state, same random streams); it shares the slip
+        sensor's track (read-only, as every rig built from the same inputs shares it) and gets its own
+        scratch buffers (they carry nothing from one kernel call to the next) instead of copies of them.
+
+        Examples
+        --------
+        >>> import copy
+        >>> rig = Rig("TR"); _ = rig.advance(0.01); twin = copy.deepcopy(rig)
+        >>> twin.track is rig.track, twin.hand.positions() == rig.hand.positions(), twin.t == rig.t
+        (True, True, True)
+        """
+        twin = type(self).__new__(type(self))
+        memo[id(self)] = twin
+        memo[id(self.track)] = self.track
+        for scratch in (self._daq_buf, self._ev_buf, self._counts):
+            memo[id(scratch)] = np.empty_like(scratch)
+        for name, value in self.__dict__.items():
+            twin.__dict__[name] = copy.deepcopy(value, memo)
+        return twin
+
     # ------------------------------------------------------------------ setup
     def _params(self, flow_k: float, flow_phase: float) -> np.ndarray:
         return rig_params(self, flow_k, flow_phase)
@@ -292,13 +315,8 @@ class Rig:
 
     @property
     def next_daq_index(self) -> int:
-        """Index of the next DAQ sample not produced yet (its time is ``index * DAQ_PERIOD_S``).
-
-        Examples
-        --------
-        >>> rig = Rig("TR"); _ = rig.advance(0.01); rig.next_daq_index
-        4
-        """
+        """Index of the next DAQ sample not produced yet (its time ``index * DAQ_PERIOD_S``): ``Rig("TR")``
+        after ``advance(0.01)`` has made samples 0-3, so 4."""
         return int(self._C[K.C_DAQ])
 
     def advance(self, duration: float) -> list[DaqSample]:
@@ -331,6 +349,17 @@ class Rig:
         """
         seq0 = int(self._C[K.C_DAQ])
         return DaqBlock.from_rows(self._advance_rows(t), seq0)
+
+    def run_to(self, t: float) -> int:
+        """Like :meth:`advance_to`, but nothing is handed back (the history keeps the samples): the number of
+        new DAQ samples.
+
+        Examples
+        --------
+        >>> rig = Rig("TR"); rig.run_to(1.0), rig.daq_history().t.size
+        (334, 334)
+        """
+        return int(self._advance_rows(t).shape[0])
 
     def advance_slip(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Advance to ``t``; return the new DAQ samples' times, slip volts and middle-finger positions.
@@ -590,33 +619,15 @@ class Rig:
         settle = hp.settle_s if settle is None else float(settle)
         if not (0 < speed <= hp.speed_units_s):
             raise ParameterError(f"speed must be in (0, {hp.speed_units_s}] units/s, got {speed!r}")
-        pwm = speed / hp.speed_units_s * hw.PWM_MAX
-        self.hand.command(HandCommand.CLOSE, hw.TRIPOD, pwm)
-        s_idx = self.tactile_sampler(hp.grasp_poll_fs, Finger.INDEX)
-        s_th = self.tactile_sampler(hp.grasp_poll_fs, Finger.THUMB)
-        stopped: set[Finger] = set()
-        t_contact = math.nan
-        t_limit = self.t + 1.5 * hw.FINGER_MAX / speed + 1.0
-        try:
-            while len(stopped) < 2:
-                if self.t > t_limit:
-                    raise ParameterError(f"grasp: fingers closed fully without reaching {force} N "
-                                         f"(bottle diameter {self.bottle.diameter_m} m too small?)")
-                self._advance_rows(max(s_idx.next_time, self.t + self.physics.dt))
-                _, fi = s_idx.read()
-                _, ft = s_th.read()
-                if Finger.INDEX not in stopped and fi.shape[0] and fi[-1].sum() >= force:
-                    self.hand.command(HandCommand.STOP, [Finger.INDEX, Finger.MIDDLE])
-                    stopped.add(Finger.INDEX)
-                    t_contact = self.t if math.isnan(t_contact) else t_contact
-                if Finger.THUMB not in stopped and ft.shape[0] and ft[-1].sum() >= force:
-                    self.hand.command(HandCommand.STOP, [Finger.THUMB])
-                    stopped.add(Finger.THUMB)
-                    t_contact = self.t if math.isnan(t_contact) else t_contact
-        finally:
-            s_idx.close()
-            s_th.close()
-        self._advance_rows(self.t + settle)
+        # the closing phase does not depend on the contacts' friction: kept once per its other inputs
+        key = closing_key_of(self, force, speed, settle)
+        kept = CLOSINGS.get(key)
+        if kept is None:
+            t_contact = close(self, force, speed, settle)
+            if key is not None:
+                CLOSINGS.put(key, closing_of(self, t_contact))
+        else:
+            t_contact = restore_closing(self, kept)
         self._S[K.S_SUPPORTED] = 0.0
         t_release = self.t
         self._advance_rows(self.t + settle)
@@ -744,31 +755,7 @@ class Rig:
         >>> Rig("TR").slip_events()
         []
         """
-        ev = self.events()
-        out: list[SlipEvent] = []
-        onset = None
-        last_stick = None
-        s_on = 0.0
-        x_stick = 0.0
-        for t, kind, x in ev:
-            if kind == K.E_ONSET:
-                if onset is not None and last_stick is not None and t - last_stick >= quiet:
-                    out.append(SlipEvent(onset, last_stick, x_stick - s_on))
-                    onset = None
-                if onset is None:
-                    onset, s_on = float(t), float(x)
-                last_stick = None
-            elif kind == K.E_STICK and onset is not None:
-                last_stick, x_stick = float(t), float(x)
-            elif kind == K.E_FALLEN and onset is not None:
-                out.append(SlipEvent(onset, None, float(x) - s_on))
-                onset = None
-        if onset is not None:
-            if last_stick is not None and not self.slipping and not self.fallen:
-                out.append(SlipEvent(onset, last_stick, x_stick - s_on))
-            else:
-                out.append(SlipEvent(onset, None, self.displacement - s_on))
-        return out
+        return slip_episodes(self.events(), quiet, self.slipping or self.fallen, self.displacement)
 
     def daq_history(self, since: float | None = None) -> DaqBlock:
         """Every DAQ sample (and truth) produced since the rig started (empty with ``history=False``),
@@ -782,6 +769,20 @@ class Rig:
         >>> b = rig.daq_history(since=0.02); b.seq.tolist(), b.t.size
         ([7, 8, 9, 10], 4)
         """
+        rows, skip = self.daq_rows(since)
+        return DaqBlock.from_rows(rows, skip)
+
+    def daq_rows(self, since: float | None = None) -> tuple[np.ndarray, int]:
+        """The rows :meth:`daq_history` is made of, in the kernel's layout (columns ``kernel.O_*``), and the
+        sample number of the first: for a reader that needs a few columns (read them, never write them).
+
+        Examples
+        --------
+        >>> rig = Rig("TR"); _ = rig.advance(0.03)
+        >>> rows, first = rig.daq_rows(since=0.02)
+        >>> rows[:, K.O_T].size, first
+        (4, 7)
+        """
         chunks = self._daq_chunks
         skip = 0
         if since is not None:
@@ -792,4 +793,4 @@ class Rig:
         if since is not None:
             i = int(np.searchsorted(rows[:, K.O_T], since - 1e-12, side="left"))
             rows, skip = rows[i:], skip + i
-        return DaqBlock.from_rows(rows, skip)
+        return rows, skip

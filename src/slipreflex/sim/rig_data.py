@@ -13,7 +13,7 @@ from . import kernel as K
 if TYPE_CHECKING:
     pass
 
-__all__ = ["DaqBlock", "KernelArrays", "SlipEvent"]
+__all__ = ["DaqBlock", "KernelArrays", "SlipEvent", "slip_episodes"]
 
 
 @dataclass(frozen=True)
@@ -179,3 +179,40 @@ class SlipEvent:
         True
         """
         return None if self.end is None else round(self.end - self.onset, 12)
+
+
+def slip_episodes(events: np.ndarray, quiet: float, open_end: bool, displacement: float) -> list[SlipEvent]:
+    """Group a rig's stick/slip transitions (:meth:`slipreflex.sim.Rig.events` rows) into episodes separated
+    by ``quiet`` seconds of sticking (what :meth:`slipreflex.sim.Rig.slip_events` returns); ``open_end``: the
+    contacts slide (or the bottle has fallen) now, at ``displacement`` (m).
+
+    Examples
+    --------
+    >>> ev = np.array([[1.0, K.E_ONSET, 0.0], [1.1, K.E_STICK, 0.002], [2.0, K.E_ONSET, 0.002]])
+    >>> [(e.onset, e.end) for e in slip_episodes(ev, 0.1, True, 0.01)]
+    [(1.0, 1.1), (2.0, None)]
+    """
+    out: list[SlipEvent] = []
+    onset = None
+    last_stick = None
+    s_on = 0.0
+    x_stick = 0.0
+    for t, kind, x in events:
+        if kind == K.E_ONSET:
+            if onset is not None and last_stick is not None and t - last_stick >= quiet:
+                out.append(SlipEvent(onset, last_stick, x_stick - s_on))
+                onset = None
+            if onset is None:
+                onset, s_on = float(t), float(x)
+            last_stick = None
+        elif kind == K.E_STICK and onset is not None:
+            last_stick, x_stick = float(t), float(x)
+        elif kind == K.E_FALLEN and onset is not None:
+            out.append(SlipEvent(onset, None, float(x) - s_on))
+            onset = None
+    if onset is not None:
+        if last_stick is not None and not open_end:
+            out.append(SlipEvent(onset, last_stick, x_stick - s_on))
+        else:
+            out.append(SlipEvent(onset, None, displacement - s_on))
+    return out

@@ -85,6 +85,39 @@ def texture(n: int, dx: float, exponent: float, min_wavelength: float, max_wavel
     return out / sd if sd > 0 else out
 
 
+#: Unit textures kept by :func:`_kept_texture` (least recently used dropped first; each ~210 kB).
+TEXTURE_CACHE_SIZE: int = 32
+_TEXTURES: OrderedDict = OrderedDict()
+
+
+def _kept_texture(n: int, dx: float, surf: Surface, rng: np.random.Generator) -> np.ndarray:
+    """:func:`texture` of ``surf``'s spectrum, kept by every input and the generator's whole state (a hit leaves
+    the generator where a draw would): the plants of a study differ in a surface's reflectance and texture
+    amplitude, which scale the unit texture, while its seed and spectrum stay (read it, never write it).
+
+    Examples
+    --------
+    >>> from slipreflex.sim import SURFACES
+    >>> r1, r2 = np.random.default_rng(3), np.random.default_rng(3)
+    >>> a, b = _kept_texture(64, 5e-6, SURFACES["white"], r1), _kept_texture(64, 5e-6, SURFACES["white"], r2)
+    >>> a is b, r1.random() == r2.random()
+    (True, True)
+    """
+    spectrum = (surf.texture_exponent, surf.texture_min_wavelength_m, surf.texture_max_wavelength_m)
+    key = (int(n), float(dx), repr(spectrum), repr(rng.bit_generator.state))
+    hit = _TEXTURES.get(key)
+    if hit is not None:
+        _TEXTURES.move_to_end(key)
+        rng.bit_generator.state = hit[1]
+        return hit[0]
+    t = texture(n, dx, *spectrum, rng)
+    t.flags.writeable = False
+    _TEXTURES[key] = (t, rng.bit_generator.state)
+    while len(_TEXTURES) > TEXTURE_CACHE_SIZE:
+        _TEXTURES.popitem(last=False)
+    return t
+
+
 def opr5005_volts(reflectance: np.ndarray | float, params: SlipSensorParams | None = None) -> np.ndarray:
     """Mean output of the OPR5005 driver for a given effective reflectance.
 
@@ -225,8 +258,7 @@ class Track:
         tex = np.zeros(n)
         for i, (surf, _) in enumerate(layout):
             mask = seg == i
-            t = texture(n, dx, surf.texture_exponent, surf.texture_min_wavelength_m,
-                        surf.texture_max_wavelength_m, rng)
+            t = _kept_texture(n, dx, surf, rng)
             tex[mask] = (surf.reflectance * surf.texture * t)[mask]
             # the second draw per segment was the tactile undulation (removed); its random numbers are
             # still drawn (not transformed) so that every later segment's texture, and the scan

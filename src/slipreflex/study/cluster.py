@@ -120,6 +120,7 @@ def _require_tls_config(where: str) -> None:
 
 def _client(workers: int | None, scheduler: str | None, dashboard: str | None = None):
 
+    import dask.config  # deferred: optional extra (study: dask)
     from dask.distributed import Client, LocalCluster  # deferred: optional extra (study: dask)
 
     if scheduler:
@@ -137,8 +138,12 @@ def _client(workers: int | None, scheduler: str | None, dashboard: str | None = 
     if main:
         signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
         old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    # Dask's statistical profiler samples each worker's stack every 10 ms, for the dashboard's profile
+    # page: without a dashboard nobody reads it, and a plant's Python-heavy work paid for it (about a
+    # tenth of a plant's CPU, docs/speed.md)
+    profile = {"distributed.worker.profile.enabled": dashboard is not None}
     try:
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), dask.config.set(profile):
             # Without a dashboard the scheduler still serves its health page, on 8787 if free and
             # on another port (with this warning) when another cluster holds it: not the user's concern.
             warnings.filterwarnings("ignore", message="Port 8787 is already in use")
