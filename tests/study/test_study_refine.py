@@ -108,13 +108,19 @@ def _tiny(**kw) -> StudyConfig:
 
 
 @pytest.mark.slow
-def test_refined_study_same_rows_serial_and_local_cluster_and_resumes(tmp_path):
+def test_refined_study_same_rows_serial_and_local_cluster_and_resumes(tmp_path, monkeypatch):
     pytest.importorskip("distributed")
+    from slipreflex.study import runner
+
     cfg = _tiny()
     serial = run_study(cfg, tmp_path / "a", workers=0, progress=False)
     assert serial.complete and sorted(serial.parts) == list(range(8))
+    starts = []
+    real = runner._client
+    monkeypatch.setattr(runner, "_client", lambda *a: starts.append(a) or real(*a))
     dask = run_study(cfg, tmp_path / "b", workers=2, progress=False)
     assert dask.workers == "LocalCluster(2)" and dask.complete
+    assert len(starts) == 1      # one local cluster for the pilot and the refinement
     for i in range(8):      # byte for byte, the second stage's metadata and rows included
         assert part_path(tmp_path / "a", i).read_bytes() == part_path(tmp_path / "b", i).read_bytes()
     again = run_study(cfg, tmp_path / "a", workers=0, progress=False)

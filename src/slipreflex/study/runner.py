@@ -687,12 +687,14 @@ def run_study(config: StudyConfig, out: str | Path, *, workers: int | None = Non
     def stage(values: Mapping[int, dict]) -> None:
         nonlocal where
         todo = [i for i in sorted(values) if i not in have]
-        if todo and (workers != 0 or scheduler):
-            where = _run_dask(todo, values, config, workers, scheduler, finished, fp, dashboard)
+        if todo and session is not None:
+            where = _run_dask(todo, values, config, session, finished, fp)
         else:
             for i in todo:
                 finished(run_plant(i, values[i], config))
 
+    # one client (and local cluster) for the pilot and the refinement, started when a stage needs it
+    session = _DaskSession(workers, scheduler, dashboard) if (workers != 0 or scheduler) else None
     try:
         stage(plants)
         if config.refine:   # the second stage is decided by the finished pilot
@@ -706,6 +708,8 @@ def run_study(config: StudyConfig, out: str | Path, *, workers: int | None = Non
                         folder.rmdir()
         raise
     finally:
+        if session is not None:
+            session.close()
         bar.close()
     return StudyRun(config, out, read_parts(out, fp), computed, time.perf_counter() - t0, where)
 
@@ -716,14 +720,41 @@ _QUIET_LOGGERS: tuple[str, ...] = ("distributed", "tornado", "asyncio")
 _STOP_CLOSE_S: float = 3.0
 
 
-def _run_dask(todo: list[int], plants: Mapping[int, dict], config: StudyConfig, workers: int | None,
-              scheduler: str | None, finished: Callable[[PlantOutcome], None], fp: str,
-              dashboard: str | None = None) -> str:
+class _DaskSession:
+    """The Dask client (and local cluster) of one run: started on first use, shared by its stages, closed once."""
+
+    def __init__(self, workers: int | None, scheduler: str | None, dashboard: str | None):
+        self._args = (workers, scheduler, dashboard)
+        self.client: Any = None
+        self.cluster: Any = None
+        self.where = ""
+        self.stopped = False   # a Ctrl-C: the close is short and may be abandoned
+
+    def start(self) -> Any:
+        if self.client is None:
+            self.client, self.cluster, self.where = _client(*self._args)
+        return self.client
+
+    def close(self) -> None:
+        if self.client is None:
+            return
+        client, cluster, self.client, self.cluster = self.client, self.cluster, None, None
+        with signals_ignored():
+            # after a stop, a close that takes long is abandoned: the workers are this process's
+            # children and end with it
+            with contextlib.suppress(Exception) if self.stopped else contextlib.nullcontext():
+                client.close(timeout=_STOP_CLOSE_S if self.stopped else None)
+                if cluster is not None:
+                    cluster.close(timeout=_STOP_CLOSE_S if self.stopped else None)
+
+
+def _run_dask(todo: list[int], plants: Mapping[int, dict], config: StudyConfig, session: _DaskSession,
+              finished: Callable[[PlantOutcome], None], fp: str) -> str:
 
     from dask.distributed import as_completed  # deferred: optional extra (study: dask)
 
 
-    client, cluster, where = _client(workers, scheduler, dashboard)
+    client = session.start()
     futures = []
     quiet = [logging.getLogger(n) for n in _QUIET_LOGGERS]
     levels = [q.level for q in quiet]
@@ -745,7 +776,7 @@ def _run_dask(todo: list[int], plants: Mapping[int, dict], config: StudyConfig, 
             finished(fut.result())
             fut.release()
     except KeyboardInterrupt:
-        stopped = True
+        stopped = session.stopped = True
         for q in quiet:
             q.setLevel(logging.CRITICAL)
         raise
@@ -755,13 +786,9 @@ def _run_dask(todo: list[int], plants: Mapping[int, dict], config: StudyConfig, 
                 signal.signal(signal.SIGINT, old)
             for f in futures:
                 f.cancel()
-            # after a stop, a close that takes long is abandoned: the workers are this process's
-            # children and end with it
-            with contextlib.suppress(Exception) if stopped else contextlib.nullcontext():
-                client.close(timeout=_STOP_CLOSE_S if stopped else None)
-                if cluster is not None:
-                    cluster.close(timeout=_STOP_CLOSE_S if stopped else None)
+            if stopped:   # closed at once, still hushed (the caller's close is then a no-op)
+                session.close()
         if not stopped:  # after a stop the event loop may still report closed streams: stay hushed
             for q, lv in zip(quiet, levels):
                 q.setLevel(lv)
-    return where
+    return session.where
