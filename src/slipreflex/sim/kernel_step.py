@@ -203,6 +203,15 @@ def _splash(S, C, P, key5, tl, fjet, mw, ms, g):
 
 
 @njit(cache=_CACHE, inline="always")
+def _event(ev_out, nev, t, kind, x):
+    """Write the event row ``(t, kind, x)`` after the ``nev`` rows of ``ev_out``; the new row count."""
+    ev_out[nev, 0] = t
+    ev_out[nev, 1] = kind
+    ev_out[nev, 2] = x
+    return nev + 1
+
+
+@njit(cache=_CACHE, inline="always")
 def _drops(D, ev_out, nev, x, v, th, om, tilted, t1, h, geff, drop_e, zg):
     """The dropped masses over the step (released, in flight, landing with an event row, resting):
     ``(fdrop, mdrop, mland, nev)``, their force on the bottom, its moment about the tilt axis, the landed mass."""
@@ -226,10 +235,7 @@ def _drops(D, ev_out, nev, x, v, th, om, tilted, t1, h, geff, drop_e, zg):
                 f = 0.0
             if D[d, D_LANDED] == 0.0:
                 D[d, D_LANDED] = 1.0
-                ev_out[nev, 0] = t1
-                ev_out[nev, 1] = E_LANDED
-                ev_out[nev, 2] = x
-                nev += 1
+                nev = _event(ev_out, nev, t1, E_LANDED, x)
         if D[d, D_LANDED] > 0.0:
             mland += D[d, D_M]
         D[d, D_VZ] += (geff - f / D[d, D_M]) * h
@@ -419,15 +425,9 @@ def _micro_slips(S, C, P, key6, n, nc, dt, ms_eta, ms_per_m, ms_w2, ms_2zw, ms_w
 def _slip_events(S, ev_out, nev, sliding, t0, t1, x_old, x):
     """An onset row when every contact starts to slide, a stick row when one sticks again: the new row count."""
     if sliding and S[S_STUCK] > 0.0:
-        ev_out[nev, 0] = t0
-        ev_out[nev, 1] = E_ONSET
-        ev_out[nev, 2] = x_old
-        nev += 1
+        nev = _event(ev_out, nev, t0, E_ONSET, x_old)
     elif not sliding and S[S_STUCK] == 0.0:
-        ev_out[nev, 0] = t1
-        ev_out[nev, 1] = E_STICK
-        ev_out[nev, 2] = x
-        nev += 1
+        nev = _event(ev_out, nev, t1, E_STICK, x)
     return nev
 
 
@@ -447,10 +447,7 @@ def _lose_contacts(S, ev_out, nev, x, th, tilt_now, pen_full, t1, lev0, lev1, le
         for i in range(3):
             S[S_C0 + i * SC_SIZE + SC_STUCK] = 0.0
             S[S_C0 + i * SC_SIZE + SC_FT] = 0.0
-        ev_out[nev, 0] = t1
-        ev_out[nev, 1] = E_FALLEN
-        ev_out[nev, 2] = x
-        nev += 1
+        nev = _event(ev_out, nev, t1, E_FALLEN, x)
     return nev
 
 

@@ -220,10 +220,10 @@ class Rig:
         """
         par: np.ndarray = self._P if P is None else P
         m, dt = self.bottle.mass_kg, self.physics.dt
-        kts = [float(par[K.P_C0 + i * K.PC_SIZE + K.PC_KT]) for i in range(3)]
         inertia, _ = K.tilt_inertia(0.0, par)
-        tilt_k = sum(k * float(par[K.P_LEVER0 + i]) ** 2 for i, k in enumerate(kts))
-        omega = max(math.sqrt(sum(kts) / m), math.sqrt(float(par[K.P_KLAT]) / m), math.sqrt(tilt_k / inertia))
+        # the contacts' summed shear and tilt stiffness, as rig_params writes them for the kernel's mass_cap
+        omega = max(math.sqrt(float(par[K.P_KT_SUM]) / m), math.sqrt(float(par[K.P_KLAT]) / m),
+                    math.sqrt(float(par[K.P_TILT_K]) / inertia))
         return max(1, min(int(COARSE_STEP_S / dt + 1e-9), int(1.0 / (omega * dt))))
 
     # ------------------------------------------------------------------ time
