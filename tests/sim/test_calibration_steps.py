@@ -66,6 +66,23 @@ def test_a_study_plant_whose_accelerometer_sees_the_cuff_slip_cannot_meet_the_pa
     assert claim_fractions(plants)[0]["plants"] == 0
 
 
+@pytest.mark.slow
+def test_a_first_slip_pinned_at_the_cuff_s_slip_is_refused_after_two_frictions():
+    plant = plant_from_values({**nominal_values(), **STAIRS})
+    tr, kw = plant.bottles["TR"], plant.rig_kwargs()
+    memo: dict = {}
+    with pytest.raises(ParameterError, match=r"observed at [0-9.]+ ml at pad mu_s .* alike, before its true onsets"):
+        calibrate_bottle(tr, 200.0, rig_kwargs=kw, seeds=(0,), memo=memo)
+    assert len(memo) == 2                     # two pours, not a search onto the friction where the slip leaves the pour
+    # the seeds' fallback reuses seed 0's pours and stops after the same two frictions
+    with pytest.raises(ParameterError, match=r"alike.*nor in 170-230 ml"):
+        calibrate_bottle(tr, 200.0, rig_kwargs=kw, seeds=(0, 1, 2), band_ml=(170.0, 230.0), memo=memo)
+    assert len(memo) == 6
+    # a plant whose accelerometer sees the bottle's own slip is searched as before
+    c = calibrate_bottle(plant_from_values(nominal_values()).bottles["TR"], 200.0, seeds=(0,))
+    assert abs(c.first_slip_ml - 200.0) <= 4.0 and c.first_slip_ml >= c.true_first_slip_ml
+
+
 def test_the_stairs_plant_sets_uncertain_constants_only():
     from slipreflex.sim.uncertain import UNCERTAIN
 

@@ -384,6 +384,8 @@ def calibrate_bottle(bottle: Bottle, target_ml: float = PAPER_FIRST_SLIP_ML, *,
     true volume). On a plant whose middle-finger cuff sticks and slips, the
     accelerometer sees the cuff's first slip: the observed first slip stays
     there whatever the pads' friction, and no pad friction meets a later target.
+    The search stops as soon as two frictions show it (every seed observed
+    before its true onset, below the volumes accepted, at the same volume).
 
     The first slip grows with ``mu_s`` (``mu_k / mu_s`` kept), but in steps:
     the bottle slips grossly only when all three contacts slide, and the
@@ -430,14 +432,17 @@ def calibrate_bottle(bottle: Bottle, target_ml: float = PAPER_FIRST_SLIP_ML, *,
         return replace(bottle, mu_s=mu, mu_k=mu * ratio)
 
     seen: dict[float, FirstSlip] = {}
+    tol = max(tol_ml, 0.02 * target_ml)
+    lowest = target_ml - tol if band_ml is None else min(target_ml - tol, band_ml[0])
 
     def f(mu: float) -> float:   # a bottle that does not slip during the pour counts as twice its volume
         s = seen[mu] = first_slip(with_mu(mu), rig_kwargs=rig_kwargs, seeds=seeds, pour=pour,
                                   grasp_force=grasp_force, memo=memo)
+        if observed:
+            _stop_if_pinned(seen, mu, lowest, target_ml, band_ml, bottle.name)
         v = s.observed_ml if observed else s.true_ml
         return pour.volume_ml * 2 if math.isnan(v) else v
 
-    tol = max(tol_ml, 0.02 * target_ml)
     best, lo, hi = _search(f, *_bracket(f, bottle.mu_s, target_ml, bottle.name), target_ml, tol)
     note = ""
     if abs(best[1] - target_ml) > tol:
@@ -445,6 +450,38 @@ def calibrate_bottle(bottle: Bottle, target_ml: float = PAPER_FIRST_SLIP_ML, *,
     b = with_mu(best[0])
     return Calibration(b, best[1], float(target_ml), b.mu_s, b.mu_k, static_capacity(b, 1.0), note,
                        seen[best[0]].true_ml)
+
+
+def _early(s: FirstSlip, lowest: float) -> tuple[float, ...] | None:
+    """The observed volumes of ``s``'s seeds if every one comes before its seed's true onset and below ``lowest``."""
+    if not s.per_seed or not all(o < t and o < lowest for t, o in s.per_seed):   # (NaN compares false)
+        return None
+    return tuple(o for _, o in s.per_seed)
+
+
+def _stop_if_pinned(seen: dict[float, FirstSlip], mu: float, lowest: float, target: float, band_ml,
+                    name: str) -> None:
+    """Raise :class:`ParameterError` if the observed first slip at ``mu`` is pinned at the cuff's slip.
+
+    Pinned: at ``mu`` and at another friction already tried, every seed's observed onset comes before
+    its true onset, below the lowest volume accepted, at the same volume at both frictions. The
+    accelerometer then sees a slip of the middle finger's cuff, which the pads' friction does not move
+    (while the pads stick they share the load by stiffness, not friction), and the gross slip, which
+    does move, can only be observed later than that: no pad friction brings the observed first slip up
+    to the target. The search would otherwise narrow onto the friction at which the gross slip leaves
+    the pour, a jump to "no slip" that is no answer either.
+    """
+    here = _early(seen[mu], lowest)
+    other = next((m for m, s in seen.items() if m != mu and here is not None and _early(s, lowest) == here), None)
+    if other is None:
+        return
+    within = "" if band_ml is None else f", nor in {band_ml[0]:g}-{band_ml[1]:g} ml"
+    trues = " and ".join(f"{seen[m].true_ml:.0f}" for m in sorted((other, mu)))
+    raise ParameterError(
+        f"calibration: the open-loop first slip of bottle {name} is observed at {seen[mu].observed_ml:.1f} ml "
+        f"at pad mu_s {min(other, mu):.4g} and {max(other, mu):.4g} alike, before its true onsets ({trues} ml): "
+        f"the accelerometer sees a slip of the middle finger's cuff, which the pads' friction does not move, "
+        f"so no pad mu_s puts it at {target:g} ml{within}")
 
 
 def _mechanics(bottle: Bottle) -> str:
