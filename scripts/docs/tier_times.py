@@ -25,32 +25,37 @@ ROOT = Path(__file__).resolve().parents[2]
 DOC = ROOT / "docs" / "development.md"
 BEGIN, END = "<!-- test tiers begins -->", "<!-- test tiers ends -->"
 
-#: (tier, the command as the table shows it, its arguments after ``python -m pytest``, what it holds).
+#: (tier, the command as the table shows it, the argument lists of its ``python -m pytest`` runs, what it holds).
 TIERS = [
-    ("fast", 'python -m pytest -m "not slow" -q', ["-m", "not slow"],
+    ("fast", 'python -m pytest -m "not slow" -q -n auto', [["-m", "not slow", "-n", "auto"]],
      "every test module keeps at least one test here, every module's doctests run here, and every module of "
      "`src/` is reached (`tests/house/test_house.py` checks both)"),
-    ("full", "python -m pytest -q", [],
-     "adds the slow tier: whole reproduce runs, the firmware under simavr, the bootstrap script, the "
-     "real-time loop against the wall clock, the Dask study"),
+    ("full", 'python -m pytest -q -n auto -m "not realtime"; python -m pytest -q -m realtime',
+     [["-n", "auto", "-m", "not realtime"], ["-m", "realtime"]],
+     "adds the slow tier: whole reproduce runs, the firmware under simavr, the bootstrap script, the Dask "
+     "study; then the real-time loop against the wall clock, alone (what `bash scripts/bootstrap.sh test` runs)"),
 ]
 
 
-def run_tier(args: list[str]) -> dict[str, object]:
-    """Run pytest with ``args``; its counts, wall and CPU seconds (children included), load before."""
+def run_tier(runs: list[list[str]]) -> dict[str, object]:
+    """Run pytest once per argument list; the summed counts, wall and CPU seconds (children included),
+    the load before the first."""
     load = os.getloadavg()[0]
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
-    done = subprocess.run([sys.executable, "-m", "pytest", *args, "-q", "-rfE", "-p", "no:cacheprovider"], cwd=ROOT,
-                          capture_output=True, text=True)
+    counts: dict[str, int] = {}
+    for args in runs:
+        done = subprocess.run([sys.executable, "-m", "pytest", *args, "-q", "-rfE", "-p", "no:cacheprovider"],
+                              cwd=ROOT, capture_output=True, text=True)
+        last = done.stdout.strip().splitlines()[-1] if done.stdout.strip() else ""
+        if done.returncode != 0:
+            failed = [ln for ln in done.stdout.splitlines() if ln.startswith(("FAILED ", "ERROR "))]
+            raise SystemExit(f"tier_times: pytest {' '.join(args)} failed (exit {done.returncode}): {last}\n"
+                             + "\n".join(failed))
+        for n, k in re.findall(r"(\d+) (passed|skipped|deselected)", last):
+            counts[k] = counts.get(k, 0) + int(n)
     wall = time.perf_counter() - t0
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    last = done.stdout.strip().splitlines()[-1] if done.stdout.strip() else ""
-    if done.returncode != 0:
-        failed = [ln for ln in done.stdout.splitlines() if ln.startswith(("FAILED ", "ERROR "))]
-        raise SystemExit(f"tier_times: pytest {' '.join(args)} failed (exit {done.returncode}): {last}\n"
-                         + "\n".join(failed))
-    counts = dict((k, int(n)) for n, k in re.findall(r"(\d+) (passed|skipped|deselected)", last))
     return {"passed": counts.get("passed", 0), "skipped": counts.get("skipped", 0), "wall_s": wall,
             "cpu_s": (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime), "load": load}
 
@@ -81,9 +86,9 @@ def main(argv: list[str]) -> int:
     from scripts.docs.splice_report import write_marked
 
     rows = []
-    for tier, command, args, what in TIERS:
+    for tier, command, runs, what in TIERS:
         print(f"tier_times: {command}", flush=True)
-        rows.append(row(tier, command, what, run_tier(args)))
+        rows.append(row(tier, command, what, run_tier(runs)))
     text = table(rows, describe())
     print(text)
     return write_marked("tier_times", DOC, BEGIN, END, text) if "--write" in argv else 0

@@ -92,8 +92,27 @@ def test_the_local_cluster_listens_on_loopback_without_a_dashboard(monkeypatch):
     assert seen["host"] == "127.0.0.1" and seen["dashboard_address"] is None and seen["sigint_blocked"]
     assert seen["sigint_ignored"] and signal.getsignal(signal.SIGINT) is not signal.SIG_IGN
     assert signal.SIGINT not in signal.pthread_sigmask(signal.SIG_BLOCK, set())   # unblocked again
+    # its health page on a free loopback port: two studies at once do not both try 8787
+    assert seen["scheduler_kwargs"] == {"dashboard": False, "dashboard_address": "127.0.0.1:0"}
     runner._client(1, None, "127.0.0.1:0")
-    assert seen["dashboard_address"] == "127.0.0.1:0"
+    assert seen["dashboard_address"] == "127.0.0.1:0" and seen["scheduler_kwargs"] == {}
+
+
+@pytest.mark.slow
+def test_a_local_cluster_starts_quietly_while_port_8787_is_taken():
+    try:
+        held = socket.create_server(("127.0.0.1", 8787))
+    except OSError:           # taken already: what the test needs
+        held = None
+    try:
+        client, cluster, _ = runner._client(1, None)   # warnings are errors here, a leaked socket too
+        with client, cluster:
+            page = cluster.scheduler.http_server
+            assert client.submit(sum, [1, 2]).result() == 3
+            assert page.address == "127.0.0.1" and page.port != 8787
+    finally:
+        if held is not None:
+            held.close()
 
 
 def test_a_reused_out_names_the_arguments_that_differ(tmp_path, capsys, monkeypatch):

@@ -20,7 +20,6 @@ import socket
 import struct
 import threading
 import time
-import warnings
 from typing import Any
 
 from ..core.errors import ParameterError
@@ -143,13 +142,17 @@ def _client(workers: int | None, scheduler: str | None, dashboard: str | None = 
     # tenth of a plant's CPU, docs/speed.md)
     profile = {"distributed.worker.profile.enabled": dashboard is not None}
     try:
-        with warnings.catch_warnings(), dask.config.set(profile):
-            # Without a dashboard the scheduler still serves its health page, on 8787 if free and
-            # on another port (with this warning) when another cluster holds it: not the user's concern.
-            warnings.filterwarnings("ignore", message="Port 8787 is already in use")
+        # Without a dashboard the scheduler still serves its health page: on a free local port, not on
+        # 8787, which two studies at once would both try (the second with a warning and a leaked socket)
+        quiet_page = {} if dashboard is not None else {"dashboard": False, "dashboard_address": "127.0.0.1:0"}
+        with dask.config.set(profile):
             cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
                                    dashboard_address=dashboard,  # type: ignore[arg-type]  # None: no dashboard
-                                   silence_logs=logging.ERROR)   # the workers' warnings are Dask's business
+                                   scheduler_kwargs=quiet_page,
+                                   # the workers' own logs are Dask's business: what fails in a plant is recorded in
+                                   # its part, what fails in a worker reaches the client as an exception; and on a
+                                   # loaded machine a stopped study's workers log the scheduler's close as errors
+                                   silence_logs=logging.CRITICAL)
     finally:
         if main:
             signal.signal(signal.SIGINT, old)
