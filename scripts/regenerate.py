@@ -4,6 +4,7 @@ Usage::
 
     python -m scripts.regenerate              # run every default step (a default reproduction first)
     python -m scripts.regenerate --with-tiers # ... and time both test tiers (the whole suite: minutes)
+    python -m scripts.regenerate --with-large-study   # ... and time the 1000-plant study (over ten minutes)
     python -m scripts.regenerate --dry-run    # list the steps and the markers each one writes
     python -m scripts.regenerate --only "speed table"   # one step and the steps it needs, first
     python -m scripts.regenerate --jobs 4     # worker processes of the reproduction (default 2)
@@ -38,7 +39,9 @@ docs quote in one commit. Steps:
    reproduction's and the study's rows from steps 1 and 9's timings (their wall and CPU time,
    written to ``timing.json`` in each one's folder);
 13. only with ``--with-tiers``: ``scripts/docs/tier_times.py --write``, docs/development.md's test
-   tiers (it runs the fast tier and then the whole suite).
+   tiers (it runs the fast tier and then the whole suite);
+14. only with ``--with-large-study``: ``slipreflex study --plants 1000 --workers 2`` timed, then
+   ``scripts/docs/large_study.py --write``: docs/speed.md's block on it (over ten minutes on 2 cores).
 
 **What a step needs.** Each step names the steps whose outputs it reads (:attr:`Step.needs`):
 the README tables and the report read the default reproduction's folder, the study tables the
@@ -140,13 +143,19 @@ STEPS: list[Step] = [
                                            "--study-timing", "{out}-study/timing.json"],
          needs=("reproduce", "study")),
     Step("test tiers", ("test tiers",), [sys.executable, "-m", "scripts.docs.tier_times", "--write"]),
+    Step("large study", (), [sys.executable, "-m", "slipreflex", "study", "--plants", "1000", "--workers", "2",
+                             "--out", "{out}-study1000", "--no-progress"]),
+    Step("large study block", ("large study",),
+         [sys.executable, "-m", "scripts.docs.large_study", "{out}-study1000", "--write"], needs=("large study",)),
 ]
 
-#: Steps timed as they run, the speed table's rows of the default jobs: step -> its timing option there.
-TIMED: dict[str, str] = {"reproduce": "--reproduce-timing", "study": "--study-timing"}
+#: Steps timed as they run: step -> the speed table's option for its timing (None: the step's own block reads it).
+TIMED: dict[str, str | None] = {"reproduce": "--reproduce-timing", "study": "--study-timing",
+                                "large study": None}   # (its block reads the timing.json in its folder)
 
 #: Steps run only when their flag is given (too slow for the default).
-OPT_IN: dict[str, str] = {"test tiers": "--with-tiers"}
+OPT_IN: dict[str, str] = {"test tiers": "--with-tiers", "large study": "--with-large-study",
+                          "large study block": "--with-large-study"}
 
 
 def plan(only: str | None = None, steps: list[Step] = STEPS) -> list[Step]:
@@ -175,7 +184,7 @@ def _command(step: Step, out: str, jobs: str, timed_here: set[str]) -> list[str]
     """The step's command for this run; a timing option only where this run timed that step."""
     cmd = [c.replace("{out}", out).replace("{jobs}", jobs) for c in step.command]
     for timed_step, option in TIMED.items():     # only this run's timings, never an older file's
-        if option in cmd and timed_step not in timed_here:
+        if option is not None and option in cmd and timed_step not in timed_here:
             cmd = cmd[:cmd.index(option)] + cmd[cmd.index(option) + 2:]
     return cmd
 
