@@ -175,3 +175,28 @@ def test_the_tier_table_says_what_ran_and_what_it_cost():
     assert line == ('| fast | `python -m pytest -m "not slow" -q` | what | 1300 passed, 2 skipped | 45 s | '
                     '2 min 10 s at load average 2.2 |')
     assert "<!-- test tiers begins -->" in (ROOT / "docs" / "development.md").read_text()
+
+
+def test_the_large_study_block_says_its_time_against_the_target_and_why_plants_were_rejected(tmp_path):
+    import csv
+    import json
+
+    large = _script("large_study")
+    (tmp_path / "timing.json").write_text(json.dumps({"wall_s": 1000.0, "user_s": 1800.0, "sys_s": 40.0,
+                                                      "load": 0.5}))
+    pinned = "calibration: ... observed at 4.4 ml at pad mu_s 0.8 and 1.2 alike, before its true onsets (200 ml) ..."
+    with open(tmp_path / "plants.csv", "w", newline="") as fh:
+        w = csv.DictWriter(fh, ["plant", "error", "rejected"])
+        w.writeheader()
+        w.writerows([{"plant": 0, "error": "", "rejected": ""}, {"plant": 1, "error": "", "rejected": pinned},
+                     {"plant": 2, "error": "", "rejected": "observed first slip outside the paper's 170-230 ml"},
+                     {"plant": 3, "error": "ValueError: x", "rejected": ""}])
+    with open(tmp_path / "claims.csv", "w", newline="") as fh:
+        w = csv.DictWriter(fh, ["claim", "verdict", "value", "low", "high"])
+        w.writeheader()
+        w.writerow({"claim": 2, "verdict": "holds", "value": 0.59, "low": 0.55, "high": 0.62})
+    text = large.block(tmp_path, "a machine")
+    assert "**16 min 40 s** wall, **over** the 15 minutes aimed at" in text and "1840 CPU-s" in text
+    assert "4 plants, 1 with errors; 1 accepted and 2 rejected by their calibration (1 of them because" in text
+    assert "| 2 | holds | 59 % | 55-62 % |" in text
+    assert "<!-- large study begins -->" in (ROOT / "docs" / "speed.md").read_text()
