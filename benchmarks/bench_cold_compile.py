@@ -30,16 +30,16 @@ _STAGES = """
 import json, time
 t0 = time.perf_counter()
 from slipreflex import methods
-from slipreflex.reproduce.experiments import ReproduceConfig
+from slipreflex.reproduce.experiments import ReproduceConfig, method_context
 from slipreflex.reproduce.thresholds import calibrate
 from slipreflex.reproduce.warmup import warm_kernels
 cfg = ReproduceConfig()
 t1 = time.perf_counter()
-calibrate(cfg)
+context = method_context(cfg, calibrate(cfg))
 t2 = time.perf_counter()
-warm_kernels(cfg, methods.MethodContext(), {"dath": methods.get("dath")}, 1)
+warm_kernels(cfg, context, {"dath": methods.get("dath")}, 1)
 t3 = time.perf_counter()
-warm_kernels(cfg, methods.MethodContext(), {"nmsd": methods.get("nmsd")}, 1)
+warm_kernels(cfg, context, {"nmsd": methods.get("nmsd")}, 1)
 t4 = time.perf_counter()
 print(json.dumps({"imports": t1 - t0, "thresholds": t2 - t1, "slip loop": t3 - t2, "tactile loop": t4 - t3}))
 """
