@@ -141,6 +141,7 @@ def test_unresolved_when_few_scattered_trials_straddle_the_criterion():
     assert r5.verdict == C.UNRESOLVED and r5.low < 2 < r5.high and "straddles" in r5.reason
 
 
+@pytest.mark.slow
 def test_a_censored_comparison_counts_the_slips_a_method_never_answered():
     rows = paper_like()
     # DATH answers faster when it answers, but misses 6 of every 10 drops: the responders alone would say "faster"

@@ -224,6 +224,7 @@ def test_reading_something_that_is_not_a_recording(tmp_path, capsys):
     assert "no slip-sensor samples" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_the_recording_package_imports_nothing_of_the_chain_or_the_board():
     """The file format sits below the chain: replay, which needs the chain and the board's twin, is above it."""
     from test_imports import _graph

@@ -168,6 +168,7 @@ def test_study_docs_install_from_the_repository_or_a_wheel():
 
 # -- the first run ------------------------------------------------------------------------------
 
+@pytest.mark.slow
 def test_an_empty_numba_cache_is_seen_as_cold(tmp_path):
     code = "from slipreflex.reproduce.warmup import cold_kernels; print(len(cold_kernels()))"
     env = {**__import__("os").environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba")}
@@ -307,6 +308,7 @@ def _jar_config(**kw):
     return ReproduceConfig(bottles=("JAR",), plant=plant, **kw), path
 
 
+@pytest.mark.slow
 def test_the_suggested_grasp_force_was_simulated_on_the_runs_trials_before_it_is_printed(tmp_path, capsys):
     import re
 
@@ -420,6 +422,7 @@ def _texts_of_saved_figures(monkeypatch):
     return seen
 
 
+@pytest.mark.slow
 def test_the_scan_figure_draws_the_papers_levels(tmp_path, monkeypatch):
     seen = _texts_of_saved_figures(monkeypatch)
     assert main(["scan", "--out", str(tmp_path)]) == 0

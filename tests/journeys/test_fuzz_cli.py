@@ -213,6 +213,7 @@ def _load_is_clean(load, path: Path) -> None:
         assert "\n" not in str(err) and str(path) in str(err), err
 
 
+@pytest.mark.slow
 def test_objects_files_load_or_are_refused_in_one_line(tmp_path):
     from slipreflex.sim import load_objects
 
@@ -226,6 +227,7 @@ def test_objects_files_load_or_are_refused_in_one_line(tmp_path):
     check()
 
 
+@pytest.mark.slow
 def test_ranges_files_load_or_are_refused_in_one_line(tmp_path):
     from slipreflex.sim.uncertain import load_ranges
 

@@ -95,6 +95,7 @@ def user_method():
     methods.unregister(spec.name)
 
 
+@pytest.mark.slow
 def test_a_user_registered_method_runs_in_reproduce_and_its_tables(user_method, tmp_path):
     assert methods.make("Dath-D4").params.dath_samples == 4
     out = tmp_path / "r"

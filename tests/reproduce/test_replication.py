@@ -118,6 +118,7 @@ def test_ctrl_c_in_a_replicate_keeps_the_run_and_the_finished_replicates(monkeyp
     assert stop.value.partial is first and len(first.replicate_seeds) == 1 and not first.partial_note
 
 
+@pytest.mark.slow
 def test_replicates_csv_is_written_and_the_claims_command_pools_it(tmp_path, capsys, monkeypatch):
     from slipreflex.cli import main
 

@@ -55,6 +55,7 @@ def test_a_bad_ranges_file_is_one_line_before_any_work(tmp_path, capsys):
     assert not out.exists()
 
 
+@pytest.mark.slow
 def test_killed_and_resumed_equals_uninterrupted(tmp_path):
     cfg = StudyConfig(plants=3, **TINY)
     full = run_study(cfg, tmp_path / "a", workers=0, progress=False)
