@@ -15,8 +15,6 @@ Examples
 --------
 >>> minutes(662.1)
 '11 min 2 s'
->>> pinned("calibration: ... is observed at 4.4 ml at pad mu_s 0.84 and 1.26 alike, before its true onsets ...")
-True
 """
 
 from __future__ import annotations
@@ -40,11 +38,6 @@ def minutes(s: float) -> str:
     return f"{int(s // 60)} min {s % 60:.0f} s"
 
 
-def pinned(why: str) -> bool:
-    """Whether a plant's rejection is a first slip pinned at the cuff's (``slipreflex.sim.calibration``)."""
-    return " alike, before its true onsets" in why
-
-
 def block(folder: Path, machine: str) -> str:
     """The block's text from ``folder``'s timing.json, plants.csv and claims.csv."""
     timing = json.loads((folder / "timing.json").read_text())
@@ -52,6 +45,8 @@ def block(folder: Path, machine: str) -> str:
         plants = list(csv.DictReader(fh))
     with open(folder / "claims.csv", newline="") as fh:
         claims = list(csv.DictReader(fh))
+    from slipreflex.sim.calibration import pinned  # deferred: heavy (numba kernels), for this one block
+
     errors = sum(1 for p in plants if p.get("error"))
     rejected = [p.get("rejected", "") for p in plants if p.get("rejected")]
     n_pinned = sum(1 for why in rejected if pinned(why))

@@ -28,8 +28,10 @@ from contextlib import contextmanager
 
 def decision(extra: dict) -> tuple[str, tuple]:
     """``(kind, calibrated mu_s)`` of a plant's calibration: kind is accepted, pinned or rejected."""
+    from slipreflex.sim.calibration import pinned  # deferred: heavy (numba kernels)
+
     why = extra.get("rejected", "")
-    kind = "accepted" if not why else "pinned" if " alike, before its true onsets" in why else "rejected"
+    kind = "accepted" if not why else "pinned" if pinned(why) else "rejected"
     return kind, tuple(sorted((k, v) for k, v in extra.items() if k.startswith("calibrated_mu_s_")))
 
 
@@ -61,6 +63,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--step", type=int, default=8, help="every STEP-th plant of the 1000-plant design (default 8)")
     args = ap.parse_args()
+    if not 1 <= args.step <= 1000:
+        ap.error(f"--step must be 1-1000, got {args.step}")
     config = StudyConfig(plants=1000)
     values = config.plant_values()
     _calibrate(0, values[0], config)          # imports and compiled kernels, outside the timing

@@ -44,7 +44,7 @@ from .rig import Rig
 __all__ = ["PAPER_FIRST_SLIP_ML", "CALIBRATION_SEEDS", "LANDING_S", "OBSERVED_ONSET", "FirstSlip", "first_slip",
            "first_slip_ml",
            "calibrate_bottle", "Calibration",
-           "drop_falls", "drop_fall_capacity", "GraspFailed", "check_grasp", "plant_lines"]
+           "drop_falls", "drop_fall_capacity", "GraspFailed", "check_grasp", "plant_lines", "pinned"]
 
 #: The paper's open-loop first pour slip (ml): "the first slip occurred at about 200 ml" (Fig. 15).
 PAPER_FIRST_SLIP_ML: float = 200.0
@@ -452,6 +452,23 @@ def calibrate_bottle(bottle: Bottle, target_ml: float = PAPER_FIRST_SLIP_ML, *,
                        seen[best[0]].true_ml)
 
 
+#: The words of a calibration error that only a first slip pinned at the cuff's slip says (:func:`pinned`).
+_PINNED = "alike, before its true onsets"
+
+
+def pinned(why: str) -> bool:
+    """Whether a calibration's error (or a study plant's ``rejected`` text) is a first slip pinned at the cuff's.
+
+    Examples
+    --------
+    >>> pinned("... observed at 4.4 ml at pad mu_s 0.84 and 1.26 alike, before its true onsets (224 and 345 ml) ...")
+    True
+    >>> pinned("observed first slip outside the paper's 170-230 ml: TR 240 ml")
+    False
+    """
+    return _PINNED in why
+
+
 def _early(s: FirstSlip, lowest: float) -> tuple[float, ...] | None:
     """The observed volumes of ``s``'s seeds if every one comes before its seed's true onset and below ``lowest``."""
     if not s.per_seed or not all(o < t and o < lowest for t, o in s.per_seed):   # (NaN compares false)
@@ -472,14 +489,16 @@ def _stop_if_pinned(seen: dict[float, FirstSlip], mu: float, lowest: float, targ
     the pour, a jump to "no slip" that is no answer either.
     """
     here = _early(seen[mu], lowest)
-    other = next((m for m, s in seen.items() if m != mu and here is not None and _early(s, lowest) == here), None)
+    if here is None:
+        return
+    other = next((m for m, s in seen.items() if m != mu and _early(s, lowest) == here), None)
     if other is None:
         return
     within = "" if band_ml is None else f", nor in {band_ml[0]:g}-{band_ml[1]:g} ml"
     trues = " and ".join(f"{seen[m].true_ml:.0f}" for m in sorted((other, mu)))
     raise ParameterError(
         f"calibration: the open-loop first slip of bottle {name} is observed at {seen[mu].observed_ml:.1f} ml "
-        f"at pad mu_s {min(other, mu):.4g} and {max(other, mu):.4g} alike, before its true onsets ({trues} ml): "
+        f"at pad mu_s {min(other, mu):.4g} and {max(other, mu):.4g} {_PINNED} ({trues} ml): "
         f"the accelerometer sees a slip of the middle finger's cuff, which the pads' friction does not move, "
         f"so no pad mu_s puts it at {target:g} ml{within}")
 
