@@ -5,9 +5,11 @@ default reproduction's drop and pour, bottle TR), the trial is set up exactly as
 ``reproduce`` sets it up (rig, grasp, calibrated thresholds, perturbation) and only
 ``run_closed_loop`` (the compiled loop) is timed, once with the fixed-step kernel
 (``stepping="fixed"``, the reference) and once with the adaptive one, alternately,
-so both see the same load on a shared machine; the ratio is adaptive over fixed.
-Each figure is the median over ``--repeat`` runs of simulated seconds per CPU
-second of this process (wall-clock figures beside it). Then the held pour: the
+so both see the same load on a shared machine; the ratio is the median over the
+pairs of adaptive over fixed (the held pour's lines give the pairs' range too).
+Each rate is the median over ``--repeat`` runs (``--held-repeat`` for the held
+pour) of simulated seconds per CPU second of this process (wall-clock figures
+beside it). Then the held pour: the
 paper's pour on a grasp squeezed 40 units firmer (it holds throughout), advanced
 open loop (physics and sensors alone, also with a 260 Hz and a 380 Hz tactile
 stream) and closed by a compiled reflex that never commands, each with both kernels.
@@ -99,21 +101,35 @@ def median_rate(fn, repeat: int, *args) -> tuple[float, float]:
 
 
 def paired_rates(fn, repeat: int, *args) -> dict[str, tuple[float, float]]:
-    """Median (per CPU-s, per wall-s) of ``fn(*args, stepping=...)`` for both kernels, run alternately."""
+    """Median (per CPU-s, per wall-s) of ``fn(*args, stepping=...)`` for both kernels, run in adjacent pairs, and
+    under ``"ratio"`` the median, lowest and highest of the pairs' adaptive-to-fixed CPU ratios.
+
+    The two runs of a pair are adjacent in time (their order alternates from pair to pair), so a pair's ratio
+    sees one load; the machine's load moves a kernel's rate by up to a factor of two between pairs.
+    """
     for kind in ("fixed", "adaptive"):   # warm-up (compilation, caches)
         fn(*args, stepping=kind)
     runs: dict[str, list] = {"fixed": [], "adaptive": []}
-    for _ in range(repeat):
-        for kind in runs:
+    for i in range(repeat):
+        for kind in (("fixed", "adaptive") if i % 2 == 0 else ("adaptive", "fixed")):
             runs[kind].append(fn(*args, stepping=kind))
-    return {k: (statistics.median(s / c for s, _, c in v), statistics.median(s / w for s, w, _ in v))
-            for k, v in runs.items()}
+    pairs = [(sa / ca) / (sf / cf) for (sf, _, cf), (sa, _, ca) in zip(runs["fixed"], runs["adaptive"])]
+    out = {k: (statistics.median(s / c for s, _, c in v), statistics.median(s / w for s, w, _ in v))
+           for k, v in runs.items()}
+    out["ratio"] = (statistics.median(pairs), min(pairs), max(pairs))
+    return out
+
+
+def _ratio(r: dict) -> str:
+    med, lo, hi = r["ratio"]
+    return f"{med:.2f}x, pairs {lo:.2f}-{hi:.2f}"
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--methods", default=",".join(methods.names()), help="comma-separated (default: all)")
-    ap.add_argument("--repeat", type=int, default=3, help="timed runs per figure (median)")
+    ap.add_argument("--repeat", type=int, default=3, help="timed pairs per trial figure (median)")
+    ap.add_argument("--held-repeat", type=int, default=15, help="timed pairs per held-pour figure (median)")
     ap.add_argument("--python", action="store_true", help="also time the Python loop (fixed steps)")
     args = ap.parse_args()
     config = ReproduceConfig(trials=1)
@@ -126,18 +142,18 @@ def main() -> None:
             r = paired_rates(trial, args.repeat, config, thresholds, method, experiment, True)
             fx, ad = r["fixed"], r["adaptive"]
             line = (f"{method:14s} {experiment:10s} {config.duration(experiment):6.1f}   "
-                    f"{fx[0]:8.0f} ({fx[1]:6.0f})   {ad[0]:8.0f} ({ad[1]:6.0f})   {ad[0] / fx[0]:5.2f}x")
+                    f"{fx[0]:8.0f} ({fx[1]:6.0f})   {ad[0]:8.0f} ({ad[1]:6.0f})   {r['ratio'][0]:5.2f}x")
             if args.python:
                 slow = median_rate(trial, args.repeat, config, thresholds, method, experiment, False, "TR", "fixed")
                 line += f"   {slow[0]:8.0f} ({slow[1]:6.0f})"
             print(line)
     for fs, what in ((None, ""), (hw.NMSD_FS, ", 260 Hz tactile"), (hw.SWT_FS, ", 380 Hz tactile")):
-        phys = paired_rates(held, args.repeat, False, 40.0, fs)
-        loop = paired_rates(held, args.repeat, True, 40.0, fs)
+        phys = paired_rates(held, args.held_repeat, False, 40.0, fs)
+        loop = paired_rates(held, args.held_repeat, True, 40.0, fs)
         print(f"held pour{what}: open loop (physics + sensors alone) fixed {phys['fixed'][0]:5.0f} adaptive "
-              f"{phys['adaptive'][0]:5.0f} ({phys['adaptive'][0] / phys['fixed'][0]:.2f}x) sim-s per CPU-s; closed "
+              f"{phys['adaptive'][0]:5.0f} ({_ratio(phys)}) sim-s per CPU-s; closed "
               f"by a compiled reflex that never commands fixed {loop['fixed'][0]:5.0f} adaptive "
-              f"{loop['adaptive'][0]:5.0f} ({loop['adaptive'][0] / loop['fixed'][0]:.2f}x)")
+              f"{loop['adaptive'][0]:5.0f} ({_ratio(loop)})")
 
 
 if __name__ == "__main__":

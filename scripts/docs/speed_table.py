@@ -108,17 +108,20 @@ def closed_loop(out: str) -> str:
     rate = {(m, e): find(rf"^{m}\s+{e}\s+[\d.]+\s+(\d+) \(\s*\d+\)\s+(\d+) \(\s*\d+\)\s+([\d.]+)x", out,
                          "bench_closed_loop")
             for m in names for e in ("drop", "pour")}
-    held = [find(rf"^held pour{what}: open loop .*? fixed\s+(\d+) adaptive\s+(\d+) \(([\d.]+)x\) sim-s per CPU-s; "
-                 rf"closed by a compiled reflex that never commands fixed\s+(\d+) adaptive\s+(\d+) \(([\d.]+)x\)",
+    held = [find(rf"^held pour{what}: open loop .*? fixed\s+(\d+) adaptive\s+(\d+) \(([\d.]+)x, pairs [\d.-]+\) "
+                 rf"sim-s per CPU-s; closed by a compiled reflex that never commands fixed\s+(\d+) adaptive\s+(\d+) "
+                 rf"\(([\d.]+)x, pairs ([\d.]+)-([\d.]+)\)",
                  out, "bench_closed_loop")
             for what in ("", ", 260 Hz tactile", ", 380 Hz tactile")]
 
     def cells(e: str) -> str:
         return " / ".join(f"{rate[m, e][1]} ({rate[m, e][2]}x)" for m in names)
     return (f"adaptive kernel (ratio to the fixed-step reference in the same run): pour {cells('pour')}; drop "
-            f"{cells('drop')}. The held pour closed by a compiled reflex that never commands: {held[0][4]} "
-            f"({held[0][5]}x; fixed {held[0][3]}), with a 260 Hz tactile stream {held[1][4]} ({held[1][5]}x), 380 Hz "
-            f"{held[2][4]} ({held[2][5]}x); open loop {held[0][1]} ({held[0][2]}x). Sim-s per CPU-s, median of 3 runs")
+            f"{cells('drop')}, median of 3 pairs. The held pour closed by a compiled reflex that never commands: "
+            f"{held[0][4]} ({held[0][5]}x, {held[0][6]}-{held[0][7]}x over the pairs; fixed {held[0][3]}), with a 260 Hz "
+            f"tactile stream {held[1][4]} ({held[1][5]}x), 380 Hz {held[2][4]} ({held[2][5]}x); open loop {held[0][1]} "
+            f"({held[0][2]}x), median of 15 pairs. Sim-s per CPU-s; a ratio is the median of the pairs' ratios, the two "
+            "kernels run back to back")
 
 
 def interrupt(out: str) -> str:

@@ -521,3 +521,25 @@ def test_a_reflex_that_never_commands_costs_the_adaptive_kernel_no_extra_steps()
             rig.advance_block(rig.t + 6.0)
         steps.append(rig.steps_taken - before)
     assert steps[1] == steps[0] < 6.0 / 1e-4 / 8
+
+
+def test_a_compiled_loop_s_trace_reads_the_rig_s_history_without_copying_it():
+    """The compiled loop writes its DAQ rows column by column: the trace's columns are read-only views of the
+    rows the rig keeps, equal to the rows read back, and the Python loop's (copied) trace equals it."""
+    traces, rows = [], []
+    for compiled in (True, False):
+        rig = Rig("TR", seed=2)
+        g = rig.grasp()
+        rig.perturb(SHORT_POUR, at=rig.t + 0.1)
+        t0 = rig.t
+        reflex = methods.make("dath", p0=float(round(g.positions[Finger.MIDDLE])), context=_context())
+        traces.append(run_closed_loop(rig, reflex, 1.0, compiled=compiled))
+        rows.append(rig.daq_rows(since=t0)[0])
+    fast, plain = traces
+    assert np.shares_memory(fast.daq.volts, rows[0]) and not np.shares_memory(plain.daq.volts, rows[1])
+    for name in ("t", "volts", "accel", "fingers", "normal_force", "flow_pulses", "stuck"):
+        a, b = getattr(fast.daq, name), getattr(plain.daq, name)
+        assert not a.flags.writeable and not b.flags.writeable
+        np.testing.assert_array_equal(a, b)
+    with pytest.raises(ValueError, match="read-only"):
+        fast.daq.volts[0] = 0.0

@@ -83,10 +83,12 @@ _CACHE = stamped_cache(__file__, K.__file__, hw.__file__)
 
 _f1, _i1, _u1 = types.float64[::1], types.int64[::1], types.uint64[::1]
 _f2, _i2, _f3 = types.float64[:, ::1], types.int64[:, ::1], types.float64[:, :, ::1]
+#: the DAQ rows go to a column-major buffer: the rig keeps it as history and a trace's columns are views of it
+_f2c = types.float64[::1, :]
 # the arguments every kernel shares: physics, hand, queue, outputs, scratch
 _COMMON = (_f1, _f1, _f1, _i1, _f1, _u1, _f2, _f2, _f1, _f1, _i1, _i1,  # RS RP | S C P keys D W track rates next cont
            _f1, _f1, _i2, _f1, _i1, _i1, _f1, _f1, _f1,  # tgt spd q_i q_v masks cmd_g cmd_off g_level g_until
-           _f1, _i1, _f2, _f2, _f2, _f1, _f1, _f2, _f2, _f2, _i1)  # cfg cnt daq ev tac cmd_t cmd_v s_daq s_ev s_tac s_n
+           _f1, _i1, _f2c, _f2, _f2, _f1, _f1, _f2, _f2, _f2, _i1)  # cfg cnt daq ev tac cmd_t cmd_v s_* (scratch)
 
 
 @njit(cache=_CACHE)
@@ -429,9 +431,9 @@ class _Buffers:
     rec: np.ndarray
 
     def grow(self) -> None:
-        """Double every buffer (their filled parts kept)."""
+        """Double every buffer (their filled parts kept, in their memory order)."""
         for name, a in vars(self).items():
-            b = np.empty((2 * a.shape[0] + 16,) + a.shape[1:], dtype=a.dtype)
+            b = np.empty((2 * a.shape[0] + 16,) + a.shape[1:], dtype=a.dtype, order="F" if name == "daq" else "C")
             b[:a.shape[0]] = a
             setattr(self, name, b)
 
@@ -551,7 +553,7 @@ def run_compiled(rig, reflex, t_end: float, split: list[tuple[tuple[Finger, ...]
     slots = dict(getattr(reflex, "probe_slots", {}) or {}) if record is not None else {}
     probe = np.array(list(slots.values()), dtype=np.int64)
     n_rec = int(span * hw.DAQ_FS) + 16 if sampler is None else n_in
-    buf = _Buffers(daq=np.empty((int(span * hw.DAQ_FS) + 16, K.O_SIZE)), ev=np.empty((4096, 3)),
+    buf = _Buffers(daq=np.empty((int(span * hw.DAQ_FS) + 16, K.O_SIZE), order="F"), ev=np.empty((4096, 3)),
                    tac=np.empty((n_tac + 16, K.T_SIZE)), cmd_t=np.empty(n_in), cmd_v=np.empty(n_in),
                    q_i=q_i, q_v=q_v, frames=np.empty((n_in if sampler is not None else 0,) + hw.TACTILE_SHAPE),
                    rec=np.empty((n_rec if slots else 0, len(slots) + 1 if slots else 0)))

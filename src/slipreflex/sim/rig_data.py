@@ -55,6 +55,12 @@ class DaqBlock:
         Truth: the water's sideways force on the bottle (N): the slosh and the
         jet's drive of it (see :class:`~slipreflex.sim.params.WaterParams`).
 
+    Notes
+    -----
+    Every array is read-only: a compiled closed loop's block shares the rig's
+    history (its columns are views of the rows the rig keeps; copying them cost
+    a fifth of a held pour's closed loop). Copy an array to change it.
+
     Examples
     --------
     >>> from slipreflex.sim import Rig
@@ -86,22 +92,41 @@ class DaqBlock:
     def from_rows(cls, rows: np.ndarray, seq0: int) -> DaqBlock:
         """Build from kernel rows (internal layout).
 
+        A column that is contiguous in ``rows`` (a compiled loop's column-major rows) is
+        taken as a view, any other is copied; every array of the block is read-only, as
+        the rig's history it may share.
+
         Examples
         --------
         >>> import numpy as np
         >>> DaqBlock.from_rows(np.zeros((0, K.O_SIZE)), 0).t.size
         0
+        >>> b = DaqBlock.from_rows(np.zeros((4, K.O_SIZE), order="F"), 0)
+        >>> b.volts.flags.writeable, b.volts.flags.owndata
+        (False, False)
         """
         n = rows.shape[0]
+
+        def kept(a: np.ndarray) -> np.ndarray:
+            a = a if a.shape[0] < 2 or a.strides[0] == a.itemsize else a.copy(order="F")
+            a.flags.writeable = False
+            return a
+
+        def col(c: int) -> np.ndarray:
+            return kept(rows[:, c])
+
+        def cols(c0: int, c1: int) -> np.ndarray:
+            return kept(rows[:, c0:c1 + 1])
+
         return cls(
-            seq=np.arange(seq0, seq0 + n, dtype=np.int64), t=rows[:, K.O_T].copy(),
-            volts=rows[:, K.O_VOLTS].copy(), accel=rows[:, K.O_AX:K.O_AZ + 1].copy(),
-            accel_fresh=rows[:, K.O_AFRESH] > 0, flow_pulses=rows[:, K.O_PULSES].astype(np.int64),
-            displacement=rows[:, K.O_X].copy(), velocity=rows[:, K.O_V].copy(), slip=rows[:, K.O_S].copy(),
-            stuck=rows[:, K.O_STUCK] > 0, fallen=rows[:, K.O_FALLEN] > 0, normal_force=rows[:, K.O_NC].copy(),
-            load_mass=rows[:, K.O_MASS].copy(), fingers=rows[:, K.O_Q0:K.O_Q2 + 1].copy(),
-            accel_true=rows[:, K.O_A].copy(), accel_lateral=rows[:, K.O_ALAT].copy(),
-            load_force=rows[:, K.O_LOAD].copy(), water_force_lateral=rows[:, K.O_FWAT].copy())
+            seq=kept(np.arange(seq0, seq0 + n, dtype=np.int64)), t=col(K.O_T),
+            volts=col(K.O_VOLTS), accel=cols(K.O_AX, K.O_AZ),
+            accel_fresh=kept(rows[:, K.O_AFRESH] > 0), flow_pulses=kept(rows[:, K.O_PULSES].astype(np.int64)),
+            displacement=col(K.O_X), velocity=col(K.O_V), slip=col(K.O_S),
+            stuck=kept(rows[:, K.O_STUCK] > 0), fallen=kept(rows[:, K.O_FALLEN] > 0), normal_force=col(K.O_NC),
+            load_mass=col(K.O_MASS), fingers=cols(K.O_Q0, K.O_Q2),
+            accel_true=col(K.O_A), accel_lateral=col(K.O_ALAT),
+            load_force=col(K.O_LOAD), water_force_lateral=col(K.O_FWAT))
 
     def samples(self) -> list[DaqSample]:
         """The block as :class:`~slipreflex.core.interfaces.DaqSample` objects.
