@@ -116,12 +116,12 @@ def closed_loop(out: str) -> str:
 
     def cells(e: str) -> str:
         return " / ".join(f"{rate[m, e][1]} ({rate[m, e][2]}x)" for m in names)
+    h, t260, t380 = held
     return (f"adaptive kernel (ratio to the fixed-step reference in the same run): pour {cells('pour')}; drop "
             f"{cells('drop')}, median of 3 pairs. The held pour closed by a compiled reflex that never commands: "
-            f"{held[0][4]} ({held[0][5]}x, {held[0][6]}-{held[0][7]}x over the pairs; fixed {held[0][3]}), with a 260 Hz "
-            f"tactile stream {held[1][4]} ({held[1][5]}x), 380 Hz {held[2][4]} ({held[2][5]}x); open loop {held[0][1]} "
-            f"({held[0][2]}x), median of 15 pairs. Sim-s per CPU-s; a ratio is the median of the pairs' ratios, the two "
-            "kernels run back to back")
+            f"{h[4]} ({h[5]}x, {h[6]}-{h[7]}x over the pairs; fixed {h[3]}), with a 260 Hz tactile stream {t260[4]} "
+            f"({t260[5]}x), 380 Hz {t380[4]} ({t380[5]}x); open loop {h[1]} ({h[2]}x), median of 15 pairs. Sim-s per "
+            "CPU-s; a ratio is the median of the pairs' ratios, the two kernels run back to back")
 
 
 def interrupt(out: str) -> str:

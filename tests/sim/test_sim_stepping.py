@@ -148,13 +148,37 @@ def test_the_speed_table_reads_both_kernels_and_their_ratio_from_the_benchmark()
     lines = [f"{m:14s} {e:10s} {d:6.1f}   {500:8.0f} ({300:6.0f})   {1500:8.0f} ({900:6.0f})   {3.0:5.2f}x"
              for m in ("dath", "fixed", "nmsd", "swt") for e, d in (("drop", 2.5), ("pour", 32.5))]
     for what in ("", ", 260 Hz tactile", ", 380 Hz tactile"):
-        lines.append(f"held pour{what}: open loop (physics + sensors alone) fixed   400 adaptive  2000 (5.00x) sim-s "
-                     f"per CPU-s; closed by a compiled reflex that never commands fixed   410 adaptive  1800 (4.39x)")
+        lines.append(f"held pour{what}: open loop (physics + sensors alone) fixed   400 adaptive  2000 (5.00x, pairs "
+                     f"4.10-5.20) sim-s per CPU-s; closed by a compiled reflex that never commands fixed   410 "
+                     f"adaptive  1800 (4.39x, pairs 3.90-4.80)")
     row = speed_table.closed_loop("\n".join(lines))
     assert row.startswith("adaptive kernel (ratio to the fixed-step reference in the same run): pour 1500 (3.00x)")
-    assert "never commands: 1800 (4.39x; fixed 410)" in row
+    assert "never commands: 1800 (4.39x, 3.90-4.80x over the pairs; fixed 410)" in row
     with pytest.raises(speed_table.Missing, match="bench_closed_loop"):
         speed_table.closed_loop("\n".join(lines[1:]))
+
+
+def test_the_closed_loop_benchmark_s_ratio_is_the_median_of_adjacent_pairs():
+    """Each pair's two runs share one load: a load that halves both kernels' rates for three pairs leaves
+    every pair's ratio, and so their median, range and the reported ratio, where a quiet machine puts it."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[2] / "benchmarks" / "bench_closed_loop.py"
+    spec = importlib.util.spec_from_file_location("bench_closed_loop", path)
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    calls: list[str] = []
+    slow = iter([1.0] * 4 + [2.0] * 6 + [1.0] * 4)   # pairs 1-2 and 6-7 on a quiet machine, 3-5 on a busy one
+
+    def run(*, stepping):
+        calls.append(stepping)
+        cpu = (0.1 if stepping == "fixed" else 0.02) * (next(slow, 1.0) if len(calls) > 2 else 1.0)
+        return 40.0, cpu, cpu
+    out = bench.paired_rates(run, 7)
+    assert calls[2:6] == ["fixed", "adaptive", "adaptive", "fixed"]   # the order alternates
+    assert out["ratio"] == pytest.approx((5.0, 5.0, 5.0))
+    assert (out["fixed"][0], out["adaptive"][0]) == pytest.approx((400.0, 2000.0))   # 4 quiet pairs of 7
 
 
 def test_a_study_runs_every_plant_with_its_own_stepping_and_fingerprints_it(monkeypatch):
