@@ -4,6 +4,7 @@ steps whose outputs it reads (no circle; ``--only`` plans them first)."""
 
 from __future__ import annotations
 
+import os
 import re
 import subprocess
 import sys
@@ -168,8 +169,11 @@ def test_every_speed_row_reads_its_benchmark_and_a_missing_line_is_an_error_nami
         "2 free cores")
 
 
-def test_the_tier_table_says_what_ran_and_what_it_cost():
+def test_the_tier_table_says_what_ran_and_what_it_cost(monkeypatch):
     tiers = _script("tier_times")
+    monkeypatch.setenv("PYTHONDONTWRITEBYTECODE", "1")
+    env = tiers._developer_env()
+    assert "PYTHONDONTWRITEBYTECODE" not in env and env["PATH"] == os.environ["PATH"]
     line = tiers.row("fast", 'python -m pytest -m "not slow" -q', "what", {
         "passed": 1300, "skipped": 2, "wall_s": 130.4, "cpu_s": 44.6, "load": 2.25})
     assert line == ('| fast | `python -m pytest -m "not slow" -q` | what | 1300 passed, 2 skipped | 45 s | '
