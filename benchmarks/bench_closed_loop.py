@@ -132,6 +132,9 @@ def main() -> None:
     ap.add_argument("--held-repeat", type=int, default=15, help="timed pairs per held-pour figure (median)")
     ap.add_argument("--python", action="store_true", help="also time the Python loop (fixed steps)")
     args = ap.parse_args()
+    for n, flag in ((args.repeat, "--repeat"), (args.held_repeat, "--held-repeat")):
+        if not 1 <= n <= 1000:
+            ap.error(f"{flag} must be 1-1000, got {n}")
     config = ReproduceConfig(trials=1)
     thresholds = calibrate(config)
     print(f"{'method':14s} {'experiment':10s} {'sim s':>6s}   {'fixed step':>18s}   {'adaptive':>18s}   "

@@ -22,13 +22,13 @@ import subprocess
 import sys
 from pathlib import Path
 
+# that version's own held() and median_rate() (warm-up, then the median): held(closed, duration, tactile_fs[, stepping])
 _CHILD = """
-import statistics, sys
+import sys
 sys.path.insert(0, sys.argv[1] + "/benchmarks")
-from bench_closed_loop import held
-kw = {} if sys.argv[2] == "-" else {"stepping": sys.argv[2]}
-held(True, **kw)
-print(statistics.median(s / c for s, _, c in (held(True, **kw) for _ in range(int(sys.argv[3])))))
+from bench_closed_loop import held, median_rate
+args = (True,) if sys.argv[2] == "-" else (True, 40.0, None, sys.argv[2])
+print(median_rate(held, int(sys.argv[3]), *args)[0])
 """
 
 
@@ -51,6 +51,9 @@ def main() -> None:
     here = Path(__file__).resolve().parents[1]
     if not (args.other / "benchmarks" / "bench_closed_loop.py").is_file():
         ap.error(f"--other {args.other}: no benchmarks/bench_closed_loop.py there")
+    for n, flag in ((args.rounds, "--rounds"), (args.runs, "--runs")):
+        if not 1 <= n <= 1000:
+            ap.error(f"{flag} must be 1-1000, got {n}")
     for s, flag in ((args.other_stepping, "--other-stepping"), (args.stepping, "--stepping")):
         if s not in ("fixed", "adaptive", "-"):
             ap.error(f"{flag} {s!r}: not fixed, adaptive or -")
